@@ -1,0 +1,183 @@
+// Subcommands on still environment maps: coeffs, irradiance, compare.
+#include <cmath>
+#include <cstdio>
+#include <iostream>
+#include <limits>
+
+#include "capture/error.h"
+#include "capture/image.h"
+#include "capture/layout.h"
+#include "coeffs_io.h"
+#include "commands.h"
+#include "compare.h"
+#include "shading/brute.h"
+
+namespace lp::cli {
+
+namespace {
+
+const OptionSpec kLayoutOpt{"--layout", "equirect|angular", "panorama layout of FILE (default equirect)"};
+const OptionSpec kWindowOpt{"--window", "none|auto|W",
+                            "Hann window of width W against ringing; auto = mildest keeping E >= 0"};
+
+struct Environment {
+  Image image;
+  Layout layout;
+  Sh9 radiance;  ///< unwindowed
+};
+
+Environment loadEnvironment(const Args& a) {
+  const Layout layout = parseLayout(a.get("--layout", "equirect"));  // option errors first
+  Environment env{loadImage(a.positional().at(0)), layout, {}};
+  if (auto why = layoutMismatch(env.layout, env.image.width, env.image.height); !why.empty())
+    throw Error(a.positional()[0] + ": " + why);
+  env.radiance = Projector(layout, env.image.width, env.image.height).project(env.image.rgb.data());
+  return env;
+}
+
+/// Resolves --window against the coefficients; reports an automatic choice on stderr.
+BandWindow chooseWindow(const Args& a, const Sh9& radiance) {
+  const std::string w = a.get("--window", "none");
+  if (w == "none") return {};
+  if (w == "auto") {
+    const AutoWindow aw = autoWindow(radiance);
+    if (std::isinf(aw.width))
+      std::cerr << "liveprobe: --window auto: irradiance is already non-negative, no window\n";
+    else
+      std::cerr << "liveprobe: --window auto: Hann width " << aw.width << " (sigma1 "
+                << aw.window.sigma1 << ", sigma2 " << aw.window.sigma2 << ")\n";
+    return aw.window;
+  }
+  const double width = parseNumber(w, "--window");
+  if (width <= 2.0) throw Error("--window " + w + ": the Hann width must be greater than 2");
+  return hannWindow(float(width));
+}
+
+}  // namespace
+
+const CommandSpec kCoeffsSpec{
+    "coeffs",
+    "FILE [--layout equirect|angular] [--format json|text|glsl] [--window none|auto|W]",
+    "Prints the nine radiance coefficients L_lm (R&H convention, before the A_l factors) of an\n"
+    "environment map (.hdr, .exr, or 8-bit PNG/JPEG decoded from sRGB).",
+    {kLayoutOpt, {"--format", "json|text|glsl", "output format (default json)"}, kWindowOpt},
+    1, 1};
+
+int runCoeffs(const Args& a) {
+  const std::string format = a.get("--format", "json");
+  if (format != "json" && format != "text" && format != "glsl")
+    throw Error("--format " + format + ": expected json, text or glsl");
+  Environment env = loadEnvironment(a);
+  const Sh9 L = applyWindow(env.radiance, chooseWindow(a, env.radiance));
+  if (format == "json") {
+    nlohmann::ordered_json j;
+    j["source"] = a.positional()[0];
+    j["layout"] = std::string(layoutName(env.layout));
+    j["width"] = env.image.width;
+    j["height"] = env.image.height;
+    j["coefficients"] = coefficientsJson(L);
+    std::cout << j.dump() << "\n";
+  } else if (format == "text") {
+    std::cout << a.positional()[0] << " (" << layoutName(env.layout) << ", " << env.image.width
+              << "x" << env.image.height << ")\n"
+              << coefficientsText(L);
+    const MinIrradiance mn = minIrradiance(L);
+    std::printf("min irradiance over the sphere / L00-irradiance: %.4f %.4f %.4f\n",
+                mn.value.x / (kA0 * 0.282095 * L.c[0].x), mn.value.y / (kA0 * 0.282095 * L.c[0].y),
+                mn.value.z / (kA0 * 0.282095 * L.c[0].z));
+  } else {
+    std::cout << coefficientsGlsl(L);
+  }
+  return 0;
+}
+
+const CommandSpec kIrradianceSpec{
+    "irradiance",
+    "FILE --out OUT.hdr|.exr|.png [--layout ...] [--size 256x128] [--method sh|brute] [--window ...]",
+    "Writes the irradiance environment map E(n), equirectangular and indexed by normal, computed\n"
+    "from nine coefficients (sh) or by brute-force hemispherical integration (brute).\n"
+    "PNG output is sRGB-encoded E/pi (the radiance of a white diffuse surface), clamped to 1.",
+    {kLayoutOpt,
+     {"--out", "FILE", "output image (.hdr, .exr: linear irradiance; .png: 8-bit)"},
+     {"--size", "WxH", "output size (default 256x128)"},
+     {"--method", "sh|brute", "how to compute E (default sh)"},
+     kWindowOpt},
+    1, 1};
+
+int runIrradiance(const Args& a) {
+  if (!a.has("--out")) throw Error("irradiance: --out FILE is required");
+  const auto [w, h] = parseSize(a.get("--size", "256x128"), "--size");
+  const std::string method = a.get("--method", "sh");
+  if (method != "sh" && method != "brute") throw Error("--method " + method + ": expected sh or brute");
+  Environment env = loadEnvironment(a);
+  const auto grid = equirectSamples(w, h);
+  std::vector<glm::vec3> normals(grid.size());
+  for (std::size_t i = 0; i < grid.size(); ++i) normals[i] = grid[i].dir;
+  std::vector<Rgb> e(grid.size());
+  if (method == "sh") {
+    const auto m = irradianceMatrices(applyWindow(env.radiance, chooseWindow(a, env.radiance)));
+    for (std::size_t i = 0; i < normals.size(); ++i) e[i] = evalIrradianceQuadratic(m, normals[i]);
+  } else {
+    if (a.has("--window")) throw Error("--window applies to --method sh only");
+    const auto samples = layoutSamples(env.layout, env.image.width, env.image.height);
+    e = bruteIrradiance(env.image.rgb.data(), 3, samples.data(), samples.size(), normals);
+  }
+  Image out(w, h);
+  for (std::size_t i = 0; i < e.size(); ++i) std::copy_n(&e[i].x, 3, out.rgb.data() + 3 * i);
+  const std::string path = a.get("--out");
+  const std::string ext = path.size() > 4 ? path.substr(path.size() - 4) : "";
+  if (ext != ".hdr" && ext != ".exr")
+    for (float& v : out.rgb) v /= kA0;  // 8-bit: the radiance of a white Lambertian surface
+  saveImage(path, out);
+  return 0;
+}
+
+const CommandSpec kCompareSpec{
+    "compare",
+    "FILE [--layout ...] [--size 64x32] [--out error.png] [--json] [--window ...]",
+    "Compares SH irradiance with the brute-force integral on a WxH equirect grid of normals\n"
+    "(luminance, solid-angle weighted). Errors are given as a fraction of the total intensity\n"
+    "(the paper's measure) and of the mean irradiance.",
+    {kLayoutOpt,
+     {"--size", "WxH", "grid of normals (default 64x32)"},
+     {"--out", "PNG", "figure: SH map, brute-force map and error, with a colour scale"},
+     {"--json", "", "print JSON instead of text"},
+     kWindowOpt},
+    1, 1};
+
+int runCompare(const Args& a) {
+  const auto [w, h] = parseSize(a.get("--size", "64x32"), "--size");
+  Environment env = loadEnvironment(a);
+  const CompareResult r = compareIrradiance(env.image, env.layout, w, h, chooseWindow(a, env.radiance));
+  if (a.has("--out")) saveCompareFigure(a.get("--out"), r);
+  if (a.has("--json")) {
+    nlohmann::ordered_json j;
+    j["source"] = a.positional()[0];
+    j["layout"] = std::string(layoutName(env.layout));
+    j["input"] = std::to_string(env.image.width) + "x" + std::to_string(env.image.height);
+    j["size"] = std::to_string(w) + "x" + std::to_string(h);
+    j["mean_frac_total"] = r.meanFracTotal;
+    j["max_frac_total"] = r.maxFracTotal;
+    j["mean_rel_mean"] = r.meanRelMean;
+    j["max_rel_mean"] = r.maxRelMean;
+    j["min_sh_over_mean"] = r.minShOverMean;
+    j["sh_ms"] = r.shMs;
+    j["brute_ms"] = r.bruteMs;
+    j["speed_ratio"] = r.bruteMs / r.shMs;
+    std::cout << j.dump(2) << "\n";
+  } else {
+    std::printf("%s (%s, %dx%d), %dx%d normals\n", a.positional()[0].c_str(),
+                std::string(layoutName(env.layout)).c_str(), env.image.width, env.image.height, w, h);
+    std::printf("  |E_sh - E| / total intensity: mean %.3f%%  max %.3f%%\n", 100 * r.meanFracTotal,
+                100 * r.maxFracTotal);
+    std::printf("  |E_sh - E| / mean irradiance: mean %.3f%%  max %.3f%%\n", 100 * r.meanRelMean,
+                100 * r.maxRelMean);
+    std::printf("  min E_sh / mean irradiance:   %.4f%s\n", r.minShOverMean,
+                r.minShOverMean < 0 ? "  (negative: ringing)" : "");
+    std::printf("  time: sh %.3f ms, brute force %.1f ms, ratio %.0f\n", r.shMs, r.bruteMs,
+                r.bruteMs / r.shMs);
+  }
+  return 0;
+}
+
+}  // namespace lp::cli

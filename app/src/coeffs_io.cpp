@@ -1,0 +1,101 @@
+#include "coeffs_io.h"
+
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <sstream>
+
+#include "capture/error.h"
+
+namespace lp::cli {
+
+double jsonFloat(float v) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%.9g", double(v));
+  // Shortest of 6..9 significant digits that reads back as the same float.
+  for (int digits = 6; digits <= 9; ++digits) {
+    char b[32];
+    std::snprintf(b, sizeof b, "%.*g", digits, double(v));
+    if (std::strtof(b, nullptr) == v) return std::strtod(b, nullptr);
+  }
+  return std::strtod(buf, nullptr);
+}
+
+nlohmann::ordered_json coefficientsJson(const Sh9& radiance) {
+  nlohmann::ordered_json c = nlohmann::ordered_json::object();
+  for (int k = 0; k < kShCount; ++k) {
+    const Rgb v = radiance.c[k];
+    c[std::string(kShNames[k])] = {jsonFloat(v.x), jsonFloat(v.y), jsonFloat(v.z)};
+  }
+  return c;
+}
+
+Sh9 coefficientsFromJson(const nlohmann::json& j, const std::string& source) {
+  const nlohmann::json& c = j.contains("coefficients") ? j["coefficients"] : j;
+  if (!c.is_object()) throw Error(source + ": no \"coefficients\" object");
+  Sh9 out;
+  for (int k = 0; k < kShCount; ++k) {
+    const std::string name(kShNames[k]);
+    if (!c.contains(name)) throw Error(source + ": coefficient " + name + " is missing");
+    const auto& v = c[name];
+    if (!v.is_array() || v.size() != 3)
+      throw Error(source + ": coefficient " + name + " must be an array [r, g, b]");
+    for (int ch = 0; ch < 3; ++ch) {
+      if (!v[ch].is_number()) throw Error(source + ": coefficient " + name + " has a non-number");
+      const double x = v[ch].get<double>();
+      if (!std::isfinite(x)) throw Error(source + ": coefficient " + name + " is not finite");
+      out.c[k][ch] = float(x);
+    }
+  }
+  for (auto it = c.begin(); it != c.end(); ++it)
+    if (shIndex(it.key()) < 0)
+      throw Error(source + ": unknown coefficient name " + it.key() + " (expected L00 .. L22)");
+  return out;
+}
+
+Sh9 loadCoefficients(const std::string& path) {
+  std::ifstream f(path);
+  if (!f) throw Error(path + ": cannot open coefficient file");
+  nlohmann::json j;
+  try {
+    f >> j;
+  } catch (const nlohmann::json::exception& e) {
+    throw Error(path + ": not valid JSON (" + std::string(e.what()) + ")");
+  }
+  return coefficientsFromJson(j, path);
+}
+
+std::string coefficientsText(const Sh9& radiance) {
+  std::ostringstream s;
+  char line[128];
+  std::snprintf(line, sizeof line, "%-5s %14s %14s %14s\n", "name", "red", "green", "blue");
+  s << line;
+  for (int k = 0; k < kShCount; ++k) {
+    std::snprintf(line, sizeof line, "%-5s %14.6g %14.6g %14.6g\n",
+                  std::string(kShNames[k]).c_str(), double(radiance.c[k].x),
+                  double(radiance.c[k].y), double(radiance.c[k].z));
+    s << line;
+  }
+  return s.str();
+}
+
+std::string coefficientsGlsl(const Sh9& radiance) {
+  const auto m = irradianceMatrices(radiance);
+  std::ostringstream s;
+  s << "// Irradiance matrices (Ramamoorthi & Hanrahan 2001, eq. 12), R&H frame (+z up).\n"
+       "// E(n) = dot(vec4(n, 1.0), M * vec4(n, 1.0)) per channel; diffuse = albedo * E / pi.\n";
+  const char* names[3] = {"shMatR", "shMatG", "shMatB"};
+  char num[32];
+  for (int ch = 0; ch < 3; ++ch) {
+    s << "const mat4 " << names[ch] << " = mat4(";
+    for (int col = 0; col < 4; ++col)
+      for (int row = 0; row < 4; ++row) {
+        std::snprintf(num, sizeof num, "%.9g", double(m[ch][col][row]));
+        s << num << (col == 3 && row == 3 ? "" : ", ");
+      }
+    s << ");\n";
+  }
+  return s.str();
+}
+
+}  // namespace lp::cli

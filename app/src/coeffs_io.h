@@ -1,0 +1,28 @@
+#pragma once
+// Text forms of the nine radiance coefficients: JSON (the interchange format of every
+// liveprobe command), a readable table, and a GLSL snippet with the three R&H matrices.
+#include <string>
+
+#include <nlohmann/json.hpp>
+
+#include "shading/sh.h"
+
+namespace lp::cli {
+
+/// {"L00": [r,g,b], "L1-1": [...], ..., "L22": [...]} in storage order.
+nlohmann::ordered_json coefficientsJson(const Sh9& radiance);
+
+/// Reads the "coefficients" object of `liveprobe coeffs` JSON (or a bare coefficients object).
+/// Throws lp::Error naming `source` for a missing name, a non-numeric or non-finite value.
+Sh9 coefficientsFromJson(const nlohmann::json& j, const std::string& source);
+
+/// Reads a file written by `liveprobe coeffs --format json`.
+Sh9 loadCoefficients(const std::string& path);
+
+std::string coefficientsText(const Sh9& radiance);
+std::string coefficientsGlsl(const Sh9& radiance);
+
+/// A float as a JSON number with the shortest decimal form that round-trips the float.
+double jsonFloat(float v);
+
+}  // namespace lp::cli

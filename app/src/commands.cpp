@@ -1,0 +1,14 @@
+#include "commands.h"
+
+namespace lp::cli {
+
+const std::vector<Command>& commands() {
+  static const std::vector<Command> all = {
+      {kCoeffsSpec, runCoeffs},
+      {kIrradianceSpec, runIrradiance},
+      {kCompareSpec, runCompare},
+  };
+  return all;
+}
+
+}  // namespace lp::cli

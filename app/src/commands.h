@@ -1,0 +1,24 @@
+#pragma once
+// The subcommands of the liveprobe program. Each returns the process exit code; errors are
+// thrown as lp::Error and printed by main() as one line.
+#include <string>
+#include <vector>
+
+#include "args.h"
+
+namespace lp::cli {
+
+struct Command {
+  CommandSpec spec;
+  int (*run)(const Args&);
+};
+
+const std::vector<Command>& commands();
+
+int runCoeffs(const Args&);
+int runIrradiance(const Args&);
+int runCompare(const Args&);
+
+extern const CommandSpec kCoeffsSpec, kIrradianceSpec, kCompareSpec;
+
+}  // namespace lp::cli

@@ -1,0 +1,125 @@
+#include "compare.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+
+#include <glm/gtc/type_ptr.hpp>
+#include <opencv2/imgproc.hpp>
+
+#include "capture/image.h"
+#include "shading/brute.h"
+
+namespace lp::cli {
+
+namespace {
+double msSince(std::chrono::steady_clock::time_point t0) {
+  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+}
+}  // namespace
+
+CompareResult compareIrradiance(const Image& img, Layout layout, int width, int height,
+                                const BandWindow& window, unsigned threads) {
+  const Projector projector(layout, img.width, img.height);
+  const auto& samples = projector.samples();
+  const auto grid = equirectSamples(width, height);
+  std::vector<glm::vec3> normals(grid.size());
+  for (std::size_t i = 0; i < grid.size(); ++i) normals[i] = grid[i].dir;
+
+  CompareResult r;
+  r.width = width;
+  r.height = height;
+  r.ySh.resize(grid.size());
+  r.yBrute.resize(grid.size());
+
+  auto t0 = std::chrono::steady_clock::now();
+  const Sh9 L = applyWindow(projector.project(img.rgb.data()), window);
+  const auto m = irradianceMatrices(L);
+  for (std::size_t i = 0; i < grid.size(); ++i)
+    r.ySh[i] = luminance(evalIrradianceQuadratic(m, normals[i]));
+  r.shMs = msSince(t0);
+
+  t0 = std::chrono::steady_clock::now();
+  const auto brute = bruteIrradiance(img.rgb.data(), 3, samples.data(), samples.size(), normals, threads);
+  r.bruteMs = msSince(t0);
+  for (std::size_t i = 0; i < grid.size(); ++i) r.yBrute[i] = luminance(brute[i]);
+
+  for (std::size_t i = 0; i < samples.size(); ++i)
+    r.totalIntensity += double(luminance(glm::make_vec3(img.rgb.data() + 3 * i))) * samples[i].solidAngle;
+
+  double wsum = 0, esum = 0, errSum = 0, errMax = 0, shMin = INFINITY;
+  for (std::size_t i = 0; i < grid.size(); ++i) {
+    const double w = grid[i].solidAngle, d = std::abs(double(r.ySh[i]) - r.yBrute[i]);
+    wsum += w;
+    esum += w * r.yBrute[i];
+    errSum += w * d;
+    errMax = std::max(errMax, d);
+    shMin = std::min(shMin, double(r.ySh[i]));
+  }
+  r.meanIrradiance = esum / wsum;
+  const double meanErr = errSum / wsum;
+  r.meanFracTotal = meanErr / r.totalIntensity;
+  r.maxFracTotal = errMax / r.totalIntensity;
+  r.meanRelMean = meanErr / r.meanIrradiance;
+  r.maxRelMean = errMax / r.meanIrradiance;
+  r.minShOverMean = shMin / r.meanIrradiance;
+  return r;
+}
+
+void saveCompareFigure(const std::string& path, const CompareResult& r) {
+  const int scale = std::max(1, 384 / r.width);
+  const int pw = r.width * scale, ph = r.height * scale;
+  const int label = 28, barW = 60, gap = 8;
+  cv::Mat fig(ph + label, 3 * pw + 2 * gap + barW + 70, CV_8UC3, cv::Scalar(32, 32, 32));
+
+  // Panels 1 and 2: the two irradiance maps, same exposure (brute-force maximum -> white).
+  float peak = 1e-30f;
+  for (float v : r.yBrute) peak = std::max(peak, v);
+  auto drawMap = [&](const std::vector<float>& y, int x0) {
+    cv::Mat small(r.height, r.width, CV_8UC3);
+    for (int i = 0; i < r.height; ++i)
+      for (int j = 0; j < r.width; ++j) {
+        const auto v = std::uint8_t(std::lround(255 * linearToSrgb(y[i * r.width + j] / peak)));
+        small.at<cv::Vec3b>(i, j) = {v, v, v};
+      }
+    cv::Mat big;
+    cv::resize(small, big, {pw, ph}, 0, 0, cv::INTER_NEAREST);
+    big.copyTo(fig(cv::Rect(x0, label, pw, ph)));
+  };
+  drawMap(r.ySh, 0);
+  drawMap(r.yBrute, pw + gap);
+
+  // Panel 3: |E_sh - E| / total intensity, inferno colour map from 0 to the maximum error.
+  const double emax = std::max(1e-12, r.maxFracTotal);
+  cv::Mat err(r.height, r.width, CV_8UC1);
+  for (int i = 0; i < r.height; ++i)
+    for (int j = 0; j < r.width; ++j) {
+      const double e = std::abs(double(r.ySh[i * r.width + j]) - r.yBrute[i * r.width + j]) / r.totalIntensity;
+      err.at<std::uint8_t>(i, j) = std::uint8_t(std::lround(255 * std::min(1.0, e / emax)));
+    }
+  cv::Mat errBig, errColour;
+  cv::resize(err, errBig, {pw, ph}, 0, 0, cv::INTER_NEAREST);
+  cv::applyColorMap(errBig, errColour, cv::COLORMAP_INFERNO);
+  errColour.copyTo(fig(cv::Rect(2 * (pw + gap), label, pw, ph)));
+
+  // Colour bar with its range.
+  const int bx = 3 * pw + 2 * gap + 10;
+  cv::Mat ramp(ph, 1, CV_8UC1);
+  for (int i = 0; i < ph; ++i) ramp.at<std::uint8_t>(i) = std::uint8_t(255 - 255 * i / std::max(1, ph - 1));
+  cv::Mat rampW, rampC;
+  cv::resize(ramp, rampW, {16, ph}, 0, 0, cv::INTER_NEAREST);
+  cv::applyColorMap(rampW, rampC, cv::COLORMAP_INFERNO);
+  rampC.copyTo(fig(cv::Rect(bx, label, 16, ph)));
+  char text[64];
+  std::snprintf(text, sizeof text, "%.2f%%", 100 * emax);
+  const auto white = cv::Scalar(235, 235, 235);
+  cv::putText(fig, text, {bx + 20, label + 12}, cv::FONT_HERSHEY_SIMPLEX, 0.4, white);
+  cv::putText(fig, "0%", {bx + 20, label + ph - 2}, cv::FONT_HERSHEY_SIMPLEX, 0.4, white);
+  cv::putText(fig, "SH (9 coefficients)", {4, 19}, cv::FONT_HERSHEY_SIMPLEX, 0.5, white);
+  cv::putText(fig, "brute force", {pw + gap + 4, 19}, cv::FONT_HERSHEY_SIMPLEX, 0.5, white);
+  cv::putText(fig, "|error| / total intensity", {2 * (pw + gap) + 4, 19}, cv::FONT_HERSHEY_SIMPLEX, 0.5, white);
+  saveImage8(path, fig.cols, fig.rows, 3, fig.ptr<std::uint8_t>());
+}
+
+}  // namespace lp::cli

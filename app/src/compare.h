@@ -1,0 +1,32 @@
+#pragma once
+// SH irradiance against the brute-force hemispherical integral, with the paper's error measure.
+#include <string>
+#include <vector>
+
+#include "capture/image.h"
+#include "capture/layout.h"
+#include "shading/sh.h"
+
+namespace lp::cli {
+
+struct CompareResult {
+  int width = 0, height = 0;       ///< the equirect grid of normals
+  std::vector<float> ySh, yBrute;  ///< luminance of E at each normal, row-major
+  double totalIntensity = 0;       ///< integral of Y(L) over the sphere
+  double meanIrradiance = 0;       ///< solid-angle-weighted mean of Y(E_brute) (= total / 4)
+  double meanFracTotal = 0, maxFracTotal = 0;  ///< |E_sh - E| / total intensity
+  double meanRelMean = 0, maxRelMean = 0;      ///< |E_sh - E| / mean irradiance
+  double minShOverMean = 0;                    ///< min Y(E_sh) / mean irradiance
+  double shMs = 0, bruteMs = 0;
+};
+
+/// Evaluates both methods on a W x H equirect grid of normals (pixel centres, weighted by their
+/// solid angle). `window` is applied to the SH coefficients first.
+CompareResult compareIrradiance(const Image& img, Layout layout, int width, int height,
+                                const BandWindow& window = {}, unsigned threads = 0);
+
+/// The SH map, the brute-force map (same exposure) and |error| / total intensity with a colour
+/// scale, side by side, as an 8-bit PNG.
+void saveCompareFigure(const std::string& path, const CompareResult& r);
+
+}  // namespace lp::cli

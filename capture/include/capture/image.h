@@ -1,0 +1,39 @@
+#pragma once
+// Still images in and out, through OpenCV imgcodecs: Radiance .hdr, OpenEXR, and 8/16-bit PNG or
+// JPEG (decoded from sRGB to linear radiance). Pixels are linear RGB floats, packed, row-major.
+#include <cstdint>
+#include <string>
+#include <vector>
+
+namespace lp {
+
+/// An owning linear-RGB float image (3 floats per pixel, rows top to bottom).
+struct Image {
+  int width = 0;
+  int height = 0;
+  std::vector<float> rgb;
+
+  Image() = default;
+  Image(int w, int h) : width(w), height(h), rgb(std::size_t(w) * h * 3, 0.0f) {}
+  float* pixel(int x, int y) { return rgb.data() + (std::size_t(y) * width + x) * 3; }
+  const float* pixel(int x, int y) const { return rgb.data() + (std::size_t(y) * width + x) * 3; }
+};
+
+/// sRGB transfer function, decode (8-bit code value / 255 -> linear) and encode.
+float srgbToLinear(float v);
+float linearToSrgb(float v);
+
+/// Loads `path` as linear RGB. Throws lp::Error naming the file on: a missing or unreadable file,
+/// a file that is not an image, a truncated Radiance file, and NaN or Inf pixels.
+Image loadImage(const std::string& path);
+
+/// Writes `img` to `path` (.hdr, .exr: linear float; .png, .jpg: 8-bit sRGB of the clamped
+/// linear values). Written to a temporary file beside `path`, then renamed, so a failure never
+/// leaves a half-written file. Throws lp::Error.
+void saveImage(const std::string& path, const Image& img);
+
+/// Writes already-encoded 8-bit BGR(A) pixels (OpenCV order) atomically, as saveImage does.
+void saveImage8(const std::string& path, int width, int height, int channels,
+                const std::uint8_t* data);
+
+}  // namespace lp

@@ -1,0 +1,236 @@
+#include "capture/image.h"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+
+#include <fcntl.h>
+#include <unistd.h>
+
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+
+#include "capture/error.h"
+
+namespace lp {
+
+namespace fs = std::filesystem;
+
+float srgbToLinear(float v) {
+  return v <= 0.04045f ? v / 12.92f : std::pow((v + 0.055f) / 1.055f, 2.4f);
+}
+float linearToSrgb(float v) {
+  v = std::clamp(v, 0.0f, 1.0f);
+  return v <= 0.0031308f ? v * 12.92f : 1.055f * std::pow(v, 1.0f / 2.4f) - 0.055f;
+}
+
+namespace {
+
+// Points fd 2 at /dev/null for its lifetime. Decoders (libpng, libjpeg, OpenCV's own logging)
+// write warnings straight to stderr; we report their failure as one line of our own instead.
+class QuietStderr {
+ public:
+  QuietStderr() : saved_(::dup(2)) {
+    const int null = ::open("/dev/null", O_WRONLY);
+    if (null >= 0) {
+      ::dup2(null, 2);
+      ::close(null);
+    }
+  }
+  ~QuietStderr() {
+    if (saved_ >= 0) {
+      ::dup2(saved_, 2);
+      ::close(saved_);
+    }
+  }
+  QuietStderr(const QuietStderr&) = delete;
+  QuietStderr& operator=(const QuietStderr&) = delete;
+
+ private:
+  int saved_;
+};
+
+std::string lower(std::string s) {
+  for (auto& c : s) c = char(std::tolower(static_cast<unsigned char>(c)));
+  return s;
+}
+
+// OpenCV's Radiance reader accepts a file whose RLE scanlines stop early and returns the image
+// with the missing rows left black. A complete file holds at least one RLE (>= 4-byte header per
+// scanline) or flat (4 bytes per pixel) record per row, so we check the header's size line against
+// the bytes present.
+void checkRadianceComplete(const std::string& path, int width, int height) {
+  std::ifstream f(path, std::ios::binary);
+  std::string line;
+  std::size_t headerBytes = 0;
+  bool sawSize = false;
+  while (std::getline(f, line)) {
+    headerBytes += line.size() + 1;
+    if (line.rfind("-Y ", 0) == 0 || line.rfind("+Y ", 0) == 0) {
+      sawSize = true;
+      break;
+    }
+  }
+  if (!sawSize) throw Error(path + ": Radiance header has no resolution line");
+  const auto size = fs::file_size(path);
+  const auto payload = size > headerBytes ? size - headerBytes : 0;
+  // Decode the scanlines ourselves just far enough to count them.
+  f.clear();
+  f.seekg(std::streamoff(headerBytes));
+  std::vector<unsigned char> data(payload);
+  f.read(reinterpret_cast<char*>(data.data()), std::streamsize(payload));
+  std::size_t pos = 0;
+  for (int row = 0; row < height; ++row) {
+    if (pos + 4 > data.size()) throw Error(path + ": truncated Radiance file (row " +
+                                           std::to_string(row) + " of " +
+                                           std::to_string(height) + " missing)");
+    const bool rle = width >= 8 && width < 32768 && data[pos] == 2 && data[pos + 1] == 2 &&
+                     ((data[pos + 2] << 8) | data[pos + 3]) == width;
+    if (!rle) {
+      pos += std::size_t(width) * 4;  // flat (or old-style RLE, which we size as flat)
+      if (pos > data.size()) throw Error(path + ": truncated Radiance file (row " +
+                                         std::to_string(row) + " of " +
+                                         std::to_string(height) + " incomplete)");
+      continue;
+    }
+    pos += 4;
+    for (int ch = 0; ch < 4; ++ch) {
+      int x = 0;
+      while (x < width) {
+        if (pos >= data.size())
+          throw Error(path + ": truncated Radiance file (row " + std::to_string(row) + " of " +
+                      std::to_string(height) + " incomplete)");
+        int n = data[pos++];
+        if (n > 128) {  // run
+          n -= 128;
+          pos += 1;
+        } else {
+          pos += std::size_t(n);
+        }
+        if (n == 0 || pos > data.size())
+          throw Error(path + ": corrupt or truncated Radiance file at row " + std::to_string(row));
+        x += n;
+      }
+    }
+  }
+}
+
+}  // namespace
+
+Image loadImage(const std::string& path) {
+  std::error_code ec;
+  if (!fs::exists(path, ec)) throw Error(path + ": no such file");
+  if (fs::is_directory(path, ec)) throw Error(path + ": is a directory, not an image");
+  cv::Mat m;
+  try {
+    QuietStderr quiet;  // libpng and OpenCV's codecs print their own multi-line complaints
+    m = cv::imread(path, cv::IMREAD_UNCHANGED | cv::IMREAD_ANYDEPTH | cv::IMREAD_ANYCOLOR);
+  } catch (const cv::Exception& e) {
+    throw Error(path + ": cannot decode image (" + e.err + ")");
+  }
+  if (m.empty()) throw Error(path + ": not a readable image (unknown format or corrupt data)");
+  const std::string ext = lower(fs::path(path).extension().string());
+  if (ext == ".hdr" || ext == ".pic") checkRadianceComplete(path, m.cols, m.rows);
+
+  // To 3-channel RGB.
+  cv::Mat rgb;
+  switch (m.channels()) {
+    case 1: cv::cvtColor(m, rgb, cv::COLOR_GRAY2RGB); break;
+    case 3: cv::cvtColor(m, rgb, cv::COLOR_BGR2RGB); break;
+    case 4: cv::cvtColor(m, rgb, cv::COLOR_BGRA2RGB); break;
+    default:
+      throw Error(path + ": unsupported channel count " + std::to_string(m.channels()));
+  }
+  Image img(rgb.cols, rgb.rows);
+  const int depth = rgb.depth();
+  if (depth == CV_8U) {
+    std::array<float, 256> lut;
+    for (int i = 0; i < 256; ++i) lut[i] = srgbToLinear(i / 255.0f);
+    for (int y = 0; y < rgb.rows; ++y) {
+      const auto* src = rgb.ptr<std::uint8_t>(y);
+      float* dst = img.pixel(0, y);
+      for (int x = 0; x < rgb.cols * 3; ++x) dst[x] = lut[src[x]];
+    }
+  } else if (depth == CV_16U) {
+    for (int y = 0; y < rgb.rows; ++y) {
+      const auto* src = rgb.ptr<std::uint16_t>(y);
+      float* dst = img.pixel(0, y);
+      for (int x = 0; x < rgb.cols * 3; ++x) dst[x] = srgbToLinear(src[x] / 65535.0f);
+    }
+  } else {
+    cv::Mat f;
+    rgb.convertTo(f, CV_32F);
+    for (int y = 0; y < f.rows; ++y)
+      std::copy_n(f.ptr<float>(y), std::size_t(f.cols) * 3, img.pixel(0, y));
+  }
+  std::size_t bad = 0, firstBad = 0;
+  for (std::size_t i = 0; i < img.rgb.size(); ++i) {
+    if (!std::isfinite(img.rgb[i])) {
+      if (bad++ == 0) firstBad = i / 3;
+    }
+  }
+  if (bad)
+    throw Error(path + ": " + std::to_string(bad) + " pixel values are NaN or Inf (first at x=" +
+                std::to_string(firstBad % img.width) + ", y=" +
+                std::to_string(firstBad / img.width) + ")");
+  return img;
+}
+
+namespace {
+
+void writeAtomically(const std::string& path, const cv::Mat& m) {
+  const fs::path target(path);
+  const std::string ext = target.extension().string();
+  if (ext.empty()) throw Error(path + ": output needs an extension (.png, .hdr, .exr, .jpg)");
+  const fs::path dir = target.has_parent_path() ? target.parent_path() : fs::path(".");
+  std::error_code ec;
+  if (!fs::is_directory(dir, ec)) throw Error(path + ": folder " + dir.string() + " does not exist");
+  const fs::path tmp = dir / ("." + target.stem().string() + ".tmp" + std::to_string(::getpid()) + ext);
+  bool ok = false;
+  try {
+    ok = cv::imwrite(tmp.string(), m);
+  } catch (const cv::Exception& e) {
+    fs::remove(tmp, ec);
+    throw Error(path + ": cannot write (" + e.err + ")");
+  }
+  if (!ok) {
+    fs::remove(tmp, ec);
+    throw Error(path + ": cannot write (unsupported extension or unwritable folder)");
+  }
+  fs::rename(tmp, target, ec);
+  if (ec) {
+    fs::remove(tmp, ec);
+    throw Error(path + ": cannot rename temporary file into place: " + ec.message());
+  }
+}
+
+}  // namespace
+
+void saveImage(const std::string& path, const Image& img) {
+  const std::string ext = lower(fs::path(path).extension().string());
+  cv::Mat rgb(img.height, img.width, CV_32FC3, const_cast<float*>(img.rgb.data()));
+  cv::Mat bgr;
+  cv::cvtColor(rgb, bgr, cv::COLOR_RGB2BGR);
+  if (ext == ".hdr" || ext == ".exr") {
+    writeAtomically(path, bgr);
+    return;
+  }
+  cv::Mat out(bgr.rows, bgr.cols, CV_8UC3);
+  for (int y = 0; y < bgr.rows; ++y) {
+    const float* s = bgr.ptr<float>(y);
+    auto* d = out.ptr<std::uint8_t>(y);
+    for (int x = 0; x < bgr.cols * 3; ++x) d[x] = std::uint8_t(std::lround(255.0f * linearToSrgb(s[x])));
+  }
+  writeAtomically(path, out);
+}
+
+void saveImage8(const std::string& path, int width, int height, int channels,
+                const std::uint8_t* data) {
+  cv::Mat m(height, width, channels == 4 ? CV_8UC4 : CV_8UC3, const_cast<std::uint8_t*>(data));
+  writeAtomically(path, m);
+}
+
+}  // namespace lp

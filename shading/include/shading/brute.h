@@ -1,0 +1,19 @@
+#pragma once
+// The standard method, kept for comparison with the nine-coefficient representation:
+// brute-force hemispherical integration E(n) = sum_i L_i max(n . w_i, 0) dw_i for every output
+// normal. O(T S) for T normals and S pixels. Same conventions as shading/sh.h.
+#include <cstddef>
+#include <vector>
+
+#include "shading/sh.h"
+
+namespace lp {
+
+/// Irradiance at each of `normals` (unit, R&H frame) from an image given as samples (see
+/// projectSamples for rgb/pixelStride). Runs on `threads` threads (0 = all hardware threads).
+/// Inner sums are float over blocks, totals in double.
+std::vector<Rgb> bruteIrradiance(const float* rgb, std::size_t pixelStride,
+                                 const SphereSample* samples, std::size_t count,
+                                 const std::vector<glm::vec3>& normals, unsigned threads = 0);
+
+}  // namespace lp

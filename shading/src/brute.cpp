@@ -1,0 +1,61 @@
+#include "shading/brute.h"
+
+#include <algorithm>
+#include <atomic>
+#include <thread>
+
+namespace lp {
+
+std::vector<Rgb> bruteIrradiance(const float* rgb, std::size_t pixelStride,
+                                 const SphereSample* samples, std::size_t count,
+                                 const std::vector<glm::vec3>& normals, unsigned threads) {
+  // Structure-of-arrays copy of the non-empty pixels with radiance pre-multiplied by dw, so the
+  // inner loop is five contiguous streams the compiler vectorises (this file is compiled with
+  // reassociation allowed; see shading/CMakeLists.txt).
+  std::vector<float> wx, wy, wz, lr, lg, lb;
+  for (auto* v : {&wx, &wy, &wz, &lr, &lg, &lb}) v->reserve(count);
+  for (std::size_t i = 0; i < count; ++i) {
+    const SphereSample& s = samples[i];
+    if (s.solidAngle == 0.0f) continue;
+    const float* p = rgb + i * pixelStride;
+    wx.push_back(s.dir.x);
+    wy.push_back(s.dir.y);
+    wz.push_back(s.dir.z);
+    lr.push_back(p[0] * s.solidAngle);
+    lg.push_back(p[1] * s.solidAngle);
+    lb.push_back(p[2] * s.solidAngle);
+  }
+  const std::size_t n = wx.size();
+  std::vector<Rgb> out(normals.size());
+  std::atomic<std::size_t> next{0};
+  auto worker = [&] {
+    for (std::size_t t; (t = next.fetch_add(1)) < normals.size();) {
+      const glm::vec3 nrm = normals[t];
+      double er = 0, eg = 0, eb = 0;
+      constexpr std::size_t kBlock = 4096;
+      for (std::size_t b0 = 0; b0 < n; b0 += kBlock) {
+        const std::size_t b1 = std::min(n, b0 + kBlock);
+        float r = 0, g = 0, b = 0;
+        for (std::size_t i = b0; i < b1; ++i) {
+          const float c = std::max(0.0f, nrm.x * wx[i] + nrm.y * wy[i] + nrm.z * wz[i]);
+          r += c * lr[i];
+          g += c * lg[i];
+          b += c * lb[i];
+        }
+        er += r;
+        eg += g;
+        eb += b;
+      }
+      out[t] = Rgb(float(er), float(eg), float(eb));
+    }
+  };
+  if (threads == 0) threads = std::max(1u, std::thread::hardware_concurrency());
+  threads = std::min<unsigned>(threads, std::max<std::size_t>(1, normals.size()));
+  std::vector<std::thread> pool;
+  for (unsigned i = 1; i < threads; ++i) pool.emplace_back(worker);
+  worker();
+  for (auto& th : pool) th.join();
+  return out;
+}
+
+}  // namespace lp

@@ -1,0 +1,182 @@
+// The liveprobe program on files: output formats, and one-line errors on bad input.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <fstream>
+#include <numbers>
+
+#include <nlohmann/json.hpp>
+#include <opencv2/imgcodecs.hpp>
+
+#include "capture/image.h"
+#include "test_util.h"
+
+namespace {
+
+using lpt::runLiveprobe;
+namespace fs = std::filesystem;
+
+void writeConstantHdr(const std::string& path, int w, int h, float c) {
+  cv::Mat m(h, w, CV_32FC3, cv::Scalar(c, c, c));
+  ASSERT_TRUE(cv::imwrite(path, m));
+}
+
+int lineCount(const std::string& s) { return int(std::count(s.begin(), s.end(), '\n')); }
+
+// A bad input gives exit 1 and exactly one line that names the input.
+void expectOneLineError(const std::string& args, const std::string& names,
+                        const std::string& says) {
+  const auto r = runLiveprobe(args);
+  EXPECT_EQ(r.exitCode, 1) << r.output;
+  EXPECT_EQ(lineCount(r.output), 1) << r.output;
+  EXPECT_NE(r.output.find(names), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find(says), std::string::npos) << r.output;
+}
+
+TEST(Cli, HelpForEveryCommand) {
+  for (const char* cmd : {"coeffs", "irradiance", "compare"}) {
+    const auto r = runLiveprobe(std::string(cmd) + " --help");
+    EXPECT_EQ(r.exitCode, 0);
+    EXPECT_NE(r.output.find("usage: liveprobe " + std::string(cmd)), std::string::npos);
+  }
+  EXPECT_EQ(runLiveprobe("--help").exitCode, 0);
+  EXPECT_NE(runLiveprobe("frobnicate").exitCode, 0);
+}
+
+TEST(Cli, CoeffsJsonIsExactlyTheDocumentedShape) {
+  lpt::TempDir tmp;
+  const std::string f = tmp / "const.hdr";
+  writeConstantHdr(f, 64, 32, 2.0f);
+  const auto r = runLiveprobe("coeffs " + f);
+  ASSERT_EQ(r.exitCode, 0) << r.output;
+  const auto j = nlohmann::ordered_json::parse(r.output);
+  std::vector<std::string> keys;
+  for (auto& [k, v] : j.items()) keys.push_back(k);
+  EXPECT_EQ(keys, (std::vector<std::string>{"source", "layout", "width", "height", "coefficients"}));
+  EXPECT_EQ(j["layout"], "equirect");
+  EXPECT_EQ(j["width"], 64);
+  std::vector<std::string> names;
+  for (auto& [k, v] : j["coefficients"].items()) names.push_back(k);
+  EXPECT_EQ(names, (std::vector<std::string>{"L00", "L1-1", "L10", "L11", "L2-2", "L2-1", "L20",
+                                             "L21", "L22"}));
+  // Radiance 2 everywhere (exact in RGBE): L00 = 4 pi 0.282095 * 2.
+  EXPECT_NEAR(j["coefficients"]["L00"][1].get<double>(), 4 * std::numbers::pi * 0.282095 * 2, 1e-4);
+  EXPECT_NEAR(j["coefficients"]["L20"][1].get<double>(), 0.0, 1e-4);
+}
+
+TEST(Cli, CoeffsTextAndGlsl) {
+  lpt::TempDir tmp;
+  const std::string f = tmp / "const.hdr";
+  writeConstantHdr(f, 64, 32, 1.0f);
+  const auto t = runLiveprobe("coeffs " + f + " --format text");
+  EXPECT_EQ(t.exitCode, 0);
+  EXPECT_NE(t.output.find("L2-2"), std::string::npos);
+  const auto g = runLiveprobe("coeffs " + f + " --format glsl");
+  EXPECT_EQ(g.exitCode, 0);
+  std::size_t n = 0;
+  for (std::size_t p = 0; (p = g.output.find("const mat4", p)) != std::string::npos; ++p) ++n;
+  EXPECT_EQ(n, 3u);
+  expectOneLineError("coeffs " + f + " --format yaml", "--format yaml", "expected json");
+  expectOneLineError("coeffs " + f + " --window 1.5", "--window 1.5", "greater than 2");
+}
+
+// Irradiance of a constant environment c is pi c everywhere, by both methods; the file is
+// written atomically (no temporary left beside it).
+TEST(Cli, IrradianceMapOfConstantEnvironment) {
+  lpt::TempDir tmp;
+  const std::string f = tmp / "const.hdr";
+  writeConstantHdr(f, 128, 64, 0.5f);
+  for (const char* method : {"sh", "brute"}) {
+    const std::string out = tmp / (std::string("e_") + method + ".exr");
+    const auto r = runLiveprobe("irradiance " + f + " --out " + out + " --size 32x16 --method " + method);
+    ASSERT_EQ(r.exitCode, 0) << r.output;
+    const lp::Image e = lp::loadImage(out);
+    ASSERT_EQ(e.width, 32);
+    ASSERT_EQ(e.height, 16);
+    for (float v : e.rgb) ASSERT_NEAR(v, std::numbers::pi * 0.5, 1e-3) << method;
+  }
+  int files = 0;
+  for (auto& entry : fs::directory_iterator(tmp.path)) files += entry.is_regular_file();
+  EXPECT_EQ(files, 3);
+  expectOneLineError("irradiance " + f + " --out " + tmp / "nodir/x.hdr", "nodir", "does not exist");
+  expectOneLineError("irradiance " + f, "irradiance", "--out");
+}
+
+TEST(Cli, CompareJson) {
+  const auto r = runLiveprobe("compare " + lpt::dataPath("probes/latlong_256x128/grace.hdr") +
+                              " --size 32x16 --json");
+  ASSERT_EQ(r.exitCode, 0) << r.output;
+  const auto j = nlohmann::json::parse(r.output);
+  for (const char* k : {"mean_frac_total", "max_frac_total", "mean_rel_mean", "max_rel_mean",
+                        "min_sh_over_mean", "sh_ms", "brute_ms"})
+    EXPECT_TRUE(j.contains(k)) << k;
+  // Mean irradiance is a quarter of the total intensity, so rel_mean = 4 frac_total.
+  EXPECT_NEAR(j["mean_rel_mean"].get<double>(), 4 * j["mean_frac_total"].get<double>(), 1e-3);
+  EXPECT_LT(j["mean_frac_total"].get<double>(), 0.05);
+}
+
+TEST(Cli, CompareFigure) {
+  lpt::TempDir tmp;
+  const std::string out = tmp / "err.png";
+  const auto r = runLiveprobe("compare " + lpt::dataPath("probes/latlong_256x128/grace.hdr") +
+                              " --size 32x16 --out " + out);
+  ASSERT_EQ(r.exitCode, 0) << r.output;
+  const cv::Mat fig = cv::imread(out);
+  ASSERT_FALSE(fig.empty());
+  EXPECT_GT(fig.cols, 3 * 32);
+  double lo, hi;
+  cv::minMaxLoc(fig.reshape(1), &lo, &hi);
+  EXPECT_GT(hi - lo, 100);  // not blank
+}
+
+// ---- Bad input ----------------------------------------------------------------------------
+
+TEST(CliBadInput, MissingFile) {
+  expectOneLineError("coeffs /nonexistent/env.hdr", "/nonexistent/env.hdr", "no such file");
+}
+
+TEST(CliBadInput, NotAnImage) {
+  lpt::TempDir tmp;
+  const std::string f = tmp / "notes.hdr";
+  std::ofstream(f) << "this is not a picture\n";
+  expectOneLineError("coeffs " + f, f, "not a readable image");
+  const std::string g = tmp / "garbage.png";
+  std::ofstream(g, std::ios::binary) << std::string("\x89PNG\r\n\x1a\n garbage garbage", 24);
+  expectOneLineError("compare " + g, g, "image");
+}
+
+TEST(CliBadInput, TruncatedRadianceFile) {
+  lpt::TempDir tmp;
+  const std::string src = lpt::dataPath("equirect/royal_esplanade_1k.hdr");
+  std::ifstream in(src, std::ios::binary);
+  std::string bytes((std::istreambuf_iterator<char>(in)), {});
+  const std::string f = tmp / "truncated.hdr";
+  std::ofstream(f, std::ios::binary) << bytes.substr(0, bytes.size() / 2);
+  expectOneLineError("coeffs " + f, f, "truncated");
+}
+
+TEST(CliBadInput, NanAndInfPixels) {
+  lpt::TempDir tmp;
+  cv::Mat m(32, 64, CV_32FC3, cv::Scalar(1, 1, 1));
+  m.at<cv::Vec3f>(5, 7)[1] = NAN;
+  m.at<cv::Vec3f>(9, 2)[0] = INFINITY;
+  const std::string f = tmp / "nan.exr";
+  ASSERT_TRUE(cv::imwrite(f, m));
+  expectOneLineError("coeffs " + f, f, "NaN or Inf");
+}
+
+TEST(CliBadInput, AngularMapNotSquare) {
+  lpt::TempDir tmp;
+  const std::string f = tmp / "wide.hdr";
+  writeConstantHdr(f, 64, 32, 1.0f);
+  expectOneLineError("coeffs " + f + " --layout angular", f, "must be square");
+}
+
+TEST(CliBadInput, BadOptions) {
+  expectOneLineError("coeffs a.hdr --layout spherical", "spherical", "unknown layout");
+  expectOneLineError("compare a.hdr --size 64by32", "64by32", "size");
+  expectOneLineError("coeffs a.hdr --bogus", "--bogus", "unknown option");
+  expectOneLineError("coeffs", "coeffs", "missing argument");
+}
+
+}  // namespace

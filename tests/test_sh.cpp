@@ -1,0 +1,294 @@
+// Tier 1: the SH core against closed forms and an independent float64 reference.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <numbers>
+#include <random>
+
+#include "capture/image.h"
+#include "capture/layout.h"
+#include "compare.h"
+#include "shading/sh.h"
+
+namespace {
+
+using lp::Sh9;
+constexpr double kPi = std::numbers::pi;
+
+// Independent float64 basis in spherical coordinates, with the exact normalisations
+// sqrt((2l+1)/(4pi) (l-m)!/(l+m)!) rather than the paper's rounded constants.
+std::array<double, 9> refBasis(double t, double p) {
+  const double ct = std::cos(t), st = std::sin(t);
+  return {0.5 / std::sqrt(kPi),
+          std::sqrt(3 / (4 * kPi)) * st * std::sin(p),
+          std::sqrt(3 / (4 * kPi)) * ct,
+          std::sqrt(3 / (4 * kPi)) * st * std::cos(p),
+          std::sqrt(15 / (16 * kPi)) * st * st * std::sin(2 * p),
+          std::sqrt(15 / (4 * kPi)) * st * ct * std::sin(p),
+          std::sqrt(5 / (16 * kPi)) * (3 * ct * ct - 1),
+          std::sqrt(15 / (4 * kPi)) * st * ct * std::cos(p),
+          std::sqrt(15 / (16 * kPi)) * st * st * std::cos(2 * p)};
+}
+
+glm::vec3 randomUnit(std::mt19937& rng) {
+  std::normal_distribution<float> g;
+  return glm::normalize(glm::vec3(g(rng), g(rng), g(rng)));
+}
+
+lp::Image constantEquirect(int w, int h, float c) {
+  lp::Image img(w, h);
+  std::fill(img.rgb.begin(), img.rgb.end(), c);
+  return img;
+}
+
+lp::Image randomImage(int w, int h, float maxValue, unsigned seed) {
+  lp::Image img(w, h);
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<float> u(0, maxValue);
+  for (float& v : img.rgb) v = u(rng);
+  return img;
+}
+
+// Equirect with a small disc of constant radiance around `dir` (unit, R&H frame). Returns the
+// disc's power (sum of L dw over its pixels) through `power`.
+lp::Image discEquirect(int w, int h, glm::dvec3 dir, double radiusRad, float radiance,
+                       double* power) {
+  lp::Image img(w, h);
+  *power = 0;
+  const double cosR = std::cos(radiusRad);
+  for (int i = 0; i < h; ++i) {
+    const double t = kPi * (i + 0.5) / h;
+    const double dw = 2 * kPi / w * (std::cos(kPi * i / h) - std::cos(kPi * (i + 1) / h));
+    for (int j = 0; j < w; ++j) {
+      const double p = 2 * kPi * (j + 0.5) / w;
+      const glm::dvec3 d(std::sin(t) * std::cos(p), std::sin(t) * std::sin(p), std::cos(t));
+      if (glm::dot(d, dir) >= cosR) {
+        float* px = img.pixel(j, i);
+        px[0] = px[1] = px[2] = radiance;
+        *power += radiance * dw;
+      }
+    }
+  }
+  return img;
+}
+
+Sh9 projectImage(const lp::Image& img, lp::Layout layout) {
+  return lp::Projector(layout, img.width, img.height).project(img.rgb.data());
+}
+
+TEST(ShCore, BasisMatchesExactNormalisation) {
+  std::mt19937 rng(1);
+  for (int n = 0; n < 100; ++n) {
+    const glm::vec3 d = randomUnit(rng);
+    const double t = std::acos(double(d.z)), p = std::atan2(double(d.y), double(d.x));
+    const auto ref = refBasis(t, p);
+    const auto y = lp::shBasis(d);
+    for (int k = 0; k < 9; ++k) EXPECT_NEAR(y[k], ref[k], 2e-6) << "k=" << k;
+  }
+}
+
+TEST(ShCore, IndexAndNames) {
+  EXPECT_EQ(lp::shIndex("L00"), 0);
+  EXPECT_EQ(lp::shIndex("L1-1"), 1);
+  EXPECT_EQ(lp::shIndex("L2-1"), 5);
+  EXPECT_EQ(lp::shIndex("L22"), 8);
+  EXPECT_EQ(lp::shIndex("L23"), -1);
+  EXPECT_EQ(lp::shBand(3), 1);
+  EXPECT_EQ(lp::shBand(4), 2);
+}
+
+// Radiance c everywhere: L00 = 4 pi Y00 c, the rest ~0, E = pi c at every normal.
+TEST(ShCore, WhiteFurnace) {
+  const float c = 1.7f;
+  for (auto [w, h] : {std::pair{256, 128}, std::pair{300, 300}, std::pair{97, 31}}) {
+    const Sh9 L = projectImage(constantEquirect(w, h, c), lp::Layout::Equirect);
+    const double l00 = 4 * kPi * 0.282095 * c;
+    for (int ch = 0; ch < 3; ++ch) {
+      EXPECT_NEAR(L.c[0][ch], l00, 1e-5 * l00) << w << "x" << h;
+      for (int k = 1; k < 9; ++k) EXPECT_NEAR(L.c[k][ch], 0.0, 1e-5 * l00) << "k=" << k;
+    }
+    const auto m = lp::irradianceMatrices(L);
+    std::mt19937 rng(2);
+    for (int n = 0; n < 200; ++n) {
+      const glm::vec3 nrm = randomUnit(rng);
+      const glm::vec3 e1 = lp::evalIrradiance(L, nrm), e2 = lp::evalIrradianceQuadratic(m, nrm);
+      for (int ch = 0; ch < 3; ++ch) {
+        EXPECT_NEAR(e1[ch], kPi * c, 1e-5 * kPi * c);
+        EXPECT_NEAR(e2[ch], kPi * c, 1e-5 * kPi * c);
+      }
+    }
+  }
+  // The angular map of the same constant environment.
+  lp::Image ang(256, 256);
+  std::fill(ang.rgb.begin(), ang.rgb.end(), c);
+  const Sh9 La = projectImage(ang, lp::Layout::Angular);
+  EXPECT_NEAR(La.c[0].x, 4 * kPi * 0.282095 * c, 1e-5 * 4 * kPi * 0.282095 * c);
+  for (int k = 1; k < 9; ++k) EXPECT_NEAR(La.c[k].x, 0.0, 1e-4 * La.c[0].x) << "k=" << k;
+}
+
+// Basis sum and quadratic form (R&H eq. 12) are the same function of n.
+TEST(ShCore, QuadraticFormEqualsBasisSum) {
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<float> u(-1, 1);
+  for (int trial = 0; trial < 20; ++trial) {
+    Sh9 L;
+    for (auto& v : L.c) v = {u(rng), u(rng), u(rng)};
+    const auto m = lp::irradianceMatrices(L);
+    for (int n = 0; n < 100; ++n) {
+      const glm::vec3 nrm = randomUnit(rng);
+      const glm::vec3 a = lp::evalIrradiance(L, nrm), b = lp::evalIrradianceQuadratic(m, nrm);
+      // Independent: sum_lm A_l L_lm Y_lm(n) in float64 with exact normalisations.
+      const auto y = refBasis(std::acos(double(nrm.z)), std::atan2(double(nrm.y), double(nrm.x)));
+      for (int ch = 0; ch < 3; ++ch) {
+        double ref = 0;
+        for (int k = 0; k < 9; ++k) {
+          const int l = lp::shBand(k);
+          const double A = l == 0 ? kPi : (l == 1 ? 2 * kPi / 3 : kPi / 4);
+          ref += A * L.c[k][ch] * y[k];
+        }
+        EXPECT_NEAR(a[ch], ref, 2e-5) << "basis sum";
+        EXPECT_NEAR(b[ch], ref, 2e-5) << "quadratic form";
+      }
+    }
+  }
+}
+
+// The equirect projection against a float64 loop written here by another path: each pixel's
+// basis integral by 4x4-point Gauss-Legendre quadrature in (cos t, p), the spherical-coordinate
+// basis, double accumulation. (The projector uses closed-form antiderivatives instead.)
+TEST(ShCore, ProjectionMatchesFloat64Reference) {
+  const int w = 160, h = 80;
+  const lp::Image img = randomImage(w, h, 5.0f, 4);
+  const Sh9 L = projectImage(img, lp::Layout::Equirect);
+  const double gx[4] = {-0.8611363115940526, -0.3399810435848563, 0.3399810435848563,
+                        0.8611363115940526};
+  const double gw[4] = {0.3478548451374538, 0.6521451548625461, 0.6521451548625461,
+                        0.3478548451374538};
+  std::array<double, 27> ref{};
+  for (int i = 0; i < h; ++i) {
+    const double u0 = std::cos(kPi * i / h), u1 = std::cos(kPi * (i + 1) / h);
+    for (int j = 0; j < w; ++j) {
+      const double p0 = 2 * kPi * j / w, p1 = 2 * kPi * (j + 1) / w;
+      std::array<double, 9> integral{};
+      for (int a = 0; a < 4; ++a)
+        for (int b = 0; b < 4; ++b) {
+          const double uc = 0.5 * (u0 + u1) + 0.5 * (u0 - u1) * gx[a];
+          const double pc = 0.5 * (p0 + p1) + 0.5 * (p1 - p0) * gx[b];
+          const auto y = refBasis(std::acos(uc), pc);
+          const double wgt = gw[a] * gw[b] * 0.25 * (u0 - u1) * (p1 - p0);
+          for (int k = 0; k < 9; ++k) integral[k] += wgt * y[k];
+        }
+      for (int k = 0; k < 9; ++k)
+        for (int ch = 0; ch < 3; ++ch) ref[3 * k + ch] += img.pixel(j, i)[ch] * integral[k];
+    }
+  }
+  // 1e-5 of L00: float32 row sums against float64; the basis constants differ by < 1e-6.
+  for (int k = 0; k < 9; ++k)
+    for (int ch = 0; ch < 3; ++ch)
+      EXPECT_NEAR(L.c[k][ch], ref[3 * k + ch], 1e-5 * ref[0]) << lp::kShNames[k] << " ch " << ch;
+}
+
+// The generic per-sample path (used for non-equirect layouts) agrees with the exact equirect
+// path to the midpoint-rule error O(1/H^2).
+TEST(ShCore, SamplePathAgreesWithExactEquirect) {
+  const int w = 512, h = 256;
+  const lp::Image img = randomImage(w, h, 2.0f, 7);
+  const Sh9 a = lp::projectEquirect(img.rgb.data(), w, h);
+  const auto s = lp::layoutSamples(lp::Layout::Equirect, w, h);
+  const Sh9 b = lp::projectSamples(img.rgb.data(), 3, s.data(), s.size());
+  for (int k = 0; k < 9; ++k) EXPECT_NEAR(a.c[k].x, b.c[k].x, 2e-5 * a.c[0].x) << lp::kShNames[k];
+}
+
+// A band-limited environment L(w) = sum a_k Y_k(w) has coefficients exactly a_k.
+TEST(ShCore, BandLimitedEnvironmentRecoversItsCoefficients) {
+  const std::array<double, 9> a = {2.0, 0.3, -0.5, 0.25, 0.1, -0.2, 0.15, 0.05, -0.12};
+  const int w = 512, h = 256;
+  lp::Image img(w, h);
+  for (int i = 0; i < h; ++i)
+    for (int j = 0; j < w; ++j) {
+      const auto y = refBasis(kPi * (i + 0.5) / h, 2 * kPi * (j + 0.5) / w);
+      double v = 0;
+      for (int k = 0; k < 9; ++k) v += a[k] * y[k];
+      float* p = img.pixel(j, i);
+      p[0] = p[1] = p[2] = float(v);
+    }
+  const Sh9 L = projectImage(img, lp::Layout::Equirect);
+  // The image holds L at pixel centres, not pixel averages: O(1/H^2), 1e-4 of L00 at H = 256.
+  for (int k = 0; k < 9; ++k) EXPECT_NEAR(L.c[k].y, a[k], 1e-4 * a[0]) << lp::kShNames[k];
+}
+
+// A small bright disc: coefficients Y_lm(dir) * power; the paper's worst case error 3/32.
+TEST(ShCore, DirectionalLight) {
+  const glm::dvec3 dir = glm::normalize(glm::dvec3(0.3, -0.5, 0.6));
+  double power = 0;
+  const double radius = 1.5 * kPi / 180;
+  const lp::Image img = discEquirect(2048, 1024, dir, radius, 100.0f, &power);
+  const Sh9 L = projectImage(img, lp::Layout::Equirect);
+  const auto y = refBasis(std::acos(dir.z), std::atan2(dir.y, dir.x));
+  // A uniform cap of half-angle d averages Y_lm to Y_lm(centre) (P_{l-1} - P_{l+1})(cos d) /
+  // ((2l+1)(1 - cos d)): 1, 0.99983, 0.99949 for l = 0, 1, 2 here. What remains is the
+  // staircase of the disc's pixels (~500 of them): tolerance 0.1% of L00.
+  const double cd = std::cos(radius);
+  const double capFactor[3] = {1.0, (1 + cd) / 2, (cd * (1 + cd)) / 2};
+  for (int k = 0; k < 9; ++k)
+    EXPECT_NEAR(L.c[k].x, y[k] * power * capFactor[lp::shBand(k)], 1e-3 * 0.282095 * power)
+        << lp::kShNames[k];
+
+  const auto r = lp::cli::compareIrradiance(img, lp::Layout::Equirect, 64, 32);
+  EXPECT_GT(r.maxFracTotal, 0.085);
+  EXPECT_LT(r.maxFracTotal, 0.10);
+  // Closed form of the mean |error| for an ideal directional light: 3.07%
+  // (1/2 of the integral over c in [-1,1] of |3/32 + c/2 + 15/32 c^2 - max(c,0)|).
+  EXPECT_GT(r.meanFracTotal, 0.028);
+  EXPECT_LT(r.meanFracTotal, 0.034);
+  // The order-2 approximation of a clamped cosine dips below zero: ringing.
+  EXPECT_LT(r.minShOverMean, 0.0);
+}
+
+// minIrradiance against a dense random search.
+TEST(ShCore, MinimumIrradianceDiagnostic) {
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<float> u(-0.5f, 0.5f);
+  for (int trial = 0; trial < 10; ++trial) {
+    Sh9 L;
+    L.c[0] = glm::vec3(1.0f);
+    for (int k = 1; k < 9; ++k) L.c[k] = {u(rng), u(rng), u(rng)};
+    const lp::MinIrradiance mn = lp::minIrradiance(L);
+    glm::vec3 dense(INFINITY);
+    for (int n = 0; n < 200000; ++n) dense = glm::min(dense, lp::evalIrradiance(L, randomUnit(rng)));
+    for (int ch = 0; ch < 3; ++ch) {
+      EXPECT_LE(mn.value[ch], dense[ch] + 1e-6f);
+      EXPECT_GT(mn.value[ch], dense[ch] - 2e-3f);  // random search is coarser than the solver
+      EXPECT_NEAR(lp::evalIrradiance(L, mn.normal[ch])[ch], mn.value[ch], 1e-5f);
+    }
+  }
+}
+
+TEST(ShCore, HannWindow) {
+  const auto w = lp::hannWindow(4.0f);
+  EXPECT_NEAR(w.sigma1, 0.5 * (1 + std::cos(kPi / 4)), 1e-6);
+  EXPECT_NEAR(w.sigma2, 0.5, 1e-6);
+  EXPECT_EQ(lp::hannWindow(2.0f).sigma2, 0.0f);
+  const auto none = lp::hannWindow(INFINITY);
+  EXPECT_EQ(none.sigma1, 1.0f);
+  EXPECT_EQ(none.sigma2, 1.0f);
+}
+
+// auto finds the mildest window that removes ringing: it is non-negative, and 3% milder is not.
+TEST(ShCore, AutoWindowIsMildestNonNegative) {
+  const glm::vec3 dir = glm::normalize(glm::vec3(0.2f, 0.7f, -0.3f));
+  Sh9 L;  // an ideal directional light of power 1
+  const auto y = lp::shBasis(dir);
+  for (int k = 0; k < 9; ++k) L.c[k] = glm::vec3(y[k]);
+  ASSERT_LT(lp::minIrradiance(L).minOfChannels(), -0.01f);
+  const lp::AutoWindow aw = lp::autoWindow(L);
+  ASSERT_TRUE(std::isfinite(aw.width));
+  EXPECT_GE(lp::minIrradiance(lp::applyWindow(L, aw.window)).minOfChannels(), -1e-6f);
+  EXPECT_LT(lp::minIrradiance(lp::applyWindow(L, lp::hannWindow(aw.width * 1.03f))).minOfChannels(), 0.0f);
+  // A constant environment needs none.
+  Sh9 c;
+  c.c[0] = glm::vec3(1.0f);
+  EXPECT_TRUE(std::isinf(lp::autoWindow(c).width));
+}
+
+}  // namespace

@@ -1,0 +1,53 @@
+#pragma once
+// Helpers shared by the tests: data paths that must exist (a missing data folder fails, it is
+// never skipped), temporary folders, running the liveprobe binary.
+#include <gtest/gtest.h>
+
+#include <array>
+#include <cstdio>
+#include <filesystem>
+#include <string>
+
+namespace lpt {
+
+inline std::string dataPath(const std::string& rel) {
+  const std::string p = std::string(LIVEPROBE_DATA_DIR) + "/" + rel;
+  EXPECT_TRUE(std::filesystem::exists(p)) << "test data missing: " << p
+                                          << " (set -DLIVEPROBE_DATA_DIR=...)";
+  return p;
+}
+
+/// A fresh folder under the system temp dir, removed with the object.
+struct TempDir {
+  std::filesystem::path path;
+  TempDir() {
+    path = std::filesystem::temp_directory_path() /
+           ("liveprobe-test-" + std::to_string(::testing::UnitTest::GetInstance()->random_seed()) +
+            "-" + ::testing::UnitTest::GetInstance()->current_test_info()->name());
+    std::filesystem::remove_all(path);
+    std::filesystem::create_directories(path);
+  }
+  ~TempDir() { std::filesystem::remove_all(path); }
+  std::string operator/(const std::string& name) const { return (path / name).string(); }
+};
+
+struct RunResult {
+  int exitCode;
+  std::string output;  ///< stdout and stderr together
+};
+
+/// Runs `liveprobe ARGS` through the shell, capturing output.
+inline RunResult runLiveprobe(const std::string& args) {
+  const std::string cmd = std::string(LIVEPROBE_BIN) + " " + args + " 2>&1";
+  FILE* p = popen(cmd.c_str(), "r");
+  RunResult r{-1, {}};
+  if (!p) return r;
+  std::array<char, 4096> buf;
+  std::size_t n;
+  while ((n = fread(buf.data(), 1, buf.size(), p)) > 0) r.output.append(buf.data(), n);
+  const int status = pclose(p);
+  r.exitCode = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
+  return r;
+}
+
+}  // namespace lpt
