@@ -13,6 +13,8 @@
 
 namespace {
 
+using lpt::expectOneLineError;
+using lpt::lineCount;
 using lpt::runLiveprobe;
 namespace fs = std::filesystem;
 
@@ -21,17 +23,6 @@ void writeConstantHdr(const std::string& path, int w, int h, float c) {
   ASSERT_TRUE(cv::imwrite(path, m));
 }
 
-int lineCount(const std::string& s) { return int(std::count(s.begin(), s.end(), '\n')); }
-
-// A bad input gives exit 1 and exactly one line that names the input.
-void expectOneLineError(const std::string& args, const std::string& names,
-                        const std::string& says) {
-  const auto r = runLiveprobe(args);
-  EXPECT_EQ(r.exitCode, 1) << r.output;
-  EXPECT_EQ(lineCount(r.output), 1) << r.output;
-  EXPECT_NE(r.output.find(names), std::string::npos) << r.output;
-  EXPECT_NE(r.output.find(says), std::string::npos) << r.output;
-}
 
 TEST(Cli, HelpForEveryCommand) {
   for (const char* cmd : {"coeffs", "irradiance", "compare"}) {

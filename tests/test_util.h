@@ -3,6 +3,7 @@
 // never skipped), temporary folders, running the liveprobe binary.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <array>
 #include <cstdio>
 #include <filesystem>
@@ -48,6 +49,19 @@ inline RunResult runLiveprobe(const std::string& args) {
   const int status = pclose(p);
   r.exitCode = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
   return r;
+}
+
+inline int lineCount(const std::string& s) { return int(std::count(s.begin(), s.end(), '\n')); }
+
+/// A bad input gives exit status 1 and exactly one line that names the input and says what is
+/// wrong.
+inline void expectOneLineError(const std::string& args, const std::string& names,
+                               const std::string& says) {
+  const auto r = runLiveprobe(args);
+  EXPECT_EQ(r.exitCode, 1) << r.output;
+  EXPECT_EQ(lineCount(r.output), 1) << r.output;
+  EXPECT_NE(r.output.find(names), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find(says), std::string::npos) << r.output;
 }
 
 }  // namespace lpt

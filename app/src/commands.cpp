@@ -7,6 +7,8 @@ const std::vector<Command>& commands() {
       {kCoeffsSpec, runCoeffs},
       {kIrradianceSpec, runIrradiance},
       {kCompareSpec, runCompare},
+      {kRenderSpec, runRender},
+      {kViewSpec, runView},
   };
   return all;
 }

@@ -18,7 +18,9 @@ const std::vector<Command>& commands();
 int runCoeffs(const Args&);
 int runIrradiance(const Args&);
 int runCompare(const Args&);
+int runRender(const Args&);
+int runView(const Args&);
 
-extern const CommandSpec kCoeffsSpec, kIrradianceSpec, kCompareSpec;
+extern const CommandSpec kCoeffsSpec, kIrradianceSpec, kCompareSpec, kRenderSpec, kViewSpec;
 
 }  // namespace lp::cli

@@ -227,6 +227,12 @@ void saveImage(const std::string& path, const Image& img) {
   writeAtomically(path, out);
 }
 
+void saveRgb8(const std::string& path, int width, int height, const std::uint8_t* rgb) {
+  cv::Mat m(height, width, CV_8UC3, const_cast<std::uint8_t*>(rgb)), bgr;
+  cv::cvtColor(m, bgr, cv::COLOR_RGB2BGR);
+  writeAtomically(path, bgr);
+}
+
 void saveImage8(const std::string& path, int width, int height, int channels,
                 const std::uint8_t* data) {
   cv::Mat m(height, width, channels == 4 ? CV_8UC4 : CV_8UC3, const_cast<std::uint8_t*>(data));

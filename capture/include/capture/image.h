@@ -32,6 +32,9 @@ Image loadImage(const std::string& path);
 /// leaves a half-written file. Throws lp::Error.
 void saveImage(const std::string& path, const Image& img);
 
+/// Writes 8-bit sRGB RGB pixels (rows top to bottom) atomically, as saveImage does.
+void saveRgb8(const std::string& path, int width, int height, const std::uint8_t* rgb);
+
 /// Writes already-encoded 8-bit BGR(A) pixels (OpenCV order) atomically, as saveImage does.
 void saveImage8(const std::string& path, int width, int height, int channels,
                 const std::uint8_t* data);

@@ -1,0 +1,132 @@
+#include "scene.h"
+
+#include <sstream>
+
+#include "capture/error.h"
+#include "coeffs_io.h"
+
+namespace lp::cli {
+
+std::vector<OptionSpec> sceneOptions() {
+  return {{"--model", "FILE|sphere", "model to light (OBJ, PLY, glTF, ...; default: a UV sphere)"},
+          {"--yaw", "DEG", "camera yaw around the vertical axis (default 0: front view)"},
+          {"--pitch", "DEG", "camera pitch (default 0)"},
+          {"--distance", "D", "camera distance; the model fits the unit sphere (default 3.2)"},
+          {"--exposure", "X|auto", "exposure multiplier; auto maps the mean radiance to 0.18 (default)"},
+          {"--tonemap", "aces|reinhard|linear", "tone map (default aces)"},
+          {"--no-background", "", "do not draw the panorama behind the model"},
+          {"--headless", "", "render offscreen through OSMesa even when a display exists"}};
+}
+
+std::vector<OptionSpec> lightingOptions() {
+  return {{"--env", "FILE", "environment map that lights the model and is drawn behind it"},
+          {"--layout", "equirect|angular", "layout of --env (default equirect)"},
+          {"--coeffs", "FILE.json", "coefficients written by liveprobe coeffs"},
+          {"--coeff", "NAME=VALUE", "set one coefficient (VALUE or r,g,b), others zero; repeatable",
+           true}};
+}
+
+void applyCoeffAssignment(const std::string& text, Sh9& sh) {
+  const auto eq = text.find('=');
+  if (eq == std::string::npos) throw Error("--coeff " + text + ": expected NAME=VALUE, e.g. L20=-0.2");
+  const std::string name = text.substr(0, eq);
+  const int k = shIndex(name);
+  if (k < 0) throw Error("--coeff " + text + ": unknown coefficient name " + name + " (L00 .. L22)");
+  std::vector<float> v;
+  std::stringstream s(text.substr(eq + 1));
+  for (std::string part; std::getline(s, part, ',');) v.push_back(float(parseNumber(part, "--coeff " + name)));
+  if (v.size() == 1) v = {v[0], v[0], v[0]};
+  if (v.size() != 3) throw Error("--coeff " + text + ": expected one value or r,g,b");
+  sh.c[k] = {v[0], v[1], v[2]};
+}
+
+std::optional<Lighting> lightingFromArgs(const Args& a) {
+  const int kinds = int(a.has("--env")) + int(a.has("--coeffs")) + int(a.has("--coeff"));
+  if (kinds > 1) throw Error("give only one of --env, --coeffs and --coeff");
+  if (kinds == 0) return std::nullopt;
+  Lighting l;
+  if (a.has("--env")) {
+    l.layout = parseLayout(a.get("--layout", "equirect"));
+    Image img = loadImage(a.get("--env"));
+    if (auto why = layoutMismatch(l.layout, img.width, img.height); !why.empty())
+      throw Error(a.get("--env") + ": " + why);
+    l.radiance = Projector(l.layout, img.width, img.height).project(img.rgb.data());
+    l.background = std::move(img);
+  } else if (a.has("--coeffs")) {
+    l.radiance = loadCoefficients(a.get("--coeffs"));
+  } else {
+    for (const auto& c : a.all("--coeff")) applyCoeffAssignment(c, l.radiance);
+  }
+  return l;
+}
+
+Mesh meshFromArgs(const Args& a) {
+  const std::string model = a.get("--model", "sphere");
+  Mesh m;
+  if (model == "sphere") {
+    m = makeUvSphere();
+  } else {
+    try {
+      m = loadMesh(model);
+    } catch (const MeshError& e) {
+      throw Error(e.what());
+    }
+  }
+  fitToUnitSphere(m);
+  return m;
+}
+
+gl::Camera cameraFromArgs(const Args& a) {
+  gl::Camera c;
+  c.yawDeg = float(a.number("--yaw", c.yawDeg));
+  c.pitchDeg = float(a.number("--pitch", c.pitchDeg));
+  c.distance = float(a.number("--distance", c.distance));
+  if (!(c.distance > 0.05f)) throw Error("--distance " + a.get("--distance") + ": must be > 0.05");
+  if (std::abs(c.pitchDeg) > 89.9f) throw Error("--pitch " + a.get("--pitch") + ": must be within +-89.9");
+  return c;
+}
+
+float autoExposure(const Sh9& radiance) {
+  const float meanRadiance = luminance(radiance.c[0]) * 0.282095f;
+  return meanRadiance > 1e-12f ? 0.18f / meanRadiance : 1.0f;
+}
+
+gl::ShadingSettings shadingFromArgs(const Args& a, const Sh9& radiance) {
+  gl::ShadingSettings s;
+  const std::string e = a.get("--exposure", "auto");
+  s.exposure = e == "auto" ? autoExposure(radiance) : float(parseNumber(e, "--exposure"));
+  if (!(s.exposure > 0)) throw Error("--exposure " + e + ": must be positive or auto");
+  const std::string tm = a.get("--tonemap", "aces");
+  if (tm == "aces") s.toneMap = gl::ToneMap::Aces;
+  else if (tm == "reinhard") s.toneMap = gl::ToneMap::Reinhard;
+  else if (tm == "linear") s.toneMap = gl::ToneMap::Linear;
+  else throw Error("--tonemap " + tm + ": expected aces, reinhard or linear");
+  s.background = !a.has("--no-background");
+  return s;
+}
+
+gl::Backend backendFromArgs(const Args& a) {
+  return a.has("--headless") ? gl::Backend::Headless : gl::Backend::Auto;
+}
+
+void loadScene(gl::Renderer& r, const Mesh& mesh, const Lighting& lighting) {
+  r.setMesh(mesh);
+  if (!mesh.albedoTexture.empty()) {
+    const Image tex = loadImage(mesh.albedoTexture);
+    r.setAlbedoTexture(tex.rgb.data(), tex.width, tex.height);
+  }
+  r.setLighting(lighting.radiance);
+  if (lighting.background)
+    r.setBackground(lighting.background->rgb.data(), lighting.background->width,
+                    lighting.background->height,
+                    lighting.layout == Layout::Angular ? gl::BackgroundMapping::Angular
+                                                       : gl::BackgroundMapping::Equirect);
+}
+
+void applyInput(gl::Camera& camera, const gl::InputDelta& input) {
+  camera.yawDeg -= 0.3f * input.drag.x;
+  camera.pitchDeg = std::clamp(camera.pitchDeg + 0.3f * input.drag.y, -89.0f, 89.0f);
+  camera.distance = std::clamp(camera.distance * std::pow(0.9f, input.scroll), 1.1f, 50.0f);
+}
+
+}  // namespace lp::cli

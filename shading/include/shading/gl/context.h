@@ -1,0 +1,51 @@
+#pragma once
+// One GL context interface, two backends in the same binary: a GLFW window (X11) and OSMesa
+// offscreen (Mesa llvmpipe). All backend #ifs live in src/gl/context_factory.cpp; the renderer
+// never sees GLFW or OSMesa. createGlContext() loads GL 3.3 core through glad for either.
+#include <cstdint>
+#include <memory>
+#include <stdexcept>
+#include <string>
+
+#include <glm/glm.hpp>
+
+namespace lp::gl {
+
+struct ContextError : std::runtime_error {
+  using std::runtime_error::runtime_error;
+};
+
+enum class Backend : std::uint8_t { Auto, Window, Headless };
+
+struct ContextSpec {
+  Backend backend = Backend::Auto;  ///< Auto: a window when a display opens, else headless
+  int width = 1280;
+  int height = 720;
+  std::string title = "liveprobe";
+  bool vsync = true;
+};
+
+/// Mouse input gathered since the last pollEvents(), for orbit and zoom.
+struct InputDelta {
+  glm::vec2 drag{0.0f};  ///< cursor movement with the left button held, in pixels
+  float scroll = 0.0f;   ///< wheel steps
+};
+
+class GlContext {
+ public:
+  virtual ~GlContext() = default;
+  virtual void makeCurrent() = 0;
+  /// Shows the frame (window) or does nothing (headless).
+  virtual void present() = 0;
+  virtual glm::ivec2 framebufferSize() const = 0;
+  virtual bool shouldClose() const = 0;
+  virtual InputDelta pollEvents() = 0;
+  virtual bool isHeadless() const = 0;
+  /// "GLFW window" or "OSMesa offscreen", plus GL_RENDERER.
+  virtual std::string describe() const = 0;
+};
+
+/// Creates a context and loads GL into it. Throws ContextError with the cause.
+std::unique_ptr<GlContext> createGlContext(const ContextSpec& spec);
+
+}  // namespace lp::gl

@@ -1,0 +1,98 @@
+#pragma once
+// Draws a model lit by nine SH coefficients, in one pass per pixel: E(n) = n4^T M n4 from three
+// 4x4 uniforms, albedo (optionally textured) * E / pi, exposure, a tone map and sRGB output. The
+// panorama is drawn behind it in the same orientation. Needs a current GL 3.3 core context;
+// knows nothing of GLFW or OSMesa.
+#include <cstdint>
+#include <vector>
+
+#include <glm/glm.hpp>
+
+#include "shading/gl/handles.h"
+#include "shading/mesh.h"
+#include "shading/sh.h"
+
+namespace lp::gl {
+
+enum class ToneMap : std::uint8_t { Aces, Reinhard, Linear };
+enum class OutputMode : std::uint8_t {
+  Display,     ///< tone-mapped sRGB colour
+  Irradiance,  ///< raw E(n) per channel (for float targets and tests)
+  Normal,      ///< the unit normal in the R&H world frame (debug view, tests)
+};
+/// How the background texture maps to directions (capture/layout.h has the definitions).
+enum class BackgroundMapping : std::uint8_t { Equirect, Angular };
+
+/// An orbit camera around the origin (GL frame). yaw 0, pitch 0 looks from +Z towards -Z.
+struct Camera {
+  float yawDeg = 0.0f;
+  float pitchDeg = 0.0f;
+  float distance = 3.2f;
+  float fovYDeg = 40.0f;
+
+  glm::vec3 eye() const;
+  glm::mat4 view() const;
+  glm::mat4 projection(float aspect) const;
+};
+
+struct ShadingSettings {
+  float exposure = 1.0f;
+  ToneMap toneMap = ToneMap::Aces;
+  bool background = true;
+  OutputMode output = OutputMode::Display;
+};
+
+/// A float RGBA offscreen target with depth, for exact readback.
+class FloatTarget {
+ public:
+  FloatTarget(int width, int height);
+  void bind() const;
+  /// RGBA floats, rows top to bottom.
+  std::vector<float> readRgba() const;
+  int width() const { return width_; }
+  int height() const { return height_; }
+
+ private:
+  int width_, height_;
+  Framebuffer fbo_;
+  Texture colour_;
+  Renderbuffer depth_;
+};
+
+class Renderer {
+ public:
+  /// Compiles the programs. Throws ContextError (shading/gl/context.h) on a GL failure.
+  Renderer();
+
+  void setMesh(const Mesh& mesh);
+  /// Linear RGB albedo texture (rows top to bottom); multiplies Mesh::albedo.
+  void setAlbedoTexture(const float* rgb, int width, int height);
+  void setLighting(const Sh9& radiance);
+  /// Linear RGB panorama for the background (rows top to bottom).
+  void setBackground(const float* rgb, int width, int height, BackgroundMapping mapping);
+
+  /// Draws into the currently bound framebuffer (viewport `size`).
+  void draw(glm::ivec2 size, const Camera& camera, const ShadingSettings& settings);
+
+  /// Waits until GL has finished all commands (for frame timing).
+  static void finish();
+
+  /// Reads the bound framebuffer as 8-bit RGB, rows top to bottom.
+  static std::vector<std::uint8_t> readRgb8(glm::ivec2 size);
+
+ private:
+  Program modelProgram_, backgroundProgram_;
+  VertexArray meshVao_, emptyVao_;
+  Buffer positions_, normals_, uvs_, indices_;
+  GLsizei indexCount_ = 0;
+  bool hasUv_ = false;
+  glm::vec3 albedo_{0.8f};
+  Texture albedoTex_, backgroundTex_;
+  BackgroundMapping backgroundMapping_ = BackgroundMapping::Equirect;
+  std::array<glm::mat4, 3> sh_{};
+};
+
+/// Throws ContextError if glGetError() reports an error, naming `where`.
+void checkGl(const char* where);
+
+}  // namespace lp::gl

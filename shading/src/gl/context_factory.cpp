@@ -1,0 +1,137 @@
+// The GL context backends and the factory that picks one. The only file that includes GLFW or
+// OSMesa (as Filament's PlatformFactory.cpp holds all platform #ifs).
+#include "shading/gl/gl.h"  // before osmesa.h: glad's header stands in for <GL/gl.h>
+
+#include <GL/osmesa.h>
+#include <GLFW/glfw3.h>
+
+#include <cstdlib>
+#include <vector>
+
+#include "shading/gl/context.h"
+
+namespace lp::gl {
+
+namespace {
+
+std::string rendererString() {
+  const auto* r = reinterpret_cast<const char*>(glGetString(GL_RENDERER));
+  const auto* v = reinterpret_cast<const char*>(glGetString(GL_VERSION));
+  return std::string(r ? r : "?") + ", GL " + (v ? v : "?");
+}
+
+std::string& glfwLastError() {
+  static std::string e;
+  return e;
+}
+
+class GlfwContext final : public GlContext {
+ public:
+  explicit GlfwContext(const ContextSpec& spec) {
+    glfwWindowHint(GLFW_CONTEXT_VERSION_MAJOR, 3);
+    glfwWindowHint(GLFW_CONTEXT_VERSION_MINOR, 3);
+    glfwWindowHint(GLFW_OPENGL_PROFILE, GLFW_OPENGL_CORE_PROFILE);
+    glfwWindowHint(GLFW_OPENGL_FORWARD_COMPAT, GLFW_TRUE);
+    window_ = glfwCreateWindow(spec.width, spec.height, spec.title.c_str(), nullptr, nullptr);
+    if (!window_) {
+      glfwTerminate();
+      throw ContextError("cannot create a GLFW window: " + glfwLastError());
+    }
+    glfwMakeContextCurrent(window_);
+    if (!gladLoadGL(reinterpret_cast<GLADloadfunc>(glfwGetProcAddress))) {
+      glfwDestroyWindow(window_);
+      glfwTerminate();
+      throw ContextError("GLFW window: cannot load GL 3.3 core functions");
+    }
+    glfwSwapInterval(spec.vsync ? 1 : 0);
+    glfwSetWindowUserPointer(window_, this);
+    glfwSetScrollCallback(window_, [](GLFWwindow* w, double, double dy) {
+      static_cast<GlfwContext*>(glfwGetWindowUserPointer(w))->input_.scroll += float(dy);
+    });
+    glfwGetCursorPos(window_, &lastX_, &lastY_);
+  }
+  ~GlfwContext() override {
+    glfwDestroyWindow(window_);
+    glfwTerminate();
+  }
+  void makeCurrent() override { glfwMakeContextCurrent(window_); }
+  void present() override { glfwSwapBuffers(window_); }
+  glm::ivec2 framebufferSize() const override {
+    int w = 0, h = 0;
+    glfwGetFramebufferSize(window_, &w, &h);
+    return {w, h};
+  }
+  bool shouldClose() const override { return glfwWindowShouldClose(window_); }
+  InputDelta pollEvents() override {
+    input_ = {};
+    glfwPollEvents();
+    double x, y;
+    glfwGetCursorPos(window_, &x, &y);
+    if (glfwGetMouseButton(window_, GLFW_MOUSE_BUTTON_LEFT) == GLFW_PRESS)
+      input_.drag = {float(x - lastX_), float(y - lastY_)};
+    lastX_ = x, lastY_ = y;
+    if (glfwGetKey(window_, GLFW_KEY_ESCAPE) == GLFW_PRESS || glfwGetKey(window_, GLFW_KEY_Q) == GLFW_PRESS)
+      glfwSetWindowShouldClose(window_, GLFW_TRUE);
+    return input_;
+  }
+  bool isHeadless() const override { return false; }
+  std::string describe() const override { return "GLFW window (" + rendererString() + ")"; }
+
+ private:
+  GLFWwindow* window_ = nullptr;
+  InputDelta input_;
+  double lastX_ = 0, lastY_ = 0;
+};
+
+class OsMesaContext final : public GlContext {
+ public:
+  explicit OsMesaContext(const ContextSpec& spec)
+      : width_(spec.width), height_(spec.height), buffer_(std::size_t(spec.width) * spec.height * 4) {
+    const int attribs[] = {OSMESA_FORMAT, OSMESA_RGBA, OSMESA_DEPTH_BITS, 24,
+                           OSMESA_STENCIL_BITS, 0, OSMESA_PROFILE, OSMESA_CORE_PROFILE,
+                           OSMESA_CONTEXT_MAJOR_VERSION, 3, OSMESA_CONTEXT_MINOR_VERSION, 3, 0};
+    ctx_ = OSMesaCreateContextAttribs(attribs, nullptr);
+    if (!ctx_) throw ContextError("OSMesa: cannot create a GL 3.3 core context");
+    makeCurrent();
+    if (!gladLoadGL(reinterpret_cast<GLADloadfunc>(OSMesaGetProcAddress))) {
+      OSMesaDestroyContext(ctx_);
+      throw ContextError("OSMesa: cannot load GL 3.3 core functions");
+    }
+  }
+  ~OsMesaContext() override { OSMesaDestroyContext(ctx_); }
+  void makeCurrent() override {
+    if (!OSMesaMakeCurrent(ctx_, buffer_.data(), GL_UNSIGNED_BYTE, width_, height_))
+      throw ContextError("OSMesa: cannot make the context current");
+  }
+  void present() override {}
+  glm::ivec2 framebufferSize() const override { return {width_, height_}; }
+  bool shouldClose() const override { return false; }
+  InputDelta pollEvents() override { return {}; }
+  bool isHeadless() const override { return true; }
+  std::string describe() const override { return "OSMesa offscreen (" + rendererString() + ")"; }
+
+ private:
+  OSMesaContext ctx_ = nullptr;
+  int width_, height_;
+  std::vector<unsigned char> buffer_;
+};
+
+}  // namespace
+
+std::unique_ptr<GlContext> createGlContext(const ContextSpec& spec) {
+  if (spec.width <= 0 || spec.height <= 0 || spec.width > 16384 || spec.height > 16384)
+    throw ContextError("bad framebuffer size " + std::to_string(spec.width) + "x" +
+                       std::to_string(spec.height));
+  if (spec.backend != Backend::Headless) {
+    glfwSetErrorCallback([](int, const char* msg) { glfwLastError() = msg ? msg : "?"; });
+    // Without a display glfwInit() fails: the natural point to fall back to headless.
+    const bool haveDisplay = std::getenv("DISPLAY") || std::getenv("WAYLAND_DISPLAY");
+    if (haveDisplay && glfwInit()) return std::make_unique<GlfwContext>(spec);
+    if (spec.backend == Backend::Window)
+      throw ContextError("cannot open a window (no display: " +
+                         (glfwLastError().empty() ? std::string("DISPLAY is not set") : glfwLastError()) + ")");
+  }
+  return std::make_unique<OsMesaContext>(spec);
+}
+
+}  // namespace lp::gl

@@ -1,0 +1,239 @@
+#include "shading/gl/renderer.h"
+
+#include <algorithm>
+#include <string>
+
+#include <glm/gtc/matrix_transform.hpp>
+#include <glm/gtc/type_ptr.hpp>
+
+#include "shaders.h"
+#include "shading/gl/axes.h"
+#include "shading/gl/context.h"
+
+namespace lp::gl {
+
+void checkGl(const char* where) {
+  const GLenum e = glGetError();
+  if (e != GL_NO_ERROR) throw ContextError(std::string(where) + ": GL error 0x" + [e] {
+    char b[16];
+    std::snprintf(b, sizeof b, "%04x", e);
+    return std::string(b);
+  }());
+}
+
+glm::vec3 Camera::eye() const {
+  const float y = glm::radians(yawDeg), p = glm::radians(pitchDeg);
+  return distance * glm::vec3(std::cos(p) * std::sin(y), std::sin(p), std::cos(p) * std::cos(y));
+}
+glm::mat4 Camera::view() const {
+  return glm::lookAt(eye(), glm::vec3(0.0f), glm::vec3(0, 1, 0));
+}
+glm::mat4 Camera::projection(float aspect) const {
+  return glm::perspective(glm::radians(fovYDeg), aspect, 0.05f, 100.0f);
+}
+
+namespace {
+
+Shader compile(GLenum type, const char* src, const char* name) {
+  Shader s(glCreateShader(type));
+  glShaderSource(s.get(), 1, &src, nullptr);
+  glCompileShader(s.get());
+  GLint ok = 0;
+  glGetShaderiv(s.get(), GL_COMPILE_STATUS, &ok);
+  if (!ok) {
+    char log[2048];
+    glGetShaderInfoLog(s.get(), sizeof log, nullptr, log);
+    throw ContextError(std::string("compiling ") + name + ": " + log);
+  }
+  return s;
+}
+
+Program link(const char* vs, const char* fs, const char* name) {
+  const Shader v = compile(GL_VERTEX_SHADER, vs, name), f = compile(GL_FRAGMENT_SHADER, fs, name);
+  Program p(glCreateProgram());
+  glAttachShader(p.get(), v.get());
+  glAttachShader(p.get(), f.get());
+  glLinkProgram(p.get());
+  GLint ok = 0;
+  glGetProgramiv(p.get(), GL_LINK_STATUS, &ok);
+  if (!ok) {
+    char log[2048];
+    glGetProgramInfoLog(p.get(), sizeof log, nullptr, log);
+    throw ContextError(std::string("linking ") + name + ": " + log);
+  }
+  return p;
+}
+
+GLint loc(const Program& p, const char* name) { return glGetUniformLocation(p.get(), name); }
+
+template <class T>
+Buffer upload(GLenum target, const std::vector<T>& data) {
+  GLuint id = 0;
+  glGenBuffers(1, &id);
+  Buffer b(id);
+  glBindBuffer(target, id);
+  glBufferData(target, GLsizeiptr(data.size() * sizeof(T)), data.data(), GL_STATIC_DRAW);
+  return b;
+}
+
+Texture makeFloatTexture(const float* rgb, int width, int height, GLint wrapS) {
+  GLuint id = 0;
+  glGenTextures(1, &id);
+  Texture t(id);
+  glBindTexture(GL_TEXTURE_2D, id);
+  glPixelStorei(GL_UNPACK_ALIGNMENT, 4);
+  glTexImage2D(GL_TEXTURE_2D, 0, GL_RGB32F, width, height, 0, GL_RGB, GL_FLOAT, rgb);
+  glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_LINEAR);
+  glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
+  glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_S, wrapS);
+  glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
+  checkGl("uploading a texture");
+  return t;
+}
+
+}  // namespace
+
+FloatTarget::FloatTarget(int width, int height) : width_(width), height_(height) {
+  GLuint id = 0;
+  glGenFramebuffers(1, &id);
+  fbo_.reset(id);
+  glGenTextures(1, &id);
+  colour_.reset(id);
+  glBindTexture(GL_TEXTURE_2D, id);
+  glTexImage2D(GL_TEXTURE_2D, 0, GL_RGBA32F, width, height, 0, GL_RGBA, GL_FLOAT, nullptr);
+  glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
+  glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
+  glGenRenderbuffers(1, &id);
+  depth_.reset(id);
+  glBindRenderbuffer(GL_RENDERBUFFER, id);
+  glRenderbufferStorage(GL_RENDERBUFFER, GL_DEPTH_COMPONENT24, width, height);
+  glBindFramebuffer(GL_FRAMEBUFFER, fbo_.get());
+  glFramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_TEXTURE_2D, colour_.get(), 0);
+  glFramebufferRenderbuffer(GL_FRAMEBUFFER, GL_DEPTH_ATTACHMENT, GL_RENDERBUFFER, depth_.get());
+  if (glCheckFramebufferStatus(GL_FRAMEBUFFER) != GL_FRAMEBUFFER_COMPLETE)
+    throw ContextError("float framebuffer is incomplete");
+  glBindFramebuffer(GL_FRAMEBUFFER, 0);
+}
+
+void FloatTarget::bind() const { glBindFramebuffer(GL_FRAMEBUFFER, fbo_.get()); }
+
+std::vector<float> FloatTarget::readRgba() const {
+  bind();
+  std::vector<float> px(std::size_t(width_) * height_ * 4);
+  glPixelStorei(GL_PACK_ALIGNMENT, 4);
+  glReadPixels(0, 0, width_, height_, GL_RGBA, GL_FLOAT, px.data());
+  // GL rows start at the bottom.
+  const std::size_t row = std::size_t(width_) * 4;
+  for (int y = 0; y < height_ / 2; ++y)
+    std::swap_ranges(px.begin() + y * row, px.begin() + (y + 1) * row, px.begin() + (height_ - 1 - y) * row);
+  return px;
+}
+
+Renderer::Renderer()
+    : modelProgram_(link(shaders::kModelVs, shaders::kModelFs, "model shader")),
+      backgroundProgram_(link(shaders::kBackgroundVs, shaders::kBackgroundFs, "background shader")) {
+  GLuint id = 0;
+  glGenVertexArrays(1, &id);
+  emptyVao_.reset(id);
+  glGenVertexArrays(1, &id);
+  meshVao_.reset(id);
+  checkGl("Renderer()");
+}
+
+void Renderer::setMesh(const Mesh& mesh) {
+  glBindVertexArray(meshVao_.get());
+  positions_ = upload(GL_ARRAY_BUFFER, mesh.positions);
+  glEnableVertexAttribArray(0);
+  glVertexAttribPointer(0, 3, GL_FLOAT, GL_FALSE, 0, nullptr);
+  normals_ = upload(GL_ARRAY_BUFFER, mesh.normals);
+  glEnableVertexAttribArray(1);
+  glVertexAttribPointer(1, 3, GL_FLOAT, GL_FALSE, 0, nullptr);
+  hasUv_ = mesh.uvs.size() == mesh.positions.size();
+  if (hasUv_) {
+    uvs_ = upload(GL_ARRAY_BUFFER, mesh.uvs);
+    glEnableVertexAttribArray(2);
+    glVertexAttribPointer(2, 2, GL_FLOAT, GL_FALSE, 0, nullptr);
+  } else {
+    uvs_.reset();
+    glDisableVertexAttribArray(2);
+    glVertexAttrib2f(2, 0.0f, 0.0f);
+  }
+  indices_ = upload(GL_ELEMENT_ARRAY_BUFFER, mesh.indices);
+  indexCount_ = GLsizei(mesh.indices.size());
+  albedo_ = mesh.albedo;
+  glBindVertexArray(0);
+  checkGl("Renderer::setMesh");
+}
+
+void Renderer::setAlbedoTexture(const float* rgb, int width, int height) {
+  albedoTex_ = makeFloatTexture(rgb, width, height, GL_REPEAT);
+}
+
+void Renderer::setLighting(const Sh9& radiance) { sh_ = irradianceMatrices(radiance); }
+
+void Renderer::setBackground(const float* rgb, int width, int height, BackgroundMapping mapping) {
+  backgroundTex_ = makeFloatTexture(rgb, width, height,
+                                    mapping == BackgroundMapping::Equirect ? GL_REPEAT : GL_CLAMP_TO_EDGE);
+  backgroundMapping_ = mapping;
+}
+
+void Renderer::draw(glm::ivec2 size, const Camera& camera, const ShadingSettings& s) {
+  glViewport(0, 0, size.x, size.y);
+  glClearColor(0.0f, 0.0f, 0.0f, 1.0f);
+  glClear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
+  const glm::mat4 viewProj = camera.projection(float(size.x) / float(std::max(1, size.y))) * camera.view();
+  const glm::mat3 worldFromGl = axes::worldFromGlMatrix();
+
+  if (s.background && backgroundTex_.isValid() && s.output == OutputMode::Display) {
+    glDisable(GL_DEPTH_TEST);
+    glUseProgram(backgroundProgram_.get());
+    glUniformMatrix4fv(loc(backgroundProgram_, "uInvViewProj"), 1, GL_FALSE,
+                       glm::value_ptr(glm::inverse(viewProj)));
+    glUniformMatrix3fv(loc(backgroundProgram_, "uWorldFromGl"), 1, GL_FALSE, glm::value_ptr(worldFromGl));
+    glUniform1f(loc(backgroundProgram_, "uExposure"), s.exposure);
+    glUniform1i(loc(backgroundProgram_, "uToneMap"), int(s.toneMap));
+    glUniform1i(loc(backgroundProgram_, "uMapping"), int(backgroundMapping_));
+    glActiveTexture(GL_TEXTURE0);
+    glBindTexture(GL_TEXTURE_2D, backgroundTex_.get());
+    glUniform1i(loc(backgroundProgram_, "uPanorama"), 0);
+    glBindVertexArray(emptyVao_.get());
+    glDrawArrays(GL_TRIANGLES, 0, 3);
+  }
+
+  if (indexCount_ > 0) {
+    glEnable(GL_DEPTH_TEST);
+    glDepthFunc(GL_LESS);
+    glUseProgram(modelProgram_.get());
+    glUniformMatrix4fv(loc(modelProgram_, "uViewProj"), 1, GL_FALSE, glm::value_ptr(viewProj));
+    glUniformMatrix4fv(loc(modelProgram_, "uShR"), 1, GL_FALSE, glm::value_ptr(sh_[0]));
+    glUniformMatrix4fv(loc(modelProgram_, "uShG"), 1, GL_FALSE, glm::value_ptr(sh_[1]));
+    glUniformMatrix4fv(loc(modelProgram_, "uShB"), 1, GL_FALSE, glm::value_ptr(sh_[2]));
+    glUniformMatrix3fv(loc(modelProgram_, "uWorldFromGl"), 1, GL_FALSE, glm::value_ptr(worldFromGl));
+    glUniform3fv(loc(modelProgram_, "uAlbedo"), 1, glm::value_ptr(albedo_));
+    glUniform1i(loc(modelProgram_, "uHasTexture"), albedoTex_.isValid() && hasUv_);
+    glUniform1f(loc(modelProgram_, "uExposure"), s.exposure);
+    glUniform1i(loc(modelProgram_, "uToneMap"), int(s.toneMap));
+    glUniform1i(loc(modelProgram_, "uOutput"), int(s.output));
+    glActiveTexture(GL_TEXTURE1);
+    glBindTexture(GL_TEXTURE_2D, albedoTex_.get());
+    glUniform1i(loc(modelProgram_, "uAlbedoTex"), 1);
+    glBindVertexArray(meshVao_.get());
+    glDrawElements(GL_TRIANGLES, indexCount_, GL_UNSIGNED_INT, nullptr);
+  }
+  glBindVertexArray(0);
+  checkGl("Renderer::draw");
+}
+
+void Renderer::finish() { glFinish(); }
+
+std::vector<std::uint8_t> Renderer::readRgb8(glm::ivec2 size) {
+  std::vector<std::uint8_t> px(std::size_t(size.x) * size.y * 3);
+  glPixelStorei(GL_PACK_ALIGNMENT, 1);
+  glReadPixels(0, 0, size.x, size.y, GL_RGB, GL_UNSIGNED_BYTE, px.data());
+  const std::size_t row = std::size_t(size.x) * 3;
+  for (int y = 0; y < size.y / 2; ++y)
+    std::swap_ranges(px.begin() + y * row, px.begin() + (y + 1) * row, px.begin() + (size.y - 1 - y) * row);
+  return px;
+}
+
+}  // namespace lp::gl

@@ -1,0 +1,7 @@
+#pragma once
+namespace lp::gl::shaders {
+extern const char* const kModelVs;
+extern const char* const kModelFs;
+extern const char* const kBackgroundVs;
+extern const char* const kBackgroundFs;
+}  // namespace lp::gl::shaders
