@@ -10,7 +10,7 @@
 
 #include "capture/image.h"
 #include "scene.h"
-#include "shading/gl/axes.h"
+#include "shading/axes.h"
 #include "shading/gl/context.h"
 #include "shading/gl/renderer.h"
 #include "shading/mesh.h"

@@ -17,14 +17,6 @@ std::vector<OptionSpec> concat(std::vector<OptionSpec> a, const std::vector<Opti
   return a;
 }
 
-std::unique_ptr<gl::GlContext> openContext(gl::Backend backend, std::pair<int, int> size) {
-  try {
-    return gl::createGlContext({backend, size.first, size.second, "liveprobe", true});
-  } catch (const gl::ContextError& e) {
-    throw Error(std::string("GL context: ") + e.what());
-  }
-}
-
 }  // namespace
 
 const CommandSpec kRenderSpec{

@@ -10,29 +10,24 @@
 #include "coeffs_io.h"
 #include "commands.h"
 #include "compare.h"
+#include "scene.h"
 #include "shading/brute.h"
 
 namespace lp::cli {
 
 namespace {
 
-const OptionSpec kLayoutOpt{"--layout", "equirect|angular", "panorama layout of FILE (default equirect)"};
 const OptionSpec kWindowOpt{"--window", "none|auto|W",
                             "Hann window of width W against ringing; auto = mildest keeping E >= 0"};
 
-struct Environment {
-  Image image;
-  Layout layout;
-  Sh9 radiance;  ///< unwindowed
-};
+std::vector<OptionSpec> withLayout(std::vector<OptionSpec> o) {
+  const auto l = layoutOptions();
+  o.insert(o.begin(), l.begin(), l.end());
+  return o;
+}
 
 Environment loadEnvironment(const Args& a) {
-  const Layout layout = parseLayout(a.get("--layout", "equirect"));  // option errors first
-  Environment env{loadImage(a.positional().at(0)), layout, {}};
-  if (auto why = layoutMismatch(env.layout, env.image.width, env.image.height); !why.empty())
-    throw Error(a.positional()[0] + ": " + why);
-  env.radiance = Projector(layout, env.image.width, env.image.height).project(env.image.rgb.data());
-  return env;
+  return cli::loadEnvironment(a.positional().at(0), layoutFromArgs(a));
 }
 
 /// Resolves --window against the coefficients; reports an automatic choice on stderr.
@@ -60,7 +55,7 @@ const CommandSpec kCoeffsSpec{
     "FILE [--layout equirect|angular] [--format json|text|glsl] [--window none|auto|W]",
     "Prints the nine radiance coefficients L_lm (R&H convention, before the A_l factors) of an\n"
     "environment map (.hdr, .exr, or 8-bit PNG/JPEG decoded from sRGB).",
-    {kLayoutOpt, {"--format", "json|text|glsl", "output format (default json)"}, kWindowOpt},
+    withLayout({{"--format", "json|text|glsl", "output format (default json)"}, kWindowOpt}),
     1, 1};
 
 int runCoeffs(const Args& a) {
@@ -72,13 +67,13 @@ int runCoeffs(const Args& a) {
   if (format == "json") {
     nlohmann::ordered_json j;
     j["source"] = a.positional()[0];
-    j["layout"] = std::string(layoutName(env.layout));
+    j["layout"] = std::string(layoutName(env.layout.layout));
     j["width"] = env.image.width;
     j["height"] = env.image.height;
     j["coefficients"] = coefficientsJson(L);
     std::cout << j.dump() << "\n";
   } else if (format == "text") {
-    std::cout << a.positional()[0] << " (" << layoutName(env.layout) << ", " << env.image.width
+    std::cout << a.positional()[0] << " (" << layoutName(env.layout.layout) << ", " << env.image.width
               << "x" << env.image.height << ")\n"
               << coefficientsText(L);
     const MinIrradiance mn = minIrradiance(L);
@@ -97,11 +92,10 @@ const CommandSpec kIrradianceSpec{
     "Writes the irradiance environment map E(n), equirectangular and indexed by normal, computed\n"
     "from nine coefficients (sh) or by brute-force hemispherical integration (brute).\n"
     "PNG output is sRGB-encoded E/pi (the radiance of a white diffuse surface), clamped to 1.",
-    {kLayoutOpt,
-     {"--out", "FILE", "output image (.hdr, .exr: linear irradiance; .png: 8-bit)"},
+    withLayout({{"--out", "FILE", "output image (.hdr, .exr: linear irradiance; .png: 8-bit)"},
      {"--size", "WxH", "output size (default 256x128)"},
      {"--method", "sh|brute", "how to compute E (default sh)"},
-     kWindowOpt},
+     kWindowOpt}),
     1, 1};
 
 int runIrradiance(const Args& a) {
@@ -138,11 +132,10 @@ const CommandSpec kCompareSpec{
     "Compares SH irradiance with the brute-force integral on a WxH equirect grid of normals\n"
     "(luminance, solid-angle weighted). Errors are given as a fraction of the total intensity\n"
     "(the paper's measure) and of the mean irradiance.",
-    {kLayoutOpt,
-     {"--size", "WxH", "grid of normals (default 64x32)"},
+    withLayout({{"--size", "WxH", "grid of normals (default 64x32)"},
      {"--out", "PNG", "figure: SH map, brute-force map and error, with a colour scale"},
      {"--json", "", "print JSON instead of text"},
-     kWindowOpt},
+     kWindowOpt}),
     1, 1};
 
 int runCompare(const Args& a) {
@@ -153,7 +146,7 @@ int runCompare(const Args& a) {
   if (a.has("--json")) {
     nlohmann::ordered_json j;
     j["source"] = a.positional()[0];
-    j["layout"] = std::string(layoutName(env.layout));
+    j["layout"] = std::string(layoutName(env.layout.layout));
     j["input"] = std::to_string(env.image.width) + "x" + std::to_string(env.image.height);
     j["size"] = std::to_string(w) + "x" + std::to_string(h);
     j["mean_frac_total"] = r.meanFracTotal;
@@ -167,7 +160,7 @@ int runCompare(const Args& a) {
     std::cout << j.dump(2) << "\n";
   } else {
     std::printf("%s (%s, %dx%d), %dx%d normals\n", a.positional()[0].c_str(),
-                std::string(layoutName(env.layout)).c_str(), env.image.width, env.image.height, w, h);
+                std::string(layoutName(env.layout.layout)).c_str(), env.image.width, env.image.height, w, h);
     std::printf("  |E_sh - E| / total intensity: mean %.3f%%  max %.3f%%\n", 100 * r.meanFracTotal,
                 100 * r.maxFracTotal);
     std::printf("  |E_sh - E| / mean irradiance: mean %.3f%%  max %.3f%%\n", 100 * r.meanRelMean,

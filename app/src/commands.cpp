@@ -9,6 +9,8 @@ const std::vector<Command>& commands() {
       {kCompareSpec, runCompare},
       {kRenderSpec, runRender},
       {kViewSpec, runView},
+      {kReplaySpec, runReplay},
+      {kRecordSpec, runRecord},
   };
   return all;
 }

@@ -20,7 +20,10 @@ int runIrradiance(const Args&);
 int runCompare(const Args&);
 int runRender(const Args&);
 int runView(const Args&);
+int runReplay(const Args&);
+int runRecord(const Args&);
+std::vector<OptionSpec> streamOptions();
 
-extern const CommandSpec kCoeffsSpec, kIrradianceSpec, kCompareSpec, kRenderSpec, kViewSpec;
+extern const CommandSpec kCoeffsSpec, kIrradianceSpec, kCompareSpec, kRenderSpec, kViewSpec, kReplaySpec, kRecordSpec;
 
 }  // namespace lp::cli

@@ -19,7 +19,7 @@ double msSince(std::chrono::steady_clock::time_point t0) {
 }
 }  // namespace
 
-CompareResult compareIrradiance(const Image& img, Layout layout, int width, int height,
+CompareResult compareIrradiance(const Image& img, const LayoutSpec& layout, int width, int height,
                                 const BandWindow& window, unsigned threads) {
   const Projector projector(layout, img.width, img.height);
   const auto& samples = projector.samples();

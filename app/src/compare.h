@@ -22,7 +22,7 @@ struct CompareResult {
 
 /// Evaluates both methods on a W x H equirect grid of normals (pixel centres, weighted by their
 /// solid angle). `window` is applied to the SH coefficients first.
-CompareResult compareIrradiance(const Image& img, Layout layout, int width, int height,
+CompareResult compareIrradiance(const Image& img, const LayoutSpec& layout, int width, int height,
                                 const BandWindow& window = {}, unsigned threads = 0);
 
 /// The SH map, the brute-force map (same exposure) and |error| / total intensity with a colour

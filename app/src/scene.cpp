@@ -3,6 +3,8 @@
 #include <sstream>
 
 #include "capture/error.h"
+#include "capture/frame.h"
+#include "capture/photometry.h"
 #include "coeffs_io.h"
 
 namespace lp::cli {
@@ -18,12 +20,63 @@ std::vector<OptionSpec> sceneOptions() {
           {"--headless", "", "render offscreen through OSMesa even when a display exists"}};
 }
 
+std::vector<OptionSpec> layoutOptions() {
+  return {{"--layout", "equirect|angular|mirrorball|cube|fisheye", "panorama layout (default equirect)"},
+          {"--circle", "CX,CY,R", "mirrorball: the ball's circle in pixels"},
+          {"--fov", "DEG", "fisheye: field of view of each lens (default 190)"}};
+}
+
+LayoutSpec layoutFromArgs(const Args& a) {
+  LayoutSpec spec(parseLayout(a.get("--layout", "equirect")));
+  if (a.has("--circle")) {
+    if (spec.layout != Layout::MirrorBall) throw Error("--circle applies to --layout mirrorball only");
+    std::vector<float> v;
+    std::stringstream s(a.get("--circle"));
+    for (std::string part; std::getline(s, part, ',');) v.push_back(float(parseNumber(part, "--circle")));
+    if (v.size() != 3 || !(v[2] > 0)) throw Error("--circle " + a.get("--circle") + ": expected cx,cy,r with r > 0");
+    spec.circle = {v[0], v[1], v[2]};
+  }
+  if (a.has("--fov")) {
+    if (spec.layout != Layout::DualFisheye) throw Error("--fov applies to --layout fisheye only");
+    spec.fisheyeFovDeg = float(a.number("--fov", 190));
+  }
+  return spec;
+}
+
+Environment loadEnvironment(const std::string& source, const LayoutSpec& layout) {
+  auto src = openSource(source);
+  Frame frame;
+  if (!src->next(frame)) throw Error(source + ": no frame to read");
+  Environment env;
+  env.layout = layout;
+  Photometry photometry;
+  photometry.exposure = float(src->radianceScale());
+  Linearizer(photometry).convert(frame, env.image);
+  if (auto why = layoutMismatch(layout, env.image.width, env.image.height); !why.empty())
+    throw Error(source + ": " + why);
+  env.radiance = Projector(layout, env.image.width, env.image.height).project(env.image.rgb.data());
+  return env;
+}
+
+void setBackground(gl::Renderer& r, const Image& frame, const LayoutSpec& layout) {
+  if (layout.layout == Layout::Equirect || layout.layout == Layout::Angular) {
+    r.setBackground(frame.rgb.data(), frame.width, frame.height,
+                    layout.layout == Layout::Angular ? gl::BackgroundMapping::Angular
+                                                     : gl::BackgroundMapping::Equirect);
+    return;
+  }
+  const Image eq = resampleToEquirect(frame, layout, 1024, 512);
+  r.setBackground(eq.rgb.data(), eq.width, eq.height, gl::BackgroundMapping::Equirect);
+}
+
 std::vector<OptionSpec> lightingOptions() {
-  return {{"--env", "FILE", "environment map that lights the model and is drawn behind it"},
-          {"--layout", "equirect|angular", "layout of --env (default equirect)"},
+  std::vector<OptionSpec> o = {{"--env", "FILE", "environment map that lights the model and is drawn behind it"}};
+  for (auto& l : layoutOptions()) o.push_back(l);
+  o.insert(o.end(), {
           {"--coeffs", "FILE.json", "coefficients written by liveprobe coeffs"},
           {"--coeff", "NAME=VALUE", "set one coefficient (VALUE or r,g,b), others zero; repeatable",
-           true}};
+           true}});
+  return o;
 }
 
 void applyCoeffAssignment(const std::string& text, Sh9& sh) {
@@ -46,12 +99,10 @@ std::optional<Lighting> lightingFromArgs(const Args& a) {
   if (kinds == 0) return std::nullopt;
   Lighting l;
   if (a.has("--env")) {
-    l.layout = parseLayout(a.get("--layout", "equirect"));
-    Image img = loadImage(a.get("--env"));
-    if (auto why = layoutMismatch(l.layout, img.width, img.height); !why.empty())
-      throw Error(a.get("--env") + ": " + why);
-    l.radiance = Projector(l.layout, img.width, img.height).project(img.rgb.data());
-    l.background = std::move(img);
+    Environment env = loadEnvironment(a.get("--env"), layoutFromArgs(a));
+    l.layout = env.layout;
+    l.radiance = env.radiance;
+    l.background = std::move(env.image);
   } else if (a.has("--coeffs")) {
     l.radiance = loadCoefficients(a.get("--coeffs"));
   } else {
@@ -109,18 +160,26 @@ gl::Backend backendFromArgs(const Args& a) {
   return a.has("--headless") ? gl::Backend::Headless : gl::Backend::Auto;
 }
 
-void loadScene(gl::Renderer& r, const Mesh& mesh, const Lighting& lighting) {
+std::unique_ptr<gl::GlContext> openContext(gl::Backend backend, std::pair<int, int> size) {
+  try {
+    return gl::createGlContext({backend, size.first, size.second, "liveprobe", true});
+  } catch (const gl::ContextError& e) {
+    throw Error(std::string("GL context: ") + e.what());
+  }
+}
+
+void loadModel(gl::Renderer& r, const Mesh& mesh) {
   r.setMesh(mesh);
   if (!mesh.albedoTexture.empty()) {
     const Image tex = loadImage(mesh.albedoTexture);
     r.setAlbedoTexture(tex.rgb.data(), tex.width, tex.height);
   }
+}
+
+void loadScene(gl::Renderer& r, const Mesh& mesh, const Lighting& lighting) {
+  loadModel(r, mesh);
   r.setLighting(lighting.radiance);
-  if (lighting.background)
-    r.setBackground(lighting.background->rgb.data(), lighting.background->width,
-                    lighting.background->height,
-                    lighting.layout == Layout::Angular ? gl::BackgroundMapping::Angular
-                                                       : gl::BackgroundMapping::Equirect);
+  if (lighting.background) setBackground(r, *lighting.background, lighting.layout);
 }
 
 void applyInput(gl::Camera& camera, const gl::InputDelta& input) {

@@ -16,14 +16,32 @@ namespace lp::cli {
 
 /// Options for the model, camera and look (appended to a command's own).
 std::vector<OptionSpec> sceneOptions();
-/// Options choosing the lighting: --env/--layout, --coeffs, --coeff.
+/// Options choosing the lighting: --env and the layout options, --coeffs, --coeff.
 std::vector<OptionSpec> lightingOptions();
+/// --layout, --circle, --fov.
+std::vector<OptionSpec> layoutOptions();
+/// The layout options as a spec (option errors are reported before any file is read).
+LayoutSpec layoutFromArgs(const Args& a);
+
+/// A still environment in any layout: FILE is an image, or a folder of six cube faces.
+struct Environment {
+  Image image;  ///< linear RGB
+  LayoutSpec layout;
+  Sh9 radiance;  ///< unwindowed, unrotated
+};
+/// Reads the first frame of `source` through the capture path (photometry, layout check) and
+/// projects it. Throws lp::Error naming the source.
+Environment loadEnvironment(const std::string& source, const LayoutSpec& layout);
 
 struct Lighting {
   Sh9 radiance;
   std::optional<Image> background;  ///< the environment, when lighting came from one
-  Layout layout = Layout::Equirect;
+  LayoutSpec layout;
 };
+
+/// The background texture for a frame: equirect and angular frames are drawn directly; other
+/// layouts are resampled to a 1024x512 equirect on the CPU (bilinear).
+void setBackground(gl::Renderer& r, const Image& frame, const LayoutSpec& layout);
 
 /// From --env FILE [--layout], --coeffs FILE.json or --coeff NAME=VALUE...; nullopt if none given.
 std::optional<Lighting> lightingFromArgs(const Args& a);
@@ -41,6 +59,12 @@ gl::ShadingSettings shadingFromArgs(const Args& a, const Sh9& radiance);
 /// Exposure that maps the mean radiance of `radiance` (L00 Y00, luminance) to 0.18; 1 if dark.
 float autoExposure(const Sh9& radiance);
 gl::Backend backendFromArgs(const Args& a);
+
+/// Creates a GL context (lp::Error on failure).
+std::unique_ptr<gl::GlContext> openContext(gl::Backend backend, std::pair<int, int> size);
+
+/// Uploads the mesh and its albedo texture.
+void loadModel(gl::Renderer& r, const Mesh& mesh);
 
 /// Uploads mesh (and its albedo texture), lighting and background into `r`.
 void loadScene(gl::Renderer& r, const Mesh& mesh, const Lighting& lighting);

@@ -14,6 +14,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "capture/error.h"
+#include "capture/frame.h"
 
 namespace lp {
 
@@ -120,7 +121,7 @@ void checkRadianceComplete(const std::string& path, int width, int height) {
 
 }  // namespace
 
-Image loadImage(const std::string& path) {
+void readImageFrame(const std::string& path, Frame& frame) {
   std::error_code ec;
   if (!fs::exists(path, ec)) throw Error(path + ": no such file");
   if (fs::is_directory(path, ec)) throw Error(path + ": is a directory, not an image");
@@ -135,47 +136,62 @@ Image loadImage(const std::string& path) {
   const std::string ext = lower(fs::path(path).extension().string());
   if (ext == ".hdr" || ext == ".pic") checkRadianceComplete(path, m.cols, m.rows);
 
-  // To 3-channel RGB.
-  cv::Mat rgb;
+  cv::Mat bgr;
   switch (m.channels()) {
-    case 1: cv::cvtColor(m, rgb, cv::COLOR_GRAY2RGB); break;
-    case 3: cv::cvtColor(m, rgb, cv::COLOR_BGR2RGB); break;
-    case 4: cv::cvtColor(m, rgb, cv::COLOR_BGRA2RGB); break;
+    case 1: cv::cvtColor(m, bgr, cv::COLOR_GRAY2BGR); break;
+    case 3: bgr = m; break;
+    case 4: cv::cvtColor(m, bgr, cv::COLOR_BGRA2BGR); break;
     default:
       throw Error(path + ": unsupported channel count " + std::to_string(m.channels()));
   }
-  Image img(rgb.cols, rgb.rows);
-  const int depth = rgb.depth();
-  if (depth == CV_8U) {
-    std::array<float, 256> lut;
-    for (int i = 0; i < 256; ++i) lut[i] = srgbToLinear(i / 255.0f);
-    for (int y = 0; y < rgb.rows; ++y) {
-      const auto* src = rgb.ptr<std::uint8_t>(y);
-      float* dst = img.pixel(0, y);
-      for (int x = 0; x < rgb.cols * 3; ++x) dst[x] = lut[src[x]];
-    }
-  } else if (depth == CV_16U) {
-    for (int y = 0; y < rgb.rows; ++y) {
-      const auto* src = rgb.ptr<std::uint16_t>(y);
-      float* dst = img.pixel(0, y);
-      for (int x = 0; x < rgb.cols * 3; ++x) dst[x] = srgbToLinear(src[x] / 65535.0f);
-    }
-  } else {
-    cv::Mat f;
-    rgb.convertTo(f, CV_32F);
-    for (int y = 0; y < f.rows; ++y)
-      std::copy_n(f.ptr<float>(y), std::size_t(f.cols) * 3, img.pixel(0, y));
+  frame.width = bgr.cols;
+  frame.height = bgr.rows;
+  const std::size_t n = std::size_t(bgr.cols) * bgr.rows * 3;
+  if (bgr.depth() == CV_8U) {
+    frame.format = PixelFormat::Bgr8;
+    frame.rgb.clear();
+    frame.bgr8.resize(n);
+    for (int y = 0; y < bgr.rows; ++y)
+      std::copy_n(bgr.ptr<std::uint8_t>(y), std::size_t(bgr.cols) * 3, frame.bgr8.data() + y * std::size_t(bgr.cols) * 3);
+    return;
   }
+  cv::Mat rgb, f;
+  cv::cvtColor(bgr, rgb, cv::COLOR_BGR2RGB);
+  rgb.convertTo(f, CV_32F, bgr.depth() == CV_16U ? 1.0 / 65535.0 : 1.0);
+  frame.format = PixelFormat::RgbF32;
+  frame.bgr8.clear();
+  frame.rgb.resize(n);
+  for (int y = 0; y < f.rows; ++y)
+    std::copy_n(f.ptr<float>(y), std::size_t(f.cols) * 3, frame.rgb.data() + y * std::size_t(f.cols) * 3);
+  if (bgr.depth() == CV_16U)
+    for (float& v : frame.rgb) v = srgbToLinear(v);
   std::size_t bad = 0, firstBad = 0;
-  for (std::size_t i = 0; i < img.rgb.size(); ++i) {
-    if (!std::isfinite(img.rgb[i])) {
+  for (std::size_t i = 0; i < frame.rgb.size(); ++i) {
+    if (!std::isfinite(frame.rgb[i])) {
       if (bad++ == 0) firstBad = i / 3;
     }
   }
   if (bad)
     throw Error(path + ": " + std::to_string(bad) + " pixel values are NaN or Inf (first at x=" +
-                std::to_string(firstBad % img.width) + ", y=" +
-                std::to_string(firstBad / img.width) + ")");
+                std::to_string(firstBad % frame.width) + ", y=" +
+                std::to_string(firstBad / frame.width) + ")");
+}
+
+Image loadImage(const std::string& path) {
+  Frame f;
+  readImageFrame(path, f);
+  Image img(f.width, f.height);
+  if (f.format == PixelFormat::RgbF32) {
+    img.rgb = std::move(f.rgb);
+    return img;
+  }
+  std::array<float, 256> lut;
+  for (int i = 0; i < 256; ++i) lut[i] = srgbToLinear(i / 255.0f);
+  for (std::size_t i = 0; i < f.bgr8.size(); i += 3) {
+    img.rgb[i] = lut[f.bgr8[i + 2]];
+    img.rgb[i + 1] = lut[f.bgr8[i + 1]];
+    img.rgb[i + 2] = lut[f.bgr8[i]];
+  }
   return img;
 }
 

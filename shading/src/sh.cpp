@@ -276,3 +276,64 @@ Sh9 projectEquirect(const float* rgb, int width, int height) {
 }
 
 }  // namespace lp
+
+namespace lp {
+
+glm::mat3 rotationYawPitchRoll(float yawDeg, float pitchDeg, float rollDeg) {
+  const float y = glm::radians(yawDeg), p = glm::radians(pitchDeg), r = glm::radians(rollDeg);
+  const glm::mat3 rz(glm::vec3(std::cos(y), std::sin(y), 0), glm::vec3(-std::sin(y), std::cos(y), 0),
+                     glm::vec3(0, 0, 1));
+  const glm::mat3 ry(glm::vec3(std::cos(p), 0, -std::sin(p)), glm::vec3(0, 1, 0),
+                     glm::vec3(std::sin(p), 0, std::cos(p)));
+  const glm::mat3 rx(glm::vec3(1, 0, 0), glm::vec3(0, std::cos(r), std::sin(r)),
+                     glm::vec3(0, -std::sin(r), std::cos(r)));
+  return rz * ry * rx;
+}
+
+Sh9 rotateSh(const Sh9& L, const glm::mat3& R) {
+  Sh9 out;
+  out.c[0] = L.c[0];
+  // Band 1: sum_m L1m Y1m(w) = 0.488603 (L11, L1-1, L10) . w, so the vector turns with R.
+  for (int ch = 0; ch < 3; ++ch) {
+    const glm::vec3 v = R * glm::vec3(L.c[3][ch], L.c[1][ch], L.c[2][ch]);
+    out.c[3][ch] = v.x, out.c[1][ch] = v.y, out.c[2][ch] = v.z;
+  }
+  // Band 2: the rotated coefficients c' satisfy sum c'_m Y2m(w_i) = sum c_m Y2m(R^T w_i) at every w_i. Least squares
+  // over 12 icosahedron directions: (A^T A) c' = A^T B c, A_im = Y2m(w_i), B_im = Y2m(R^T w_i).
+  const float g = 1.61803399f;
+  const glm::vec3 dirs[12] = {{-1, g, 0}, {1, g, 0}, {-1, -g, 0}, {1, -g, 0}, {0, -1, g}, {0, 1, g},
+                              {0, -1, -g}, {0, 1, -g}, {g, 0, -1}, {g, 0, 1}, {-g, 0, -1}, {-g, 0, 1}};
+  double A[12][5], B[12][5];
+  const glm::mat3 Rt = glm::transpose(R);
+  for (int i = 0; i < 12; ++i) {
+    const glm::vec3 w = glm::normalize(dirs[i]);
+    const auto ya = shBasis(w), yb = shBasis(Rt * w);
+    for (int m = 0; m < 5; ++m) A[i][m] = ya[4 + m], B[i][m] = yb[4 + m];
+  }
+  double ata[5][5] = {}, atb[5][5] = {};
+  for (int i = 0; i < 12; ++i)
+    for (int a = 0; a < 5; ++a)
+      for (int b = 0; b < 5; ++b) ata[a][b] += A[i][a] * A[i][b], atb[a][b] += A[i][a] * B[i][b];
+  // Solve ata X = atb (Gauss-Jordan with partial pivoting; ata is well conditioned).
+  for (int col = 0; col < 5; ++col) {
+    int piv = col;
+    for (int r = col + 1; r < 5; ++r)
+      if (std::abs(ata[r][col]) > std::abs(ata[piv][col])) piv = r;
+    std::swap(ata[col], ata[piv]);
+    std::swap(atb[col], atb[piv]);
+    for (int r = 0; r < 5; ++r) {
+      if (r == col) continue;
+      const double f = ata[r][col] / ata[col][col];
+      for (int k = 0; k < 5; ++k) ata[r][k] -= f * ata[col][k], atb[r][k] -= f * atb[col][k];
+    }
+  }
+  for (int ch = 0; ch < 3; ++ch)
+    for (int m = 0; m < 5; ++m) {
+      double v = 0;
+      for (int k = 0; k < 5; ++k) v += atb[m][k] / ata[m][m] * L.c[4 + k][ch];
+      out.c[4 + m][ch] = float(v);
+    }
+  return out;
+}
+
+}  // namespace lp

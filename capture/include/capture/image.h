@@ -23,6 +23,13 @@ struct Image {
 float srgbToLinear(float v);
 float linearToSrgb(float v);
 
+struct Frame;
+
+/// Reads an image file into a frame without changing its encoding: 8-bit files stay 8-bit BGR
+/// (decoded later by the photometry stage), HDR files become linear float; 16-bit files are
+/// decoded from sRGB to float. Same checks and errors as loadImage.
+void readImageFrame(const std::string& path, Frame& frame);
+
 /// Loads `path` as linear RGB. Throws lp::Error naming the file on: a missing or unreadable file,
 /// a file that is not an image, a truncated Radiance file, and NaN or Inf pixels.
 Image loadImage(const std::string& path);

@@ -12,7 +12,7 @@
 //   W x H, any aspect: row i covers t in [pi i/H, pi (i+1)/H] (row 0 touches +z),
 //   column j covers p in [2 pi j/W, 2 pi (j+1)/W]; pixel centres at i + 0.5, j + 0.5;
 //   solid angle (2 pi / W)(cos t0 - cos t1), exact, summing to 4 pi.)
-// the GL renderer converts from it to GL's y-up frame in exactly one place (shading/gl/axes.h).
+// the GL renderer converts from it to GL's y-up frame in exactly one place (shading/axes.h).
 //
 // Coefficient order (index k = l(l+1)+m, as Filament's SHindex):
 //     k: 0    1     2    3    4     5     6    7    8
@@ -139,6 +139,18 @@ std::array<glm::mat4, 3> irradianceMatrices(const Sh9& radiance);
 /// E(n) = n4^T M n4, n4 = (n, 1), per channel. This is, term for term, the GLSL in
 /// shading/src/gl/shaders.cpp (function shIrradiance): keep the two identical.
 glm::vec3 evalIrradianceQuadratic(const std::array<glm::mat4, 3>& m, glm::vec3 n);
+
+// ---- Rotation -------------------------------------------------------------------------------
+
+/// Coefficients of the environment turned by the rotation R (R&H frame): a light that was in
+/// direction d is in direction R d afterwards, L'(w) = L(R^T w). Band 1 turns as the vector
+/// (L11, L1-1, L10) = (x, y, z); band 2 by the 5x5 matrix that maps the band-2 basis through R
+/// (found by least squares on 12 fixed directions; exact, since band 2 is closed under rotation).
+Sh9 rotateSh(const Sh9& radiance, const glm::mat3& rotation);
+
+/// R = Rz(yaw) * Ry(pitch) * Rx(roll), angles in degrees, about the world axes (+z up): yaw
+/// turns the environment about the vertical, pitch tilts it about +y, roll about +x.
+glm::mat3 rotationYawPitchRoll(float yawDeg, float pitchDeg, float rollDeg);
 
 // ---- Windowing against ringing ---------------------------------------------------------------
 

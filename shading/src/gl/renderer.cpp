@@ -7,7 +7,7 @@
 #include <glm/gtc/type_ptr.hpp>
 
 #include "shaders.h"
-#include "shading/gl/axes.h"
+#include "shading/axes.h"
 #include "shading/gl/context.h"
 
 namespace lp::gl {

@@ -35,7 +35,7 @@ in vec3 vNormal;
 in vec2 vUv;
 out vec4 fragColor;
 uniform mat4 uShR, uShG, uShB;
-uniform mat3 uWorldFromGl;  // shading/gl/axes.h
+uniform mat3 uWorldFromGl;  // shading/axes.h
 uniform vec3 uAlbedo;
 uniform bool uHasTexture;
 uniform sampler2D uAlbedoTex;

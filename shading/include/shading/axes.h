@@ -1,5 +1,7 @@
 #pragma once
 // THE one place where the R&H world frame of shading/sh.h (+z up) meets GL's frame (+y up).
+// Pure math (part of shading_sh): the renderer uses it for normals and the background, and the
+// cube-map layout for OpenGL's face convention, whose directions are given in GL's frame.
 //
 //   GL (X, Y, Z) = (-y, z, x) of the world;   world (x, y, z) = (Z, -X, Y) of GL.
 //

@@ -1,0 +1,63 @@
+#pragma once
+// Frames and the sources that produce them: still images, image sequences, cube-face sets, video
+// files (OpenCV videoio with FFmpeg), a synthetic sky, and (issue 5) V4L2 cameras. One small
+// interface; one factory, openSource().
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace lp {
+
+enum class PixelFormat : std::uint8_t {
+  Bgr8,    ///< 8-bit, display-encoded (sRGB or a gamma), OpenCV channel order
+  RgbF32,  ///< linear radiance, float
+};
+
+/// One frame. Exactly one of the two buffers is filled, by `format`.
+struct Frame {
+  std::uint64_t sequence = 0;  ///< frame number at the source; a gap means frames were lost
+  double timestamp = 0.0;      ///< seconds since the first frame of the source
+  int width = 0, height = 0;
+  PixelFormat format = PixelFormat::RgbF32;
+  std::vector<std::uint8_t> bgr8;  ///< width * height * 3 (Bgr8)
+  std::vector<float> rgb;          ///< width * height * 3 (RgbF32)
+};
+
+class FrameSource {
+ public:
+  virtual ~FrameSource() = default;
+  /// The next frame; false at the end of the stream. Throws lp::Error on a fatal failure.
+  virtual bool next(Frame& frame) = 0;
+  /// Back to the first frame (for --loop); false if the source cannot.
+  virtual bool rewind() = 0;
+  virtual std::string describe() const = 0;
+  /// Nominal frame rate, 0 if unknown.
+  virtual double fps() const = 0;
+  /// Frames that could not be decoded and were skipped.
+  virtual std::size_t skippedFrames() const { return 0; }
+  /// Why the stream ended, when it ended early (a truncated file); empty otherwise.
+  virtual std::string endReason() const { return {}; }
+  /// Linear radiance = decoded 8-bit value * this (recordings store their exposure).
+  virtual double radianceScale() const { return 1.0; }
+};
+
+struct SourceOptions {
+  double fps = 30.0;  ///< for image sequences and stills, which carry no timing
+};
+
+/// Opens SOURCE:
+///   synthetic[:WxH[@FPS]]       the procedural sky (default 512x256 at 30 fps)
+///   DIR with px,nx,py,ny,pz,nz  six cube faces, assembled into a horizontal cross
+///   DIR                         an image sequence (image files in name order)
+///   PATTERN with %d             an image sequence by printf pattern (frame_%04d.png)
+///   *.mp4|webm|mkv|avi|mov|m4v  a video file, decoded by FFmpeg through OpenCV
+///   anything else               a still image
+/// Throws lp::Error naming the source on failure.
+std::unique_ptr<FrameSource> openSource(const std::string& spec, const SourceOptions& options = {});
+
+/// The synthetic sky at time t (seconds): an equirect HDR with a moving sun, a sky gradient, a
+/// ground, and two coloured area lights moving around the horizon. Deterministic in t.
+void renderSyntheticSky(int width, int height, double t, std::vector<float>& rgb);
+
+}  // namespace lp

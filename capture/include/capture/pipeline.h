@@ -1,0 +1,111 @@
+#pragma once
+// The capture pipeline: a thread grabs, converts (photometry) and projects each frame, then
+// hands the newest coefficients to the render loop through a latest-value slot. With
+// Handoff::Latest capture never waits for rendering: a frame not taken before the next one is
+// ready is dropped and counted. With Handoff::Every (offline output) capture waits until each
+// frame is taken, so every frame is rendered.
+#include <atomic>
+#include <condition_variable>
+#include <functional>
+#include <memory>
+#include <mutex>
+#include <optional>
+#include <string>
+#include <thread>
+
+#include "capture/frame.h"
+#include "capture/image.h"
+#include "capture/layout.h"
+#include "capture/photometry.h"
+#include "shading/sh.h"
+
+namespace lp {
+
+struct StageTimes {
+  double grabMs = 0, convertMs = 0, projectMs = 0;
+};
+
+struct ProcessedFrame {
+  std::uint64_t index = 0;     ///< position in this pipeline's output, from 0
+  std::uint64_t sequence = 0;  ///< the source's frame number
+  double timestamp = 0;        ///< the source's timestamp, seconds
+  Sh9 radiance;                ///< after rotation and smoothing
+  std::shared_ptr<const Image> image;  ///< the linear frame (when PipelineOptions::keepImages)
+  StageTimes times;
+  std::size_t saturated = 0;
+};
+
+enum class Handoff : std::uint8_t { Latest, Every };
+
+struct PipelineOptions {
+  LayoutSpec layout;
+  Photometry photometry;
+  std::optional<glm::mat3> rotation;  ///< applied to the coefficients (SH rotation)
+  double smoothSeconds = 0;           ///< EMA time constant on the 27 numbers; 0 = off
+  bool loop = false;                  ///< rewind at the end of the source
+  std::int64_t maxFrames = -1;        ///< stop after this many frames; -1 = the whole source
+  Handoff handoff = Handoff::Latest;
+  bool realtime = false;              ///< pace capture by the source's timestamps
+  bool keepImages = true;             ///< hand the linear frame over too (for the background)
+  /// Called on the capture thread for every processed frame, before the handoff.
+  std::function<void(const ProcessedFrame&)> onCaptured;
+};
+
+struct PipelineStats {
+  std::size_t captured = 0;  ///< frames processed
+  std::size_t taken = 0;     ///< frames the consumer took
+  std::size_t dropped = 0;   ///< frames replaced in the slot before anyone took them
+  std::size_t skipped = 0;   ///< frames the source could not decode
+  std::string endReason;     ///< why the source ended early, if it did
+  std::string error;         ///< the fatal error that stopped capture, if any
+};
+
+/// Exponential moving average of coefficients: alpha = 1 - exp(-dt / tau). Exact on SH because
+/// projection is linear (the average of projections is the projection of the average frame).
+/// For a step change it reaches 63% after tau seconds: that is the latency it adds.
+class ShSmoother {
+ public:
+  explicit ShSmoother(double tauSeconds) : tau_(tauSeconds) {}
+  Sh9 update(const Sh9& x, double timestamp);
+
+ private:
+  double tau_;
+  std::optional<Sh9> state_;
+  double last_ = 0;
+};
+
+class CapturePipeline {
+ public:
+  CapturePipeline(std::unique_ptr<FrameSource> source, PipelineOptions options);
+  ~CapturePipeline();
+  CapturePipeline(const CapturePipeline&) = delete;
+  CapturePipeline& operator=(const CapturePipeline&) = delete;
+
+  void start();
+  /// Stops the capture thread (idempotent).
+  void stop();
+  /// The newest frame not yet taken, without waiting.
+  std::optional<ProcessedFrame> takeLatest();
+  /// Waits for the next frame; nullopt when capture has ended and nothing is left.
+  std::optional<ProcessedFrame> waitNext();
+  /// Capture has ended (end of source, frame limit, error or stop).
+  bool finished() const { return finished_; }
+  PipelineStats stats() const;
+  const FrameSource& source() const { return *source_; }
+
+ private:
+  void run();
+  void publish(ProcessedFrame&& f);
+  std::optional<ProcessedFrame> takeFromSlot(std::unique_lock<std::mutex>& lock);
+
+  std::unique_ptr<FrameSource> source_;
+  PipelineOptions opt_;
+  std::thread thread_;
+  std::atomic<bool> stop_{false}, finished_{false};
+  mutable std::mutex mutex_;
+  std::condition_variable cv_;
+  std::optional<ProcessedFrame> slot_;
+  PipelineStats stats_;
+};
+
+}  // namespace lp

@@ -1,0 +1,154 @@
+#include "capture/pipeline.h"
+
+#include <chrono>
+#include <cmath>
+
+#include "capture/error.h"
+
+namespace lp {
+
+namespace {
+using Clock = std::chrono::steady_clock;
+double msBetween(Clock::time_point a, Clock::time_point b) {
+  return std::chrono::duration<double, std::milli>(b - a).count();
+}
+}  // namespace
+
+Sh9 ShSmoother::update(const Sh9& x, double timestamp) {
+  if (tau_ <= 0 || !state_) {
+    state_ = x;
+    last_ = timestamp;
+    return x;
+  }
+  const double dt = timestamp - last_;
+  last_ = timestamp;
+  // A backwards jump (a loop) restarts the average.
+  const float alpha = dt < 0 ? 1.0f : float(1.0 - std::exp(-dt / tau_));
+  for (int k = 0; k < kShCount; ++k) state_->c[k] += alpha * (x.c[k] - state_->c[k]);
+  return *state_;
+}
+
+CapturePipeline::CapturePipeline(std::unique_ptr<FrameSource> source, PipelineOptions options)
+    : source_(std::move(source)), opt_(std::move(options)) {}
+
+CapturePipeline::~CapturePipeline() { stop(); }
+
+void CapturePipeline::start() {
+  stop_ = false;
+  finished_ = false;
+  thread_ = std::thread([this] { run(); });
+}
+
+void CapturePipeline::stop() {
+  {
+    std::lock_guard lock(mutex_);  // under the lock, so no waiter misses the wake-up
+    stop_ = true;
+  }
+  cv_.notify_all();
+  if (thread_.joinable()) thread_.join();
+}
+
+void CapturePipeline::publish(ProcessedFrame&& f) {
+  std::unique_lock lock(mutex_);
+  if (opt_.handoff == Handoff::Every) cv_.wait(lock, [&] { return !slot_ || stop_; });
+  if (slot_) ++stats_.dropped;  // the consumer never saw it: stale, dropped
+  slot_ = std::move(f);
+  ++stats_.captured;
+  lock.unlock();
+  cv_.notify_all();
+}
+
+void CapturePipeline::run() {
+  Photometry photometry = opt_.photometry;
+  photometry.exposure *= float(source_->radianceScale());
+  const Linearizer linearizer(photometry);
+  std::optional<Projector> projector;
+  ShSmoother smoother(opt_.smoothSeconds);
+  Frame frame;
+  std::uint64_t index = 0;
+  Clock::time_point wallStart = Clock::now();
+  double streamStart = -1, loopOffset = 0, lastTimestamp = 0;
+  try {
+    while (!stop_ && (opt_.maxFrames < 0 || std::int64_t(index) < opt_.maxFrames)) {
+      const auto t0 = Clock::now();
+      if (!source_->next(frame)) {
+        if (opt_.loop && source_->rewind() && source_->next(frame)) {
+          loopOffset = lastTimestamp + (source_->fps() > 0 ? 1.0 / source_->fps() : 0.0);
+        } else {
+          break;
+        }
+      }
+      const auto t1 = Clock::now();
+      const double timestamp = frame.timestamp + loopOffset;
+      lastTimestamp = timestamp;
+      auto image = std::make_shared<Image>();
+      const std::size_t saturated = linearizer.convert(frame, *image);
+      const auto t2 = Clock::now();
+      if (!projector || projector->width() != frame.width || projector->height() != frame.height) {
+        if (auto why = layoutMismatch(opt_.layout, frame.width, frame.height); !why.empty())
+          throw Error(source_->describe() + ": " + std::string(layoutName(opt_.layout.layout)) + " layout: " + why);
+        projector.emplace(opt_.layout, frame.width, frame.height);
+      }
+      Sh9 sh = projector->project(image->rgb.data());
+      if (opt_.rotation) sh = rotateSh(sh, *opt_.rotation);
+      sh = smoother.update(sh, timestamp);
+      const auto t3 = Clock::now();
+
+      ProcessedFrame out;
+      out.index = index++;
+      out.sequence = frame.sequence;
+      out.timestamp = timestamp;
+      out.radiance = sh;
+      if (opt_.keepImages) out.image = std::move(image);
+      out.times = {msBetween(t0, t1), msBetween(t1, t2), msBetween(t2, t3)};
+      out.saturated = saturated;
+      if (opt_.onCaptured) opt_.onCaptured(out);
+      if (opt_.realtime) {
+        if (streamStart < 0) streamStart = timestamp, wallStart = Clock::now();
+        const auto due = wallStart + std::chrono::duration_cast<Clock::duration>(
+                                         std::chrono::duration<double>(timestamp - streamStart));
+        std::unique_lock lock(mutex_);
+        cv_.wait_until(lock, due, [&] { return bool(stop_); });
+      }
+      publish(std::move(out));
+    }
+  } catch (const std::exception& e) {
+    std::lock_guard lock(mutex_);
+    stats_.error = e.what();
+  }
+  {
+    std::lock_guard lock(mutex_);
+    stats_.skipped = source_->skippedFrames();
+    stats_.endReason = source_->endReason();
+    finished_ = true;
+  }
+  cv_.notify_all();
+}
+
+std::optional<ProcessedFrame> CapturePipeline::takeFromSlot(std::unique_lock<std::mutex>& lock) {
+  if (!slot_) return std::nullopt;
+  std::optional<ProcessedFrame> f = std::move(slot_);
+  slot_.reset();
+  ++stats_.taken;
+  lock.unlock();
+  cv_.notify_all();  // a capture thread waiting in Handoff::Every may go on
+  return f;
+}
+
+std::optional<ProcessedFrame> CapturePipeline::takeLatest() {
+  std::unique_lock lock(mutex_);
+  return takeFromSlot(lock);
+}
+
+std::optional<ProcessedFrame> CapturePipeline::waitNext() {
+  std::unique_lock lock(mutex_);
+  cv_.wait(lock, [&] { return slot_ || finished_ || stop_; });
+  return takeFromSlot(lock);
+}
+
+PipelineStats CapturePipeline::stats() const {
+  std::lock_guard lock(mutex_);
+  return stats_;
+}
+
+}  // namespace lp

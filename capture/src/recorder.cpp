@@ -1,0 +1,112 @@
+#include "capture/recorder.h"
+
+#include <unistd.h>
+
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+
+#include <nlohmann/json.hpp>
+#include <opencv2/videoio.hpp>
+
+#include "capture/error.h"
+#include "capture/image.h"
+
+namespace lp {
+
+namespace fs = std::filesystem;
+
+struct VideoRecorder::Impl {
+  cv::VideoWriter writer;
+  int fourcc = 0;
+  cv::Mat bgr;
+};
+
+VideoRecorder::VideoRecorder(std::string path, double fps, std::string sourceDescription, double sourceScale)
+    : impl_(std::make_unique<Impl>()), path_(std::move(path)), source_(std::move(sourceDescription)),
+      fps_(fps > 0 ? fps : 30.0), sourceScale_(sourceScale) {
+  const fs::path p(path_);
+  std::string ext = p.extension().string();
+  for (auto& c : ext) c = char(std::tolower(static_cast<unsigned char>(c)));
+  if (ext == ".mkv") impl_->fourcc = cv::VideoWriter::fourcc('F', 'F', 'V', '1');
+  else if (ext == ".avi") impl_->fourcc = cv::VideoWriter::fourcc('M', 'J', 'P', 'G');
+  else throw Error(path_ + ": record to .mkv (FFV1, lossless) or .avi (MJPEG)");
+  const fs::path dir = p.has_parent_path() ? p.parent_path() : fs::path(".");
+  std::error_code ec;
+  if (!fs::is_directory(dir, ec)) throw Error(path_ + ": folder " + dir.string() + " does not exist");
+  tmp_ = (dir / ("." + p.stem().string() + ".tmp" + std::to_string(::getpid()) + ext)).string();
+}
+
+VideoRecorder::~VideoRecorder() {
+  try {
+    finish();
+  } catch (...) {  // a destructor must not throw; finish() already cleaned up what it could
+  }
+}
+
+void VideoRecorder::write(const Frame& f) {
+  if (finished_) throw Error(path_ + ": recording already finished");
+  cv::Mat& bgr = impl_->bgr;
+  if (f.format == PixelFormat::Bgr8) {
+    if (exposure_ == 0) exposure_ = 1.0 / sourceScale_;
+    bgr = cv::Mat(f.height, f.width, CV_8UC3, const_cast<std::uint8_t*>(f.bgr8.data()));
+  } else {
+    if (exposure_ == 0) {
+      float peak = 0;
+      for (float v : f.rgb) peak = std::max(peak, v);
+      exposure_ = peak > 0 ? 0.95 / peak : 1.0;
+    }
+    bgr.create(f.height, f.width, CV_8UC3);
+    const float k = float(exposure_);
+    for (int y = 0; y < f.height; ++y) {
+      const float* s = f.rgb.data() + std::size_t(y) * f.width * 3;
+      auto* d = bgr.ptr<std::uint8_t>(y);
+      for (int x = 0; x < f.width; ++x, s += 3, d += 3)
+        for (int c = 0; c < 3; ++c) d[2 - c] = std::uint8_t(std::lround(255.0f * linearToSrgb(s[c] * k)));
+    }
+  }
+  if (!impl_->writer.isOpened()) {
+    if (!impl_->writer.open(tmp_, cv::CAP_FFMPEG, impl_->fourcc, fps_, cv::Size(f.width, f.height), true))
+      throw Error(path_ + ": cannot open a video writer (FFmpeg codec missing?)");
+  }
+  impl_->writer.write(bgr);
+  stamps_.push_back(f.timestamp);
+}
+
+void VideoRecorder::finish() {
+  if (finished_) return;
+  finished_ = true;
+  std::error_code ec;
+  if (!impl_->writer.isOpened()) {  // nothing was recorded
+    fs::remove(tmp_, ec);
+    return;
+  }
+  impl_->writer.release();
+  nlohmann::ordered_json j;
+  j["source"] = source_;
+  j["fps"] = fps_;
+  j["encoding"] = "srgb8";
+  j["exposure"] = exposure_;
+  j["frames"] = stamps_.size();
+  j["timestamps"] = stamps_;
+  const std::string sideTmp = tmp_ + ".json";
+  {
+    std::ofstream out(sideTmp);
+    out << j.dump() << "\n";
+    if (!out) {
+      fs::remove(tmp_, ec);
+      fs::remove(sideTmp, ec);
+      throw Error(path_ + ".json: cannot write the recording's sidecar");
+    }
+  }
+  fs::rename(tmp_, path_, ec);
+  if (!ec) fs::rename(sideTmp, path_ + ".json", ec);
+  if (ec) {
+    fs::remove(tmp_, ec);
+    fs::remove(sideTmp, ec);
+    throw Error(path_ + ": cannot move the recording into place");
+  }
+}
+
+}  // namespace lp

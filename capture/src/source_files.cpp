@@ -1,0 +1,264 @@
+// Sources backed by files: still images, cube-face sets, image sequences, video (OpenCV videoio
+// with FFmpeg).
+#include <algorithm>
+#include <array>
+#include <cstdio>
+#include <filesystem>
+#include <cstdlib>
+#include <fstream>
+
+#include <nlohmann/json.hpp>
+#include <opencv2/videoio.hpp>
+
+#include "capture/error.h"
+#include "capture/image.h"
+#include "sources.h"
+
+namespace lp {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+bool isImageFile(const fs::path& p) {
+  static const std::array<std::string, 9> exts = {".hdr", ".exr", ".png", ".jpg", ".jpeg", ".pic", ".tif", ".tiff", ".bmp"};
+  std::string e = p.extension().string();
+  for (auto& c : e) c = char(std::tolower(static_cast<unsigned char>(c)));
+  return std::find(exts.begin(), exts.end(), e) != exts.end();
+}
+
+// A fixed list of frames in memory or on disk, read one after another.
+class ListSource : public FrameSource {
+ public:
+  ListSource(std::vector<std::string> files, double fps, std::string what)
+      : files_(std::move(files)), fps_(fps), what_(std::move(what)) {}
+  bool next(Frame& f) override {
+    if (i_ >= files_.size()) return false;
+    readImageFrame(files_[i_], f);
+    if (i_ > 0 && (f.width != w_ || f.height != h_))
+      throw Error(files_[i_] + ": frame size " + std::to_string(f.width) + "x" + std::to_string(f.height) +
+                  " differs from the sequence's " + std::to_string(w_) + "x" + std::to_string(h_));
+    w_ = f.width, h_ = f.height;
+    f.sequence = i_;
+    f.timestamp = double(i_) / fps_;
+    ++i_;
+    return true;
+  }
+  bool rewind() override {
+    i_ = 0;
+    return true;
+  }
+  std::string describe() const override { return what_; }
+  double fps() const override { return fps_; }
+
+ private:
+  std::vector<std::string> files_;
+  double fps_;
+  std::string what_;
+  std::size_t i_ = 0;
+  int w_ = 0, h_ = 0;
+};
+
+// Six face files assembled into a horizontal cross (capture/layout.h, cube).
+class CubeFacesSource final : public FrameSource {
+ public:
+  CubeFacesSource(std::array<std::string, 6> faces, std::string dir, double fps)
+      : faces_(std::move(faces)), dir_(std::move(dir)), fps_(fps) {}
+  bool next(Frame& f) override {
+    if (done_) return false;
+    done_ = true;
+    static const int cells[6][2] = {{2, 1}, {0, 1}, {1, 0}, {1, 2}, {1, 1}, {3, 1}};  // px nx py ny pz nz
+    int n = 0;
+    for (int k = 0; k < 6; ++k) {
+      const Image face = loadImage(faces_[k]);
+      if (face.width != face.height) throw Error(faces_[k] + ": a cube face must be square");
+      if (k == 0) {
+        n = face.width;
+        f.width = 4 * n, f.height = 3 * n;
+        f.rgb.assign(std::size_t(f.width) * f.height * 3, 0.0f);
+      } else if (face.width != n) {
+        throw Error(faces_[k] + ": cube faces differ in size");
+      }
+      for (int y = 0; y < n; ++y)
+        std::copy_n(face.pixel(0, y), std::size_t(n) * 3,
+                    f.rgb.data() + ((std::size_t(cells[k][1]) * n + y) * f.width + std::size_t(cells[k][0]) * n) * 3);
+    }
+    f.format = PixelFormat::RgbF32;
+    f.bgr8.clear();
+    f.sequence = 0;
+    f.timestamp = 0;
+    return true;
+  }
+  bool rewind() override {
+    done_ = false;
+    return true;
+  }
+  std::string describe() const override { return "cube faces in " + dir_; }
+  double fps() const override { return fps_; }
+
+ private:
+  std::array<std::string, 6> faces_;
+  std::string dir_;
+  double fps_;
+  bool done_ = false;
+};
+
+// A video file through OpenCV's FFmpeg backend. A frame that fails to decode in the middle is
+// skipped and counted; after kMaxBadRun failures in a row the stream is over (a truncated file).
+class VideoSource final : public FrameSource {
+ public:
+  explicit VideoSource(std::string path) : path_(std::move(path)) {
+    open();
+    // A recording made by `liveprobe record` carries a sidecar with its exposure and timestamps.
+    std::ifstream side(path_ + ".json");
+    if (side) {
+      try {
+        nlohmann::json j;
+        side >> j;
+        scale_ = 1.0 / j.at("exposure").get<double>();
+        for (const auto& t : j.at("timestamps")) stamps_.push_back(t.get<double>());
+      } catch (const std::exception& e) {
+        throw Error(path_ + ".json: bad recording sidecar (" + e.what() + ")");
+      }
+    }
+  }
+  bool next(Frame& f) override {
+    cv::Mat m;
+    int badRun = 0;
+    for (;;) {
+      bool ok = false;
+      try {
+        ok = cap_.read(m) && !m.empty();
+      } catch (const cv::Exception&) {
+        ok = false;
+      }
+      if (ok) break;
+      // A frame FFmpeg cannot decode fails the read without advancing; reading on skips the
+      // damage. A long run of failures is the end of the file (or of what survives of it).
+      if (++badRun >= kMaxBadRun) {
+        const double count = cap_.get(cv::CAP_PROP_FRAME_COUNT);
+        if (count > 0 && double(read_ + skipped_) + 1 < count)
+          endReason_ = "ended after " + std::to_string(read_) + " frames of " + std::to_string(long(count)) +
+                       ": the rest does not decode (truncated file?)";
+        return false;
+      }
+    }
+    skipped_ += std::size_t(read_ > 0 ? badRun : 0);  // failures before a good frame: skipped damage
+    if (m.type() != CV_8UC3) throw Error(path_ + ": unsupported decoded pixel type");
+    f.format = PixelFormat::Bgr8;
+    f.width = m.cols, f.height = m.rows;
+    f.rgb.clear();
+    f.bgr8.resize(std::size_t(m.cols) * m.rows * 3);
+    for (int y = 0; y < m.rows; ++y)
+      std::copy_n(m.ptr<std::uint8_t>(y), std::size_t(m.cols) * 3, f.bgr8.data() + y * std::size_t(m.cols) * 3);
+    const auto index = std::uint64_t(std::max(0.0, cap_.get(cv::CAP_PROP_POS_FRAMES) - 1));
+    f.sequence = index;
+    const double ms = cap_.get(cv::CAP_PROP_POS_MSEC);
+    f.timestamp = index < stamps_.size() ? stamps_[index] : (ms > 0 ? ms / 1000.0 : double(index) / fps());
+    ++read_;
+    return true;
+  }
+  bool rewind() override {
+    cap_.release();
+    open();
+    read_ = 0;
+    return true;
+  }
+  std::string describe() const override {
+    return "video " + path_ + " (" + std::to_string(int(cap_.get(cv::CAP_PROP_FRAME_WIDTH))) + "x" +
+           std::to_string(int(cap_.get(cv::CAP_PROP_FRAME_HEIGHT))) + ", " + std::to_string(fps()) + " fps)";
+  }
+  double fps() const override {
+    const double f = cap_.get(cv::CAP_PROP_FPS);
+    return f > 0 && f < 1000 ? f : 30.0;
+  }
+  std::size_t skippedFrames() const override { return skipped_; }
+  std::string endReason() const override { return endReason_; }
+  double radianceScale() const override { return scale_; }
+
+ private:
+  static constexpr int kMaxBadRun = 32;
+  void open() {
+    ::setenv("OPENCV_FFMPEG_LOGLEVEL", "-8", 0);  // FFmpeg's own warnings: we report in one line
+    std::error_code ec;
+    if (!fs::exists(path_, ec)) throw Error(path_ + ": no such file");
+    if (!cap_.open(path_, cv::CAP_FFMPEG) || !cap_.isOpened())
+      throw Error(path_ + ": cannot open as video (corrupt, truncated or unsupported codec)");
+  }
+  std::string path_;
+  cv::VideoCapture cap_;
+  std::size_t skipped_ = 0, read_ = 0;
+  std::string endReason_;
+  double scale_ = 1.0;
+  std::vector<double> stamps_;
+};
+
+bool hasVideoExtension(const std::string& path) {
+  std::string e = fs::path(path).extension().string();
+  for (auto& c : e) c = char(std::tolower(static_cast<unsigned char>(c)));
+  for (const char* v : {".mp4", ".webm", ".mkv", ".avi", ".mov", ".m4v"})
+    if (e == v) return true;
+  return false;
+}
+
+}  // namespace
+
+std::unique_ptr<FrameSource> openStill(const std::string& path, double fps) {
+  return std::make_unique<ListSource>(std::vector<std::string>{path}, fps, "image " + path);
+}
+
+std::unique_ptr<FrameSource> openCubeFaces(const std::string& dir, double fps) {
+  std::array<std::string, 6> faces;
+  const char* names[6] = {"px", "nx", "py", "ny", "pz", "nz"};
+  for (const auto& e : fs::directory_iterator(dir))
+    for (int k = 0; k < 6; ++k)
+      if (e.path().stem() == names[k] && isImageFile(e.path())) faces[k] = e.path().string();
+  for (int k = 0; k < 6; ++k)
+    if (faces[k].empty()) return nullptr;
+  return std::make_unique<CubeFacesSource>(faces, dir, fps);
+}
+
+std::unique_ptr<FrameSource> openSequence(const std::string& dirOrPattern, double fps) {
+  std::vector<std::string> files;
+  if (dirOrPattern.find('%') != std::string::npos) {
+    for (int i = 0, misses = 0; misses < 2 && i < 10000000; ++i) {
+      char buf[4096];
+      std::snprintf(buf, sizeof buf, dirOrPattern.c_str(), i);
+      if (fs::exists(buf)) files.emplace_back(buf), misses = 0;
+      else if (!files.empty() || i > 1) ++misses;  // numbering may start at 0 or 1
+    }
+  } else {
+    for (const auto& e : fs::directory_iterator(dirOrPattern))
+      if (e.is_regular_file() && isImageFile(e.path())) files.push_back(e.path().string());
+    std::sort(files.begin(), files.end());
+  }
+  if (files.empty()) throw Error(dirOrPattern + ": no image files in this sequence");
+  return std::make_unique<ListSource>(std::move(files), fps,
+                                      "image sequence " + dirOrPattern + " (" + std::to_string(files.size()) + " frames)");
+}
+
+std::unique_ptr<FrameSource> openVideo(const std::string& path) { return std::make_unique<VideoSource>(path); }
+
+std::unique_ptr<FrameSource> openSource(const std::string& spec, const SourceOptions& options) {
+  if (spec.rfind("synthetic", 0) == 0) {
+    int w = 512, h = 256;
+    double fps = 30;
+    if (spec.size() > 9) {
+      if (spec[9] != ':' || std::sscanf(spec.c_str() + 10, "%dx%d@%lf", &w, &h, &fps) < 2 || w < 4 ||
+          h < 2 || w > 16384 || h > 16384 || !(fps > 0 && fps <= 1000))
+        throw Error(spec + ": expected synthetic[:WxH[@FPS]]");
+    }
+    return openSynthetic(w, h, fps);
+  }
+  std::error_code ec;
+  if (fs::is_directory(spec, ec)) {
+    if (auto cube = openCubeFaces(spec, options.fps)) return cube;
+    return openSequence(spec, options.fps);
+  }
+  if (spec.find('%') != std::string::npos) return openSequence(spec, options.fps);
+  if (hasVideoExtension(spec)) return openVideo(spec);
+  if (!fs::exists(spec, ec)) throw Error(spec + ": no such file");
+  return openStill(spec, options.fps);
+}
+
+}  // namespace lp

@@ -1,0 +1,222 @@
+// Every layout agrees: the same environment, resampled here into each layout by this test's own
+// code (from the documented conventions), projects to the same coefficients as the equirect.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <numbers>
+
+#include "capture/frame.h"
+#include "capture/image.h"
+#include "capture/layout.h"
+#include "test_util.h"
+
+namespace {
+
+constexpr double kPi = std::numbers::pi;
+using glm::dvec3;
+
+// Bilinear lookup of the equirect at a world direction (the test's own inverse mapping).
+dvec3 sampleEquirect(const lp::Image& eq, dvec3 d) {
+  double p = std::atan2(d.y, d.x);
+  if (p < 0) p += 2 * kPi;
+  const double x = p / (2 * kPi) * eq.width - 0.5, y = std::acos(std::clamp(d.z, -1.0, 1.0)) / kPi * eq.height - 0.5;
+  const int x0 = int(std::floor(x)), y0 = std::clamp(int(std::floor(y)), 0, eq.height - 1);
+  const int y1 = std::min(y0 + 1, eq.height - 1);
+  const double ax = x - std::floor(x), ay = std::clamp(y - y0, 0.0, 1.0);
+  auto px = [&](int xx, int yy) {
+    xx = ((xx % eq.width) + eq.width) % eq.width;
+    const float* v = eq.pixel(xx, yy);
+    return dvec3(v[0], v[1], v[2]);
+  };
+  return (1 - ay) * ((1 - ax) * px(x0, y0) + ax * px(x0 + 1, y0)) + ay * ((1 - ax) * px(x0, y1) + ax * px(x0 + 1, y1));
+}
+
+// Fills a W x H image by asking `dirAt(x, y)` (pixel centre) for each pixel's world direction;
+// 4x4 supersampling within each pixel keeps the resampling from aliasing.
+template <class DirFn>
+lp::Image resample(const lp::Image& eq, int w, int h, DirFn dirAt) {
+  lp::Image out(w, h);
+  for (int i = 0; i < h; ++i)
+    for (int j = 0; j < w; ++j) {
+      dvec3 sum(0);
+      int n = 0;
+      for (int a = 0; a < 4; ++a)
+        for (int b = 0; b < 4; ++b)
+          if (auto d = dirAt(j + (b + 0.5) / 4, i + (a + 0.5) / 4)) sum += sampleEquirect(eq, *d), ++n;
+      if (n) {
+        sum /= double(n);
+        float* p = out.pixel(j, i);
+        p[0] = float(sum.x), p[1] = float(sum.y), p[2] = float(sum.z);
+      }
+    }
+  return out;
+}
+
+lp::Sh9 project(const lp::Image& img, const lp::LayoutSpec& spec) {
+  return lp::Projector(spec, img.width, img.height).project(img.rgb.data());
+}
+
+std::array<double, 3> bandNorms(const lp::Sh9& L, int ch) {
+  std::array<double, 3> n{};
+  for (int k = 0; k < 9; ++k) n[lp::shBand(k)] += double(L.c[k][ch]) * L.c[k][ch];
+  for (auto& v : n) v = std::sqrt(v);
+  return n;
+}
+
+void expectSameLighting(const lp::Sh9& ref, const lp::Sh9& got, const std::string& what) {
+  for (int ch = 0; ch < 3; ++ch) {
+    for (int k = 0; k < 9; ++k)
+      EXPECT_NEAR(got.c[k][ch], ref.c[k][ch], 0.01 * ref.c[0][ch]) << what << " " << lp::kShNames[k] << " ch " << ch;
+    const auto a = bandNorms(ref, ch), b = bandNorms(got, ch);
+    for (int l = 0; l < 3; ++l) EXPECT_NEAR(b[l], a[l], 0.01 * a[l]) << what << " band " << l << " ch " << ch;
+  }
+}
+
+// Directions from the conventions in capture/layout.h, written out again.
+dvec3 lensLocal(double t, double p) { return {std::sin(t) * std::cos(p), std::sin(t) * std::sin(p), std::cos(t)}; }
+
+class EveryLayout : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    eq_ = lp::loadImage(lpt::dataPath("equirect/royal_esplanade_1k.hdr"));
+    ref_ = project(eq_, lp::Layout::Equirect);
+  }
+  lp::Image eq_;
+  lp::Sh9 ref_;
+};
+
+TEST_F(EveryLayout, Angular) {
+  const int w = 512;
+  auto img = resample(eq_, w, w, [&](double x, double y) -> std::optional<dvec3> {
+    const double u = (x - w / 2.0) / (w / 2.0), v = (w / 2.0 - y) / (w / 2.0), r = std::hypot(u, v);
+    if (r > 1) return std::nullopt;
+    const dvec3 l = lensLocal(kPi * r, std::atan2(v, u));
+    return dvec3(-l.z, -l.x, l.y);
+  });
+  expectSameLighting(ref_, project(img, lp::Layout::Angular), "angular");
+}
+
+TEST_F(EveryLayout, MirrorBall) {
+  // A 640x480 photo with the ball off-centre.
+  const double cx = 300, cy = 250, R = 220;
+  auto img = resample(eq_, 640, 480, [&](double x, double y) -> std::optional<dvec3> {
+    const double u = (x - cx) / R, v = (cy - y) / R, r = std::hypot(u, v);
+    if (r > 1) return std::nullopt;
+    const dvec3 l = lensLocal(2 * std::asin(r), std::atan2(v, u));
+    return dvec3(-l.z, -l.x, l.y);
+  });
+  lp::LayoutSpec spec(lp::Layout::MirrorBall);
+  spec.circle = {float(cx), float(cy), float(R)};
+  expectSameLighting(ref_, project(img, spec), "mirror ball");
+}
+
+// OpenGL's face table, and the world = (Z, -X, Y) map of shading/axes.h.
+dvec3 glFace(int face, double s, double t) {
+  const double sc = 2 * s - 1, tc = 2 * t - 1;
+  const dvec3 g[6] = {{1, -tc, -sc}, {-1, -tc, sc}, {sc, 1, tc}, {sc, -1, -tc}, {sc, -tc, 1}, {-sc, -tc, -1}};
+  const dvec3 r = glm::normalize(g[face]);
+  return {r.z, -r.x, r.y};
+}
+
+TEST_F(EveryLayout, CubeCrosses) {
+  const int n = 128;
+  // Horizontal: +Y at (1,0); -X,+Z,+X,-Z on row 1; -Y at (1,2).
+  const int hc[6][2] = {{2, 1}, {0, 1}, {1, 0}, {1, 2}, {1, 1}, {3, 1}};
+  auto h = resample(eq_, 4 * n, 3 * n, [&](double x, double y) -> std::optional<dvec3> {
+    for (int f = 0; f < 6; ++f)
+      if (int(x / n) == hc[f][0] && int(y / n) == hc[f][1]) return glFace(f, x / n - hc[f][0], y / n - hc[f][1]);
+    return std::nullopt;
+  });
+  expectSameLighting(ref_, project(h, lp::Layout::Cube), "horizontal cross");
+  // Vertical: -Z below -Y, rotated by 180 degrees.
+  const int vc[6][2] = {{2, 1}, {0, 1}, {1, 0}, {1, 2}, {1, 1}, {1, 3}};
+  auto v = resample(eq_, 3 * n, 4 * n, [&](double x, double y) -> std::optional<dvec3> {
+    for (int f = 0; f < 6; ++f)
+      if (int(x / n) == vc[f][0] && int(y / n) == vc[f][1]) {
+        double s = x / n - vc[f][0], t = y / n - vc[f][1];
+        if (f == 5) s = 1 - s, t = 1 - t;
+        return glFace(f, s, t);
+      }
+    return std::nullopt;
+  });
+  expectSameLighting(ref_, project(v, lp::Layout::Cube), "vertical cross");
+}
+
+TEST_F(EveryLayout, DualFisheye) {
+  for (float fov : {190.0f, 220.0f}) {
+    const int h = 384, w = 2 * h;
+    const double half = glm::radians(double(fov)) / 2, R = h / 2.0;
+    auto img = resample(eq_, w, h, [&](double x, double y) -> std::optional<dvec3> {
+      const bool front = x < w / 2.0;
+      const double u = (x - (front ? w / 4.0 : 3 * w / 4.0)) / R, v = (h / 2.0 - y) / R, r = std::hypot(u, v);
+      if (r > 1) return std::nullopt;
+      const dvec3 l = lensLocal(r * half, std::atan2(v, u));  // (right, up, forward)
+      return front ? dvec3(-l.z, -l.x, l.y) : dvec3(l.z, l.x, l.y);
+    });
+    lp::LayoutSpec spec(lp::Layout::DualFisheye);
+    spec.fisheyeFovDeg = fov;
+    expectSameLighting(ref_, project(img, spec), "dual fisheye " + std::to_string(int(fov)));
+  }
+}
+
+// The cube-face source: Pisa's six real faces against the same courtyard's lat-long probe. Both
+// are real data; their exposures and resolutions differ, so compare normalised band norms
+// (rotation invariant) loosely: this guards the face assembly, not the resampling.
+TEST(CubeFaces, PisaFacesMatchPisaLatlong) {
+  const lp::Image lat = lp::loadImage(lpt::dataPath("probes/latlong_256x128/pisa.hdr"));
+  const lp::Sh9 a = project(lat, lp::Layout::Equirect);
+  auto src = lp::openSource(lpt::dataPath("cube/pisaHDR"));
+  lp::Frame f;
+  ASSERT_TRUE(src->next(f));
+  ASSERT_EQ(f.width, 4 * 256);
+  ASSERT_EQ(f.height, 3 * 256);
+  lp::Image cross(f.width, f.height);
+  cross.rgb = f.rgb;
+  const lp::Sh9 b = project(cross, lp::Layout::Cube);
+  for (int ch = 0; ch < 3; ++ch) {
+    const auto na = bandNorms(a, ch), nb = bandNorms(b, ch);
+    for (int l = 1; l < 3; ++l)
+      EXPECT_NEAR(nb[l] / nb[0], na[l] / na[0], 0.1 * na[l] / na[0]) << "band " << l << " ch " << ch;
+  }
+}
+
+TEST(Layouts, RejectFramesThatDoNotFit) {
+  EXPECT_NE(lp::layoutMismatch(lp::Layout::Cube, 1000, 500).find("4:3"), std::string::npos);
+  EXPECT_NE(lp::layoutMismatch(lp::Layout::DualFisheye, 1000, 1000).find("2:1"), std::string::npos);
+  EXPECT_NE(lp::layoutMismatch(lp::Layout::MirrorBall, 640, 480).find("--circle"), std::string::npos);
+  lp::LayoutSpec ball(lp::Layout::MirrorBall);
+  ball.circle = {600, 240, 200};
+  EXPECT_NE(lp::layoutMismatch(ball, 640, 480).find("does not fit"), std::string::npos);
+}
+
+// Solid angles of every layout sum to 4 pi; and layoutPixel inverts the sample directions.
+TEST(Layouts, SolidAnglesAndInverse) {
+  lp::LayoutSpec ball(lp::Layout::MirrorBall);
+  ball.circle = {160, 120, 100};
+  const std::vector<std::tuple<lp::LayoutSpec, int, int>> cases = {
+      {lp::Layout::Equirect, 256, 128}, {lp::Layout::Angular, 256, 256}, {ball, 320, 240},
+      {lp::Layout::Cube, 256, 192}, {lp::Layout::Cube, 192, 256}, {lp::Layout::DualFisheye, 512, 256}};
+  for (const auto& [spec, w, h] : cases) {
+    const auto s = lp::layoutSamples(spec, w, h);
+    double total = 0;
+    for (const auto& x : s) total += x.solidAngle;
+    EXPECT_NEAR(total, 4 * kPi, 1e-3) << lp::layoutName(spec.layout) << " " << w << "x" << h;
+    int checked = 0;
+    for (int i = 0; i < h; i += 7)
+      for (int j = 0; j < w; j += 5) {
+        const auto& x = s[std::size_t(i) * w + j];
+        if (x.solidAngle == 0) continue;
+        const auto px = lp::layoutPixel(spec, w, h, x.dir);
+        ASSERT_TRUE(px.has_value());
+        // Inside the layout the inverse lands in the same pixel (dual-fisheye overlap pixels may
+        // map to the other lens, which sees the same direction).
+        if (spec.layout == lp::Layout::DualFisheye && std::abs(x.dir.x) < 0.3f) continue;
+        EXPECT_NEAR(px->x, j + 0.5f, 0.51f) << lp::layoutName(spec.layout);
+        EXPECT_NEAR(px->y, i + 0.5f, 0.51f) << lp::layoutName(spec.layout);
+        ++checked;
+      }
+    EXPECT_GT(checked, 50);
+  }
+}
+
+}  // namespace

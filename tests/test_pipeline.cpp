@@ -1,0 +1,193 @@
+// The stream side of capture: SH rotation, smoothing, the latest-value handoff, sources.
+#include <gtest/gtest.h>
+
+#include <chrono>
+#include <cmath>
+#include <numbers>
+#include <thread>
+
+#include "capture/error.h"
+#include "capture/frame.h"
+#include "capture/image.h"
+#include "capture/pipeline.h"
+#include "capture/recorder.h"
+#include "test_util.h"
+
+namespace {
+
+constexpr double kPi = std::numbers::pi;
+
+// Rotating the coefficients equals projecting the rotated panorama (resampled here), within
+// 0.5% of L00.
+TEST(ShRotation, EqualsProjectingTheRotatedPanorama) {
+  const lp::Image eq = lp::loadImage(lpt::dataPath("probes/latlong_full/grace_latlong.exr"));
+  const lp::Sh9 L = lp::projectEquirect(eq.rgb.data(), eq.width, eq.height);
+  for (auto [y, p, r] : {std::tuple{30.0f, 0.0f, 0.0f}, std::tuple{-70.0f, 25.0f, 10.0f}, std::tuple{120.0f, -40.0f, 75.0f}}) {
+    const glm::mat3 R = lp::rotationYawPitchRoll(y, p, r);
+    const glm::mat3 Rt = glm::transpose(R);
+    // Rotated panorama: L'(w) = L(R^T w), nearest-neighbour lookups at 4x4 sub-pixel points.
+    lp::Image rot(eq.width / 2, eq.height / 2);
+    for (int i = 0; i < rot.height; ++i)
+      for (int j = 0; j < rot.width; ++j) {
+        glm::dvec3 acc(0);
+        for (int a = 0; a < 4; ++a)
+          for (int b = 0; b < 4; ++b) {
+            const double t = kPi * (i + (a + 0.5) / 4) / rot.height, ph = 2 * kPi * (j + (b + 0.5) / 4) / rot.width;
+            const glm::vec3 w(std::sin(t) * std::cos(ph), std::sin(t) * std::sin(ph), std::cos(t));
+            const glm::vec3 s = Rt * w;
+            double sp = std::atan2(s.y, s.x);
+            if (sp < 0) sp += 2 * kPi;
+            const int sx = std::min(eq.width - 1, int(sp / (2 * kPi) * eq.width));
+            const int sy = std::min(eq.height - 1, int(std::acos(std::clamp(double(s.z), -1.0, 1.0)) / kPi * eq.height));
+            const float* v = eq.pixel(sx, sy);
+            acc += glm::dvec3(v[0], v[1], v[2]);
+          }
+        acc /= 16.0;
+        float* o = rot.pixel(j, i);
+        o[0] = float(acc.x), o[1] = float(acc.y), o[2] = float(acc.z);
+      }
+    const lp::Sh9 a = lp::projectEquirect(rot.rgb.data(), rot.width, rot.height);
+    const lp::Sh9 b = lp::rotateSh(L, R);
+    for (int k = 0; k < 9; ++k)
+      for (int ch = 0; ch < 3; ++ch)
+        EXPECT_NEAR(b.c[k][ch], a.c[k][ch], 0.005 * a.c[0][ch]) << lp::kShNames[k] << " yaw " << y;
+  }
+}
+
+TEST(ShRotation, BasicAxes) {
+  // Yaw 90 degrees turns a light at +x to +y.
+  lp::Sh9 L;
+  const auto y = lp::shBasis({1, 0, 0});
+  for (int k = 0; k < 9; ++k) L.c[k] = glm::vec3(y[k]);
+  const lp::Sh9 r = lp::rotateSh(L, lp::rotationYawPitchRoll(90, 0, 0));
+  const auto want = lp::shBasis({0, 1, 0});
+  for (int k = 0; k < 9; ++k) EXPECT_NEAR(r.c[k].x, want[k], 1e-5) << lp::kShNames[k];
+}
+
+// The EMA of coefficients equals the projection of the EMA of frames (SH is linear), and a step
+// reaches 63% after tau.
+TEST(Smoothing, ExactAndLatency) {
+  lp::ShSmoother sm(0.5);
+  lp::Sh9 zero, one;
+  one.c[0] = glm::vec3(1.0f);
+  sm.update(zero, 0.0);
+  lp::Sh9 out;
+  for (int i = 1; i <= 50; ++i) out = sm.update(one, i * 0.01);  // 0.5 s after the step
+  EXPECT_NEAR(out.c[0].x, 1 - std::exp(-1.0), 1e-4);
+}
+
+// A slow renderer never slows capture: a 200 fps synthetic stream paced in real time keeps its
+// rate while the consumer takes a frame every 50 ms; the rest are dropped and counted.
+TEST(Handoff, SlowRendererDoesNotBlockCapture) {
+  lp::PipelineOptions opt;
+  opt.handoff = lp::Handoff::Latest;
+  opt.realtime = true;
+  opt.maxFrames = 200;  // one second
+  opt.keepImages = false;
+  lp::CapturePipeline pipe(lp::openSource("synthetic:64x32@200"), opt);
+  const auto t0 = std::chrono::steady_clock::now();
+  pipe.start();
+  int taken = 0;
+  while (!pipe.finished()) {
+    if (pipe.takeLatest()) ++taken;
+    std::this_thread::sleep_for(std::chrono::milliseconds(50));  // the "renderer"
+  }
+  const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  pipe.stop();
+  const auto st = pipe.stats();
+  EXPECT_EQ(st.captured, 200u);
+  EXPECT_LT(s, 1.3) << "capture was slowed down by the renderer";
+  EXPECT_LE(taken, 25);
+  EXPECT_GE(st.dropped, 170u);
+  EXPECT_EQ(st.taken, std::size_t(taken));
+  EXPECT_LE(st.captured - st.dropped - st.taken, 1u);  // at most the last frame is still in the slot
+}
+
+// Handoff::Every hands over every frame, in order.
+TEST(Handoff, EveryFrameWhenAsked) {
+  lp::PipelineOptions opt;
+  opt.handoff = lp::Handoff::Every;
+  opt.maxFrames = 20;
+  lp::CapturePipeline pipe(lp::openSource("synthetic:32x16@30"), opt);
+  pipe.start();
+  std::uint64_t expect = 0;
+  while (auto f = pipe.waitNext()) {
+    EXPECT_EQ(f->index, expect++);
+    std::this_thread::sleep_for(std::chrono::milliseconds(5));
+  }
+  EXPECT_EQ(expect, 20u);
+  EXPECT_EQ(pipe.stats().dropped, 0u);
+}
+
+TEST(Handoff, LayoutMismatchStopsWithAClearError) {
+  lp::PipelineOptions opt;
+  opt.layout = lp::Layout::Angular;
+  opt.handoff = lp::Handoff::Every;
+  lp::CapturePipeline pipe(lp::openSource("synthetic:64x32@30"), opt);
+  pipe.start();
+  EXPECT_FALSE(pipe.waitNext().has_value());
+  EXPECT_NE(pipe.stats().error.find("must be square"), std::string::npos) << pipe.stats().error;
+}
+
+// Sources: synthetic is deterministic per frame; sequences by folder and by pattern.
+TEST(Sources, SyntheticIsDeterministic) {
+  std::vector<float> a, b;
+  lp::renderSyntheticSky(64, 32, 1.25, a);
+  lp::renderSyntheticSky(64, 32, 1.25, b);
+  EXPECT_EQ(a, b);
+  lp::renderSyntheticSky(64, 32, 1.5, b);
+  EXPECT_NE(a, b);
+}
+
+TEST(Sources, ImageSequenceByFolderAndPattern) {
+  lpt::TempDir tmp;
+  for (int i = 1; i <= 3; ++i) {
+    lp::Image img(16, 8);
+    std::fill(img.rgb.begin(), img.rgb.end(), float(i));
+    lp::saveImage(tmp / ("f_" + std::to_string(i) + ".exr"), img);
+  }
+  for (const std::string spec : {tmp.path.string(), tmp / "f_%d.exr"}) {
+    auto src = lp::openSource(spec, {10.0});
+    lp::Frame f;
+    int n = 0;
+    while (src->next(f)) {
+      ++n;
+      EXPECT_FLOAT_EQ(f.rgb[0], float(n));
+      EXPECT_NEAR(f.timestamp, (n - 1) / 10.0, 1e-9);
+    }
+    EXPECT_EQ(n, 3) << spec;
+  }
+}
+
+// A recording replays to the coefficients of the stream it recorded (8-bit sRGB with the stored
+// exposure: quantisation, well under 1% of L00).
+TEST(Recording, RoundTripThroughFfv1) {
+  lpt::TempDir tmp;
+  const std::string file = tmp / "sky.mkv";
+  {
+    auto src = lp::openSource("synthetic:128x64@30");
+    lp::VideoRecorder rec(file, src->fps(), src->describe());
+    lp::Frame f;
+    for (int i = 0; i < 10 && src->next(f); ++i) rec.write(f);
+  }  // the destructor finalises
+  ASSERT_TRUE(std::filesystem::exists(file));
+  ASSERT_TRUE(std::filesystem::exists(file + ".json"));
+  auto replay = lp::openSource(file);
+  const lp::Projector proj(lp::Layout::Equirect, 128, 64);
+  const lp::Linearizer lin({0.0f, float(replay->radianceScale())});
+  lp::Frame f;
+  int n = 0;
+  while (replay->next(f)) {
+    lp::Image img;
+    lin.convert(f, img);
+    std::vector<float> truth;
+    lp::renderSyntheticSky(128, 64, n / 30.0, truth);
+    EXPECT_NEAR(f.timestamp, n / 30.0, 1e-6);
+    const lp::Sh9 a = proj.project(img.rgb.data()), b = proj.project(truth.data());
+    for (int k = 0; k < 9; ++k) EXPECT_NEAR(a.c[k].y, b.c[k].y, 0.01 * b.c[0].y) << lp::kShNames[k];
+    ++n;
+  }
+  EXPECT_EQ(n, 10);
+}
+
+}  // namespace

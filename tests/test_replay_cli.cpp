@@ -1,0 +1,207 @@
+// liveprobe replay and record end to end: real video checked frame by frame against an
+// independent float64 computation, corrupt and truncated files, outputs.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <fstream>
+#include <numbers>
+#include <random>
+#include <regex>
+#include <thread>
+
+#include <nlohmann/json.hpp>
+#include <opencv2/videoio.hpp>
+
+#include "shading/sh.h"
+#include "test_util.h"
+
+namespace {
+
+using lpt::expectOneLineError;
+using lpt::runLiveprobe;
+constexpr double kPi = std::numbers::pi;
+
+std::vector<nlohmann::json> readJsonl(const std::string& path) {
+  std::vector<nlohmann::json> out;
+  std::ifstream in(path);
+  for (std::string line; std::getline(in, line);) out.push_back(nlohmann::json::parse(line));
+  return out;
+}
+
+// The reference: OpenCV decode, sRGB to linear in double, the frame as an equirect of its own
+// aspect, per-pixel basis at pixel centres times the exact row solid angle, summed in double.
+std::array<double, 27> referenceCoefficients(const cv::Mat& bgr) {
+  const int w = bgr.cols, h = bgr.rows;
+  double lut[256];
+  for (int i = 0; i < 256; ++i) {
+    const double v = i / 255.0;
+    lut[i] = v <= 0.04045 ? v / 12.92 : std::pow((v + 0.055) / 1.055, 2.4);
+  }
+  std::vector<double> cp(w), sp(w), c2p(w), s2p(w);
+  for (int j = 0; j < w; ++j) {
+    const double p = 2 * kPi * (j + 0.5) / w;
+    cp[j] = std::cos(p), sp[j] = std::sin(p), c2p[j] = std::cos(2 * p), s2p[j] = std::sin(2 * p);
+  }
+  std::array<double, 27> L{};
+  for (int i = 0; i < h; ++i) {
+    const double t = kPi * (i + 0.5) / h, ct = std::cos(t), st = std::sin(t);
+    const double dw = 2 * kPi / w * (std::cos(kPi * i / h) - std::cos(kPi * (i + 1) / h));
+    const auto* row = bgr.ptr<std::uint8_t>(i);
+    for (int j = 0; j < w; ++j) {
+      const double y[9] = {0.5 / std::sqrt(kPi),
+                           std::sqrt(3 / (4 * kPi)) * st * sp[j],
+                           std::sqrt(3 / (4 * kPi)) * ct,
+                           std::sqrt(3 / (4 * kPi)) * st * cp[j],
+                           std::sqrt(15 / (16 * kPi)) * st * st * s2p[j],
+                           std::sqrt(15 / (4 * kPi)) * st * ct * sp[j],
+                           std::sqrt(5 / (16 * kPi)) * (3 * ct * ct - 1),
+                           std::sqrt(15 / (4 * kPi)) * st * ct * cp[j],
+                           std::sqrt(15 / (16 * kPi)) * st * st * c2p[j]};
+      const double rgb[3] = {lut[row[3 * j + 2]], lut[row[3 * j + 1]], lut[row[3 * j]]};
+      for (int k = 0; k < 9; ++k)
+        for (int c = 0; c < 3; ++c) L[3 * k + c] += rgb[c] * y[k] * dw;
+    }
+  }
+  return L;
+}
+
+// liveprobe replay pano.mp4 --headless --coeffs-out c.jsonl: one line per decoded frame, each
+// equal to the float64 reference on that frame within 1e-4 of L00.
+TEST(ReplayCli, RealVideoCheckedFrameByFrame) {
+  lpt::TempDir tmp;
+  const std::string video = lpt::dataPath("video/pano.mp4");
+  const std::string out = tmp / "c.jsonl";
+  const auto r = runLiveprobe("replay " + video + " --headless --coeffs-out " + out + " --size 64x36");
+  ASSERT_EQ(r.exitCode, 0) << r.output;
+  const auto lines = readJsonl(out);
+  cv::VideoCapture cap(video, cv::CAP_FFMPEG);
+  std::vector<cv::Mat> frames;
+  for (cv::Mat m; cap.read(m);) frames.push_back(m.clone());
+  ASSERT_EQ(lines.size(), frames.size());
+  EXPECT_EQ(frames.size(), 188u);  // what OpenCV decodes here
+  std::vector<std::array<double, 27>> ref(frames.size());
+  std::vector<std::thread> pool;
+  for (unsigned t = 0; t < 2; ++t)
+    pool.emplace_back([&, t] {
+      for (std::size_t i = t; i < frames.size(); i += 2) ref[i] = referenceCoefficients(frames[i]);
+    });
+  for (auto& th : pool) th.join();
+  double worst = 0;
+  for (std::size_t i = 0; i < lines.size(); ++i) {
+    const auto& j = lines[i];
+    ASSERT_EQ(j["frame"].get<std::size_t>(), i);
+    if (i > 0) EXPECT_GT(j["time"].get<double>(), lines[i - 1]["time"].get<double>());
+    for (const char* key : {"grab", "convert", "project", "render"}) EXPECT_TRUE(j["timings_ms"][key].is_number());
+    for (int k = 0; k < 9; ++k)
+      for (int c = 0; c < 3; ++c) {
+        const double got = j["coefficients"][std::string(lp::kShNames[k])][c].get<double>();
+        const double diff = std::abs(got - ref[i][3 * k + c]) / ref[i][c];
+        worst = std::max(worst, diff);
+        ASSERT_LT(diff, 1e-4) << "frame " << i << " " << lp::kShNames[k] << " ch " << c;
+      }
+  }
+  std::cout << "worst |coefficient - reference| / L00 over " << lines.size() << " frames: " << worst << "\n";
+}
+
+// A copy of pano.mp4 with garbage written over two stretches in the middle.
+std::string corruptCopy(const lpt::TempDir& tmp) {
+  std::ifstream in(lpt::dataPath("video/pano.mp4"), std::ios::binary);
+  std::string bytes((std::istreambuf_iterator<char>(in)), {});
+  std::mt19937 rng(1);
+  for (double at : {0.4, 0.6})
+    for (std::size_t i = 0; i < 30000; ++i) bytes[std::size_t(at * bytes.size()) + i] = char(rng());
+  const std::string f = tmp / "corrupt.mp4";
+  std::ofstream(f, std::ios::binary) << bytes;
+  return f;
+}
+
+TEST(ReplayCliBadInput, CorruptFramesAreSkippedAndCounted) {
+  lpt::TempDir tmp;
+  const std::string f = corruptCopy(tmp), out = tmp / "c.jsonl";
+  const auto r = runLiveprobe("replay " + f + " --headless --size 32x18 --coeffs-out " + out);
+  ASSERT_EQ(r.exitCode, 0) << r.output;
+  std::smatch m;
+  ASSERT_TRUE(std::regex_search(r.output, m, std::regex(R"((\d+) frames captured.*, (\d+) skipped \(corrupt\))")))
+      << r.output;
+  const int captured = std::stoi(m[1]), skipped = std::stoi(m[2]);
+  EXPECT_GT(skipped, 0);
+  EXPECT_GT(captured, 100);
+  EXPECT_EQ(readJsonl(out).size(), std::size_t(captured));
+  EXPECT_EQ(r.output.find("[h264"), std::string::npos) << "FFmpeg's own log leaked: " << r.output;
+}
+
+TEST(ReplayCliBadInput, TruncatedVideoEndsCleanlyWithTheCount) {
+  lpt::TempDir tmp;
+  std::ifstream in(lpt::dataPath("video/pano.webm"), std::ios::binary);
+  std::string bytes((std::istreambuf_iterator<char>(in)), {});
+  const std::string f = tmp / "cut.webm", out = tmp / "c.jsonl";
+  std::ofstream(f, std::ios::binary) << bytes.substr(0, bytes.size() * 2 / 3);
+  const auto r = runLiveprobe("replay " + f + " --headless --size 32x18 --coeffs-out " + out);
+  ASSERT_EQ(r.exitCode, 0) << r.output;
+  std::smatch m;
+  ASSERT_TRUE(std::regex_search(r.output, m, std::regex(R"(ended after (\d+) frames of (\d+))"))) << r.output;
+  EXPECT_LT(std::stoi(m[1]), std::stoi(m[2]));
+  EXPECT_EQ(readJsonl(out).size(), std::size_t(std::stoi(m[1])));
+  // An mp4 cut short loses its index (moov at the end): nothing can be read, one clear line.
+  std::ifstream in2(lpt::dataPath("video/pano.mp4"), std::ios::binary);
+  std::string mp4((std::istreambuf_iterator<char>(in2)), {});
+  const std::string g = tmp / "cut.mp4";
+  std::ofstream(g, std::ios::binary) << mp4.substr(0, mp4.size() / 2);
+  expectOneLineError("replay " + g + " --headless --size 32x18", g, "cannot open as video");
+  EXPECT_FALSE(std::filesystem::exists(tmp / "c2.jsonl"));
+}
+
+TEST(ReplayCliBadInput, LayoutThatDoesNotFitTheFrame) {
+  const std::string v = lpt::dataPath("video/pano.mp4");
+  expectOneLineError("replay " + v + " --headless --layout angular --size 32x18", "pano.mp4", "must be square");
+  expectOneLineError("replay " + v + " --headless --layout cube --size 32x18", "pano.mp4", "4:3");
+  expectOneLineError("replay " + v + " --headless --layout mirrorball", "mirror ball", "--circle");
+}
+
+TEST(ReplayCliBadInput, NothingHalfWrittenOnFailure) {
+  lpt::TempDir tmp;
+  const std::string out = tmp / "c.jsonl";
+  const auto r = runLiveprobe("replay " + lpt::dataPath("video/pano.mp4") + " --headless --layout angular --coeffs-out " + out);
+  EXPECT_EQ(r.exitCode, 1);
+  EXPECT_TRUE(std::filesystem::is_empty(tmp.path)) << "a partial output was left behind";
+}
+
+// record, then replay the recording: every frame comes back, with the outputs asked for.
+TEST(ReplayCli, RecordThenReplayWithOutputs) {
+  lpt::TempDir tmp;
+  const std::string rec = tmp / "sky.mkv";
+  auto r = runLiveprobe("record synthetic:64x32@30 --frames 15 --out " + rec);
+  ASSERT_EQ(r.exitCode, 0) << r.output;
+  ASSERT_TRUE(std::filesystem::exists(rec + ".json"));
+  const std::string out = tmp / "c.jsonl", dir = tmp / "frames", vid = tmp / "render.avi";
+  r = runLiveprobe("replay " + rec + " --headless --size 64x48 --coeffs-out " + out + " --out-dir " + dir);
+  ASSERT_EQ(r.exitCode, 0) << r.output;
+  EXPECT_EQ(readJsonl(out).size(), 15u);
+  int pngs = 0;
+  for (auto& e : std::filesystem::directory_iterator(dir)) pngs += e.path().extension() == ".png";
+  EXPECT_EQ(pngs, 15);
+  r = runLiveprobe("replay " + rec + " --headless --size 64x48 --frames 7 --out-video " + vid);
+  ASSERT_EQ(r.exitCode, 0) << r.output;
+  cv::VideoCapture cap(vid);
+  int n = 0;
+  for (cv::Mat m; cap.read(m);) ++n;
+  EXPECT_EQ(n, 7);
+}
+
+TEST(ReplayCli, DefaultRecordingPlays) {
+  lpt::TempDir tmp;
+  const std::string out = tmp / "c.jsonl";
+  const auto r = runLiveprobe("replay --headless --frames 10 --size 64x36 --coeffs-out " + out);
+  ASSERT_EQ(r.exitCode, 0) << r.output;
+  EXPECT_NE(r.output.find("recordings/sky.mkv"), std::string::npos) << r.output;
+  EXPECT_EQ(readJsonl(out).size(), 10u);
+}
+
+TEST(ReplayCli, EveryLayoutOption) {
+  // coeffs accepts every layout; six cube faces as a folder.
+  const auto r = runLiveprobe("coeffs " + lpt::dataPath("cube/pisaHDR") + " --layout cube --format text");
+  EXPECT_EQ(r.exitCode, 0) << r.output;
+  EXPECT_NE(r.output.find("L22"), std::string::npos);
+}
+
+}  // namespace
