@@ -117,7 +117,9 @@ std::vector<OptionSpec> streamOptions() {
                      {"--input-exposure", "X", "linear radiance scale applied to the input (default 1)"},
                      {"--rotate", "YAW,PITCH,ROLL", "rotate the lighting (degrees; SH rotation, no resampling)"},
                      {"--smooth", "SECONDS", "exponential moving average of the coefficients"},
-                     {"--fps", "F", "frame rate of image sequences (default 30)"}});
+                     {"--fps", "F", "frame rate of image sequences (default 30)"},
+                     {"--reduce", "F", "equirect: project an F x F area average (faster; error in README)"},
+                     {"--threads", "N", "threads for one frame's projection (default 2)"}});
   return o;
 }
 
@@ -155,6 +157,9 @@ int runReplay(const Args& a) {
   opt.smoothSeconds = a.number("--smooth", 0.0);
   if (opt.smoothSeconds < 0) throw Error("--smooth " + a.get("--smooth") + ": must be >= 0");
   opt.loop = a.has("--loop");
+  opt.reduce = a.integer("--reduce", 1);
+  if (opt.reduce < 1 || opt.reduce > 64) throw Error("--reduce " + a.get("--reduce") + ": expected 1 to 64");
+  opt.threads = unsigned(std::clamp(a.integer("--threads", 2), 1, 64));
   opt.maxFrames = a.integer("--frames", -1);
   if (a.has("--frames") && opt.maxFrames < 1) throw Error("--frames " + a.get("--frames") + ": must be at least 1");
   if (a.has("--out-dir") && a.has("--out-video")) throw Error("give --out-dir or --out-video, not both");
@@ -272,7 +277,7 @@ int runReplay(const Args& a) {
 
   std::fprintf(stderr,
                "liveprobe replay: %s: %zu frames captured, %zu drawn, %zu dropped (stale), %zu skipped (corrupt)%s%s\n"
-               "  median ms: grab %.2f, convert %.2f, project %.2f, render %.2f; saturated pixels %.1f per frame\n",
+               "  median ms: grab %.2f, convert %.2f, project %.2f, render %.2f; saturated values %.1f per frame\n",
                description.c_str(), st.captured, drawn, st.dropped, st.skipped,
                st.endReason.empty() ? "" : "; ", st.endReason.c_str(), median(grab), median(convert),
                median(project), median(render), st.captured ? double(saturated) / double(grab.size()) : 0.0);

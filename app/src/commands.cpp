@@ -11,6 +11,7 @@ const std::vector<Command>& commands() {
       {kViewSpec, runView},
       {kReplaySpec, runReplay},
       {kRecordSpec, runRecord},
+      {kBenchSpec, runBench},
   };
   return all;
 }

@@ -22,8 +22,9 @@ int runRender(const Args&);
 int runView(const Args&);
 int runReplay(const Args&);
 int runRecord(const Args&);
+int runBench(const Args&);
 std::vector<OptionSpec> streamOptions();
 
-extern const CommandSpec kCoeffsSpec, kIrradianceSpec, kCompareSpec, kRenderSpec, kViewSpec, kReplaySpec, kRecordSpec;
+extern const CommandSpec kCoeffsSpec, kIrradianceSpec, kCompareSpec, kRenderSpec, kViewSpec, kReplaySpec, kRecordSpec, kBenchSpec;
 
 }  // namespace lp::cli

@@ -361,21 +361,54 @@ Image resampleToEquirect(const Image& frame, const LayoutSpec& spec, int width, 
   return out;
 }
 
+Image reduceEquirect(const float* rgb, int width, int height, int f) {
+  if (f < 1 || width % f || height % f)
+    throw Error("reduce: " + std::to_string(width) + "x" + std::to_string(height) + " is not a multiple of " + std::to_string(f));
+  const int w = width / f, h = height / f;
+  Image out(w, h);
+  std::vector<float> acc(std::size_t(w) * 3);
+  for (int I = 0; I < h; ++I) {
+    std::fill(acc.begin(), acc.end(), 0.0f);
+    double total = 0;
+    for (int r = 0; r < f; ++r) {
+      const int i = I * f + r;
+      // Row weight: the row's solid angle (all pixels of a row have the same).
+      const float wt = float(std::cos(kPi * i / height) - std::cos(kPi * (i + 1) / height));
+      total += wt;
+      const float* row = rgb + std::size_t(i) * width * 3;
+      for (int J = 0; J < w; ++J) {
+        float s0 = 0, s1 = 0, s2 = 0;
+        for (int q = 0; q < f; ++q, row += 3) s0 += row[0], s1 += row[1], s2 += row[2];
+        acc[3 * J] += wt * s0, acc[3 * J + 1] += wt * s1, acc[3 * J + 2] += wt * s2;
+      }
+    }
+    const float norm = float(1.0 / (total * f));
+    float* o = out.pixel(0, I);
+    for (std::size_t x = 0; x < acc.size(); ++x) o[x] = acc[x] * norm;
+  }
+  return out;
+}
+
 Projector::Projector(const LayoutSpec& spec, int width, int height)
     : spec_(spec), width_(width), height_(height), samples_(layoutSamples(spec, width, height)) {
   if (spec.layout == Layout::Equirect) equirect_.emplace(width, height);
+  else weighted_.emplace(samples_.data(), samples_.size());
 }
 
-Sh9 Projector::project(const float* rgb, std::size_t rowStride) const {
+Sh9 Projector::project(const float* rgb, std::size_t rowStride, ThreadPool* pool) const {
   if (rowStride == 0) rowStride = std::size_t(width_) * 3;
-  if (equirect_) return equirect_->project(rgb, rowStride);
-  if (rowStride == std::size_t(width_) * 3)
-    return projectSamples(rgb, 3, samples_.data(), samples_.size());
-  Sh9 sum;
+  if (equirect_) return equirect_->project(rgb, rowStride, pool);
+  if (rowStride == std::size_t(width_) * 3) return weighted_->project(rgb, pool);
+  Sh9 sum;  // strided rows (rare): the general per-sample path
   for (int i = 0; i < height_; ++i)
     sum += projectSamples(rgb + i * rowStride, 3, samples_.data() + std::size_t(i) * width_,
                           std::size_t(width_));
   return sum;
+}
+
+Sh9 Projector::projectBgr8(const std::uint8_t* bgr, const float* lut, ThreadPool* pool) const {
+  if (equirect_) return equirect_->projectBgr8(bgr, std::size_t(width_) * 3, lut, pool);
+  return weighted_->projectBgr8(bgr, lut, pool);
 }
 
 }  // namespace lp

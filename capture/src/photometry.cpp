@@ -31,9 +31,16 @@ std::size_t Linearizer::convert(const Frame& frame, Image& out) const {
     d[0] = lut_[s[2]];
     d[1] = lut_[s[1]];
     d[2] = lut_[s[0]];
-    saturated += (s[0] == 255) | (s[1] == 255) | (s[2] == 255);
+    saturated += (s[0] == 255) + (s[1] == 255) + (s[2] == 255);
   }
   return saturated;
+}
+
+std::size_t countSaturated(const Frame& frame) {
+  if (frame.format != PixelFormat::Bgr8) return 0;
+  std::size_t n = 0;  // channel values at 255 (a byte count vectorises; pixels would not)
+  for (const std::uint8_t v : frame.bgr8) n += v == 255;
+  return n;
 }
 
 }  // namespace lp

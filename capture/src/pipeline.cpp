@@ -4,6 +4,7 @@
 #include <cmath>
 
 #include "capture/error.h"
+#include "shading/thread_pool.h"
 
 namespace lp {
 
@@ -64,6 +65,8 @@ void CapturePipeline::run() {
   const Linearizer linearizer(photometry);
   std::optional<Projector> projector;
   ShSmoother smoother(opt_.smoothSeconds);
+  std::unique_ptr<ThreadPool> pool;
+  if (opt_.threads > 1) pool = std::make_unique<ThreadPool>(opt_.threads);
   Frame frame;
   std::uint64_t index = 0;
   Clock::time_point wallStart = Clock::now();
@@ -81,15 +84,39 @@ void CapturePipeline::run() {
       const auto t1 = Clock::now();
       const double timestamp = frame.timestamp + loopOffset;
       lastTimestamp = timestamp;
-      auto image = std::make_shared<Image>();
-      const std::size_t saturated = linearizer.convert(frame, *image);
-      const auto t2 = Clock::now();
-      if (!projector || projector->width() != frame.width || projector->height() != frame.height) {
+      const int reduce = opt_.reduce;
+      if (!projector || projector->width() * reduce != frame.width || projector->height() * reduce != frame.height) {
         if (auto why = layoutMismatch(opt_.layout, frame.width, frame.height); !why.empty())
           throw Error(source_->describe() + ": " + std::string(layoutName(opt_.layout.layout)) + " layout: " + why);
-        projector.emplace(opt_.layout, frame.width, frame.height);
+        if (reduce > 1 && (opt_.layout.layout != Layout::Equirect || frame.width % reduce || frame.height % reduce))
+          throw Error(source_->describe() + ": --reduce " + std::to_string(reduce) +
+                      " needs an equirect frame whose size is a multiple of it");
+        projector.emplace(opt_.layout, frame.width / reduce, frame.height / reduce);
       }
-      Sh9 sh = projector->project(image->rgb.data());
+      // Convert: a linear copy only for display. The projection reads the frame itself: 8-bit
+      // through the lookup table, float scaled afterwards (projection is linear).
+      std::shared_ptr<Image> image;
+      std::size_t saturated = 0;
+      const bool eightBit = frame.format == PixelFormat::Bgr8;
+      if (opt_.keepImages) {
+        image = std::make_shared<Image>();
+        saturated = linearizer.convert(frame, *image);
+      } else {
+        saturated = countSaturated(frame);
+      }
+      const auto t2 = Clock::now();
+      Sh9 sh;
+      if (reduce > 1) {
+        if (!image) {
+          image = std::make_shared<Image>();
+          linearizer.convert(frame, *image);
+        }
+        const Image small = reduceEquirect(image->rgb.data(), image->width, image->height, reduce);
+        sh = projector->project(small.rgb.data(), 0, pool.get());
+      } else {
+        sh = eightBit ? projector->projectBgr8(frame.bgr8.data(), linearizer.table().data(), pool.get())
+                      : projector->project(frame.rgb.data(), 0, pool.get()) * linearizer.exposure();
+      }
       if (opt_.rotation) sh = rotateSh(sh, *opt_.rotation);
       sh = smoother.update(sh, timestamp);
       const auto t3 = Clock::now();

@@ -1,5 +1,8 @@
 #include "shading/sh.h"
 
+#include "project_kernel.h"
+#include "shading/thread_pool.h"
+
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -206,69 +209,142 @@ namespace lp {
 // Y21 = k2 sin t cos t cos p; Y22 = k4 sin^2 t cos 2p.
 EquirectProjector::EquirectProjector(int width, int height) : width_(width), height_(height) {
   const double pi = 3.14159265358979323846;
-  for (auto& c : col_) c.resize(std::size_t(width));
+  constexpr double k0 = 0.282095, k1 = 0.488603, k2 = 1.092548, k3 = 0.315392, k4 = 0.546274;
+  auto t = std::make_shared<kernel::EquirectTables>();
+  t->width = width;
+  t->height = height;
+  const std::size_t padded = (std::size_t(width) + 15) / 16 * 16;
+  for (auto& c : t->col) c.assign(padded, 0.0f);
   for (int j = 0; j < width; ++j) {
     const double p0 = 2 * pi * j / width, p1 = 2 * pi * (j + 1) / width;
-    col_[0][j] = float(p1 - p0);
-    col_[1][j] = float(std::sin(p1) - std::sin(p0));
-    col_[2][j] = float(std::cos(p0) - std::cos(p1));
-    col_[3][j] = float((std::sin(2 * p1) - std::sin(2 * p0)) / 2);
-    col_[4][j] = float((std::cos(2 * p0) - std::cos(2 * p1)) / 2);
+    t->col[0][j] = float(p1 - p0);
+    t->col[1][j] = float(std::sin(p1) - std::sin(p0));
+    t->col[2][j] = float(std::cos(p0) - std::cos(p1));
+    t->col[3][j] = float((std::sin(2 * p1) - std::sin(2 * p0)) / 2);
+    t->col[4][j] = float((std::cos(2 * p0) - std::cos(2 * p1)) / 2);
   }
-  for (auto& r : row_) r.resize(std::size_t(height));
+  // Row factors with the basis constants folded in, in the order of kernel::kRowOf:
+  // 0: k0 * int 1, 1: k1 * int cos, 2: k1 * int sin (used by L1-1 and L11) ... see below.
+  for (auto& r : t->row) r.resize(std::size_t(height));
   for (int i = 0; i < height; ++i) {
     const double t0 = pi * i / height, t1 = pi * (i + 1) / height;
     const double u0 = std::cos(t0), u1 = std::cos(t1);
-    row_[0][i] = u0 - u1;
-    row_[1][i] = (u0 * u0 - u1 * u1) / 2;
-    row_[2][i] = (t1 / 2 - std::sin(2 * t1) / 4) - (t0 / 2 - std::sin(2 * t0) / 4);
-    row_[3][i] = (std::pow(std::sin(t1), 3) - std::pow(std::sin(t0), 3)) / 3;
-    row_[4][i] = (u0 - u0 * u0 * u0 / 3) - (u1 - u1 * u1 * u1 / 3);
-    row_[5][i] = (u0 * u0 * u0 - u0) - (u1 * u1 * u1 - u1);
+    const double one = u0 - u1;
+    const double cosT = (u0 * u0 - u1 * u1) / 2;
+    const double sinT = (t1 / 2 - std::sin(2 * t1) / 4) - (t0 / 2 - std::sin(2 * t0) / 4);
+    const double sinCos = (std::pow(std::sin(t1), 3) - std::pow(std::sin(t0), 3)) / 3;
+    const double sin2 = (u0 - u0 * u0 * u0 / 3) - (u1 - u1 * u1 * u1 / 3);
+    const double threeCos2 = (u0 * u0 * u0 - u0) - (u1 * u1 * u1 - u1);
+    // Each coefficient k uses one row factor; the kernel multiplies it by one column sum:
+    // L00 = k0 R1 S1; L1-1 = k1 Rs Ssin; L10 = k1 Rc S1; L11 = k1 Rs Scos; L2-2 = k2/2 Rs2 Ssin2;
+    // L2-1 = k2 Rsc Ssin; L20 = k3 R3 S1; L21 = k2 Rsc Scos; L22 = k4 Rs2 Scos2.
+    // Row factor slots (kernel::kRowOf): 0 k0*one, 1 k1*cosT, 2 k1*sinT, 3 k2*sinCos,
+    // 4 sin2 (times k2/2 for L2-2 or k4 for L22: equal, since k2/2 = k4), 5 k3*threeCos2.
+    t->row[0][i] = float(k0 * one);
+    t->row[1][i] = float(k1 * cosT);
+    t->row[2][i] = float(k1 * sinT);
+    t->row[3][i] = float(k2 * sinCos);
+    t->row[4][i] = float(k4 * sin2);
+    t->row[5][i] = float(k3 * threeCos2);
   }
+  tables_ = std::move(t);
 }
 
-void EquirectProjector::projectRows(const float* rgb, std::size_t rowStride, int row0, int row1,
-                                    double* out) const {
-  constexpr double k0 = 0.282095, k1 = 0.488603, k2 = 1.092548, k3 = 0.315392, k4 = 0.546274;
-  const float *c1 = col_[0].data(), *cc = col_[1].data(), *cs = col_[2].data(),
-              *cc2 = col_[3].data(), *cs2 = col_[4].data();
-  for (int i = row0; i < row1; ++i) {
-    const float* px = rgb + std::size_t(i) * rowStride;
-    // Five column-weighted sums per channel: 15 multiply-adds per pixel.
-    float s[5][3] = {};
-    for (int j = 0; j < width_; ++j) {
-      const float r = px[3 * j], g = px[3 * j + 1], b = px[3 * j + 2];
-      s[0][0] += c1[j] * r, s[0][1] += c1[j] * g, s[0][2] += c1[j] * b;
-      s[1][0] += cc[j] * r, s[1][1] += cc[j] * g, s[1][2] += cc[j] * b;
-      s[2][0] += cs[j] * r, s[2][1] += cs[j] * g, s[2][2] += cs[j] * b;
-      s[3][0] += cc2[j] * r, s[3][1] += cc2[j] * g, s[3][2] += cc2[j] * b;
-      s[4][0] += cs2[j] * r, s[4][1] += cs2[j] * g, s[4][2] += cs2[j] * b;
-    }
-    const double R1 = row_[0][i], Rc = row_[1][i], Rs = row_[2][i], Rsc = row_[3][i],
-                 Rs2 = row_[4][i], R3 = row_[5][i];
-    for (int ch = 0; ch < 3; ++ch) {
-      const double S1 = s[0][ch], Sc = s[1][ch], Ss = s[2][ch], Sc2 = s[3][ch], Ss2 = s[4][ch];
-      out[0 * 3 + ch] += k0 * R1 * S1;
-      out[1 * 3 + ch] += k1 * Rs * Ss;
-      out[2 * 3 + ch] += k1 * Rc * S1;
-      out[3 * 3 + ch] += k1 * Rs * Sc;
-      out[4 * 3 + ch] += 0.5 * k2 * Rs2 * Ss2;
-      out[5 * 3 + ch] += k2 * Rsc * Ss;
-      out[6 * 3 + ch] += k3 * R3 * S1;
-      out[7 * 3 + ch] += k2 * Rsc * Sc;
-      out[8 * 3 + ch] += k4 * Rs2 * Sc2;
-    }
-  }
-}
-
-Sh9 EquirectProjector::project(const float* rgb, std::size_t rowStride) const {
+template <class RowFill>
+Sh9 EquirectProjector::run(RowFill fill, bool bgr, ThreadPool* pool) const {
+  // Row bands of at least 32 rows per task; each task sums into its own doubles.
+  const unsigned tasks = pool ? std::min<unsigned>(pool->size() * 4, unsigned(std::max(1, height_ / 32))) : 1;
+  std::vector<std::array<double, 27>> part(tasks);
+  auto band = [&](unsigned b) {
+    part[b].fill(0.0);
+    const int r0 = int(std::int64_t(height_) * b / tasks), r1 = int(std::int64_t(height_) * (b + 1) / tasks);
+    std::vector<float> buffer;
+    kernel::equirectRows(*tables_, [&](int i) { return fill(i, buffer); },
+                         bgr ? kernel::RowOrder::Bgr : kernel::RowOrder::Rgb, r0, r1, part[b].data());
+  };
+  if (pool) pool->run(tasks, band);
+  else band(0);
   std::array<double, 27> acc{};
-  projectRows(rgb, rowStride, 0, height_, acc.data());
+  for (const auto& p : part)
+    for (int q = 0; q < 27; ++q) acc[q] += p[q];
   Sh9 out;
   for (int k = 0; k < kShCount; ++k)
     out.c[k] = Rgb(float(acc[3 * k]), float(acc[3 * k + 1]), float(acc[3 * k + 2]));
   return out;
+}
+
+Sh9 EquirectProjector::project(const float* rgb, std::size_t rowStride, ThreadPool* pool) const {
+  return run([&](int i, std::vector<float>&) { return rgb + std::size_t(i) * rowStride; }, false, pool);
+}
+
+Sh9 EquirectProjector::projectBgr8(const std::uint8_t* bgr, std::size_t rowStride, const float* lut,
+                                   ThreadPool* pool) const {
+  const std::size_t n = std::size_t(width_) * 3;
+  return run(
+      [&, n](int i, std::vector<float>& buf) {
+        buf.resize(n);
+        kernel::lutToFloat(bgr + std::size_t(i) * rowStride, lut, buf.data(), n);
+        return static_cast<const float*>(buf.data());
+      },
+      true, pool);
+}
+
+Sh9 EquirectProjector::projectHalf(const std::uint16_t* rgb, std::size_t rowStride, ThreadPool* pool) const {
+  const std::size_t n = std::size_t(width_) * 3;
+  return run(
+      [&, n](int i, std::vector<float>& buf) {
+        buf.resize(n);
+        kernel::halfToFloat(rgb + std::size_t(i) * rowStride, buf.data(), n);
+        return static_cast<const float*>(buf.data());
+      },
+      false, pool);
+}
+
+SampleProjector::SampleProjector(const SphereSample* samples, std::size_t count) : count_(count) {
+  for (auto& w : w_) w.resize(count);
+  for (std::size_t i = 0; i < count; ++i) {
+    const auto y = shBasis(samples[i].dir);
+    for (int k = 0; k < kShCount; ++k) w_[k][i] = samples[i].solidAngle == 0.0f ? 0.0f : y[k] * samples[i].solidAngle;
+  }
+}
+
+template <class BlockFill>
+Sh9 SampleProjector::run(BlockFill fill, bool bgr, ThreadPool* pool) const {
+  constexpr std::size_t kChunk = 16384;
+  const auto chunks = unsigned((count_ + kChunk - 1) / kChunk);
+  std::vector<std::array<double, 27>> part(chunks);
+  auto task = [&](unsigned c) {
+    part[c].fill(0.0);
+    const std::size_t i0 = c * kChunk, n = std::min(kChunk, count_ - i0);
+    const float* w[kShCount];
+    for (int k = 0; k < kShCount; ++k) w[k] = w_[k].data() + i0;
+    std::vector<float> buf;
+    kernel::weightedSums(fill(i0, n, buf), n, w, part[c].data());
+  };
+  if (pool) pool->run(chunks, task);
+  else for (unsigned c = 0; c < chunks; ++c) task(c);
+  std::array<double, 27> acc{};
+  for (const auto& p : part)
+    for (int q = 0; q < 27; ++q) acc[q] += p[q];
+  Sh9 out;
+  for (int k = 0; k < kShCount; ++k)
+    out.c[k] = bgr ? Rgb(float(acc[3 * k + 2]), float(acc[3 * k + 1]), float(acc[3 * k]))
+                   : Rgb(float(acc[3 * k]), float(acc[3 * k + 1]), float(acc[3 * k + 2]));
+  return out;
+}
+
+Sh9 SampleProjector::project(const float* rgb, ThreadPool* pool) const {
+  return run([&](std::size_t i0, std::size_t, std::vector<float>&) { return rgb + 3 * i0; }, false, pool);
+}
+
+Sh9 SampleProjector::projectBgr8(const std::uint8_t* bgr, const float* lut, ThreadPool* pool) const {
+  return run(
+      [&](std::size_t i0, std::size_t n, std::vector<float>& buf) {
+        buf.resize(3 * n);
+        kernel::lutToFloat(bgr + 3 * i0, lut, buf.data(), 3 * n);
+        return static_cast<const float*>(buf.data());
+      },
+      true, pool);
 }
 
 Sh9 projectEquirect(const float* rgb, int width, int height) {

@@ -21,6 +21,8 @@
 
 namespace lp {
 
+/// Where one frame's capture time went. 8-bit frames are linearised inside the projection
+/// (its lookup table fused in), so `convertMs` is only the linear copy kept for display.
 struct StageTimes {
   double grabMs = 0, convertMs = 0, projectMs = 0;
 };
@@ -47,6 +49,8 @@ struct PipelineOptions {
   Handoff handoff = Handoff::Latest;
   bool realtime = false;              ///< pace capture by the source's timestamps
   bool keepImages = true;             ///< hand the linear frame over too (for the background)
+  unsigned threads = 2;               ///< threads for one frame's projection
+  int reduce = 1;                     ///< equirect: project an f x f area average (reduceEquirect)
   /// Called on the capture thread for every processed frame, before the handoff.
   std::function<void(const ProcessedFrame&)> onCaptured;
 };

@@ -40,6 +40,7 @@
 #include <array>
 #include <cstddef>
 #include <cstdint>
+#include <memory>
 #include <string_view>
 #include <vector>
 
@@ -106,21 +107,49 @@ Sh9 projectSamples(const float* rgb, std::size_t pixelStride, const SphereSample
 /// function of t and one of p (closed-form row and column integrals). Exact for any W x H, so a
 /// constant image gives L00 = 4 pi Y00 c and zeros to float rounding. Per pixel it costs 15
 /// multiply-adds (five column-weighted sums per channel); rows are combined in double.
+class ThreadPool;
+namespace kernel {
+struct EquirectTables;
+}
+
 class EquirectProjector {
  public:
   EquirectProjector(int width, int height);
   int width() const { return width_; }
   int height() const { return height_; }
-  /// rgb: linear RGB floats, 3 per pixel, rows `rowStride` floats apart.
-  Sh9 project(const float* rgb, std::size_t rowStride) const;
-  /// Rows [row0, row1) only, unscaled partial sums in double (27 values, k-major), for threading.
-  void projectRows(const float* rgb, std::size_t rowStride, int row0, int row1,
-                   double* out27) const;
+  /// rgb: linear RGB floats, 3 per pixel, rows `rowStride` floats apart. With a pool, rows are
+  /// split across its threads.
+  Sh9 project(const float* rgb, std::size_t rowStride, ThreadPool* pool = nullptr) const;
+  /// 8-bit BGR (OpenCV order), rows `rowStride` bytes apart, linearised through `lut` (code
+  /// value -> linear radiance) row by row inside the projection: no linear frame is stored.
+  Sh9 projectBgr8(const std::uint8_t* bgr, std::size_t rowStride, const float* lut,
+                  ThreadPool* pool = nullptr) const;
+  /// Half-float (IEEE binary16) linear RGB, rows `rowStride` halves apart.
+  Sh9 projectHalf(const std::uint16_t* rgb, std::size_t rowStride, ThreadPool* pool = nullptr) const;
 
  private:
+  template <class RowFill>
+  Sh9 run(RowFill fill, bool bgr, ThreadPool* pool) const;
   int width_, height_;
-  std::array<std::vector<float>, 5> col_;   ///< integrals of 1, cos p, sin p, cos 2p, sin 2p
-  std::array<std::vector<double>, 6> row_;  ///< integrals of g(t) sin t, g per basis factor
+  std::shared_ptr<const kernel::EquirectTables> tables_;
+};
+
+/// Projection for layouts that are not separable: per pixel, nine precomputed weights
+/// Y_lm(dir) * solidAngle, so a frame costs 27 multiply-adds per pixel and no trigonometry.
+class SampleProjector {
+ public:
+  SampleProjector(const SphereSample* samples, std::size_t count);
+  std::size_t size() const { return count_; }
+  /// Packed linear RGB floats, `count` pixels.
+  Sh9 project(const float* rgb, ThreadPool* pool = nullptr) const;
+  /// Packed 8-bit BGR through `lut`.
+  Sh9 projectBgr8(const std::uint8_t* bgr, const float* lut, ThreadPool* pool = nullptr) const;
+
+ private:
+  template <class BlockFill>
+  Sh9 run(BlockFill fill, bool bgr, ThreadPool* pool) const;
+  std::size_t count_;
+  std::array<std::vector<float>, kShCount> w_;
 };
 
 /// Convenience: EquirectProjector(width, height).project(rgb, 3 * width).

@@ -1,0 +1,214 @@
+// liveprobe-bench: Google Benchmark suite (run with --benchmark_format=json).
+// Names carry layout, pixel type, size and threads: Project/equirect/f32/300x300/threads:1.
+// This file is compiled with the same flags as the projection kernels (-O3, reassociation), so
+// the plain reference loop below is a fair in-run yardstick.
+#include <benchmark/benchmark.h>
+
+#include <chrono>
+#include <map>
+#include <cmath>
+#include <memory>
+#include <numbers>
+#include <random>
+
+#include "capture/frame.h"
+#include "capture/image.h"
+#include "capture/layout.h"
+#include "capture/photometry.h"
+#include "shading/brute.h"
+#include "shading/gl/context.h"
+#include "shading/gl/renderer.h"
+#include "shading/mesh.h"
+#include "shading/sh.h"
+#include "shading/thread_pool.h"
+
+namespace {
+
+constexpr double kPi = std::numbers::pi;
+
+struct Size {
+  int w, h;
+};
+
+std::string sizeName(Size s) { return std::to_string(s.w) + "x" + std::to_string(s.h); }
+
+// A natural-looking test frame: the synthetic sky, resized by rendering it at that size.
+const std::vector<float>& skyF32(Size s) {
+  static std::map<std::pair<int, int>, std::vector<float>> cache;
+  auto& v = cache[{s.w, s.h}];
+  if (v.empty()) lp::renderSyntheticSky(s.w, s.h, 1.0, v);
+  return v;
+}
+
+const std::vector<std::uint8_t>& skyU8(Size s) {
+  static std::map<std::pair<int, int>, std::vector<std::uint8_t>> cache;
+  auto& v = cache[{s.w, s.h}];
+  if (v.empty()) {
+    const auto& f = skyF32(s);
+    v.resize(f.size());
+    for (std::size_t i = 0; i < f.size(); i += 3)
+      for (int c = 0; c < 3; ++c)
+        v[i + 2 - c] = std::uint8_t(std::lround(255 * lp::linearToSrgb(f[i + c] * 0.1f)));
+  }
+  return v;
+}
+
+lp::ThreadPool* pool(int threads) {
+  static std::map<int, std::unique_ptr<lp::ThreadPool>> pools;
+  auto& p = pools[threads];
+  if (!p) p = std::make_unique<lp::ThreadPool>(unsigned(threads));
+  return threads > 1 ? p.get() : nullptr;
+}
+
+void projectBench(benchmark::State& state, lp::Layout layout, bool u8, Size s, int threads) {
+  lp::Projector proj(layout, s.w, s.h);
+  const lp::Linearizer lin;
+  for (auto _ : state) {
+    const lp::Sh9 sh = u8 ? proj.projectBgr8(skyU8(s).data(), lin.table().data(), pool(threads))
+                          : proj.project(skyF32(s).data(), 0, pool(threads));
+    benchmark::DoNotOptimize(sh);
+  }
+  state.counters["ns_per_pixel"] = benchmark::Counter(double(s.w) * s.h * 1e-9, benchmark::Counter::kIsIterationInvariantRate | benchmark::Counter::kInvert);
+}
+
+// The plain loop: per-pixel basis from precomputed directions and solid angles, 27 multiply-adds
+// per pixel into float accumulators, one thread. What a straightforward implementation does.
+void referenceLoop(benchmark::State& state, Size s) {
+  const auto samples = lp::layoutSamples(lp::Layout::Equirect, s.w, s.h);
+  const auto& rgb = skyF32(s);
+  for (auto _ : state) {
+    float acc[27] = {};
+    for (std::size_t i = 0; i < samples.size(); ++i) {
+      const auto y = lp::shBasis(samples[i].dir);
+      const float dw = samples[i].solidAngle;
+      for (int k = 0; k < 9; ++k) {
+        const float w = y[k] * dw;
+        acc[3 * k] += w * rgb[3 * i], acc[3 * k + 1] += w * rgb[3 * i + 1], acc[3 * k + 2] += w * rgb[3 * i + 2];
+      }
+    }
+    benchmark::DoNotOptimize(acc);
+  }
+  state.counters["ns_per_pixel"] = benchmark::Counter(double(s.w) * s.h * 1e-9, benchmark::Counter::kIsIterationInvariantRate | benchmark::Counter::kInvert);
+}
+
+// Brute force at T = 64x64 output texels on the 300x300 map, with the SH time (projection plus
+// evaluation at the same T normals) measured in the same run, and their ratio.
+void bruteBench(benchmark::State& state, int threads) {
+  const Size s{300, 300};
+  const auto samples = lp::layoutSamples(lp::Layout::Equirect, s.w, s.h);
+  const auto grid = lp::equirectSamples(64, 64);
+  std::vector<glm::vec3> normals;
+  for (const auto& g : grid) normals.push_back(g.dir);
+  const auto& rgb = skyF32(s);
+  const lp::Projector proj(lp::Layout::Equirect, s.w, s.h);
+  double shSeconds = 1e30;
+  for (int rep = 0; rep < 50; ++rep) {
+    const auto t0 = std::chrono::steady_clock::now();
+    const auto m = lp::irradianceMatrices(proj.project(rgb.data()));
+    glm::vec3 sum(0);
+    for (const auto& n : normals) sum += lp::evalIrradianceQuadratic(m, n);
+    benchmark::DoNotOptimize(sum);
+    shSeconds = std::min(shSeconds, std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
+  }
+  double bruteSeconds = 0;
+  int n = 0;
+  for (auto _ : state) {
+    const auto t0 = std::chrono::steady_clock::now();
+    auto e = lp::bruteIrradiance(rgb.data(), 3, samples.data(), samples.size(), normals, unsigned(threads));
+    benchmark::DoNotOptimize(e);
+    bruteSeconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    ++n;
+  }
+  state.counters["sh_us"] = shSeconds * 1e6;
+  state.counters["ratio_brute_over_sh"] = bruteSeconds / n / shSeconds;
+  state.counters["paper_ratio_T_over_9"] = 64.0 * 64.0 / 9.0;
+}
+
+// A GL frame of the bunny at 1280x720 on OSMesa: draw + readback.
+void renderBench(benchmark::State& state) {
+  static auto ctx = lp::gl::createGlContext({lp::gl::Backend::Headless, 1280, 720, "bench", false});
+  lp::gl::Renderer r;
+  lp::Mesh mesh = lp::loadMesh(std::string(LIVEPROBE_DATA_DIR) + "/models/stanford-bunny.obj");
+  lp::fitToUnitSphere(mesh);
+  r.setMesh(mesh);
+  const Size s{512, 256};
+  r.setLighting(lp::projectEquirect(skyF32(s).data(), s.w, s.h));
+  r.setBackground(skyF32(s).data(), s.w, s.h, lp::gl::BackgroundMapping::Equirect);
+  for (auto _ : state) {
+    r.draw({1280, 720}, lp::gl::Camera{}, lp::gl::ShadingSettings{});
+    auto px = lp::gl::Renderer::readRgb8({1280, 720});
+    benchmark::DoNotOptimize(px);
+  }
+}
+
+// The replay pipeline, stage by stage, on pano.mp4 (1920x1080 H.264).
+void pipelineBench(benchmark::State& state, int stage) {
+  static auto source = lp::openSource(std::string(LIVEPROBE_DATA_DIR) + "/video/pano.mp4");
+  static lp::Frame frame;
+  if (frame.bgr8.empty()) source->next(frame);
+  const lp::Linearizer lin;
+  static const lp::Projector proj(lp::Layout::Equirect, 1920, 1080);
+  lp::Image image;
+  for (auto _ : state) {
+    switch (stage) {
+      case 0:  // grab: decode the next frame
+        if (!source->next(frame)) {
+          source->rewind();
+          source->next(frame);
+        }
+        break;
+      case 1:  // convert: linear copy for display
+        benchmark::DoNotOptimize(lin.convert(frame, image));
+        break;
+      case 2:  // project: fused lookup table + projection, 2 threads
+        benchmark::DoNotOptimize(proj.projectBgr8(frame.bgr8.data(), lin.table().data(), pool(2)));
+        break;
+    }
+  }
+}
+
+void registerAll() {
+  const Size sizes[] = {{300, 300}, {1024, 512}, {2048, 1024}, {3840, 1920}};
+  for (const char* type : {"f32", "u8"})
+    for (Size s : sizes)
+      for (int threads : {1, 2}) {
+        const bool u8 = std::string(type) == "u8";
+        benchmark::RegisterBenchmark(("Project/equirect/" + std::string(type) + "/" + sizeName(s) + "/threads:" + std::to_string(threads)).c_str(),
+                                     [=](benchmark::State& st) { projectBench(st, lp::Layout::Equirect, u8, s, threads); })
+            ->UseRealTime()->Unit(benchmark::kMicrosecond);
+      }
+  const Size angular[] = {{300, 300}, {1024, 1024}, {2048, 2048}};
+  for (const char* type : {"f32", "u8"})
+    for (Size s : angular)
+      for (int threads : {1, 2}) {
+        const bool u8 = std::string(type) == "u8";
+        benchmark::RegisterBenchmark(("Project/angular/" + std::string(type) + "/" + sizeName(s) + "/threads:" + std::to_string(threads)).c_str(),
+                                     [=](benchmark::State& st) { projectBench(st, lp::Layout::Angular, u8, s, threads); })
+            ->UseRealTime()->Unit(benchmark::kMicrosecond);
+      }
+  for (Size s : {Size{300, 300}, Size{3840, 1920}})
+    benchmark::RegisterBenchmark(("Reference/equirect/f32/" + sizeName(s) + "/threads:1").c_str(),
+                                 [=](benchmark::State& st) { referenceLoop(st, s); })
+        ->UseRealTime()->Unit(benchmark::kMicrosecond);
+  for (int threads : {1, 2})
+    benchmark::RegisterBenchmark(("Brute/equirect/f32/300x300/T:64x64/threads:" + std::to_string(threads)).c_str(),
+                                 [=](benchmark::State& st) { bruteBench(st, threads); })
+        ->UseRealTime()->Unit(benchmark::kMillisecond)->Iterations(3);
+  benchmark::RegisterBenchmark("Render/bunny/1280x720/osmesa", renderBench)->UseRealTime()->Unit(benchmark::kMillisecond);
+  const char* stages[] = {"grab", "convert", "project"};
+  for (int i = 0; i < 3; ++i)
+    benchmark::RegisterBenchmark(("Pipeline/pano.mp4/u8/1920x1080/" + std::string(stages[i])).c_str(),
+                                 [=](benchmark::State& st) { pipelineBench(st, i); })
+        ->UseRealTime()->Unit(benchmark::kMillisecond);
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  registerAll();
+  benchmark::Initialize(&argc, argv);
+  if (benchmark::ReportUnrecognizedArguments(argc, argv)) return 1;
+  benchmark::RunSpecifiedBenchmarks();
+  benchmark::Shutdown();
+  return 0;
+}
