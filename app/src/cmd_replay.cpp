@@ -148,8 +148,12 @@ const CommandSpec kReplaySpec{
     }(),
     0, 1};
 
-int runReplay(const Args& a) {
-  const std::string sourceName = a.positional().empty() ? defaultRecording() : a.positional()[0];
+namespace {
+
+// The pipeline and the render loop, for replay (a file) and live (a camera). A camera is never
+// paced or held back: capture uses the latest-value handoff even headless, and --coeffs-out
+// lines are written as frames are captured.
+int runStream(const Args& a, std::unique_ptr<FrameSource> source, bool live) {
   PipelineOptions opt;
   opt.layout = layoutFromArgs(a);
   opt.photometry = photometryFromArgs(a);
@@ -165,18 +169,14 @@ int runReplay(const Args& a) {
   if (a.has("--out-dir") && a.has("--out-video")) throw Error("give --out-dir or --out-video, not both");
   const gl::Camera cameraInit = cameraFromArgs(a);
   const Mesh mesh = meshFromArgs(a);
-  SourceOptions so;
-  so.fps = a.number("--fps", 30.0);
-  if (!(so.fps > 0 && so.fps <= 1000)) throw Error("--fps " + a.get("--fps") + ": expected a rate in (0, 1000]");
-  auto source = openSource(sourceName, so);
   const double fps = source->fps();
   const std::string description = source->describe();
 
   const bool headless = a.has("--headless") || !(std::getenv("DISPLAY") || std::getenv("WAYLAND_DISPLAY"));
   const auto size = parseSize(a.get("--size", headless ? "640x360" : "1280x720"), "--size");
   if (headless && opt.loop && opt.maxFrames < 0) throw Error("--loop without a window needs --frames N");
-  opt.handoff = headless ? Handoff::Every : Handoff::Latest;
-  opt.realtime = !headless;
+  opt.handoff = headless && !live ? Handoff::Every : Handoff::Latest;
+  opt.realtime = !headless && !live;
   gl::ShadingSettings shading = shadingFromArgs(a, Sh9{});
   const bool autoExposureWanted = a.get("--exposure", "auto") == "auto";
   opt.keepImages = shading.background;
@@ -191,9 +191,16 @@ int runReplay(const Args& a) {
   }
   std::unique_ptr<VideoRecorder> outVideo;
   if (a.has("--out-video")) outVideo = std::make_unique<VideoRecorder>(a.get("--out-video"), fps, "liveprobe replay of " + description);
-  if (!headless && coeffsOut) {
+  if ((!headless || live) && coeffsOut) {
     AtomicTextFile* file = coeffsOut.get();
     opt.onCaptured = [file](const ProcessedFrame& f) { file->line(coeffsLine(f, -1)); };
+  }
+  // --record (live): the raw stream, finalised even when capture stops on a fault.
+  std::unique_ptr<VideoRecorder> recorder;
+  if (a.has("--record")) {
+    recorder = std::make_unique<VideoRecorder>(a.get("--record"), fps, description, source->radianceScale());
+    VideoRecorder* rec = recorder.get();
+    opt.onFrame = [rec](const Frame& f) { rec->write(f); };
   }
 
   auto ctx = openContext(headless ? gl::Backend::Headless : gl::Backend::Auto, size);
@@ -217,7 +224,7 @@ int runReplay(const Args& a) {
     saturated += f.saturated;
   };
   try {
-    if (headless) {
+    if (headless && !live) {
       while (auto f = pipeline.waitNext()) {
         const auto t0 = Clock::now();
         useFrame(*f);
@@ -250,8 +257,11 @@ int runReplay(const Args& a) {
       while (!ctx->shouldClose()) {
         applyInput(camera, ctx->pollEvents());
         if (auto f = pipeline.takeLatest()) useFrame(*f);
-        else if (pipeline.finished() && !pipeline.stats().error.empty()) break;
         else if (pipeline.finished()) break;
+        else if (headless) {  // live, headless: nothing new to draw yet
+          std::this_thread::sleep_for(std::chrono::milliseconds(2));
+          continue;
+        }
         const auto t0 = Clock::now();
         renderer.draw(ctx->framebufferSize(), camera, shading);
         ctx->present();
@@ -271,8 +281,12 @@ int runReplay(const Args& a) {
   }
   pipeline.stop();
   const PipelineStats st = pipeline.stats();
+  if (recorder) {
+    recorder->finish();
+    std::fprintf(stderr, "liveprobe: recorded %zu frames to %s\n", recorder->frames(), recorder->path().c_str());
+  }
+  if (coeffsOut && (st.error.empty() || live)) coeffsOut->commit();  // a camera's frames up to a fault are real data
   if (!st.error.empty()) throw Error(st.error);
-  if (coeffsOut) coeffsOut->commit();
   if (outVideo) outVideo->finish();
 
   std::fprintf(stderr,
@@ -285,6 +299,21 @@ int runReplay(const Args& a) {
     std::fprintf(stderr, "  --smooth %.3g s: lighting lags a step change by %.3g s (63%% of the step)\n",
                  opt.smoothSeconds, opt.smoothSeconds);
   return 0;
+}
+
+}  // namespace
+
+int runStreamForLive(const Args& a, std::unique_ptr<FrameSource> camera) {
+  return runStream(a, std::move(camera), true);
+}
+
+int runReplay(const Args& a) {
+  const std::string sourceName = a.positional().empty() ? defaultRecording() : a.positional()[0];
+  SourceOptions so;
+  so.fps = a.number("--fps", 30.0);
+  if (!(so.fps > 0 && so.fps <= 1000)) throw Error("--fps " + a.get("--fps") + ": expected a rate in (0, 1000]");
+  layoutFromArgs(a);  // option errors before the file is opened
+  return runStream(a, openSource(sourceName, so), false);
 }
 
 const CommandSpec kRecordSpec{

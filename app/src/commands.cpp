@@ -11,6 +11,8 @@ const std::vector<Command>& commands() {
       {kViewSpec, runView},
       {kReplaySpec, runReplay},
       {kRecordSpec, runRecord},
+      {kLiveSpec, runLive},
+      {kDevicesSpec, runDevices},
       {kBenchSpec, runBench},
   };
   return all;

@@ -1,10 +1,12 @@
 #pragma once
 // The subcommands of the liveprobe program. Each returns the process exit code; errors are
 // thrown as lp::Error and printed by main() as one line.
+#include <memory>
 #include <string>
 #include <vector>
 
 #include "args.h"
+#include "capture/frame.h"
 
 namespace lp::cli {
 
@@ -23,8 +25,12 @@ int runView(const Args&);
 int runReplay(const Args&);
 int runRecord(const Args&);
 int runBench(const Args&);
+int runLive(const Args&);
+int runDevices(const Args&);
+/// The replay pipeline with an opened camera as its source (cmd_replay.cpp).
+int runStreamForLive(const Args& a, std::unique_ptr<FrameSource> camera);
 std::vector<OptionSpec> streamOptions();
 
-extern const CommandSpec kCoeffsSpec, kIrradianceSpec, kCompareSpec, kRenderSpec, kViewSpec, kReplaySpec, kRecordSpec, kBenchSpec;
+extern const CommandSpec kCoeffsSpec, kIrradianceSpec, kCompareSpec, kRenderSpec, kViewSpec, kReplaySpec, kRecordSpec, kBenchSpec, kLiveSpec, kDevicesSpec;
 
 }  // namespace lp::cli

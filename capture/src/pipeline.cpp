@@ -60,9 +60,10 @@ void CapturePipeline::publish(ProcessedFrame&& f) {
 }
 
 void CapturePipeline::run() {
-  Photometry photometry = opt_.photometry;
-  photometry.exposure *= float(source_->radianceScale());
-  const Linearizer linearizer(photometry);
+  // The source's radiance scale (a recording's stored exposure, a camera's exposure time) may
+  // change from frame to frame: it is read per frame and applied to the coefficients (projection
+  // is linear) and to the display copy.
+  const Linearizer linearizer(opt_.photometry);
   std::optional<Projector> projector;
   ShSmoother smoother(opt_.smoothSeconds);
   std::unique_ptr<ThreadPool> pool;
@@ -82,6 +83,7 @@ void CapturePipeline::run() {
         }
       }
       const auto t1 = Clock::now();
+      if (opt_.onFrame) opt_.onFrame(frame);
       const double timestamp = frame.timestamp + loopOffset;
       lastTimestamp = timestamp;
       const int reduce = opt_.reduce;
@@ -116,6 +118,12 @@ void CapturePipeline::run() {
       } else {
         sh = eightBit ? projector->projectBgr8(frame.bgr8.data(), linearizer.table().data(), pool.get())
                       : projector->project(frame.rgb.data(), 0, pool.get()) * linearizer.exposure();
+      }
+      const double scale = source_->radianceScale();
+      if (scale != 1.0) {
+        sh *= float(scale);
+        if (image)
+          for (float& v : image->rgb) v *= float(scale);
       }
       if (opt_.rotation) sh = rotateSh(sh, *opt_.rotation);
       sh = smoother.update(sh, timestamp);

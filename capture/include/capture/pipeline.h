@@ -53,6 +53,8 @@ struct PipelineOptions {
   int reduce = 1;                     ///< equirect: project an f x f area average (reduceEquirect)
   /// Called on the capture thread for every processed frame, before the handoff.
   std::function<void(const ProcessedFrame&)> onCaptured;
+  /// Called on the capture thread with every raw frame as the source gave it (for recording).
+  std::function<void(const Frame&)> onFrame;
 };
 
 struct PipelineStats {

@@ -1,0 +1,119 @@
+// Live light probe from a V4L2 camera: live (the replay pipeline with a camera as its source)
+// and devices (what each camera offers).
+#include <cstdio>
+#include <filesystem>
+#include <algorithm>
+#include <iostream>
+#include <tuple>
+
+#include <linux/videodev2.h>
+
+#include "capture/error.h"
+#include "capture/v4l2.h"
+#include "commands.h"
+#include "scene.h"
+
+namespace lp::cli {
+
+const CommandSpec kLiveSpec{
+    "live",
+    "DEVICE [--layout ...] [--format mjpeg|yuyv|nv12|rgb24] [--size WxH] [--fps N]\n"
+    "       [--lock-exposure [SECONDS]] [--smooth S] [--coeffs-out FILE.jsonl] [--headless] [--record FILE]",
+    "A live light probe: streams a V4L2 camera (a 360 camera over UVC, or a webcam looking at a\n"
+    "chrome ball with --layout mirrorball --circle cx,cy,r), re-projects the nine coefficients every\n"
+    "frame and lights the model with them. Capture runs on its own thread and is never held back\n"
+    "by drawing. --record saves the stream as it runs, for replay.",
+    [] {
+      auto o = streamOptions();
+      o.insert(o.end(), {{"--format", "FMT", "pixel format: mjpeg, yuyv, nv12, rgb24 or auto (default: MJPEG first)"},
+                         {"--camera-size", "WxH", "capture size asked of the camera (default: its largest)"},
+                         {"--camera-fps", "N", "frame rate asked of the camera"},
+                         {"--lock-exposure", "SECONDS", "let auto exposure settle this long (e.g. 2), then lock exposure, gain, white balance"},
+                         {"--mjpeg-reduce", "1|2|4|8", "decode MJPEG at a reduced scale (default 1)"},
+                         {"--timeout", "SECONDS", "stop when no frame arrives for this long (default 2)"},
+                         {"--record", "FILE", "save the camera stream (.mkv FFV1 or .avi MJPEG) while it runs"},
+                         {"--frames", "N", "stop after N frames"},
+                         {"--size", "WxH", "window or frame size (default 1280x720; headless 640x360)"},
+                         {"--coeffs-out", "FILE.jsonl", "one JSON line per captured frame"},
+                         {"--out-dir", "DIR", "not for live: use replay on a --record file"},
+                         {"--out-video", "FILE", "not for live: use replay on a --record file"},
+                         {"--loop", "", "not for live"}});
+      auto scene = sceneOptions();
+      o.insert(o.end(), scene.begin(), scene.end());
+      return o;
+    }(),
+    1, 1};
+
+int runLive(const Args& a) {
+  if (a.has("--out-dir") || a.has("--out-video") || a.has("--loop"))
+    throw Error("live: --out-dir, --out-video and --loop are for replay; record with --record FILE and replay it");
+  layoutFromArgs(a);
+  CameraSettings cs;
+  cs.device = a.positional()[0];
+  cs.format = parseCameraFormat(a.get("--format", "auto"));
+  if (a.has("--camera-size")) std::tie(cs.width, cs.height) = parseSize(a.get("--camera-size"), "--camera-size");
+  cs.fps = a.number("--camera-fps", 0.0);
+  cs.mjpegReduce = a.integer("--mjpeg-reduce", 1);
+  if (cs.mjpegReduce != 1 && cs.mjpegReduce != 2 && cs.mjpegReduce != 4 && cs.mjpegReduce != 8)
+    throw Error("--mjpeg-reduce " + a.get("--mjpeg-reduce") + ": expected 1, 2, 4 or 8");
+  cs.timeoutMs = int(1000 * a.number("--timeout", 2.0));
+  if (cs.timeoutMs < 10) throw Error("--timeout " + a.get("--timeout") + ": too short");
+  auto camera = std::make_unique<V4l2Source>(cs);
+  camera->open();
+  std::fprintf(stderr, "liveprobe live: %s\n", camera->describe().c_str());
+  if (a.has("--lock-exposure")) {
+    const double settle = a.number("--lock-exposure", 2.0);
+    const LockedExposure l = camera->lockExposure(settle);
+    auto show = [](const std::optional<std::int32_t>& v) { return v ? std::to_string(*v) : std::string("n/a"); };
+    std::fprintf(stderr, "liveprobe live: locked after %.1f s: exposure %s x 100 us, gain %s, white balance %s K\n",
+                 settle, show(l.exposure100us).c_str(), show(l.gain).c_str(), show(l.whiteBalanceK).c_str());
+  }
+  return runStreamForLive(a, std::move(camera));
+}
+
+const CommandSpec kDevicesSpec{
+    "devices",
+    "[DEVICE ...]",
+    "Lists V4L2 cameras (default: every /dev/video*) with their formats, sizes, frame rates and\n"
+    "controls.",
+    {},
+    0, 64};
+
+int runDevices(const Args& a) {
+  std::vector<std::string> paths = a.positional();
+  if (paths.empty()) {
+    std::error_code ec;
+    for (const auto& e : std::filesystem::directory_iterator("/dev", ec))
+      if (e.path().filename().string().rfind("video", 0) == 0) paths.push_back(e.path().string());
+    std::sort(paths.begin(), paths.end());
+    if (paths.empty()) {
+      std::cout << "no cameras (no /dev/video* on this machine)\n";
+      return 0;
+    }
+  }
+  int failures = 0;
+  for (const auto& p : paths) {
+    CameraInfo info;
+    try {
+      info = queryCamera(p);
+    } catch (const Error& e) {
+      std::cerr << "liveprobe devices: " << e.what() << "\n";
+      ++failures;
+      continue;
+    }
+    std::cout << p << ": " << info.card << " (" << info.driver << ", " << info.bus << ")\n";
+    for (const auto& m : info.modes) {
+      std::string fcc;
+      for (int i = 0; i < 4; ++i) fcc += char((m.fourcc >> (8 * i)) & 0xFF);
+      std::cout << "  " << fcc << " " << m.width << "x" << m.height << " @";
+      for (double f : m.fps) std::cout << " " << f;
+      std::cout << " fps\n";
+    }
+    for (const auto& c : info.controls)
+      std::cout << "  control " << c.name << " = " << c.value << " [" << c.minimum << ".." << c.maximum
+                << ", default " << c.defaultValue << "]\n";
+  }
+  return failures ? 1 : 0;
+}
+
+}  // namespace lp::cli

@@ -1,0 +1,146 @@
+#pragma once
+// A V4L2 capture source written against linux/videodev2.h and the kernel's V4L2 documentation
+// (https://docs.kernel.org/userspace-api/media/v4l/): memory-mapped streaming I/O with poll(),
+// MJPEG / YUYV / NV12 / RGB24 conversion to 8-bit BGR, and the camera controls a light probe needs
+// (exposure, gain, white balance), with locking after auto-exposure settles.
+// Structure after libcamera's V4L2VideoDevice: the constructor cannot fail, open() can; the fd
+// and the mappings have RAII owners; buffers are requested and released as a pair with a
+// rollback; streamOff() is idempotent and returns every buffer.
+#include <cstdint>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "capture/frame.h"
+
+namespace lp {
+
+/// Move-only owner of a file descriptor.
+class UniqueFd {
+ public:
+  UniqueFd() = default;
+  explicit UniqueFd(int fd) : fd_(fd) {}
+  UniqueFd(UniqueFd&& o) noexcept : fd_(o.release()) {}
+  UniqueFd& operator=(UniqueFd&& o) noexcept {
+    reset(o.release());
+    return *this;
+  }
+  UniqueFd(const UniqueFd&) = delete;
+  UniqueFd& operator=(const UniqueFd&) = delete;
+  ~UniqueFd() { reset(); }
+  int get() const { return fd_; }
+  bool isValid() const { return fd_ >= 0; }
+  int release() {
+    const int f = fd_;
+    fd_ = -1;
+    return f;
+  }
+  void reset(int fd = -1);
+
+ private:
+  int fd_ = -1;
+};
+
+/// The pixel formats liveprobe converts, as V4L2 fourcc codes.
+enum class CameraFormat : std::uint8_t { Auto, Mjpeg, Yuyv, Nv12, Rgb24 };
+std::string_view cameraFormatName(CameraFormat f);
+/// "mjpeg", "yuyv", "nv12", "rgb24" or "auto"; throws lp::Error.
+CameraFormat parseCameraFormat(std::string_view name);
+
+struct CameraSettings {
+  std::string device;           ///< /dev/videoN
+  CameraFormat format = CameraFormat::Auto;  ///< Auto: MJPEG, then YUYV, NV12, RGB24
+  int width = 0, height = 0;    ///< 0: the largest the format offers
+  double fps = 0;               ///< 0: the driver's default
+  int buffers = 4;              ///< asked for; at least 3 must be granted
+  int timeoutMs = 2000;         ///< no frame for this long: the camera stopped sending
+  int mjpegReduce = 1;          ///< decode MJPEG at 1/2, 1/4 or 1/8 scale (libjpeg's DCT scaling)
+};
+
+struct CameraControl {
+  std::uint32_t id = 0;
+  std::string name;
+  int type = 0;
+  std::int32_t minimum = 0, maximum = 0, step = 0, defaultValue = 0, value = 0;
+};
+
+struct CameraFrameSize {
+  std::uint32_t fourcc = 0;
+  int width = 0, height = 0;
+  std::vector<double> fps;  ///< discrete rates, or {min, max} of a stepwise range
+};
+
+struct CameraInfo {
+  std::string path, card, driver, bus;
+  std::vector<CameraFrameSize> modes;
+  std::vector<CameraControl> controls;
+};
+
+/// Queries a device without streaming (formats, sizes, rates, controls). Throws lp::Error.
+CameraInfo queryCamera(const std::string& path);
+
+/// The values --lock-exposure read and fixed.
+struct LockedExposure {
+  std::optional<std::int32_t> exposure100us, gain, whiteBalanceK;
+};
+
+class V4l2Source final : public FrameSource {
+ public:
+  explicit V4l2Source(CameraSettings settings) noexcept;
+  ~V4l2Source() override;
+
+  /// Opens, checks capabilities, negotiates format, size and rate, maps buffers and starts
+  /// streaming. Throws lp::Error "V4l2Source::open(/dev/videoN): what failed: why".
+  void open();
+  /// Stops streaming and returns every buffer (idempotent).
+  void streamOff();
+  /// Releases the buffers, unmaps them and closes the device (idempotent).
+  void close();
+
+  /// Lets auto-exposure and auto white balance settle for `seconds` of streaming, then turns the
+  /// automatic modes off and writes back the values they reached (exposure, gain, white
+  /// balance), in that order: a driver ignores manual values while its auto mode is on.
+  LockedExposure lockExposure(double seconds);
+
+  bool next(Frame& frame) override;
+  bool rewind() override { return false; }
+  std::string describe() const override;
+  double fps() const override { return fps_; }
+  std::size_t skippedFrames() const override { return dropped_; }
+  /// 1 / exposure time in seconds when the camera reports it: radiance in "per second" units,
+  /// comparable between frames and runs with different exposures.
+  double radianceScale() const override;
+
+  /// What the driver actually set.
+  std::uint32_t fourcc() const { return fourcc_; }
+  int width() const { return width_; }
+  int height() const { return height_; }
+
+ private:
+  struct Buffer;
+  enum class State : std::uint8_t { Closed, Open, Streaming };
+  [[noreturn]] void fail(const std::string& what, int err) const;
+  int xioctl(unsigned long request, void* arg);
+  void negotiate();
+  void requestBuffers();
+  void releaseBuffers();
+  void convert(const std::uint8_t* data, std::size_t bytes, Frame& frame);
+  std::optional<std::int32_t> getControl(std::uint32_t id);
+  void setControl(std::uint32_t id, std::int32_t value);
+
+  CameraSettings settings_;
+  UniqueFd fd_;
+  State state_ = State::Closed;
+  std::vector<std::unique_ptr<Buffer>> buffers_;
+  std::uint32_t fourcc_ = 0;
+  int width_ = 0, height_ = 0;
+  std::size_t bytesPerLine_ = 0, sizeImage_ = 0;
+  double fps_ = 0;
+  std::optional<std::uint32_t> lastSequence_;
+  std::size_t dropped_ = 0;
+  double firstTimestamp_ = -1;
+  std::string card_;
+};
+
+}  // namespace lp

@@ -1,0 +1,464 @@
+#include "capture/v4l2.h"
+
+#include <fcntl.h>
+#include <linux/videodev2.h>
+#include <poll.h>
+#include <sys/ioctl.h>
+#include <sys/mman.h>
+#include <unistd.h>
+
+#include <cerrno>
+#include <chrono>
+#include <cstring>
+
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+
+#include "capture/error.h"
+
+namespace lp {
+
+namespace {
+
+std::string fourccText(std::uint32_t f) {
+  std::string s;
+  for (int i = 0; i < 4; ++i) s += char((f >> (8 * i)) & 0xFF);
+  return s;
+}
+
+std::uint32_t fourccOf(CameraFormat f) {
+  switch (f) {
+    case CameraFormat::Mjpeg: return V4L2_PIX_FMT_MJPEG;
+    case CameraFormat::Yuyv: return V4L2_PIX_FMT_YUYV;
+    case CameraFormat::Nv12: return V4L2_PIX_FMT_NV12;
+    case CameraFormat::Rgb24: return V4L2_PIX_FMT_RGB24;
+    case CameraFormat::Auto: return 0;
+  }
+  return 0;
+}
+
+// ioctl, retried when a signal interrupts it.
+int retryIoctl(int fd, unsigned long request, void* arg) {
+  int r;
+  do r = ::ioctl(fd, request, arg);
+  while (r == -1 && errno == EINTR);
+  return r;
+}
+
+}  // namespace
+
+void UniqueFd::reset(int fd) {
+  if (fd_ >= 0) ::close(fd_);
+  fd_ = fd;
+}
+
+std::string_view cameraFormatName(CameraFormat f) {
+  switch (f) {
+    case CameraFormat::Auto: return "auto";
+    case CameraFormat::Mjpeg: return "mjpeg";
+    case CameraFormat::Yuyv: return "yuyv";
+    case CameraFormat::Nv12: return "nv12";
+    case CameraFormat::Rgb24: return "rgb24";
+  }
+  return "?";
+}
+
+CameraFormat parseCameraFormat(std::string_view name) {
+  for (CameraFormat f : {CameraFormat::Auto, CameraFormat::Mjpeg, CameraFormat::Yuyv, CameraFormat::Nv12, CameraFormat::Rgb24})
+    if (cameraFormatName(f) == name) return f;
+  throw Error("--format " + std::string(name) + ": expected mjpeg, yuyv, nv12, rgb24 or auto");
+}
+
+// One memory-mapped buffer; unmapped when destroyed.
+struct V4l2Source::Buffer {
+  void* start = MAP_FAILED;
+  std::size_t length = 0;
+  ~Buffer() {
+    if (start != MAP_FAILED) ::munmap(start, length);
+  }
+};
+
+V4l2Source::V4l2Source(CameraSettings settings) noexcept : settings_(std::move(settings)) {}
+
+V4l2Source::~V4l2Source() { close(); }
+
+void V4l2Source::fail(const std::string& what, int err) const {
+  std::string why = std::strerror(err);
+  if (err == ENODEV) why = "the camera was unplugged or has gone (ENODEV)";
+  throw Error("V4l2Source::open(" + settings_.device + "): " + what + ": " + why);
+}
+
+int V4l2Source::xioctl(unsigned long request, void* arg) { return retryIoctl(fd_.get(), request, arg); }
+
+void V4l2Source::open() {
+  if (state_ != State::Closed) return;
+  const int fd = ::open(settings_.device.c_str(), O_RDWR | O_NONBLOCK | O_CLOEXEC);
+  if (fd < 0) {
+    const int e = errno;
+    if (e == ENOENT) throw Error(settings_.device + ": no such device");
+    fail("open", e);
+  }
+  fd_.reset(fd);
+  state_ = State::Open;
+  try {
+    v4l2_capability cap{};
+    if (xioctl(VIDIOC_QUERYCAP, &cap) < 0) {
+      const int e = errno;
+      throw Error(settings_.device + ": not a V4L2 video device (VIDIOC_QUERYCAP: " + std::strerror(e) + ")");
+    }
+    card_ = reinterpret_cast<const char*>(cap.card);
+    const std::uint32_t caps = (cap.capabilities & V4L2_CAP_DEVICE_CAPS) ? cap.device_caps : cap.capabilities;
+    if (!(caps & V4L2_CAP_VIDEO_CAPTURE))
+      throw Error(settings_.device + ": not a single-planar video capture device (" + card_ + ")");
+    if (!(caps & V4L2_CAP_STREAMING)) throw Error(settings_.device + ": the device has no streaming I/O");
+    negotiate();
+    requestBuffers();
+    for (std::size_t i = 0; i < buffers_.size(); ++i) {
+      v4l2_buffer b{};
+      b.type = V4L2_BUF_TYPE_VIDEO_CAPTURE;
+      b.memory = V4L2_MEMORY_MMAP;
+      b.index = std::uint32_t(i);
+      if (xioctl(VIDIOC_QBUF, &b) < 0) fail("VIDIOC_QBUF", errno);
+    }
+    int type = V4L2_BUF_TYPE_VIDEO_CAPTURE;
+    if (xioctl(VIDIOC_STREAMON, &type) < 0) fail("VIDIOC_STREAMON", errno);
+    state_ = State::Streaming;
+  } catch (...) {
+    close();
+    throw;
+  }
+}
+
+void V4l2Source::negotiate() {
+  std::vector<std::uint32_t> offered;
+  for (std::uint32_t i = 0;; ++i) {
+    v4l2_fmtdesc d{};
+    d.index = i;
+    d.type = V4L2_BUF_TYPE_VIDEO_CAPTURE;
+    if (xioctl(VIDIOC_ENUM_FMT, &d) < 0) break;  // EINVAL ends the list
+    offered.push_back(d.pixelformat);
+  }
+  auto offers = [&](std::uint32_t f) { return std::find(offered.begin(), offered.end(), f) != offered.end(); };
+  std::string list;
+  for (auto f : offered) list += (list.empty() ? "" : ", ") + fourccText(f);
+  std::uint32_t want = fourccOf(settings_.format);
+  if (want == 0) {
+    for (CameraFormat f : {CameraFormat::Mjpeg, CameraFormat::Yuyv, CameraFormat::Nv12, CameraFormat::Rgb24})
+      if (offers(fourccOf(f))) {
+        want = fourccOf(f);
+        break;
+      }
+    if (want == 0) throw Error(settings_.device + ": offers no format liveprobe converts (it offers " + list + ")");
+  } else if (!offers(want)) {
+    throw Error(settings_.device + ": does not offer " + fourccText(want) + " (it offers " + list + ")");
+  }
+  int w = settings_.width, h = settings_.height;
+  if (w <= 0 || h <= 0) {  // the largest size of this format
+    for (std::uint32_t i = 0;; ++i) {
+      v4l2_frmsizeenum s{};
+      s.index = i;
+      s.pixel_format = want;
+      if (xioctl(VIDIOC_ENUM_FRAMESIZES, &s) < 0) break;
+      if (s.type == V4L2_FRMSIZE_TYPE_DISCRETE) {
+        if (int(s.discrete.width * s.discrete.height) > w * h) w = int(s.discrete.width), h = int(s.discrete.height);
+      } else {
+        w = int(s.stepwise.max_width), h = int(s.stepwise.max_height);
+        break;
+      }
+    }
+  }
+  v4l2_format fmt{};
+  fmt.type = V4L2_BUF_TYPE_VIDEO_CAPTURE;
+  fmt.fmt.pix.width = std::uint32_t(std::max(w, 0));
+  fmt.fmt.pix.height = std::uint32_t(std::max(h, 0));
+  fmt.fmt.pix.pixelformat = want;
+  fmt.fmt.pix.field = V4L2_FIELD_ANY;
+  if (xioctl(VIDIOC_S_FMT, &fmt) < 0) fail("VIDIOC_S_FMT " + fourccText(want), errno);
+  // S_FMT adjusts what it cannot do: read back what the driver actually set.
+  if (fmt.fmt.pix.pixelformat != want)
+    throw Error(settings_.device + ": asked for " + fourccText(want) + ", the driver set " + fourccText(fmt.fmt.pix.pixelformat));
+  fourcc_ = fmt.fmt.pix.pixelformat;
+  width_ = int(fmt.fmt.pix.width);
+  height_ = int(fmt.fmt.pix.height);
+  bytesPerLine_ = fmt.fmt.pix.bytesperline;
+  sizeImage_ = fmt.fmt.pix.sizeimage;
+  if (width_ <= 0 || height_ <= 0) throw Error(settings_.device + ": the driver set an empty frame size");
+
+  v4l2_streamparm parm{};
+  parm.type = V4L2_BUF_TYPE_VIDEO_CAPTURE;
+  if (settings_.fps > 0 && xioctl(VIDIOC_G_PARM, &parm) == 0 && (parm.parm.capture.capability & V4L2_CAP_TIMEPERFRAME)) {
+    parm.parm.capture.timeperframe = {1000, std::uint32_t(std::lround(settings_.fps * 1000))};
+    if (xioctl(VIDIOC_S_PARM, &parm) < 0) fail("VIDIOC_S_PARM", errno);
+  }
+  parm = {};
+  parm.type = V4L2_BUF_TYPE_VIDEO_CAPTURE;
+  if (xioctl(VIDIOC_G_PARM, &parm) == 0 && parm.parm.capture.timeperframe.numerator > 0)
+    fps_ = double(parm.parm.capture.timeperframe.denominator) / parm.parm.capture.timeperframe.numerator;
+  else
+    fps_ = settings_.fps > 0 ? settings_.fps : 30.0;
+}
+
+void V4l2Source::requestBuffers() {
+  constexpr std::uint32_t kMinBuffers = 3;
+  v4l2_requestbuffers req{};
+  req.count = std::uint32_t(std::max(settings_.buffers, int(kMinBuffers)));
+  req.type = V4L2_BUF_TYPE_VIDEO_CAPTURE;
+  req.memory = V4L2_MEMORY_MMAP;
+  if (xioctl(VIDIOC_REQBUFS, &req) < 0) {
+    const int e = errno;
+    if (e == EBUSY) throw Error(settings_.device + ": device busy (VIDIOC_REQBUFS: another program is using it)");
+    fail("VIDIOC_REQBUFS", e);
+  }
+  if (req.count < kMinBuffers) {
+    const std::uint32_t granted = req.count;
+    releaseBuffers();  // roll back: give back what was granted
+    throw Error(settings_.device + ": VIDIOC_REQBUFS granted " + std::to_string(granted) +
+                " buffers, need at least " + std::to_string(kMinBuffers));
+  }
+  buffers_.clear();
+  for (std::uint32_t i = 0; i < req.count; ++i) {
+    v4l2_buffer b{};
+    b.type = V4L2_BUF_TYPE_VIDEO_CAPTURE;
+    b.memory = V4L2_MEMORY_MMAP;
+    b.index = i;
+    if (xioctl(VIDIOC_QUERYBUF, &b) < 0) {
+      const int e = errno;
+      releaseBuffers();
+      fail("VIDIOC_QUERYBUF", e);
+    }
+    auto buf = std::make_unique<Buffer>();
+    buf->length = b.length;
+    buf->start = ::mmap(nullptr, b.length, PROT_READ | PROT_WRITE, MAP_SHARED, fd_.get(), b.m.offset);
+    if (buf->start == MAP_FAILED) {
+      const int e = errno;
+      releaseBuffers();
+      fail("mmap", e);
+    }
+    buffers_.push_back(std::move(buf));
+  }
+}
+
+void V4l2Source::releaseBuffers() {
+  buffers_.clear();  // unmaps
+  if (!fd_.isValid()) return;
+  v4l2_requestbuffers req{};
+  req.count = 0;
+  req.type = V4L2_BUF_TYPE_VIDEO_CAPTURE;
+  req.memory = V4L2_MEMORY_MMAP;
+  xioctl(VIDIOC_REQBUFS, &req);  // frees the driver's buffers; fails harmlessly on ENODEV
+}
+
+void V4l2Source::streamOff() {
+  if (state_ != State::Streaming) return;
+  int type = V4L2_BUF_TYPE_VIDEO_CAPTURE;
+  xioctl(VIDIOC_STREAMOFF, &type);  // returns every queued buffer to the application
+  state_ = State::Open;
+}
+
+void V4l2Source::close() {
+  streamOff();
+  releaseBuffers();
+  fd_.reset();
+  state_ = State::Closed;
+}
+
+void V4l2Source::convert(const std::uint8_t* data, std::size_t bytes, Frame& f) {
+  cv::Mat bgr;
+  const std::size_t stride = bytesPerLine_;
+  switch (fourcc_) {
+    case V4L2_PIX_FMT_MJPEG:
+    case V4L2_PIX_FMT_JPEG: {
+      const int flags = settings_.mjpegReduce >= 8 ? cv::IMREAD_REDUCED_COLOR_8
+                        : settings_.mjpegReduce >= 4 ? cv::IMREAD_REDUCED_COLOR_4
+                        : settings_.mjpegReduce >= 2 ? cv::IMREAD_REDUCED_COLOR_2
+                                                     : cv::IMREAD_COLOR;
+      bgr = cv::imdecode(cv::Mat(1, int(bytes), CV_8UC1, const_cast<std::uint8_t*>(data)), flags);
+      break;
+    }
+    case V4L2_PIX_FMT_YUYV:
+      if (bytes >= std::size_t(height_) * stride)
+        cv::cvtColor(cv::Mat(height_, width_, CV_8UC2, const_cast<std::uint8_t*>(data), stride), bgr, cv::COLOR_YUV2BGR_YUYV);
+      break;
+    case V4L2_PIX_FMT_NV12:
+      if (bytes >= std::size_t(height_) * stride * 3 / 2)
+        cv::cvtColor(cv::Mat(height_ * 3 / 2, width_, CV_8UC1, const_cast<std::uint8_t*>(data), stride), bgr, cv::COLOR_YUV2BGR_NV12);
+      break;
+    case V4L2_PIX_FMT_RGB24:
+      if (bytes >= std::size_t(height_) * stride)
+        cv::cvtColor(cv::Mat(height_, width_, CV_8UC3, const_cast<std::uint8_t*>(data), stride), bgr, cv::COLOR_RGB2BGR);
+      break;
+  }
+  f.format = PixelFormat::Bgr8;
+  f.rgb.clear();
+  if (bgr.empty()) {  // a corrupt or short frame
+    f.width = f.height = 0;
+    f.bgr8.clear();
+    return;
+  }
+  f.width = bgr.cols, f.height = bgr.rows;
+  f.bgr8.resize(std::size_t(bgr.cols) * bgr.rows * 3);
+  for (int y = 0; y < bgr.rows; ++y)
+    std::memcpy(f.bgr8.data() + std::size_t(y) * bgr.cols * 3, bgr.ptr(y), std::size_t(bgr.cols) * 3);
+}
+
+bool V4l2Source::next(Frame& frame) {
+  if (state_ != State::Streaming) throw Error(settings_.device + ": not streaming");
+  for (;;) {
+    pollfd p{fd_.get(), POLLIN, 0};
+    const int r = ::poll(&p, 1, settings_.timeoutMs);
+    if (r < 0) {
+      if (errno == EINTR) continue;  // a signal: poll again
+      fail("poll", errno);
+    }
+    if (r == 0)
+      throw Error(settings_.device + ": no frame for " + std::to_string(settings_.timeoutMs / 1000.0).substr(0, 4) +
+                  " s: the camera stopped sending");
+    v4l2_buffer b{};
+    b.type = V4L2_BUF_TYPE_VIDEO_CAPTURE;
+    b.memory = V4L2_MEMORY_MMAP;
+    if (xioctl(VIDIOC_DQBUF, &b) < 0) {
+      const int e = errno;
+      if (e == EAGAIN) continue;  // woken without a frame
+      if (e == ENODEV || e == EIO) throw Error(settings_.device + ": the camera was unplugged mid-stream (" + std::strerror(e) + ")");
+      fail("VIDIOC_DQBUF", e);
+    }
+    if (b.index >= buffers_.size()) throw Error(settings_.device + ": driver returned buffer " + std::to_string(b.index));
+    // Gaps in the driver's sequence numbers are frames lost before we saw them.
+    if (lastSequence_ && b.sequence > *lastSequence_ + 1) dropped_ += b.sequence - *lastSequence_ - 1;
+    lastSequence_ = b.sequence;
+    const bool corrupt = b.flags & V4L2_BUF_FLAG_ERROR;
+    if (!corrupt) convert(static_cast<const std::uint8_t*>(buffers_[b.index]->start), b.bytesused, frame);
+    if (xioctl(VIDIOC_QBUF, &b) < 0) {
+      const int e = errno;
+      if (e == ENODEV) throw Error(settings_.device + ": the camera was unplugged mid-stream (ENODEV)");
+      fail("VIDIOC_QBUF", e);
+    }
+    if (corrupt || frame.width == 0) {
+      ++dropped_;
+      continue;
+    }
+    const double t = double(b.timestamp.tv_sec) + double(b.timestamp.tv_usec) * 1e-6;
+    if (firstTimestamp_ < 0) firstTimestamp_ = t;
+    frame.sequence = b.sequence;
+    frame.timestamp = t - firstTimestamp_;
+    return true;
+  }
+}
+
+std::optional<std::int32_t> V4l2Source::getControl(std::uint32_t id) {
+  v4l2_control c{};
+  c.id = id;
+  if (xioctl(VIDIOC_G_CTRL, &c) < 0) return std::nullopt;
+  return c.value;
+}
+
+void V4l2Source::setControl(std::uint32_t id, std::int32_t value) {
+  v4l2_control c{};
+  c.id = id;
+  c.value = value;
+  xioctl(VIDIOC_S_CTRL, &c);  // a camera without this control keeps going
+}
+
+LockedExposure V4l2Source::lockExposure(double seconds) {
+  // 1. Automatic modes on (UVC cameras call auto exposure "aperture priority").
+  v4l2_control c{V4L2_CID_EXPOSURE_AUTO, V4L2_EXPOSURE_APERTURE_PRIORITY};
+  if (xioctl(VIDIOC_S_CTRL, &c) < 0) setControl(V4L2_CID_EXPOSURE_AUTO, V4L2_EXPOSURE_AUTO);
+  setControl(V4L2_CID_AUTOGAIN, 1);
+  setControl(V4L2_CID_AUTO_WHITE_BALANCE, 1);
+  // 2. Let them settle on the scene.
+  const auto end = std::chrono::steady_clock::now() + std::chrono::duration<double>(seconds);
+  Frame f;
+  while (std::chrono::steady_clock::now() < end) next(f);
+  // 3. Read what they reached, 4. turn them off, 5. write the values back.
+  LockedExposure locked;
+  locked.exposure100us = getControl(V4L2_CID_EXPOSURE_ABSOLUTE);
+  locked.gain = getControl(V4L2_CID_GAIN);
+  locked.whiteBalanceK = getControl(V4L2_CID_WHITE_BALANCE_TEMPERATURE);
+  setControl(V4L2_CID_EXPOSURE_AUTO, V4L2_EXPOSURE_MANUAL);
+  if (locked.exposure100us) setControl(V4L2_CID_EXPOSURE_ABSOLUTE, *locked.exposure100us);
+  setControl(V4L2_CID_AUTOGAIN, 0);
+  if (locked.gain) setControl(V4L2_CID_GAIN, *locked.gain);
+  setControl(V4L2_CID_AUTO_WHITE_BALANCE, 0);
+  if (locked.whiteBalanceK) setControl(V4L2_CID_WHITE_BALANCE_TEMPERATURE, *locked.whiteBalanceK);
+  return locked;
+}
+
+double V4l2Source::radianceScale() const {
+  v4l2_control c{};
+  c.id = V4L2_CID_EXPOSURE_ABSOLUTE;
+  if (fd_.isValid() && retryIoctl(fd_.get(), VIDIOC_G_CTRL, &c) == 0 && c.value > 0) return 1.0 / (c.value * 1e-4);
+  return 1.0;
+}
+
+std::string V4l2Source::describe() const {
+  return "camera " + settings_.device + " (" + card_ + ", " + fourccText(fourcc_) + " " + std::to_string(width_) + "x" +
+         std::to_string(height_) + " @ " + std::to_string(fps_).substr(0, 5) + " fps)";
+}
+
+CameraInfo queryCamera(const std::string& path) {
+  UniqueFd fd(::open(path.c_str(), O_RDWR | O_NONBLOCK | O_CLOEXEC));
+  if (!fd.isValid()) {
+    const int e = errno;
+    throw Error(path + ": " + (e == ENOENT ? std::string("no such device") : std::strerror(e)));
+  }
+  v4l2_capability cap{};
+  if (retryIoctl(fd.get(), VIDIOC_QUERYCAP, &cap) < 0)
+    throw Error(path + ": not a V4L2 video device (VIDIOC_QUERYCAP: " + std::strerror(errno) + ")");
+  CameraInfo info;
+  info.path = path;
+  info.card = reinterpret_cast<const char*>(cap.card);
+  info.driver = reinterpret_cast<const char*>(cap.driver);
+  info.bus = reinterpret_cast<const char*>(cap.bus_info);
+  for (std::uint32_t i = 0;; ++i) {
+    v4l2_fmtdesc d{};
+    d.index = i;
+    d.type = V4L2_BUF_TYPE_VIDEO_CAPTURE;
+    if (retryIoctl(fd.get(), VIDIOC_ENUM_FMT, &d) < 0) break;
+    for (std::uint32_t j = 0;; ++j) {
+      v4l2_frmsizeenum s{};
+      s.index = j;
+      s.pixel_format = d.pixelformat;
+      if (retryIoctl(fd.get(), VIDIOC_ENUM_FRAMESIZES, &s) < 0) break;
+      CameraFrameSize m;
+      m.fourcc = d.pixelformat;
+      m.width = int(s.type == V4L2_FRMSIZE_TYPE_DISCRETE ? s.discrete.width : s.stepwise.max_width);
+      m.height = int(s.type == V4L2_FRMSIZE_TYPE_DISCRETE ? s.discrete.height : s.stepwise.max_height);
+      for (std::uint32_t k = 0;; ++k) {
+        v4l2_frmivalenum iv{};
+        iv.index = k;
+        iv.pixel_format = d.pixelformat;
+        iv.width = std::uint32_t(m.width);
+        iv.height = std::uint32_t(m.height);
+        if (retryIoctl(fd.get(), VIDIOC_ENUM_FRAMEINTERVALS, &iv) < 0) break;
+        if (iv.type == V4L2_FRMIVAL_TYPE_DISCRETE) {
+          if (iv.discrete.numerator) m.fps.push_back(double(iv.discrete.denominator) / iv.discrete.numerator);
+        } else {
+          if (iv.stepwise.max.numerator) m.fps.push_back(double(iv.stepwise.max.denominator) / iv.stepwise.max.numerator);
+          if (iv.stepwise.min.numerator) m.fps.push_back(double(iv.stepwise.min.denominator) / iv.stepwise.min.numerator);
+          break;
+        }
+      }
+      info.modes.push_back(m);
+      if (s.type != V4L2_FRMSIZE_TYPE_DISCRETE) break;
+    }
+  }
+  v4l2_queryctrl q{};
+  q.id = V4L2_CTRL_FLAG_NEXT_CTRL;
+  while (retryIoctl(fd.get(), VIDIOC_QUERYCTRL, &q) == 0) {
+    if (!(q.flags & V4L2_CTRL_FLAG_DISABLED) && q.type != V4L2_CTRL_TYPE_CTRL_CLASS) {
+      CameraControl c;
+      c.id = q.id;
+      c.name = reinterpret_cast<const char*>(q.name);
+      c.type = int(q.type);
+      c.minimum = q.minimum, c.maximum = q.maximum, c.step = q.step, c.defaultValue = q.default_value;
+      v4l2_control v{};
+      v.id = q.id;
+      if (retryIoctl(fd.get(), VIDIOC_G_CTRL, &v) == 0) c.value = v.value;
+      info.controls.push_back(c);
+    }
+    q.id |= V4L2_CTRL_FLAG_NEXT_CTRL;
+  }
+  return info;
+}
+
+}  // namespace lp

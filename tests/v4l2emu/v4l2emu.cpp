@@ -1,0 +1,536 @@
+// An emulated V4L2 camera for tests, loaded with LD_PRELOAD into an unmodified liveprobe. It
+// answers open/ioctl/mmap/munmap/poll/close on one device path and keeps the kernel's ioctl
+// contract for what liveprobe uses (and what it must survive): QUERYCAP, ENUM_FMT,
+// ENUM_FRAMESIZES, ENUM_FRAMEINTERVALS, G/S/TRY_FMT (S_FMT adjusts to the nearest offered mode),
+// G/S_PARM, REQBUFS (count 0 frees; may grant fewer), QUERYBUF, QBUF, DQBUF (EAGAIN when empty),
+// STREAMON, STREAMOFF (returns every buffer), QUERYCTRL (NEXT_CTRL), G/S_CTRL.
+// The fd is a real eventfd, so the descriptor is genuine for close() and friends.
+//
+// Configuration (environment):
+//   LPEMU_DEVICE   the path it answers (default /dev/video7)
+//   LPEMU_SOURCE   a folder of modes: subfolders FOURCC_WxH (MJPG_640x320, YUYV_320x160, ...)
+//                  holding the frames in name order (.jpg served verbatim for MJPG; other images
+//                  converted to the mode's format)
+//   LPEMU_FPS      frame rate (default 30)
+//   LPEMU_FAULTS   comma list: busy_open, busy_reqbufs, grant=N, einval_fmt, stop_after=N,
+//                  eintr, unplug_after=N
+//   LPEMU_LOG      file to which each call is appended as one line (for assertions)
+// What it cannot prove about real drivers: README, "Testing without a camera".
+#include <dlfcn.h>
+#include <fcntl.h>
+#include <linux/videodev2.h>
+#include <poll.h>
+#include <sys/eventfd.h>
+#include <sys/mman.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cerrno>
+#include <chrono>
+#include <cstdarg>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <mutex>
+#include <sstream>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+
+namespace fs = std::filesystem;
+
+namespace {
+
+template <class F>
+F real(const char* name) {
+  return reinterpret_cast<F>(dlsym(RTLD_NEXT, name));
+}
+
+std::string env(const char* k, const char* d = "") {
+  const char* v = std::getenv(k);
+  return v ? v : d;
+}
+
+struct Mode {
+  std::uint32_t fourcc;
+  int w, h;
+  std::vector<std::string> files;
+};
+
+struct Control {
+  std::uint32_t id;
+  const char* name;
+  v4l2_ctrl_type type;
+  std::int32_t min, max, step, def, value;
+};
+
+struct Emu {
+  std::mutex m;
+  int fd = -1;
+  std::vector<Mode> modes;
+  int mode = 0;
+  double fps = 30;
+  std::map<std::string, long> faults;
+  std::vector<void*> maps;  // per buffer, the mapping handed out (nullptr if unmapped)
+  std::vector<std::vector<std::uint8_t>> store;
+  std::vector<bool> queued, done;
+  std::vector<std::uint32_t> bytesused;
+  bool streaming = false, unplugged = false;
+  std::uint32_t sequence = 0, served = 0;
+  int frameIndex = 0;
+  int eintrPoll = 0, eintrDq = 0;
+  std::chrono::steady_clock::time_point nextFrame;
+  std::vector<Control> controls = {
+      {V4L2_CID_EXPOSURE_AUTO, "Auto Exposure", V4L2_CTRL_TYPE_MENU, 0, 3, 1, 3, 3},
+      {V4L2_CID_EXPOSURE_ABSOLUTE, "Exposure Time, Absolute", V4L2_CTRL_TYPE_INTEGER, 1, 10000, 1, 156, 156},
+      {V4L2_CID_AUTOGAIN, "Gain, Automatic", V4L2_CTRL_TYPE_BOOLEAN, 0, 1, 1, 1, 1},
+      {V4L2_CID_GAIN, "Gain", V4L2_CTRL_TYPE_INTEGER, 0, 255, 1, 64, 64},
+      {V4L2_CID_AUTO_WHITE_BALANCE, "White Balance, Automatic", V4L2_CTRL_TYPE_BOOLEAN, 0, 1, 1, 1, 1},
+      {V4L2_CID_WHITE_BALANCE_TEMPERATURE, "White Balance Temperature", V4L2_CTRL_TYPE_INTEGER, 2800, 6500, 10, 4600, 4600}};
+  std::ofstream log;
+
+  Emu() {
+    fps = std::atof(env("LPEMU_FPS", "30").c_str());
+    std::stringstream fl(env("LPEMU_FAULTS"));
+    for (std::string f; std::getline(fl, f, ',');) {
+      const auto eq = f.find('=');
+      faults[f.substr(0, eq)] = eq == std::string::npos ? 1 : std::atol(f.c_str() + eq + 1);
+    }
+    const std::string src = env("LPEMU_SOURCE");
+    if (!src.empty() && fs::is_directory(src))
+      for (const auto& d : fs::directory_iterator(src)) {
+        const std::string n = d.path().filename().string();
+        int w = 0, h = 0;
+        char cc[5] = {};
+        if (!d.is_directory() || std::sscanf(n.c_str(), "%4c_%dx%d", cc, &w, &h) != 3) continue;
+        Mode md{v4l2_fourcc(cc[0], cc[1], cc[2], cc[3]), w, h, {}};
+        for (const auto& f : fs::directory_iterator(d.path())) md.files.push_back(f.path().string());
+        std::sort(md.files.begin(), md.files.end());
+        if (!md.files.empty()) modes.push_back(md);
+      }
+    std::sort(modes.begin(), modes.end(), [](const Mode& a, const Mode& b) {
+      return a.fourcc != b.fourcc ? a.fourcc < b.fourcc : a.w * a.h < b.w * b.h;
+    });
+    if (!env("LPEMU_LOG").empty()) log.open(env("LPEMU_LOG"), std::ios::app);
+  }
+  bool fault(const char* k) const { return faults.count(k) > 0; }
+  void say(const std::string& s) {
+    if (log) log << s << std::endl;
+  }
+  Control* control(std::uint32_t id) {
+    for (auto& c : controls)
+      if (c.id == id) return &c;
+    return nullptr;
+  }
+  std::uint32_t frameBytes(const Mode& md) const {
+    if (md.fourcc == V4L2_PIX_FMT_YUYV) return std::uint32_t(md.w * md.h * 2);
+    if (md.fourcc == V4L2_PIX_FMT_NV12) return std::uint32_t(md.w * md.h * 3 / 2);
+    if (md.fourcc == V4L2_PIX_FMT_RGB24) return std::uint32_t(md.w * md.h * 3);
+    return std::uint32_t(md.w * md.h * 3 + 65536);  // MJPEG: room for any JPEG of this size
+  }
+
+  // The next frame of the current mode, in its pixel format.
+  std::vector<std::uint8_t> makeFrame() {
+    const Mode& md = modes[std::size_t(mode)];
+    const std::string& file = md.files[std::size_t(frameIndex++) % md.files.size()];
+    if (md.fourcc == V4L2_PIX_FMT_MJPEG && (file.ends_with(".jpg") || file.ends_with(".jpeg"))) {
+      std::ifstream in(file, std::ios::binary);
+      return std::vector<std::uint8_t>((std::istreambuf_iterator<char>(in)), {});
+    }
+    cv::Mat bgr = cv::imread(file, cv::IMREAD_COLOR);
+    if (bgr.cols != md.w || bgr.rows != md.h) cv::resize(bgr, bgr, {md.w, md.h}, 0, 0, cv::INTER_AREA);
+    std::vector<std::uint8_t> out;
+    if (md.fourcc == V4L2_PIX_FMT_MJPEG) {
+      cv::imencode(".jpg", bgr, out, {cv::IMWRITE_JPEG_QUALITY, 95});
+    } else if (md.fourcc == V4L2_PIX_FMT_RGB24) {
+      cv::Mat rgb;
+      cv::cvtColor(bgr, rgb, cv::COLOR_BGR2RGB);
+      out.assign(rgb.data, rgb.data + rgb.total() * 3);
+    } else if (md.fourcc == V4L2_PIX_FMT_NV12) {
+      cv::Mat i420;
+      cv::cvtColor(bgr, i420, cv::COLOR_BGR2YUV_I420);
+      const std::size_t ysz = std::size_t(md.w) * md.h, csz = ysz / 4;
+      out.assign(i420.data, i420.data + ysz);
+      for (std::size_t i = 0; i < csz; ++i) out.push_back(i420.data[ysz + i]), out.push_back(i420.data[ysz + csz + i]);
+    } else {  // YUYV, BT.601 limited range (what OpenCV's YUV2BGR_YUYV inverts)
+      out.resize(std::size_t(md.w) * md.h * 2);
+      for (int y = 0; y < md.h; ++y)
+        for (int x = 0; x < md.w; x += 2) {
+          const auto* p = bgr.ptr<cv::Vec3b>(y) + x;
+          auto Y = [](const cv::Vec3b& c) { return std::clamp(16.0 + 0.257 * c[2] + 0.504 * c[1] + 0.098 * c[0], 0.0, 255.0); };
+          const double r = (p[0][2] + p[1][2]) / 2.0, g = (p[0][1] + p[1][1]) / 2.0, b = (p[0][0] + p[1][0]) / 2.0;
+          const double u = std::clamp(128.0 - 0.148 * r - 0.291 * g + 0.439 * b, 0.0, 255.0);
+          const double v = std::clamp(128.0 + 0.439 * r - 0.368 * g - 0.071 * b, 0.0, 255.0);
+          std::uint8_t* o = out.data() + (std::size_t(y) * md.w + x) * 2;
+          o[0] = std::uint8_t(std::lround(Y(p[0]))), o[1] = std::uint8_t(std::lround(u));
+          o[2] = std::uint8_t(std::lround(Y(p[1]))), o[3] = std::uint8_t(std::lround(v));
+        }
+    }
+    return out;
+  }
+
+  int fail(int e) {
+    errno = e;
+    return -1;
+  }
+
+  int handle(unsigned long req, void* arg);
+};
+
+Emu& emu() {
+  static Emu e;
+  return e;
+}
+
+int Emu::handle(unsigned long req, void* arg) {
+  if (unplugged) return fail(ENODEV);
+  switch (req) {
+    case VIDIOC_QUERYCAP: {
+      auto* c = static_cast<v4l2_capability*>(arg);
+      *c = {};
+      std::strcpy(reinterpret_cast<char*>(c->driver), "lpemu");
+      std::strcpy(reinterpret_cast<char*>(c->card), "liveprobe emulated camera");
+      std::strcpy(reinterpret_cast<char*>(c->bus_info), "platform:lpemu");
+      c->version = 0x060100;
+      c->device_caps = V4L2_CAP_VIDEO_CAPTURE | V4L2_CAP_STREAMING;
+      c->capabilities = c->device_caps | V4L2_CAP_DEVICE_CAPS;
+      return 0;
+    }
+    case VIDIOC_ENUM_FMT: {
+      auto* d = static_cast<v4l2_fmtdesc*>(arg);
+      std::vector<std::uint32_t> fcc;
+      for (const auto& md : modes)
+        if (std::find(fcc.begin(), fcc.end(), md.fourcc) == fcc.end()) fcc.push_back(md.fourcc);
+      if (d->type != V4L2_BUF_TYPE_VIDEO_CAPTURE || d->index >= fcc.size()) return fail(EINVAL);
+      d->pixelformat = fcc[d->index];
+      d->flags = d->pixelformat == V4L2_PIX_FMT_MJPEG ? V4L2_FMT_FLAG_COMPRESSED : 0;
+      std::snprintf(reinterpret_cast<char*>(d->description), sizeof d->description, "%.4s", reinterpret_cast<char*>(&d->pixelformat));
+      return 0;
+    }
+    case VIDIOC_ENUM_FRAMESIZES: {
+      auto* s = static_cast<v4l2_frmsizeenum*>(arg);
+      std::uint32_t n = 0;
+      for (const auto& md : modes)
+        if (md.fourcc == s->pixel_format && n++ == s->index) {
+          s->type = V4L2_FRMSIZE_TYPE_DISCRETE;
+          s->discrete = {std::uint32_t(md.w), std::uint32_t(md.h)};
+          return 0;
+        }
+      return fail(EINVAL);
+    }
+    case VIDIOC_ENUM_FRAMEINTERVALS: {
+      auto* iv = static_cast<v4l2_frmivalenum*>(arg);
+      if (iv->index != 0) return fail(EINVAL);
+      iv->type = V4L2_FRMIVAL_TYPE_DISCRETE;
+      iv->discrete = {1000, std::uint32_t(fps * 1000)};
+      return 0;
+    }
+    case VIDIOC_G_FMT:
+    case VIDIOC_S_FMT:
+    case VIDIOC_TRY_FMT: {
+      auto* f = static_cast<v4l2_format*>(arg);
+      if (f->type != V4L2_BUF_TYPE_VIDEO_CAPTURE) return fail(EINVAL);
+      int pick = mode;
+      if (req != VIDIOC_G_FMT) {
+        if (streaming && req == VIDIOC_S_FMT) return fail(EBUSY);
+        // The nearest offered mode of the requested format; another format if it is not offered
+        // (drivers adjust rather than fail) unless the einval_fmt fault is set.
+        long best = -1;
+        for (std::size_t i = 0; i < modes.size(); ++i) {
+          if (modes[i].fourcc != f->fmt.pix.pixelformat) continue;
+          const long d = std::labs(long(modes[i].w) - long(f->fmt.pix.width)) + std::labs(long(modes[i].h) - long(f->fmt.pix.height));
+          if (best < 0 || d < best) best = d, pick = int(i);
+        }
+        if (fault("einval_fmt") && req == VIDIOC_S_FMT) return fail(EINVAL);  // some drivers do
+        if (req == VIDIOC_S_FMT) mode = pick, frameIndex = 0;
+        say("S_FMT " + std::string(reinterpret_cast<char*>(&modes[std::size_t(pick)].fourcc), 4) + " " +
+            std::to_string(modes[std::size_t(pick)].w) + "x" + std::to_string(modes[std::size_t(pick)].h));
+      }
+      const Mode& md = modes[std::size_t(pick)];
+      f->fmt.pix.pixelformat = md.fourcc;
+      f->fmt.pix.width = std::uint32_t(md.w);
+      f->fmt.pix.height = std::uint32_t(md.h);
+      f->fmt.pix.field = V4L2_FIELD_NONE;
+      f->fmt.pix.bytesperline = md.fourcc == V4L2_PIX_FMT_YUYV ? md.w * 2 : md.fourcc == V4L2_PIX_FMT_RGB24 ? md.w * 3 : md.fourcc == V4L2_PIX_FMT_NV12 ? md.w : 0;
+      f->fmt.pix.sizeimage = frameBytes(md);
+      f->fmt.pix.colorspace = V4L2_COLORSPACE_SRGB;
+      return 0;
+    }
+    case VIDIOC_G_PARM:
+    case VIDIOC_S_PARM: {
+      auto* p = static_cast<v4l2_streamparm*>(arg);
+      if (req == VIDIOC_S_PARM && p->parm.capture.timeperframe.numerator)
+        fps = double(p->parm.capture.timeperframe.denominator) / p->parm.capture.timeperframe.numerator, say("S_PARM " + std::to_string(fps));
+      p->parm.capture.capability = V4L2_CAP_TIMEPERFRAME;
+      p->parm.capture.timeperframe = {1000, std::uint32_t(fps * 1000)};
+      return 0;
+    }
+    case VIDIOC_REQBUFS: {
+      auto* r = static_cast<v4l2_requestbuffers*>(arg);
+      if (r->memory != V4L2_MEMORY_MMAP || r->type != V4L2_BUF_TYPE_VIDEO_CAPTURE) return fail(EINVAL);
+      say("REQBUFS " + std::to_string(r->count));
+      if (r->count == 0) {
+        if (streaming) return fail(EBUSY);
+        store.clear(), queued.clear(), done.clear(), bytesused.clear();
+        return 0;
+      }
+      if (fault("busy_reqbufs")) return fail(EBUSY);
+      std::uint32_t n = std::min<std::uint32_t>(r->count, 8);
+      if (fault("grant")) n = std::min<std::uint32_t>(n, std::uint32_t(faults["grant"]));
+      r->count = n;
+      store.assign(n, std::vector<std::uint8_t>(frameBytes(modes[std::size_t(mode)])));
+      queued.assign(n, false), done.assign(n, false), bytesused.assign(n, 0);
+      maps.assign(n, nullptr);
+      return 0;
+    }
+    case VIDIOC_QUERYBUF:
+    case VIDIOC_QBUF:
+    case VIDIOC_DQBUF: {
+      auto* b = static_cast<v4l2_buffer*>(arg);
+      if (b->type != V4L2_BUF_TYPE_VIDEO_CAPTURE || b->memory != V4L2_MEMORY_MMAP) return fail(EINVAL);
+      if (req == VIDIOC_DQBUF) {
+        if (fault("eintr") && eintrDq++ % 7 == 3) return fail(EINTR);
+        std::size_t i = 0;
+        while (i < done.size() && !done[i]) ++i;
+        if (i == done.size()) return fail(EAGAIN);
+        done[i] = false;
+        b->index = std::uint32_t(i);
+        b->bytesused = bytesused[i];
+        b->sequence = sequence++;
+        const auto now = std::chrono::system_clock::now().time_since_epoch();
+        b->timestamp.tv_sec = long(std::chrono::duration_cast<std::chrono::seconds>(now).count());
+        b->timestamp.tv_usec = long(std::chrono::duration_cast<std::chrono::microseconds>(now).count() % 1000000);
+        b->flags = V4L2_BUF_FLAG_MAPPED | V4L2_BUF_FLAG_TIMESTAMP_MONOTONIC;
+        b->length = std::uint32_t(store[i].size());
+        return 0;
+      }
+      if (b->index >= store.size()) return fail(EINVAL);
+      b->length = std::uint32_t(store[b->index].size());
+      b->m.offset = b->index * 0x100000u;
+      if (req == VIDIOC_QBUF) {
+        if (queued[b->index]) return fail(EINVAL);
+        queued[b->index] = true;
+      }
+      b->flags = V4L2_BUF_FLAG_MAPPED | (queued[b->index] ? V4L2_BUF_FLAG_QUEUED : 0);
+      return 0;
+    }
+    case VIDIOC_STREAMON:
+      if (store.empty()) return fail(EINVAL);
+      streaming = true;
+      nextFrame = std::chrono::steady_clock::now();
+      say("STREAMON");
+      return 0;
+    case VIDIOC_STREAMOFF:
+      streaming = false;
+      std::fill(queued.begin(), queued.end(), false);
+      std::fill(done.begin(), done.end(), false);
+      say("STREAMOFF");
+      return 0;
+    case VIDIOC_QUERYCTRL: {
+      auto* q = static_cast<v4l2_queryctrl*>(arg);
+      const Control* c = nullptr;
+      if (q->id & V4L2_CTRL_FLAG_NEXT_CTRL) {
+        const std::uint32_t after = q->id & ~V4L2_CTRL_FLAG_NEXT_CTRL;
+        for (const auto& x : controls)
+          if (x.id > after && (!c || x.id < c->id)) c = &x;
+      } else {
+        c = control(q->id);
+      }
+      if (!c) return fail(EINVAL);
+      *q = {};
+      q->id = c->id, q->type = c->type, q->minimum = c->min, q->maximum = c->max, q->step = c->step;
+      q->default_value = c->def;
+      std::snprintf(reinterpret_cast<char*>(q->name), sizeof q->name, "%s", c->name);
+      return 0;
+    }
+    case VIDIOC_G_CTRL:
+    case VIDIOC_S_CTRL: {
+      auto* v = static_cast<v4l2_control*>(arg);
+      Control* c = control(v->id);
+      if (!c) return fail(EINVAL);
+      if (req == VIDIOC_G_CTRL) {
+        v->value = c->value;
+        return 0;
+      }
+      if (v->value < c->min || v->value > c->max) return fail(ERANGE);
+      // Manual values are refused while the matching automatic mode is on (as UVC does).
+      const bool blocked = (c->id == V4L2_CID_EXPOSURE_ABSOLUTE && control(V4L2_CID_EXPOSURE_AUTO)->value != V4L2_EXPOSURE_MANUAL) ||
+                           (c->id == V4L2_CID_GAIN && control(V4L2_CID_AUTOGAIN)->value) ||
+                           (c->id == V4L2_CID_WHITE_BALANCE_TEMPERATURE && control(V4L2_CID_AUTO_WHITE_BALANCE)->value);
+      say(std::string("S_CTRL ") + c->name + " " + std::to_string(v->value) + (blocked ? " refused" : ""));
+      if (blocked) return fail(EACCES);
+      c->value = v->value;
+      return 0;
+    }
+    default:
+      return fail(ENOTTY);
+  }
+}
+
+// Auto modes "converge" while frames flow: the values they settle on.
+void settle(Emu& e) {
+  if (e.control(V4L2_CID_EXPOSURE_AUTO)->value != V4L2_EXPOSURE_MANUAL) e.control(V4L2_CID_EXPOSURE_ABSOLUTE)->value = 333;
+  if (e.control(V4L2_CID_AUTOGAIN)->value) e.control(V4L2_CID_GAIN)->value = 96;
+  if (e.control(V4L2_CID_AUTO_WHITE_BALANCE)->value) e.control(V4L2_CID_WHITE_BALANCE_TEMPERATURE)->value = 5200;
+}
+
+int emuOpen(const char* path) {
+  Emu& e = emu();
+  std::lock_guard lock(e.m);
+  e.say(std::string("open ") + path);
+  if (e.fault("busy_open")) return e.fail(EBUSY);
+  if (e.fd >= 0) return e.fail(EBUSY);
+  if (e.modes.empty()) return e.fail(ENODEV);
+  e.fd = eventfd(0, EFD_CLOEXEC | EFD_NONBLOCK);
+  return e.fd;
+}
+
+bool isDevice(const char* path) { return path && env("LPEMU_DEVICE", "/dev/video7") == path; }
+bool isFake(int fd) { return fd >= 0 && fd == emu().fd; }
+
+}  // namespace
+
+extern "C" {
+
+int open(const char* path, int flags, ...) {
+  if (isDevice(path)) return emuOpen(path);
+  va_list ap;
+  va_start(ap, flags);
+  const mode_t mode = (flags & (O_CREAT | O_TMPFILE)) ? mode_t(va_arg(ap, int)) : 0;
+  va_end(ap);
+  return real<int (*)(const char*, int, ...)>("open")(path, flags, mode);
+}
+int open64(const char* path, int flags, ...) {
+  if (isDevice(path)) return emuOpen(path);
+  va_list ap;
+  va_start(ap, flags);
+  const mode_t mode = (flags & (O_CREAT | O_TMPFILE)) ? mode_t(va_arg(ap, int)) : 0;
+  va_end(ap);
+  return real<int (*)(const char*, int, ...)>("open64")(path, flags, mode);
+}
+int openat(int dir, const char* path, int flags, ...) {
+  if (isDevice(path)) return emuOpen(path);
+  va_list ap;
+  va_start(ap, flags);
+  const mode_t mode = (flags & (O_CREAT | O_TMPFILE)) ? mode_t(va_arg(ap, int)) : 0;
+  va_end(ap);
+  return real<int (*)(int, const char*, int, ...)>("openat")(dir, path, flags, mode);
+}
+int __open_2(const char* path, int flags) {
+  if (isDevice(path)) return emuOpen(path);
+  return real<int (*)(const char*, int)>("__open_2")(path, flags);
+}
+int __open64_2(const char* path, int flags) {
+  if (isDevice(path)) return emuOpen(path);
+  return real<int (*)(const char*, int)>("__open64_2")(path, flags);
+}
+
+int close(int fd) {
+  if (isFake(fd)) {
+    Emu& e = emu();
+    std::lock_guard lock(e.m);
+    std::size_t mapped = 0;
+    for (void* p : e.maps) mapped += p != nullptr;
+    e.say("close mapped=" + std::to_string(mapped) + " buffers=" + std::to_string(e.store.size()) +
+          " streaming=" + std::to_string(e.streaming));
+    e.fd = -1;
+    e.streaming = false;
+  }
+  return real<int (*)(int)>("close")(fd);
+}
+
+int ioctl(int fd, unsigned long req, ...) {
+  va_list ap;
+  va_start(ap, req);
+  void* arg = va_arg(ap, void*);
+  va_end(ap);
+  if (!isFake(fd)) return real<int (*)(int, unsigned long, void*)>("ioctl")(fd, req, arg);
+  Emu& e = emu();
+  std::lock_guard lock(e.m);
+  return e.handle(req, arg);
+}
+
+void* mmap(void* addr, size_t len, int prot, int flags, int fd, off_t off) {
+  if (!isFake(fd)) return real<void* (*)(void*, size_t, int, int, int, off_t)>("mmap")(addr, len, prot, flags, fd, off);
+  Emu& e = emu();
+  std::lock_guard lock(e.m);
+  const std::size_t i = std::size_t(off) / 0x100000u;
+  if (i >= e.store.size() || len > e.store[i].size()) {
+    errno = EINVAL;
+    return MAP_FAILED;
+  }
+  void* p = real<void* (*)(void*, size_t, int, int, int, off_t)>("mmap")(nullptr, len, PROT_READ | PROT_WRITE,
+                                                                         MAP_SHARED | MAP_ANONYMOUS, -1, 0);
+  e.maps[i] = p;
+  e.say("mmap " + std::to_string(i));
+  return p;
+}
+void* mmap64(void* addr, size_t len, int prot, int flags, int fd, off_t off) { return mmap(addr, len, prot, flags, fd, off); }
+
+int munmap(void* addr, size_t len) {
+  {
+    Emu& e = emu();
+    std::lock_guard lock(e.m);
+    for (std::size_t i = 0; i < e.maps.size(); ++i)
+      if (e.maps[i] == addr) {
+        e.maps[i] = nullptr;
+        e.say("munmap " + std::to_string(i));
+      }
+  }
+  return real<int (*)(void*, size_t)>("munmap")(addr, len);
+}
+
+int poll(struct pollfd* fds, nfds_t n, int timeout) {
+  if (n != 1 || !isFake(fds[0].fd)) return real<int (*)(struct pollfd*, nfds_t, int)>("poll")(fds, n, timeout);
+  Emu& e = emu();
+  std::unique_lock lock(e.m);
+  fds[0].revents = 0;
+  if (e.unplugged) {
+    fds[0].revents = POLLERR;
+    return 1;
+  }
+  if (e.fault("eintr") && e.eintrPoll++ % 5 == 2) return e.fail(EINTR);
+  const bool stopped = e.fault("stop_after") && e.served >= std::uint32_t(e.faults["stop_after"]);
+  const bool anyQueued = std::find(e.queued.begin(), e.queued.end(), true) != e.queued.end();
+  if (!e.streaming || !anyQueued || stopped) {
+    lock.unlock();
+    std::this_thread::sleep_for(std::chrono::milliseconds(std::max(timeout, 0)));
+    return 0;
+  }
+  // Pace frames at the configured rate.
+  const auto due = e.nextFrame;
+  lock.unlock();
+  std::this_thread::sleep_until(due);
+  lock.lock();
+  e.nextFrame = std::max(due, std::chrono::steady_clock::now() - std::chrono::milliseconds(100)) +
+                std::chrono::microseconds(long(1e6 / e.fps));
+  if (e.fault("unplug_after") && e.served >= std::uint32_t(e.faults["unplug_after"])) {
+    e.unplugged = true;
+    e.say("unplug");
+    fds[0].revents = POLLERR;
+    return 1;
+  }
+  // Fill the first queued buffer with the next frame.
+  for (std::size_t i = 0; i < e.queued.size(); ++i)
+    if (e.queued[i]) {
+      const auto frame = e.makeFrame();
+      auto* dst = static_cast<std::uint8_t*>(e.maps[i]);
+      if (dst) std::memcpy(dst, frame.data(), std::min(frame.size(), e.store[i].size()));
+      e.bytesused[i] = std::uint32_t(std::min(frame.size(), e.store[i].size()));
+      e.queued[i] = false;
+      e.done[i] = true;
+      ++e.served;
+      settle(e);
+      break;
+    }
+  fds[0].revents = POLLIN | POLLRDNORM;
+  return 1;
+}
+
+}  // extern "C"
