@@ -200,7 +200,11 @@ int runBench(const Args& a) {
       spin(inject[0]);
       t[0] = msSince(t0);
       t0 = Clock::now();
-      lin.convert(frame, image);
+      // As the replay pipeline does: an sRGB 8-bit equirect or angular frame is decoded by the
+      // GPU for display, so only other frames need a linear copy.
+      const bool gpuDecodes = frame.format == PixelFormat::Bgr8 &&
+                              (layout.layout == Layout::Equirect || layout.layout == Layout::Angular);
+      if (!gpuDecodes) lin.convert(frame, image);
       spin(inject[1]);
       t[1] = msSince(t0);
       t0 = Clock::now();
@@ -216,7 +220,13 @@ int runBench(const Args& a) {
       t0 = Clock::now();
       if (i == 0) exposure = autoExposure(sh);
       renderer.setLighting(sh);
-      setBackground(renderer, image, layout);
+      if (gpuDecodes)
+        renderer.setBackgroundSrgb8(frame.bgr8.data(), frame.width, frame.height,
+                                    layout.layout == Layout::Angular ? gl::BackgroundMapping::Angular
+                                                                     : gl::BackgroundMapping::Equirect,
+                                    lin.exposure());
+      else
+        setBackground(renderer, image, layout);
       gl::Renderer::finish();
       spin(inject[3]);
       t[3] = msSince(t0);

@@ -218,6 +218,11 @@ int runStream(const Args& a, std::unique_ptr<FrameSource> source, bool live) {
     haveLighting = true;
     renderer.setLighting(f.radiance);
     if (f.image) setBackground(renderer, *f.image, opt.layout);
+    if (f.raw)
+      renderer.setBackgroundSrgb8(f.raw->bgr8.data(), f.raw->width, f.raw->height,
+                                  opt.layout.layout == Layout::Angular ? gl::BackgroundMapping::Angular
+                                                                       : gl::BackgroundMapping::Equirect,
+                                  f.rawScale);
     grab.push_back(f.times.grabMs);
     convert.push_back(f.times.convertMs);
     project.push_back(f.times.projectMs);

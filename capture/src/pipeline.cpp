@@ -98,9 +98,15 @@ void CapturePipeline::run() {
       // Convert: a linear copy only for display. The projection reads the frame itself: 8-bit
       // through the lookup table, float scaled afterwards (projection is linear).
       std::shared_ptr<Image> image;
+      std::shared_ptr<Frame> raw;
       std::size_t saturated = 0;
       const bool eightBit = frame.format == PixelFormat::Bgr8;
-      if (opt_.keepImages) {
+      const bool srgb8 = eightBit && opt_.photometry.gamma == 0.0f;
+      if (opt_.keepImages && srgb8 && opt_.layout.layout != Layout::MirrorBall &&
+          opt_.layout.layout != Layout::Cube && opt_.layout.layout != Layout::DualFisheye) {
+        raw = std::make_shared<Frame>(frame);  // the display decodes it: no linear copy
+        saturated = countSaturated(frame);
+      } else if (opt_.keepImages) {
         image = std::make_shared<Image>();
         saturated = linearizer.convert(frame, *image);
       } else {
@@ -125,6 +131,7 @@ void CapturePipeline::run() {
         if (image)
           for (float& v : image->rgb) v *= float(scale);
       }
+      const float rawScale = float(scale) * opt_.photometry.exposure;
       if (opt_.rotation) sh = rotateSh(sh, *opt_.rotation);
       sh = smoother.update(sh, timestamp);
       const auto t3 = Clock::now();
@@ -135,6 +142,8 @@ void CapturePipeline::run() {
       out.timestamp = timestamp;
       out.radiance = sh;
       if (opt_.keepImages) out.image = std::move(image);
+      out.raw = std::move(raw);
+      out.rawScale = rawScale;
       out.times = {msBetween(t0, t1), msBetween(t1, t2), msBetween(t2, t3)};
       out.saturated = saturated;
       if (opt_.onCaptured) opt_.onCaptured(out);

@@ -33,6 +33,10 @@ struct ProcessedFrame {
   double timestamp = 0;        ///< the source's timestamp, seconds
   Sh9 radiance;                ///< after rotation and smoothing
   std::shared_ptr<const Image> image;  ///< the linear frame (when PipelineOptions::keepImages)
+  /// Instead of `image`, for sRGB 8-bit frames: the frame as captured, with the linear scale
+  /// (exposure) that applies to its decoded values. The GPU decodes sRGB for display.
+  std::shared_ptr<const Frame> raw;
+  float rawScale = 1.0f;
   StageTimes times;
   std::size_t saturated = 0;
 };

@@ -175,6 +175,31 @@ void Renderer::setBackground(const float* rgb, int width, int height, Background
   backgroundTex_ = makeFloatTexture(rgb, width, height,
                                     mapping == BackgroundMapping::Equirect ? GL_REPEAT : GL_CLAMP_TO_EDGE);
   backgroundMapping_ = mapping;
+  backgroundScale_ = 1.0f;
+  backgroundSrgb_ = false;
+}
+
+void Renderer::setBackgroundSrgb8(const std::uint8_t* bgr, int width, int height, BackgroundMapping mapping,
+                                  float scale) {
+  // Re-specify only when the size changes; otherwise update the texels in place.
+  if (!backgroundTex_.isValid() || !backgroundSrgb_ || width != backgroundW_ || height != backgroundH_) {
+    GLuint id = 0;
+    glGenTextures(1, &id);
+    backgroundTex_.reset(id);
+    glBindTexture(GL_TEXTURE_2D, id);
+    glTexImage2D(GL_TEXTURE_2D, 0, GL_SRGB8, width, height, 0, GL_BGR, GL_UNSIGNED_BYTE, nullptr);
+    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_LINEAR);
+    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
+    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_S, mapping == BackgroundMapping::Equirect ? GL_REPEAT : GL_CLAMP_TO_EDGE);
+    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
+    backgroundW_ = width, backgroundH_ = height, backgroundSrgb_ = true;
+  }
+  glBindTexture(GL_TEXTURE_2D, backgroundTex_.get());
+  glPixelStorei(GL_UNPACK_ALIGNMENT, 1);
+  glTexSubImage2D(GL_TEXTURE_2D, 0, 0, 0, width, height, GL_BGR, GL_UNSIGNED_BYTE, bgr);
+  checkGl("Renderer::setBackgroundSrgb8");
+  backgroundMapping_ = mapping;
+  backgroundScale_ = scale;
 }
 
 void Renderer::draw(glm::ivec2 size, const Camera& camera, const ShadingSettings& s) {
@@ -190,7 +215,7 @@ void Renderer::draw(glm::ivec2 size, const Camera& camera, const ShadingSettings
     glUniformMatrix4fv(loc(backgroundProgram_, "uInvViewProj"), 1, GL_FALSE,
                        glm::value_ptr(glm::inverse(viewProj)));
     glUniformMatrix3fv(loc(backgroundProgram_, "uWorldFromGl"), 1, GL_FALSE, glm::value_ptr(worldFromGl));
-    glUniform1f(loc(backgroundProgram_, "uExposure"), s.exposure);
+    glUniform1f(loc(backgroundProgram_, "uExposure"), s.exposure * backgroundScale_);
     glUniform1i(loc(backgroundProgram_, "uToneMap"), int(s.toneMap));
     glUniform1i(loc(backgroundProgram_, "uMapping"), int(backgroundMapping_));
     glActiveTexture(GL_TEXTURE0);

@@ -71,6 +71,10 @@ class Renderer {
   /// Linear RGB panorama for the background (rows top to bottom).
   void setBackground(const float* rgb, int width, int height, BackgroundMapping mapping);
 
+  /// 8-bit sRGB BGR panorama (rows top to bottom): the texture unit decodes sRGB to linear, and
+  /// the shader multiplies by `scale` (the input exposure). Saves a per-frame CPU conversion.
+  void setBackgroundSrgb8(const std::uint8_t* bgr, int width, int height, BackgroundMapping mapping, float scale);
+
   /// Draws into the currently bound framebuffer (viewport `size`).
   void draw(glm::ivec2 size, const Camera& camera, const ShadingSettings& settings);
 
@@ -89,6 +93,9 @@ class Renderer {
   glm::vec3 albedo_{0.8f};
   Texture albedoTex_, backgroundTex_;
   BackgroundMapping backgroundMapping_ = BackgroundMapping::Equirect;
+  float backgroundScale_ = 1.0f;
+  int backgroundW_ = 0, backgroundH_ = 0;
+  bool backgroundSrgb_ = false;
   std::array<glm::mat4, 3> sh_{};
 };
 
