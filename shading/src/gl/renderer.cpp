@@ -76,19 +76,25 @@ Buffer upload(GLenum target, const std::vector<T>& data) {
   return b;
 }
 
-Texture makeFloatTexture(const float* rgb, int width, int height, GLint wrapS) {
+// A bound, linearly filtered 2D texture: internal format, client format and type as given.
+Texture makeTexture(GLint internal, int width, int height, GLenum format, GLenum type, const void* data,
+                    GLint wrapS) {
   GLuint id = 0;
   glGenTextures(1, &id);
   Texture t(id);
   glBindTexture(GL_TEXTURE_2D, id);
-  glPixelStorei(GL_UNPACK_ALIGNMENT, 4);
-  glTexImage2D(GL_TEXTURE_2D, 0, GL_RGB32F, width, height, 0, GL_RGB, GL_FLOAT, rgb);
+  glPixelStorei(GL_UNPACK_ALIGNMENT, 1);
+  glTexImage2D(GL_TEXTURE_2D, 0, internal, width, height, 0, format, type, data);
   glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_LINEAR);
   glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
   glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_S, wrapS);
   glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
   checkGl("uploading a texture");
   return t;
+}
+
+Texture makeFloatTexture(const float* rgb, int width, int height, GLint wrapS) {
+  return makeTexture(GL_RGB32F, width, height, GL_RGB, GL_FLOAT, rgb, wrapS);
 }
 
 }  // namespace
@@ -183,15 +189,8 @@ void Renderer::setBackgroundSrgb8(const std::uint8_t* bgr, int width, int height
                                   float scale) {
   // Re-specify only when the size changes; otherwise update the texels in place.
   if (!backgroundTex_.isValid() || !backgroundSrgb_ || width != backgroundW_ || height != backgroundH_) {
-    GLuint id = 0;
-    glGenTextures(1, &id);
-    backgroundTex_.reset(id);
-    glBindTexture(GL_TEXTURE_2D, id);
-    glTexImage2D(GL_TEXTURE_2D, 0, GL_SRGB8, width, height, 0, GL_BGR, GL_UNSIGNED_BYTE, nullptr);
-    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_LINEAR);
-    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
-    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_S, mapping == BackgroundMapping::Equirect ? GL_REPEAT : GL_CLAMP_TO_EDGE);
-    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
+    backgroundTex_ = makeTexture(GL_SRGB8, width, height, GL_BGR, GL_UNSIGNED_BYTE, nullptr,
+                                 mapping == BackgroundMapping::Equirect ? GL_REPEAT : GL_CLAMP_TO_EDGE);
     backgroundW_ = width, backgroundH_ = height, backgroundSrgb_ = true;
   }
   glBindTexture(GL_TEXTURE_2D, backgroundTex_.get());
