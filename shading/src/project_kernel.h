@@ -31,7 +31,7 @@ void weightedSums(const float* rgb, std::size_t n, const float* const* w, double
 
 bool haveAvx512();
 
-/// dst[i] = lut[src[i]] (a 256-entry table; AVX-512 gathers where available).
+/// dst[i] = lut[src[i]] (a 256-entry table; AVX-512 register permutes where available).
 void lutToFloat(const std::uint8_t* src, const float* lut, float* dst, std::size_t n);
 
 /// IEEE binary16 to float (F16C where the CPU has it).
