@@ -149,7 +149,7 @@ TEST(Sources, ImageSequenceByFolderAndPattern) {
     std::fill(img.rgb.begin(), img.rgb.end(), float(i));
     lp::saveImage(tmp / ("f_" + std::to_string(i) + ".exr"), img);
   }
-  for (const std::string spec : {tmp.path.string(), tmp / "f_%d.exr"}) {
+  for (const std::string& spec : {tmp.path.string(), tmp / "f_%d.exr"}) {
     auto src = lp::openSource(spec, {10.0});
     lp::Frame f;
     int n = 0;
@@ -276,7 +276,9 @@ TEST(Accuracy, ReducedResolutionErrorIsBounded) {
       for (int k = 0; k < 9; ++k)
         for (int c = 0; c < 3; ++c) worst = std::max(worst, double(std::abs(r.c[k][c] - full.c[k][c]) / full.c[0][c]));
       std::cout << file << " reduced " << f << "x: worst coefficient change " << 100 * worst << "% of L00\n";
-      if (f <= 4) EXPECT_LT(worst, sun ? 0.02 : 1e-3) << file << " factor " << f;
+      if (f <= 4) {
+        EXPECT_LT(worst, sun ? 0.02 : 1e-3) << file << " factor " << f;
+      }
       EXPECT_GT(worst, previous) << "error must grow with the block size";
       previous = worst;
       EXPECT_NEAR(r.c[0].x, full.c[0].x, 1e-5 * full.c[0].x) << "power is kept exactly";

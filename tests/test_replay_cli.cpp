@@ -90,7 +90,9 @@ TEST(ReplayCli, RealVideoCheckedFrameByFrame) {
   for (std::size_t i = 0; i < lines.size(); ++i) {
     const auto& j = lines[i];
     ASSERT_EQ(j["frame"].get<std::size_t>(), i);
-    if (i > 0) EXPECT_GT(j["time"].get<double>(), lines[i - 1]["time"].get<double>());
+    if (i > 0) {
+      EXPECT_GT(j["time"].get<double>(), lines[i - 1]["time"].get<double>());
+    }
     for (const char* key : {"grab", "convert", "project", "render"}) EXPECT_TRUE(j["timings_ms"][key].is_number());
     for (int k = 0; k < 9; ++k)
       for (int c = 0; c < 3; ++c) {

@@ -85,7 +85,7 @@ V4l2Source::~V4l2Source() { close(); }
 void V4l2Source::fail(const std::string& what, int err) const {
   std::string why = std::strerror(err);
   if (err == ENODEV) why = "the camera was unplugged or has gone (ENODEV)";
-  throw Error("V4l2Source::open(" + settings_.device + "): " + what + ": " + why);
+  throw Error("V4l2Source(" + settings_.device + "): " + what + ": " + why);
 }
 
 int V4l2Source::xioctl(unsigned long request, void* arg) { return retryIoctl(fd_.get(), request, arg); }
