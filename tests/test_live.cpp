@@ -81,7 +81,8 @@ std::vector<nlohmann::json> readJsonl(const std::string& path) {
   return out;
 }
 
-const std::string kCommon = " --headless --size 64x36 --no-background ";
+const std::string kCommon = " --headless --view-size 64x36 --no-background ";
+const std::string kReplay = " --headless --size 64x36 --no-background ";
 
 // A full session per format: the coefficients of every frame equal those of the same frames read
 // from the files by the replay pipeline, once divided by the camera's exposure time (live
@@ -94,11 +95,11 @@ TEST(Live, FullSessionInEveryFormat) {
       {"mjpeg", "640x320", 1e-5}, {"yuyv", "640x320", 0.01}, {"yuyv", "320x160", 0.01}, {"nv12", "640x320", 0.01}};
   for (const auto& [fmt, size, tol] : cases) {
     const std::string live = emu.tmp / ("live_" + fmt + size + ".jsonl"), ref = emu.tmp / ("ref_" + fmt + size + ".jsonl");
-    auto r = emu.run("live /dev/video7 --format " + fmt + " --camera-size " + size + " --frames " + std::to_string(kFrames) +
+    auto r = emu.run("live /dev/video7 --format " + fmt + " --size " + size + " --frames " + std::to_string(kFrames) +
                      kCommon + "--coeffs-out " + live);
     ASSERT_EQ(r.exitCode, 0) << r.output;
     std::string folder = fmt == "mjpeg" ? "MJPG_" : fmt == "yuyv" ? "YUYV_" : "NV12_";
-    r = lpt::runLiveprobe("replay " + (emu.tmp.path / "modes" / (folder + size)).string() + kCommon + "--coeffs-out " + ref);
+    r = lpt::runLiveprobe("replay " + (emu.tmp.path / "modes" / (folder + size)).string() + kReplay + "--coeffs-out " + ref);
     ASSERT_EQ(r.exitCode, 0) << r.output;
     const auto a = readJsonl(live), b = readJsonl(ref);
     ASSERT_EQ(a.size(), std::size_t(kFrames)) << fmt << " " << size;
@@ -186,7 +187,7 @@ TEST(LiveFaults, UnpluggedMidStreamWithRecording) {
   for (cv::Mat m; cap.read(m);) ++n;
   EXPECT_EQ(n, 8);
   EXPECT_EQ(readJsonl(out).size(), 8u);
-  const auto r = lpt::runLiveprobe("replay " + rec + kCommon);
+  const auto r = lpt::runLiveprobe("replay " + rec + kReplay);
   EXPECT_EQ(r.exitCode, 0) << r.output;
   emu.expectNoLeak(true);
 }
@@ -196,6 +197,10 @@ TEST(LiveFaults, UnpluggedMidStreamWithRecording) {
 TEST(Live, LockExposureOrder) {
   Emulator emu({"MJPG_320x160"});
   const auto r = emu.run("live /dev/video7 --lock-exposure 0.3 --frames 5" + kCommon);
+  // Without a value the option is a flag (2 s of settling).
+  const auto flag = emu.run("live /dev/video7 --frames 2" + kCommon + "--lock-exposure");
+  EXPECT_EQ(flag.exitCode, 0) << flag.output;
+  EXPECT_NE(flag.output.find("locked after 2.0 s"), std::string::npos) << flag.output;
   ASSERT_EQ(r.exitCode, 0) << r.output;
   EXPECT_NE(r.output.find("exposure 333 x 100 us, gain 96, white balance 5200 K"), std::string::npos) << r.output;
   const std::string l = emu.logText();

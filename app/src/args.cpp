@@ -1,5 +1,6 @@
 #include "args.h"
 
+#include <cctype>
 #include <cmath>
 #include <sstream>
 
@@ -35,6 +36,13 @@ Args::Args(const CommandSpec& spec, const std::vector<std::string>& argv) {
         values_.emplace(name, "");
       } else {
         if (!inlineValue) {
+          // An optional value is taken only when the next word looks like one (a number).
+          const bool next = i + 1 < argv.size() && argv[i + 1].rfind("--", 0) != 0;
+          const bool numeric = next && (std::isdigit(static_cast<unsigned char>(argv[i + 1][0])) || argv[i + 1][0] == '.');
+          if (opt->optionalValue && !numeric) {
+            values_.emplace(name, "");
+            continue;
+          }
           if (i + 1 >= argv.size()) throw Error(spec.name + ": option " + name + " needs a value (" + opt->value + ")");
           value = argv[++i];
         }
@@ -78,7 +86,7 @@ std::string usage(const CommandSpec& spec) {
   s << "usage: liveprobe " << spec.name << " " << spec.synopsis << "\n\n" << spec.summary << "\n";
   if (!spec.options.empty()) s << "\noptions:\n";
   for (const auto& o : spec.options) {
-    std::string left = "  " + o.name + (o.value.empty() ? "" : " " + o.value);
+    std::string left = "  " + o.name + (o.value.empty() ? "" : o.optionalValue ? " [" + o.value + "]" : " " + o.value);
     if (left.size() < 28) left.resize(28, ' ');
     else left += "\n" + std::string(28, ' ');
     s << left << o.help << "\n";

@@ -13,6 +13,7 @@ struct OptionSpec {
   std::string value;    ///< placeholder for the value ("WxH"); empty for a flag
   std::string help;
   bool repeatable = false;
+  bool optionalValue = false;  ///< the value may be left out (then the option is a flag)
 };
 
 struct CommandSpec {

@@ -18,22 +18,25 @@ namespace lp::cli {
 const CommandSpec kLiveSpec{
     "live",
     "DEVICE [--layout ...] [--format mjpeg|yuyv|nv12|rgb24] [--size WxH] [--fps N]\n"
-    "       [--lock-exposure [SECONDS]] [--smooth S] [--coeffs-out FILE.jsonl] [--headless] [--record FILE]",
+    "       [--lock-exposure [SECONDS]] [--smooth S] [--coeffs-out FILE.jsonl] [--headless] [--record FILE]\n"
+    "       [--view-size WxH] [model and look options]",
     "A live light probe: streams a V4L2 camera (a 360 camera over UVC, or a webcam looking at a\n"
     "chrome ball with --layout mirrorball --circle cx,cy,r), re-projects the nine coefficients every\n"
     "frame and lights the model with them. Capture runs on its own thread and is never held back\n"
     "by drawing. --record saves the stream as it runs, for replay.",
     [] {
-      auto o = streamOptions();
+      std::vector<OptionSpec> o;
+      for (const auto& opt : streamOptions())
+        if (opt.name != "--fps") o.push_back(opt);  // --fps is the camera's here
       o.insert(o.end(), {{"--format", "FMT", "pixel format: mjpeg, yuyv, nv12, rgb24 or auto (default: MJPEG first)"},
-                         {"--camera-size", "WxH", "capture size asked of the camera (default: its largest)"},
-                         {"--camera-fps", "N", "frame rate asked of the camera"},
-                         {"--lock-exposure", "SECONDS", "let auto exposure settle this long (e.g. 2), then lock exposure, gain, white balance"},
+                         {"--size", "WxH", "capture size asked of the camera (default: its largest)"},
+                         {"--fps", "N", "frame rate asked of the camera"},
+                         {"--lock-exposure", "SECONDS", "let auto exposure settle (default 2 s), then lock exposure, gain, white balance", false, true},
                          {"--mjpeg-reduce", "1|2|4|8", "decode MJPEG at a reduced scale (default 1)"},
                          {"--timeout", "SECONDS", "stop when no frame arrives for this long (default 2)"},
                          {"--record", "FILE", "save the camera stream (.mkv FFV1 or .avi MJPEG) while it runs"},
                          {"--frames", "N", "stop after N frames"},
-                         {"--size", "WxH", "window or frame size (default 1280x720; headless 640x360)"},
+                         {"--view-size", "WxH", "window or frame size (default 1280x720; headless 640x360)"},
                          {"--coeffs-out", "FILE.jsonl", "one JSON line per captured frame"},
                          {"--out-dir", "DIR", "not for live: use replay on a --record file"},
                          {"--out-video", "FILE", "not for live: use replay on a --record file"},
@@ -51,8 +54,9 @@ int runLive(const Args& a) {
   CameraSettings cs;
   cs.device = a.positional()[0];
   cs.format = parseCameraFormat(a.get("--format", "auto"));
-  if (a.has("--camera-size")) std::tie(cs.width, cs.height) = parseSize(a.get("--camera-size"), "--camera-size");
-  cs.fps = a.number("--camera-fps", 0.0);
+  if (a.has("--size")) std::tie(cs.width, cs.height) = parseSize(a.get("--size"), "--size");
+  cs.fps = a.number("--fps", 0.0);
+  if (cs.fps < 0 || cs.fps > 1000) throw Error("--fps " + a.get("--fps") + ": expected a rate up to 1000");
   cs.mjpegReduce = a.integer("--mjpeg-reduce", 1);
   if (cs.mjpegReduce != 1 && cs.mjpegReduce != 2 && cs.mjpegReduce != 4 && cs.mjpegReduce != 8)
     throw Error("--mjpeg-reduce " + a.get("--mjpeg-reduce") + ": expected 1, 2, 4 or 8");
@@ -62,7 +66,7 @@ int runLive(const Args& a) {
   camera->open();
   std::fprintf(stderr, "liveprobe live: %s\n", camera->describe().c_str());
   if (a.has("--lock-exposure")) {
-    const double settle = a.number("--lock-exposure", 2.0);
+    const double settle = a.get("--lock-exposure").empty() ? 2.0 : a.number("--lock-exposure", 2.0);
     const LockedExposure l = camera->lockExposure(settle);
     auto show = [](const std::optional<std::int32_t>& v) { return v ? std::to_string(*v) : std::string("n/a"); };
     std::fprintf(stderr, "liveprobe live: locked after %.1f s: exposure %s x 100 us, gain %s, white balance %s K\n",

@@ -173,7 +173,8 @@ int runStream(const Args& a, std::unique_ptr<FrameSource> source, bool live) {
   const std::string description = source->describe();
 
   const bool headless = a.has("--headless") || !(std::getenv("DISPLAY") || std::getenv("WAYLAND_DISPLAY"));
-  const auto size = parseSize(a.get("--size", headless ? "640x360" : "1280x720"), "--size");
+  const std::string sizeOpt = live ? "--view-size" : "--size";  // live: --size is the camera's
+  const auto size = parseSize(a.get(sizeOpt, headless ? "640x360" : "1280x720"), sizeOpt);
   if (headless && opt.loop && opt.maxFrames < 0) throw Error("--loop without a window needs --frames N");
   opt.handoff = headless && !live ? Handoff::Every : Handoff::Latest;
   opt.realtime = !headless && !live;

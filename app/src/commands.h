@@ -13,6 +13,7 @@ namespace lp::cli {
 struct Command {
   CommandSpec spec;
   int (*run)(const Args&);
+  const char* brief;  ///< one line for `liveprobe --help`
 };
 
 const std::vector<Command>& commands();

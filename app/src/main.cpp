@@ -17,7 +17,7 @@ void printOverview() {
   for (const auto& c : lp::cli::commands()) {
     std::string name = "  " + c.spec.name;
     name.resize(14, ' ');
-    std::cout << name << c.spec.summary.substr(0, c.spec.summary.find('\n')) << "\n";
+    std::cout << name << c.brief << "\n";
   }
 }
 
