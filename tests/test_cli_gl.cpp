@@ -122,3 +122,28 @@ TEST(CliGlBadInput, CorruptCoefficientFile) {
 }
 
 }  // namespace
+
+namespace {
+
+// render --coeffs reads what coeffs writes: the same lighting as render --env (no background).
+TEST(CliGl, RenderFromCoefficientFileMatchesRenderFromEnvironment) {
+  lpt::TempDir tmp;
+  const std::string env = lpt::dataPath("probes/latlong_256x128/uffizi.hdr");
+  const std::string json = tmp / "uffizi.json", a = tmp / "a.png", b = tmp / "b.png";
+  auto r = lpt::runLiveprobe("coeffs " + env + " > " + json);
+  ASSERT_EQ(r.exitCode, 0) << r.output;
+  r = lpt::runLiveprobe("render --headless --coeffs " + json + " --size 160x120 --exposure 2 --out " + a);
+  ASSERT_EQ(r.exitCode, 0) << r.output;
+  r = lpt::runLiveprobe("render --headless --env " + env + " --no-background --size 160x120 --exposure 2 --out " + b);
+  ASSERT_EQ(r.exitCode, 0) << r.output;
+  const cv::Mat x = cv::imread(a), y = cv::imread(b);
+  ASSERT_EQ(x.size(), y.size());
+  cv::Mat diff;
+  cv::absdiff(x, y, diff);
+  double worst;
+  cv::minMaxLoc(diff.reshape(1), nullptr, &worst);
+  EXPECT_LE(worst, 1) << "JSON round trip changed the lighting";  // 9-digit floats: at most 1 LSB
+  EXPECT_GT(spread(x), 50);
+}
+
+}  // namespace
