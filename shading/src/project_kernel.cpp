@@ -119,6 +119,15 @@ __attribute__((target("avx512f"), always_inline)) inline void accumulate(__m512 
   }
 }
 
+// lane[c] += factor * (r, g, b)[c] for one coefficient's three channel accumulators.
+__attribute__((target("avx512f"), always_inline)) inline void addCoefficient(float* lane, float factor, __m512 r,
+                                                                             __m512 g, __m512 b) {
+  const __m512 f = _mm512_set1_ps(factor);
+  _mm512_store_ps(lane, _mm512_fmadd_ps(f, r, _mm512_load_ps(lane)));
+  _mm512_store_ps(lane + 16, _mm512_fmadd_ps(f, g, _mm512_load_ps(lane + 16)));
+  _mm512_store_ps(lane + 32, _mm512_fmadd_ps(f, b, _mm512_load_ps(lane + 32)));
+}
+
 // One row: 15 column sums as 16-lane vectors, then acc[k][c] += rowFactor[k] * s[col(k)][c].
 __attribute__((target("avx512f"))) void addRowAvx512(const float* row, RowOrder order, const EquirectTables& t,
                                                       int i, float* accLanes) {
@@ -151,52 +160,74 @@ __attribute__((target("avx512f"))) void addRowAvx512(const float* row, RowOrder 
     loadPixels(row + 3 * j, w - j, x, y, z);
     accumulate(s, col, j, x, y, z);
   }
+  // acc[k][c] += rowFactor[row(k)] * s[col(k)][c], written out with constant indices: indexing
+  // s by a table value would force the 15 row sums out of registers for the whole row loop.
   const bool bgr = order == RowOrder::Bgr;
-  for (int k = 0; k < 9; ++k) {
-    const __m512 f = _mm512_set1_ps(t.row[kRowOf[k]][i]);
-    const auto& col = s[kColOf[k]];
-    for (int c = 0; c < 3; ++c) {
-      float* lane = accLanes + (3 * k + c) * 16;
-      const __m512 v = col[bgr ? 2 - c : c];
-      _mm512_store_ps(lane, _mm512_fmadd_ps(f, v, _mm512_load_ps(lane)));
-    }
-  }
+#define LP_ADD(k, r, col)                                                                      \
+  addCoefficient(accLanes + 48 * (k), t.row[r][i], bgr ? s[col][2] : s[col][0], s[col][1], \
+                 bgr ? s[col][0] : s[col][2])
+  LP_ADD(0, 0, 0);  // L00  = k0 R1 S1
+  LP_ADD(1, 2, 2);  // L1-1 = k1 Rs Ssin
+  LP_ADD(2, 1, 0);  // L10  = k1 Rc S1
+  LP_ADD(3, 2, 1);  // L11  = k1 Rs Scos
+  LP_ADD(4, 4, 4);  // L2-2 = k4 Rs2 Ssin2
+  LP_ADD(5, 3, 2);  // L2-1 = k2 Rsc Ssin
+  LP_ADD(6, 5, 0);  // L20  = k3 R3 S1
+  LP_ADD(7, 3, 1);  // L21  = k2 Rsc Scos
+  LP_ADD(8, 4, 3);  // L22  = k4 Rs2 Scos2
+#undef LP_ADD
 }
 
 // Nine weights times three channels is 27 accumulators: with the pixels and the deinterleave
 // indices that overflows the 32 vector registers, so each block of pixels is swept twice, for
 // coefficients 0-4 and 5-8 (the second sweep reads the block from L1).
+// Nine weights times three channels is 27 accumulators: with the pixels and the deinterleave
+// indices that overflows the 32 vector registers, so each run of pixels is swept twice, for
+// coefficients 0-4 and 5-8 (the second sweep reads the pixels from L1).
+// acc[k][c] += w_k * (x, y, z)[c] for kN weights at w, 16 apart.
+template <int kN>
+__attribute__((target("avx512f"), always_inline)) inline void weightedStep(__m512 (&acc)[kN][3], const float* w,
+                                                                           __m512 x, __m512 y, __m512 z) {
+  for (int k = 0; k < kN; ++k) {
+    __m512 wk = _mm512_loadu_ps(w + 16 * k);
+    asm("" : "+v"(wk));
+    acc[k][0] = _mm512_fmadd_ps(wk, x, acc[k][0]);
+    acc[k][1] = _mm512_fmadd_ps(wk, y, acc[k][1]);
+    acc[k][2] = _mm512_fmadd_ps(wk, z, acc[k][2]);
+  }
+}
+
 template <int K0, int K1>
 __attribute__((target("avx512f"))) inline void weightedSweep(const float* rgb, std::size_t b0, std::size_t b1,
-                                                             const float* const* w, double* out) {
+                                                             const float* blocked, double* out) {
   constexpr int kN = K1 - K0;
   __m512 acc[kN][3];
   for (auto& a : acc)
     for (auto& v : a) v = _mm512_setzero_ps();
-  for (std::size_t i = b0; i < b1; i += 16) {
-    const int m = int(std::min<std::size_t>(16, b1 - i));
+  // Full blocks without masks (a branch inside this loop made GCC keep the accumulators in
+  // memory), then the tail.
+  std::size_t i = b0;
+  for (; i + 16 <= b1; i += 16) {
     __m512 x, y, z;
-    loadPixels(rgb + 3 * i, m, x, y, z);
-    const __mmask16 mask = __mmask16(m >= 16 ? 0xFFFF : (1u << m) - 1);
-    for (int k = 0; k < kN; ++k) {
-      __m512 wk = _mm512_maskz_loadu_ps(mask, w[K0 + k] + i);
-      asm("" : "+v"(wk));
-      acc[k][0] = _mm512_fmadd_ps(wk, x, acc[k][0]);
-      acc[k][1] = _mm512_fmadd_ps(wk, y, acc[k][1]);
-      acc[k][2] = _mm512_fmadd_ps(wk, z, acc[k][2]);
-    }
+    deinterleave(_mm512_loadu_ps(rgb + 3 * i), _mm512_loadu_ps(rgb + 3 * i + 16), _mm512_loadu_ps(rgb + 3 * i + 32), x, y, z);
+    weightedStep<kN>(acc, blocked + (i / 16) * 9 * 16 + K0 * 16, x, y, z);  // zero-padded past the end
+  }
+  if (i < b1) {
+    __m512 x, y, z;
+    loadPixels(rgb + 3 * i, int(b1 - i), x, y, z);
+    weightedStep<kN>(acc, blocked + (i / 16) * 9 * 16 + K0 * 16, x, y, z);  // zero-padded past the end
   }
   for (int k = 0; k < kN; ++k)
     for (int c = 0; c < 3; ++c) out[3 * (K0 + k) + c] += _mm512_reduce_add_ps(acc[k][c]);
 }
 
-__attribute__((target("avx512f"))) void weightedSumsAvx512(const float* rgb, std::size_t n, const float* const* w,
+__attribute__((target("avx512f"))) void weightedSumsAvx512(const float* rgb, std::size_t n, const float* blocked,
                                                             double* out) {
-  constexpr std::size_t kBlock = 1024;  // 12 KB of pixels: stays in L1 for the second sweep
-  for (std::size_t b0 = 0; b0 < n; b0 += kBlock) {
-    const std::size_t b1 = std::min(n, b0 + kBlock);
-    weightedSweep<0, 5>(rgb, b0, b1, w, out);
-    weightedSweep<5, 9>(rgb, b0, b1, w, out);
+  constexpr std::size_t kRun = 1024;  // 12 KB of pixels: stays in L1 for the second sweep
+  for (std::size_t b0 = 0; b0 < n; b0 += kRun) {
+    const std::size_t b1 = std::min(n, b0 + kRun);
+    weightedSweep<0, 5>(rgb, b0, b1, blocked, out);
+    weightedSweep<5, 9>(rgb, b0, b1, blocked, out);
   }
 }
 
@@ -277,9 +308,9 @@ void halfToFloat(const std::uint16_t* src, float* dst, std::size_t n) {
   for (std::size_t i = 0; i < n; ++i) dst[i] = halfToFloatScalar(src[i]);
 }
 
-void weightedSums(const float* rgb, std::size_t n, const float* const* w, double* out) {
+void weightedSums(const float* rgb, std::size_t n, const float* blocked, double* out) {
   if (haveAvx512()) {
-    weightedSumsAvx512(rgb, n, w, out);
+    weightedSumsAvx512(rgb, n, blocked, out);
     return;
   }
   constexpr std::size_t kBlock = 4096;
@@ -288,8 +319,9 @@ void weightedSums(const float* rgb, std::size_t n, const float* const* w, double
     float acc[27] = {};
     for (std::size_t i = b0; i < b1; ++i) {
       const float x = rgb[3 * i], y = rgb[3 * i + 1], z = rgb[3 * i + 2];
+      const float* w = blocked + (i / 16) * 9 * 16 + i % 16;
       for (int k = 0; k < 9; ++k) {
-        const float wk = w[k][i];
+        const float wk = w[16 * k];
         acc[3 * k] += wk * x, acc[3 * k + 1] += wk * y, acc[3 * k + 2] += wk * z;
       }
     }

@@ -26,8 +26,11 @@ enum class RowOrder : std::uint8_t { Rgb, Bgr };
 template <class RowAt>
 void equirectRows(const EquirectTables& t, RowAt rowAt, RowOrder order, int row0, int row1, double* out);
 
-/// Sum over n pixels of rgb[i] * w[k][i] for the nine weight planes; adds to out (k-major, RGB).
-void weightedSums(const float* rgb, std::size_t n, const float* const* w, double* out);
+/// Sum over n pixels of rgb[i] * w_k[i] for the nine weights; adds to out (k-major, RGB).
+/// `blocked` holds the weights in blocks of 16 pixels: w_k of pixel 16 b + l is at
+/// blocked[(9 b + k) * 16 + l] (one sequential stream, which the prefetchers follow; nine
+/// separate planes are nine streams). n is a multiple of 16 except for the last call.
+void weightedSums(const float* rgb, std::size_t n, const float* blocked, double* out);
 
 bool haveAvx512();
 

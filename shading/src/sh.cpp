@@ -300,11 +300,12 @@ Sh9 EquirectProjector::projectHalf(const std::uint16_t* rgb, std::size_t rowStri
       false, pool);
 }
 
-SampleProjector::SampleProjector(const SphereSample* samples, std::size_t count) : count_(count) {
-  for (auto& w : w_) w.resize(count);
+SampleProjector::SampleProjector(const SphereSample* samples, std::size_t count)
+    : count_(count), w_((count + 15) / 16 * 16 * kShCount, 0.0f) {
   for (std::size_t i = 0; i < count; ++i) {
+    if (samples[i].solidAngle == 0.0f) continue;
     const auto y = shBasis(samples[i].dir);
-    for (int k = 0; k < kShCount; ++k) w_[k][i] = samples[i].solidAngle == 0.0f ? 0.0f : y[k] * samples[i].solidAngle;
+    for (int k = 0; k < kShCount; ++k) w_[((i / 16) * kShCount + k) * 16 + i % 16] = y[k] * samples[i].solidAngle;
   }
 }
 
@@ -315,11 +316,9 @@ Sh9 SampleProjector::run(BlockFill fill, bool bgr, ThreadPool* pool) const {
   std::vector<std::array<double, 27>> part(chunks);
   auto task = [&](unsigned c) {
     part[c].fill(0.0);
-    const std::size_t i0 = c * kChunk, n = std::min(kChunk, count_ - i0);
-    const float* w[kShCount];
-    for (int k = 0; k < kShCount; ++k) w[k] = w_[k].data() + i0;
+    const std::size_t i0 = c * kChunk, n = std::min(kChunk, count_ - i0);  // kChunk % 16 == 0
     std::vector<float> buf;
-    kernel::weightedSums(fill(i0, n, buf), n, w, part[c].data());
+    kernel::weightedSums(fill(i0, n, buf), n, w_.data() + i0 * kShCount, part[c].data());
   };
   if (pool) pool->run(chunks, task);
   else for (unsigned c = 0; c < chunks; ++c) task(c);

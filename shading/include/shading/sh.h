@@ -149,7 +149,7 @@ class SampleProjector {
   template <class BlockFill>
   Sh9 run(BlockFill fill, bool bgr, ThreadPool* pool) const;
   std::size_t count_;
-  std::array<std::vector<float>, kShCount> w_;
+  std::vector<float> w_;  ///< weights in blocks of 16 pixels (kernel::weightedSums)
 };
 
 /// Convenience: EquirectProjector(width, height).project(rgb, 3 * width).
