@@ -14,6 +14,7 @@
 #include "capture/frame.h"
 #include "capture/layout.h"
 #include "capture/photometry.h"
+#include "capture/pipeline.h"
 #include "coeffs_io.h"
 #include "commands.h"
 #include "scene.h"
@@ -139,9 +140,7 @@ const CommandSpec kBenchSpec{
     0, 1};
 
 int runBench(const Args& a) {
-  const std::string sourceName = a.positional().empty()
-                                     ? std::string(LIVEPROBE_SOURCE_DIR) + "/recordings/sky.mkv"
-                                     : a.positional()[0];
+  const std::string sourceName = a.positional().empty() ? defaultRecording() : a.positional()[0];
   const int frames = a.integer("--frames", 100), repeat = a.integer("--repeat", 3);
   if (frames < 1 || repeat < 1) throw Error("bench: --frames and --repeat must be at least 1");
   const double threshold = a.number("--threshold", 25.0);
@@ -200,11 +199,10 @@ int runBench(const Args& a) {
       spin(inject[0]);
       t[0] = msSince(t0);
       t0 = Clock::now();
-      // As the replay pipeline does: an sRGB 8-bit equirect or angular frame is decoded by the
-      // GPU for display, so only other frames need a linear copy.
-      const bool gpuDecodes = frame.format == PixelFormat::Bgr8 &&
-                              (layout.layout == Layout::Equirect || layout.layout == Layout::Angular);
-      if (!gpuDecodes) lin.convert(frame, image);
+      // As the replay pipeline does: only frames the display cannot take as they are get a
+      // linear copy.
+      const bool asIs = displayTakesFrameAsIs(frame, photometry, layout);
+      if (!asIs) lin.convert(frame, image);
       spin(inject[1]);
       t[1] = msSince(t0);
       t0 = Clock::now();
@@ -212,21 +210,14 @@ int runBench(const Args& a) {
         if (auto why = layoutMismatch(layout, frame.width, frame.height); !why.empty()) throw Error(sourceName + ": " + why);
         projector.emplace(layout, frame.width, frame.height);
       }
-      const Sh9 sh = frame.format == PixelFormat::Bgr8
-                         ? projector->projectBgr8(frame.bgr8.data(), lin.table().data(), &pool)
-                         : projector->project(frame.rgb.data(), 0, &pool) * lin.exposure();
+      const Sh9 sh = projectFrame(*projector, frame, lin, &pool);
       spin(inject[2]);
       t[2] = msSince(t0);
       t0 = Clock::now();
       if (i == 0) exposure = autoExposure(sh);
       renderer.setLighting(sh);
-      if (gpuDecodes)
-        renderer.setBackgroundSrgb8(frame.bgr8.data(), frame.width, frame.height,
-                                    layout.layout == Layout::Angular ? gl::BackgroundMapping::Angular
-                                                                     : gl::BackgroundMapping::Equirect,
-                                    lin.exposure());
-      else
-        setBackground(renderer, image, layout);
+      if (asIs) setBackground(renderer, frame, layout, lin.exposure());
+      else setBackground(renderer, image, layout);
       gl::Renderer::finish();
       spin(inject[3]);
       t[3] = msSince(t0);

@@ -23,10 +23,14 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 
+}  // namespace
+
 std::string defaultRecording() {
   if (const char* e = std::getenv("LIVEPROBE_DEFAULT_RECORDING")) return e;
   return std::string(LIVEPROBE_SOURCE_DIR) + "/recordings/sky.mkv";
 }
+
+namespace {
 
 double median(std::vector<double> v) {
   if (v.empty()) return 0;
@@ -219,11 +223,7 @@ int runStream(const Args& a, std::unique_ptr<FrameSource> source, bool live) {
     haveLighting = true;
     renderer.setLighting(f.radiance);
     if (f.image) setBackground(renderer, *f.image, opt.layout);
-    if (f.raw)
-      renderer.setBackgroundSrgb8(f.raw->bgr8.data(), f.raw->width, f.raw->height,
-                                  opt.layout.layout == Layout::Angular ? gl::BackgroundMapping::Angular
-                                                                       : gl::BackgroundMapping::Equirect,
-                                  f.rawScale);
+    if (f.raw) setBackground(renderer, *f.raw, opt.layout, f.rawScale);
     grab.push_back(f.times.grabMs);
     convert.push_back(f.times.convertMs);
     project.push_back(f.times.projectMs);

@@ -31,6 +31,8 @@ int runDevices(const Args&);
 /// The replay pipeline with an opened camera as its source (cmd_replay.cpp).
 int runStreamForLive(const Args& a, std::unique_ptr<FrameSource> camera);
 std::vector<OptionSpec> streamOptions();
+/// recordings/sky.mkv in the source tree, or $LIVEPROBE_DEFAULT_RECORDING.
+std::string defaultRecording();
 
 extern const CommandSpec kCoeffsSpec, kIrradianceSpec, kCompareSpec, kRenderSpec, kViewSpec, kReplaySpec, kRecordSpec, kBenchSpec, kLiveSpec, kDevicesSpec;
 

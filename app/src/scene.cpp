@@ -69,6 +69,12 @@ void setBackground(gl::Renderer& r, const Image& frame, const LayoutSpec& layout
   r.setBackground(eq.rgb.data(), eq.width, eq.height, gl::BackgroundMapping::Equirect);
 }
 
+void setBackground(gl::Renderer& r, const Frame& frame, const LayoutSpec& layout, float scale) {
+  r.setBackgroundSrgb8(frame.bgr8.data(), frame.width, frame.height,
+                       layout.layout == Layout::Angular ? gl::BackgroundMapping::Angular : gl::BackgroundMapping::Equirect,
+                       scale);
+}
+
 std::vector<OptionSpec> lightingOptions() {
   std::vector<OptionSpec> o = {{"--env", "FILE", "environment map that lights the model and is drawn behind it"}};
   for (auto& l : layoutOptions()) o.push_back(l);

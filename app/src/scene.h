@@ -42,6 +42,9 @@ struct Lighting {
 /// The background texture for a frame: equirect and angular frames are drawn directly; other
 /// layouts are resampled to a 1024x512 equirect on the CPU (bilinear).
 void setBackground(gl::Renderer& r, const Image& frame, const LayoutSpec& layout);
+/// The background from an 8-bit sRGB frame the display takes as it is
+/// (capture/pipeline.h, displayTakesFrameAsIs), its decoded values times `scale`.
+void setBackground(gl::Renderer& r, const Frame& frame, const LayoutSpec& layout, float scale);
 
 /// From --env FILE [--layout], --coeffs FILE.json or --coeff NAME=VALUE...; nullopt if none given.
 std::optional<Lighting> lightingFromArgs(const Args& a);

@@ -15,6 +15,16 @@ double msBetween(Clock::time_point a, Clock::time_point b) {
 }
 }  // namespace
 
+bool displayTakesFrameAsIs(const Frame& frame, const Photometry& photometry, const LayoutSpec& layout) {
+  return frame.format == PixelFormat::Bgr8 && photometry.gamma == 0.0f &&
+         (layout.layout == Layout::Equirect || layout.layout == Layout::Angular);
+}
+
+Sh9 projectFrame(const Projector& projector, const Frame& frame, const Linearizer& linearizer, ThreadPool* pool) {
+  if (frame.format == PixelFormat::Bgr8) return projector.projectBgr8(frame.bgr8.data(), linearizer.table().data(), pool);
+  return projector.project(frame.rgb.data(), 0, pool) * linearizer.exposure();
+}
+
 Sh9 ShSmoother::update(const Sh9& x, double timestamp) {
   if (tau_ <= 0 || !state_) {
     state_ = x;
@@ -100,10 +110,7 @@ void CapturePipeline::run() {
       std::shared_ptr<Image> image;
       std::shared_ptr<Frame> raw;
       std::size_t saturated = 0;
-      const bool eightBit = frame.format == PixelFormat::Bgr8;
-      const bool srgb8 = eightBit && opt_.photometry.gamma == 0.0f;
-      if (opt_.keepImages && srgb8 && opt_.layout.layout != Layout::MirrorBall &&
-          opt_.layout.layout != Layout::Cube && opt_.layout.layout != Layout::DualFisheye) {
+      if (opt_.keepImages && displayTakesFrameAsIs(frame, opt_.photometry, opt_.layout)) {
         raw = std::make_shared<Frame>(frame);  // the display decodes it: no linear copy
         saturated = countSaturated(frame);
       } else if (opt_.keepImages) {
@@ -122,8 +129,7 @@ void CapturePipeline::run() {
         const Image small = reduceEquirect(image->rgb.data(), image->width, image->height, reduce);
         sh = projector->project(small.rgb.data(), 0, pool.get());
       } else {
-        sh = eightBit ? projector->projectBgr8(frame.bgr8.data(), linearizer.table().data(), pool.get())
-                      : projector->project(frame.rgb.data(), 0, pool.get()) * linearizer.exposure();
+        sh = projectFrame(*projector, frame, linearizer, pool.get());
       }
       const double scale = source_->radianceScale();
       if (scale != 1.0) {
@@ -141,7 +147,7 @@ void CapturePipeline::run() {
       out.sequence = frame.sequence;
       out.timestamp = timestamp;
       out.radiance = sh;
-      if (opt_.keepImages) out.image = std::move(image);
+      if (opt_.keepImages && !raw) out.image = std::move(image);  // one background per frame
       out.raw = std::move(raw);
       out.rawScale = rawScale;
       out.times = {msBetween(t0, t1), msBetween(t1, t2), msBetween(t2, t3)};

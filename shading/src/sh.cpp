@@ -223,8 +223,7 @@ EquirectProjector::EquirectProjector(int width, int height) : width_(width), hei
     t->col[3][j] = float((std::sin(2 * p1) - std::sin(2 * p0)) / 2);
     t->col[4][j] = float((std::cos(2 * p0) - std::cos(2 * p1)) / 2);
   }
-  // Row factors with the basis constants folded in, in the order of kernel::kRowOf:
-  // 0: k0 * int 1, 1: k1 * int cos, 2: k1 * int sin (used by L1-1 and L11) ... see below.
+  // Row factors with the basis constants folded in (slots as kernel::kRowOf uses them).
   for (auto& r : t->row) r.resize(std::size_t(height));
   for (int i = 0; i < height; ++i) {
     const double t0 = pi * i / height, t1 = pi * (i + 1) / height;

@@ -168,24 +168,20 @@ void pipelineBench(benchmark::State& state, int stage) {
 }
 
 void registerAll() {
-  const Size sizes[] = {{300, 300}, {1024, 512}, {2048, 1024}, {3840, 1920}};
-  for (const char* type : {"f32", "u8"})
-    for (Size s : sizes)
-      for (int threads : {1, 2}) {
-        const bool u8 = std::string(type) == "u8";
-        benchmark::RegisterBenchmark(("Project/equirect/" + std::string(type) + "/" + sizeName(s) + "/threads:" + std::to_string(threads)).c_str(),
-                                     [=](benchmark::State& st) { projectBench(st, lp::Layout::Equirect, u8, s, threads); })
-            ->UseRealTime()->Unit(benchmark::kMicrosecond);
-      }
-  const Size angular[] = {{300, 300}, {1024, 1024}, {2048, 2048}};
-  for (const char* type : {"f32", "u8"})
-    for (Size s : angular)
-      for (int threads : {1, 2}) {
-        const bool u8 = std::string(type) == "u8";
-        benchmark::RegisterBenchmark(("Project/angular/" + std::string(type) + "/" + sizeName(s) + "/threads:" + std::to_string(threads)).c_str(),
-                                     [=](benchmark::State& st) { projectBench(st, lp::Layout::Angular, u8, s, threads); })
-            ->UseRealTime()->Unit(benchmark::kMicrosecond);
-      }
+  // Angular maps are square: their sizes keep the equirect's pixel counts roughly.
+  const std::vector<std::pair<lp::Layout, std::vector<Size>>> layouts = {
+      {lp::Layout::Equirect, {{300, 300}, {1024, 512}, {2048, 1024}, {3840, 1920}}},
+      {lp::Layout::Angular, {{300, 300}, {1024, 1024}, {2048, 2048}}}};
+  for (const auto& [layout, sizes] : layouts)
+    for (const char* type : {"f32", "u8"})
+      for (Size s : sizes)
+        for (int threads : {1, 2}) {
+          const bool u8 = std::string(type) == "u8";
+          const std::string name = "Project/" + std::string(lp::layoutName(layout)) + "/" + type + "/" + sizeName(s) +
+                                   "/threads:" + std::to_string(threads);
+          benchmark::RegisterBenchmark(name.c_str(), [=](benchmark::State& st) { projectBench(st, layout, u8, s, threads); })
+              ->UseRealTime()->Unit(benchmark::kMicrosecond);
+        }
   for (Size s : {Size{300, 300}, Size{3840, 1920}})
     benchmark::RegisterBenchmark(("Reference/equirect/f32/" + sizeName(s) + "/threads:1").c_str(),
                                  [=](benchmark::State& st) { referenceLoop(st, s); })

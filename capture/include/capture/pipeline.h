@@ -18,6 +18,7 @@
 #include "capture/layout.h"
 #include "capture/photometry.h"
 #include "shading/sh.h"
+#include "shading/thread_pool.h"
 
 namespace lp {
 
@@ -83,6 +84,16 @@ class ShSmoother {
   std::optional<Sh9> state_;
   double last_ = 0;
 };
+
+/// Whether the display takes this frame as it is: 8-bit sRGB in a layout the background shader
+/// draws directly (equirect, angular). Then no linear copy is made for it; the GPU decodes sRGB.
+bool displayTakesFrameAsIs(const Frame& frame, const Photometry& photometry, const LayoutSpec& layout);
+
+/// The radiance coefficients of one frame, as every stage of liveprobe computes them: 8-bit frames
+/// through the linearizer's table inside the projection, float frames scaled after (projection
+/// is linear). The projector must have the frame's size.
+Sh9 projectFrame(const Projector& projector, const Frame& frame, const Linearizer& linearizer,
+                 ThreadPool* pool);
 
 class CapturePipeline {
  public:
