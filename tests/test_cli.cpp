@@ -28,7 +28,7 @@ TEST(Cli, HelpForEveryCommand) {
   for (const char* cmd : {"coeffs", "irradiance", "compare"}) {
     const auto r = runLiveprobe(std::string(cmd) + " --help");
     EXPECT_EQ(r.exitCode, 0);
-    EXPECT_NE(r.output.find("usage: liveprobe " + std::string(cmd)), std::string::npos);
+    EXPECT_NE(r.output.find("Usage: liveprobe " + std::string(cmd)), std::string::npos);
   }
   EXPECT_EQ(runLiveprobe("--help").exitCode, 0);
   EXPECT_NE(runLiveprobe("frobnicate").exitCode, 0);

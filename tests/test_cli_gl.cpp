@@ -40,7 +40,7 @@ TEST(CliGl, RenderHeadlessWithEnvironment) {
 // pixels as the OSMesa path (both are llvmpipe; stack-notes.md found them byte-identical).
 TEST(CliGl, ViewWindowUnderXvfb) {
   lpt::TempDir tmp;
-  const std::string common = "--coeff L00=0.8 --coeff L10=0.3,0.1,0.0 --size 200x150 --frames 3 ";
+  const std::string common = "--coeff L00=0.8 --coeff L10=0.3,0.1,0.0 --size 200x150 --frames 3 --no-hud ";
   const std::string win = tmp / "window.png", off = tmp / "offscreen.png";
   const std::string xvfb = "xvfb-run -a -s '-screen 0 640x480x24' ";
   const std::string cmd = xvfb + LIVEPROBE_BIN + " view " + common + "--screenshot " + win + " 2>&1";

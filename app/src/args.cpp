@@ -1,73 +1,113 @@
 #include "args.h"
 
-#include <cctype>
+#include <CLI/CLI.hpp>
+
+#include <algorithm>
 #include <cmath>
+#include <map>
 #include <sstream>
 
 #include "capture/error.h"
 
 namespace lp::cli {
 
-Args::Args(const CommandSpec& spec, const std::vector<std::string>& argv) {
-  for (std::size_t i = 0; i < argv.size(); ++i) {
-    const std::string& a = argv[i];
-    if (a == "--help" || a == "-h") {
-      help_ = true;
-      return;
+struct Args::Parsed {
+  CLI::App app;
+  std::map<std::string, std::vector<std::string>> values;  // storage bound to the options
+  std::map<std::string, CLI::Option*> options;
+  std::vector<std::string> positional;
+};
+
+namespace {
+
+// "[DEVICE...]" -> "DEVICE"
+std::string positionalName(const std::string& s) {
+  std::string n;
+  for (char c : s)
+    if (c != '[' && c != ']' && c != '.' && c != ' ') n += c;
+  return n;
+}
+
+// "--env-rotate,--rotate" (a name and its aliases) is known by its first name.
+std::string optionKey(const OptionSpec& o) { return o.name.substr(0, o.name.find(',')); }
+
+void declare(Args::Parsed& p, const CommandSpec& spec) {
+  CLI::App& app = p.app;
+  app.name("liveprobe " + spec.name);
+  app.description(spec.summary);
+  app.get_formatter()->column_width(34);
+  app.get_formatter()->label("REQUIRED", "");
+  for (const auto& o : spec.options) {
+    const std::string key = optionKey(o);
+    auto& store = p.values[key];
+    CLI::Option* opt = nullptr;
+    if (o.value.empty()) {
+      opt = app.add_flag(o.name, o.help)->multi_option_policy(CLI::MultiOptionPolicy::TakeAll);
+    } else {
+      opt = app.add_option(o.name, store, o.help)->type_name(o.value)->allow_extra_args(false);
+      if (o.optionalValue) opt->expected(0, 1);
+      else opt->expected(1);
+      opt->multi_option_policy(CLI::MultiOptionPolicy::TakeAll);  // repeats are judged below
     }
-    if (a.size() > 2 && a.rfind("--", 0) == 0) {
-      std::string name = a, value;
-      bool inlineValue = false;
-      if (auto eq = a.find('='); eq != std::string::npos) {
-        name = a.substr(0, eq);
-        value = a.substr(eq + 1);
-        inlineValue = true;
-      }
-      const OptionSpec* opt = nullptr;
-      for (const auto& o : spec.options)
-        if (o.name == name) opt = &o;
-      if (!opt)
-        throw Error(spec.name + ": unknown option " + name + " (see liveprobe " + spec.name +
-                    " --help)");
-      if (!opt->repeatable && values_.count(name))
-        throw Error(spec.name + ": option " + name + " given twice");
-      if (opt->value.empty()) {
-        if (inlineValue) throw Error(spec.name + ": option " + name + " takes no value");
-        values_.emplace(name, "");
-      } else {
-        if (!inlineValue) {
-          // An optional value is taken only when the next word looks like one (a number).
-          const bool next = i + 1 < argv.size() && argv[i + 1].rfind("--", 0) != 0;
-          const bool numeric = next && (std::isdigit(static_cast<unsigned char>(argv[i + 1][0])) || argv[i + 1][0] == '.');
-          if (opt->optionalValue && !numeric) {
-            values_.emplace(name, "");
-            continue;
-          }
-          if (i + 1 >= argv.size()) throw Error(spec.name + ": option " + name + " needs a value (" + opt->value + ")");
-          value = argv[++i];
-        }
-        values_.emplace(name, value);
-      }
-      continue;
-    }
-    positional_.push_back(a);
+    if (!o.group.empty()) opt->group(o.group);
+    p.options[key] = opt;
   }
+  if (spec.maxPositional > 0) {
+    auto* pos = app.add_option(positionalName(spec.positional), p.positional,
+                               spec.maxPositional > 1 ? "zero or more" : spec.minPositional ? "required" : "optional");
+    pos->expected(0, spec.maxPositional)->type_name("");
+  }
+}
+
+}  // namespace
+
+Args::Args(const CommandSpec& spec, const std::vector<std::string>& argv) : p_(std::make_unique<Parsed>()) {
+  declare(*p_, spec);
+  std::vector<std::string> reversed(argv.rbegin(), argv.rend());  // CLI11 takes them reversed
+  try {
+    p_->app.parse(reversed);
+  } catch (const CLI::CallForHelp&) {
+    help_ = true;
+    return;
+  } catch (const CLI::ExtrasError& e) {
+    // "The following argument was not expected: --bogus": name it as what it most likely is.
+    std::string extra = e.what();
+    extra = extra.substr(extra.find(':') + 1);
+    extra.erase(0, extra.find_first_not_of(' '));
+    const bool option = extra.rfind("-", 0) == 0;
+    throw Error((option ? "unknown option " : "unexpected argument ") + extra + " (see liveprobe " + spec.name + " --help)");
+  } catch (const CLI::ParseError& e) {
+    std::string what = e.what();
+    std::replace(what.begin(), what.end(), '\n', ' ');
+    throw Error(what + " (see liveprobe " + spec.name + " --help)");
+  }
+  for (const auto& o : spec.options)
+    if (!o.repeatable && p_->options[optionKey(o)]->count() > 1)
+      throw Error("option " + optionKey(o) + " given more than once");
+  positional_ = p_->positional;
   if (int(positional_.size()) < spec.minPositional)
-    throw Error(spec.name + ": missing argument (usage: liveprobe " + spec.name + " " +
-                spec.synopsis + ")");
+    throw Error("missing argument " + positionalName(spec.positional) + " (see liveprobe " + spec.name + " --help)");
   if (int(positional_.size()) > spec.maxPositional)
-    throw Error(spec.name + ": unexpected argument '" + positional_[spec.maxPositional] + "'");
+    throw Error("unexpected argument '" + positional_[std::size_t(spec.maxPositional)] + "'");
+}
+
+Args::~Args() = default;
+Args::Args(Args&&) noexcept = default;
+
+bool Args::has(const std::string& name) const {
+  auto it = p_->options.find(name);
+  return it != p_->options.end() && it->second->count() > 0;
 }
 
 std::string Args::get(const std::string& name, const std::string& fallback) const {
-  auto it = values_.find(name);
-  return it == values_.end() ? fallback : it->second;
+  if (!has(name)) return fallback;
+  const auto& v = p_->values.at(name);
+  return v.empty() ? std::string() : v.back();
 }
 
 std::vector<std::string> Args::all(const std::string& name) const {
-  std::vector<std::string> out;
-  for (auto [it, end] = values_.equal_range(name); it != end; ++it) out.push_back(it->second);
-  return out;
+  auto it = p_->values.find(name);
+  return it == p_->values.end() ? std::vector<std::string>{} : it->second;
 }
 
 double Args::number(const std::string& name, double fallback) const {
@@ -81,28 +121,41 @@ int Args::integer(const std::string& name, int fallback) const {
   return int(v);
 }
 
-std::string usage(const CommandSpec& spec) {
+namespace {
+std::string rangeText(double lo, double hi) {
   std::ostringstream s;
-  s << "usage: liveprobe " << spec.name << " " << spec.synopsis << "\n\n" << spec.summary << "\n";
-  if (!spec.options.empty()) s << "\noptions:\n";
-  for (const auto& o : spec.options) {
-    std::string left = "  " + o.name + (o.value.empty() ? "" : o.optionalValue ? " [" + o.value + "]" : " " + o.value);
-    if (left.size() < 28) left.resize(28, ' ');
-    else left += "\n" + std::string(28, ' ');
-    s << left << o.help << "\n";
-  }
-  s << "  --help                    this text\n";
+  s << lo << " to " << hi;
   return s.str();
 }
+}  // namespace
 
-std::pair<int, int> parseSize(const std::string& text, const std::string& what) {
-  int w = 0, h = 0;
+double Args::numberIn(const std::string& name, double fallback, double lo, double hi) const {
+  const double v = number(name, fallback);
+  if (has(name) && !(v >= lo && v <= hi)) throw Error(name + " " + get(name) + ": expected " + rangeText(lo, hi));
+  return v;
+}
+
+int Args::integerIn(const std::string& name, int fallback, int lo, int hi) const {
+  const int v = integer(name, fallback);
+  if (has(name) && (v < lo || v > hi)) throw Error(name + " " + get(name) + ": expected an integer from " + rangeText(lo, hi));
+  return v;
+}
+
+std::string usage(const CommandSpec& spec) {
+  Args::Parsed p;
+  declare(p, spec);
+  return p.app.help();
+}
+
+std::pair<int, int> parseSize(const std::string& text, const std::string& what, int maxSide) {
+  long long w = 0, h = 0;
   char x = 0, extra = 0;
   std::istringstream s(text);
-  if (!(s >> w >> x >> h) || (x != 'x' && x != 'X') || (s >> extra) || w <= 0 || h <= 0 ||
-      w > 65536 || h > 65536)
+  if (!(s >> w >> x >> h) || (x != 'x' && x != 'X') || (s >> extra) || w <= 0 || h <= 0)
     throw Error(what + " " + text + ": expected a size like 256x128");
-  return {w, h};
+  if (w > maxSide || h > maxSide)
+    throw Error(what + " " + text + ": each side must be at most " + std::to_string(maxSide));
+  return {int(w), int(h)};
 }
 
 double parseNumber(const std::string& text, const std::string& what) {
@@ -113,9 +166,27 @@ double parseNumber(const std::string& text, const std::string& what) {
   } catch (...) {
     used = 0;
   }
-  if (used == 0 || used != text.size() || !std::isfinite(v))
-    throw Error(what + " " + text + ": not a number");
+  if (used == 0 || used != text.size() || !std::isfinite(v)) throw Error(what + " " + text + ": not a number");
   return v;
+}
+
+std::vector<double> parseNumberList(const std::string& text, const std::string& what, std::size_t count,
+                                    const std::string& expected) {
+  std::vector<double> v;
+  std::stringstream s(text);
+  for (std::string part; std::getline(s, part, ',');) v.push_back(parseNumber(part, what));
+  if (v.size() != count) throw Error(what + " " + text + ": expected " + expected);
+  return v;
+}
+
+void requireExtension(const std::string& path, const std::string& what, const std::vector<std::string>& allowed) {
+  const auto dot = path.find_last_of('.');
+  std::string ext = dot == std::string::npos ? "" : path.substr(dot);
+  std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return char(std::tolower(c)); });
+  if (std::find(allowed.begin(), allowed.end(), ext) != allowed.end()) return;
+  std::string list;
+  for (const auto& a : allowed) list += (list.empty() ? "" : ", ") + a;
+  throw Error(what + " " + path + ": unsupported extension (expected " + list + ")");
 }
 
 }  // namespace lp::cli

@@ -8,7 +8,9 @@
 #include <map>
 #include <thread>
 
-#include <opencv2/imgproc.hpp>
+#include <unistd.h>
+#include <filesystem>
+#include <sstream>
 
 #include "capture/error.h"
 #include "capture/frame.h"
@@ -17,6 +19,8 @@
 #include "capture/pipeline.h"
 #include "coeffs_io.h"
 #include "commands.h"
+#include "atomic_file.h"
+#include "progress.h"
 #include "scene.h"
 #include "shading/thread_pool.h"
 
@@ -24,6 +28,7 @@ namespace lp::cli {
 
 namespace {
 
+namespace fs = std::filesystem;
 using Clock = std::chrono::steady_clock;
 const char* const kStages[] = {"grab", "convert", "project", "upload", "render", "readback"};
 constexpr int kStageCount = 6;
@@ -67,85 +72,146 @@ double calibrationMs() {
   return percentile(t, 0.5);
 }
 
-void drawPlot(const std::string& path, const std::vector<std::array<double, kStageCount>>& frames) {
-  const int W = 900, H = 360, histW = 300, pad = 40;
-  cv::Mat img(H, W + histW, CV_8UC3, cv::Scalar(255, 255, 255));
-  std::vector<double> total;
-  for (const auto& f : frames) {
-    double s = 0;
-    for (double v : f) s += v;
-    total.push_back(s);
-  }
-  const double ymax = std::max(1e-3, percentile(total, 1.0) * 1.1);
-  const cv::Scalar colours[kStageCount] = {{180, 119, 31}, {14, 127, 255}, {44, 160, 44}, {40, 39, 214}, {189, 103, 148}, {75, 86, 140}};
-  auto X = [&](std::size_t i) { return pad + int((W - 2 * pad) * double(i) / std::max<std::size_t>(1, frames.size() - 1)); };
-  auto Y = [&](double ms) { return H - pad - int((H - 2 * pad) * ms / ymax); };
-  // Stacked stages: each line is the cumulative time up to that stage.
-  for (int s = kStageCount - 1; s >= 0; --s)
-    for (std::size_t i = 1; i < frames.size(); ++i) {
-      double a = 0, b = 0;
-      for (int k = 0; k <= s; ++k) a += frames[i - 1][k], b += frames[i][k];
-      cv::line(img, {X(i - 1), Y(a)}, {X(i), Y(b)}, colours[s], 1, cv::LINE_AA);
+constexpr int kWarmup = 3;  // frames at the start of each run shown as warm-up (caches, JIT of llvmpipe's shaders)
+
+/// The frame-time plot, by gnuplot (pngcairo): stages stacked and filled against the frame
+/// number, the warm-up frames shaded, and a histogram of the total with median and p95 marked.
+/// Written to a temporary file and renamed; lp::Error when gnuplot is missing or fails.
+void drawPlot(const std::string& path, const std::vector<std::array<double, kStageCount>>& frames, int framesPerRun,
+              const std::string& title) {
+  const fs::path out(path);
+  const fs::path dir = out.has_parent_path() ? out.parent_path() : fs::path(".");
+  const std::string stem = (dir / ("." + out.filename().string() + "." + std::to_string(::getpid()))).string();
+  const std::string data = stem + ".dat", hist = stem + ".hist", script = stem + ".gp", png = stem + ".tmp.png";
+  struct Cleanup {
+    std::vector<std::string> files;
+    ~Cleanup() {
+      std::error_code ec;
+      for (const auto& f : files) fs::remove(f, ec);
     }
-  cv::rectangle(img, {pad, pad}, {W - pad, H - pad}, cv::Scalar(0, 0, 0));
-  char label[64];
-  std::snprintf(label, sizeof label, "%.1f ms", ymax);
-  cv::putText(img, label, {4, pad + 4}, cv::FONT_HERSHEY_SIMPLEX, 0.4, {0, 0, 0});
-  cv::putText(img, "0", {pad - 14, H - pad}, cv::FONT_HERSHEY_SIMPLEX, 0.4, {0, 0, 0});
-  cv::putText(img, "frame time (cumulative by stage) vs frame number", {pad, 20}, cv::FONT_HERSHEY_SIMPLEX, 0.5, {0, 0, 0});
-  for (int s = 0; s < kStageCount; ++s)
-    cv::putText(img, kStages[s], {pad + 90 * s, H - 10}, cv::FONT_HERSHEY_SIMPLEX, 0.45, colours[s], 1, cv::LINE_AA);
-  // Histogram of total frame time.
-  const int bins = 30;
-  std::vector<int> h(bins, 0);
-  for (double t : total) h[std::min(bins - 1, int(bins * t / ymax))]++;
-  const int hmax = std::max(1, *std::max_element(h.begin(), h.end()));
-  const int x0 = W + 10, bw = (histW - 30) / bins;
-  for (int b = 0; b < bins; ++b) {
-    const int top = H - pad - (H - 2 * pad) * h[b] / hmax;
-    cv::rectangle(img, {x0 + b * bw, top}, {x0 + (b + 1) * bw - 1, H - pad}, {120, 120, 120}, cv::FILLED);
+  } cleanup{{data, hist, script, png}};
+
+  std::vector<double> total;
+  {
+    std::ofstream d(data);
+    for (std::size_t i = 0; i < frames.size(); ++i) {
+      double cum = 0;
+      d << i;
+      for (double v : frames[i]) d << ' ' << (cum += v);
+      d << '\n';
+      total.push_back(cum);
+    }
+    if (!d) throw Error(path + ": cannot write the plot's data beside it");
   }
-  cv::putText(img, "histogram of frame time", {x0, 20}, cv::FONT_HERSHEY_SIMPLEX, 0.5, {0, 0, 0});
-  std::snprintf(label, sizeof label, "0 .. %.1f ms", ymax);
-  cv::putText(img, label, {x0, H - 10}, cv::FONT_HERSHEY_SIMPLEX, 0.45, {0, 0, 0});
-  saveImage8(path, img.cols, img.rows, 3, img.ptr<std::uint8_t>());
+  const double med = percentile(total, 0.5), p95 = percentile(total, 0.95);
+  const double top = std::max(1e-3, percentile(total, 0.99) * 1.25);  // a warm-up spike does not set the scale
+  const int bins = 40;
+  const double width = top / bins;
+  std::vector<int> counts(bins, 0);
+  for (double t : total) counts[std::size_t(std::min(bins - 1, int(t / width)))]++;
+  {
+    std::ofstream h(hist);
+    for (int b = 0; b < bins; ++b) h << (b + 0.5) * width << ' ' << counts[std::size_t(b)] << '\n';
+  }
+  std::ostringstream g;
+  g << "set terminal pngcairo size 1400,480 font 'sans,10'\nset output '" << png << "'\n"
+    << "set multiplot layout 1,2 title '" << title << "'\n"
+    << "set style fill solid 0.85 noborder\nset grid ytics lc rgb '#dddddd'\n"
+    << "set xlabel 'frame (all runs in order)'\nset ylabel 'time per frame (ms), stages stacked'\n"
+    << "set key outside right top vertical\nset yrange [0:" << top << "]\nset xrange [0:" << std::max<std::size_t>(1, frames.size() - 1) << "]\n";
+  for (std::size_t start = 0, k = 1; start < frames.size(); start += std::size_t(framesPerRun), ++k)
+    g << "set object " << k << " rect from " << start << ",0 to " << start + kWarmup - 1 << "," << top
+      << " fc rgb '#bbbbbb' fs solid 0.35 behind\n";
+  g << "set label 1 'shaded: warm-up' at graph 0.01, graph 0.96\n";
+  const char* colours[kStageCount] = {"#1f77b4", "#ff7f0e", "#2ca02c", "#d62728", "#9467bd", "#8c564b"};
+  g << "plot ";
+  for (int s = kStageCount - 1; s >= 0; --s) {
+    g << "'" << data << "' using 1:" << (s + 2) << " with filledcurves x1 lc rgb '" << colours[s] << "' title '"
+      << kStages[s] << "'";
+    g << (s ? ", " : "\n");
+  }
+  g << "unset object\nunset label\nset xlabel 'frame time (ms)'\nset ylabel 'frames'\nset xrange [0:" << top
+    << "]\nset yrange [0:*]\nset boxwidth " << width * 0.9 << "\n"
+    << "set arrow 1 from " << med << ", graph 0 to " << med << ", graph 1 nohead lc rgb '#2ca02c' lw 2\n"
+    << "set arrow 2 from " << p95 << ", graph 0 to " << p95 << ", graph 1 nohead lc rgb '#d62728' lw 2 dt 2\n"
+    << "set label 2 sprintf('median %.2f ms', " << med << ") at " << med << ", graph 0.95 offset 0.5,0 tc rgb '#2ca02c'\n"
+    << "set label 3 sprintf('p95 %.2f ms', " << p95 << ") at " << p95 << ", graph 0.88 offset 0.5,0 tc rgb '#d62728'\n"
+    << "plot '" << hist << "' using 1:2 with boxes lc rgb '#777777' title 'frames'\nunset multiplot\n";
+  {
+    std::ofstream f(script);
+    f << g.str();
+    if (!f) throw Error(path + ": cannot write the plot's script beside it");
+  }
+  const std::string cmd = "gnuplot '" + script + "' 2>&1";
+  FILE* pipe = ::popen(cmd.c_str(), "r");
+  if (!pipe) throw Error(path + ": cannot run gnuplot");
+  std::string said;
+  char buf[256];
+  while (std::fgets(buf, sizeof buf, pipe)) said += buf;
+  const int rc = ::pclose(pipe);
+  if (rc != 0 || !fs::exists(png)) {
+    const auto nl = said.find('\n');
+    throw Error(path + ": gnuplot failed (" + (rc == 127 * 256 ? std::string("not installed: scripts/deps installs gnuplot-nox")
+                                                                : said.substr(0, nl)) + ")");
+  }
+  std::error_code ec;
+  fs::rename(png, path, ec);
+  if (ec) throw Error(path + ": cannot rename the plot into place: " + ec.message());
 }
 
 }  // namespace
 
 const CommandSpec kBenchSpec{
     "bench",
-    "[SOURCE] [--frames N] [--repeat R] [--json OUT] [--plot OUT.png] [--baseline FILE]\n"
-    "       [--threshold PCT] [--inject-delay STAGE=MS] [--size WxH] [--model FILE|sphere]",
+    "[SOURCE]",
     "Frame-time regression run: replays N frames headless through the whole pipeline (R times)\n"
     "and times each stage per frame: grab (decode), convert, project, upload, render, readback.\n"
     "Reports median, p95, p99 and max per stage. With --baseline it compares the medians of the\n"
-    "runs, divided by a calibration kernel timed in the same run, and exits 1 when a stage is\n"
-    "slower than the baseline by more than --threshold percent (default 25). --inject-delay\n"
-    "slows one stage on purpose, to prove the detector works.",
+    "runs, divided by a calibration kernel timed in the same run, prints a verdict and exits 1\n"
+    "when a stage is slower than the baseline by more than --threshold percent (default 25) and\n"
+    "by more than 0.5 ms. --inject-delay slows one stage on purpose, to prove the detector works.\n"
+    "SOURCE defaults to the bundled recording recordings/sky.mkv.",
     [] {
       auto o = layoutOptions();
-      o.insert(o.end(), {{"--frames", "N", "frames per run (default 100)"},
-                         {"--repeat", "R", "runs; stage medians are taken per run, then the median of those (default 3)"},
-                         {"--json", "FILE", "write the results as JSON"},
-                         {"--plot", "FILE.png", "frame time against frame number, and a histogram"},
-                         {"--baseline", "FILE", "JSON from an earlier --json run to compare with"},
-                         {"--threshold", "PCT", "allowed slow-down per stage, percent (default 25)"},
-                         {"--inject-delay", "STAGE=MS", "add MS milliseconds of busy work to STAGE", true},
-                         {"--size", "WxH", "render size (default 640x360)"},
-                         {"--threads", "N", "projection threads (default 2)"},
-                         {"--model", "FILE|sphere", "model (default sphere)"}});
+      const std::string g = "Benchmark";
+      o.insert(o.end(), {{"--frames", "N", "frames per run, 1 to 100000 (default 100)", false, false, g},
+                         {"--repeat", "R", "runs, 1 to 1000; stage medians are taken per run, then the median of those (default 3)", false, false, g},
+                         {"--json", "FILE", "write the results as JSON", false, false, g},
+                         {"--plot", "FILE.png", "frame times by stage (stacked) and their histogram, drawn by gnuplot", false, false, g},
+                         {"--baseline", "FILE", "JSON from an earlier --json run to compare with", false, false, g},
+                         {"--threshold", "PCT", "allowed slow-down per stage, percent, 0 to 1000 (default 25)", false, false, g},
+                         {"--inject-delay", "STAGE=MS", "add MS (0 to 10000) milliseconds of busy work to STAGE; repeatable", true, false, g},
+                         {"--size", "WxH", "render size (default 640x360)", false, false, g},
+                         {"--threads", "N", "projection threads, 1 to 64 (default 2)", false, false, g},
+                         {"--model", "FILE|sphere", "model (default sphere)", false, false, g},
+                         {"--quiet", "", "no progress on stderr", false, false, g}});
       return o;
     }(),
     0, 1};
 
-int runBench(const Args& a) {
-  const std::string sourceName = a.positional().empty() ? defaultRecording() : a.positional()[0];
-  const int frames = a.integer("--frames", 100), repeat = a.integer("--repeat", 3);
-  if (frames < 1 || repeat < 1) throw Error("bench: --frames and --repeat must be at least 1");
-  const double threshold = a.number("--threshold", 25.0);
-  const auto size = parseSize(a.get("--size", "640x360"), "--size");
-  const unsigned threads = unsigned(std::max(1, a.integer("--threads", 2)));
+namespace {
+
+/// A stage's median below this (ms) is too small to judge by percent on this machine.
+constexpr double kMeasurableMs = 0.05;
+
+std::string plural(long n, const char* word) { return std::to_string(n) + " " + word + (n == 1 ? "" : "s"); }
+
+nlohmann::json readBaseline(const std::string& path) {
+  std::ifstream in(path);
+  if (!in) throw Error(path + ": cannot open the baseline");
+  nlohmann::json b;
+  try {
+    in >> b;
+    const double cal = b.at("calibration_ms").get<double>();
+    if (!(cal > 0) || !std::isfinite(cal)) throw Error(path + ": calibration_ms must be a positive number");
+    for (const auto& [name, st] : b.at("stages").items()) (void)st.at("median_ms").get<double>();
+  } catch (const nlohmann::json::exception& e) {
+    throw Error(path + ": not a liveprobe bench JSON (" + e.what() + ")");
+  }
+  return b;
+}
+
+std::array<double, kStageCount> parseInjections(const Args& a) {
   std::array<double, kStageCount> inject{};
   for (const auto& d : a.all("--inject-delay")) {
     const auto eq = d.find('=');
@@ -153,32 +219,40 @@ int runBench(const Args& a) {
     for (int s = 0; s < kStageCount; ++s)
       if (eq != std::string::npos && d.substr(0, eq) == kStages[s]) stage = s;
     if (stage < 0) throw Error("--inject-delay " + d + ": expected STAGE=MS, STAGE one of grab convert project upload render readback");
-    inject[stage] += parseNumber(d.substr(eq + 1), "--inject-delay");
+    const double ms = parseNumber(d.substr(eq + 1), "--inject-delay");
+    if (ms < 0 || ms > 10000) throw Error("--inject-delay " + d + ": expected 0 to 10000 ms");
+    inject[std::size_t(stage)] += ms;
   }
+  return inject;
+}
+
+}  // namespace
+
+int runBench(const Args& a) {
+  installStopHandlers();
+  const std::string sourceName = a.positional().empty() ? defaultRecording() : a.positional()[0];
+  const int frames = a.integerIn("--frames", 100, 1, 100000), repeat = a.integerIn("--repeat", 3, 1, 1000);
+  const double threshold = a.numberIn("--threshold", 25.0, 0.0, 1000.0);
+  const auto size = parseSize(a.get("--size", "640x360"), "--size");
+  const unsigned threads = unsigned(a.integerIn("--threads", 2, 1, 64));
+  const auto inject = parseInjections(a);
+  if (a.has("--plot")) requireExtension(a.get("--plot"), "--plot", {".png"});
   nlohmann::json baseline;
-  if (a.has("--baseline")) {
-    std::ifstream in(a.get("--baseline"));
-    if (!in) throw Error(a.get("--baseline") + ": cannot open the baseline");
-    try {
-      in >> baseline;
-      (void)baseline.at("stages");
-      (void)baseline.at("calibration_ms").get<double>();
-    } catch (const std::exception& e) {
-      throw Error(a.get("--baseline") + ": not a liveprobe bench JSON (" + e.what() + ")");
-    }
-  }
+  if (a.has("--baseline")) baseline = readBaseline(a.get("--baseline"));
   const LayoutSpec layout = layoutFromArgs(a);
+  const glm::mat3 orientation = envOrientationFromArgs(a);
   const Mesh mesh = meshFromArgs(a);
   auto ctx = openContext(gl::Backend::Headless, size);
   gl::Renderer renderer;
   loadModel(renderer, mesh);
+  renderer.setEnvOrientation(orientation);
   ThreadPool pool(threads);
-  const Linearizer linearizer;
   std::vector<std::array<double, kStageCount>> all;
   std::array<std::vector<double>, kStageCount> runMedians;
   std::vector<double> calibrations;
   std::string description;
-  for (int run = 0; run < repeat; ++run) {
+  Progress progress("bench", std::int64_t(frames) * repeat, a.has("--quiet"));
+  for (int run = 0; run < repeat && !stopRequested(); ++run) {
     calibrations.push_back(calibrationMs());
     auto source = openSource(sourceName);
     description = source->describe();
@@ -190,7 +264,7 @@ int runBench(const Args& a) {
     Frame frame;
     Image image;
     float exposure = 1.0f;
-    for (int i = 0; i < frames; ++i) {
+    for (int i = 0; i < frames && !stopRequested(); ++i) {
       std::array<double, kStageCount> t{};
       auto t0 = Clock::now();
       if (!source->next(frame)) {
@@ -210,7 +284,7 @@ int runBench(const Args& a) {
         if (auto why = layoutMismatch(layout, frame.width, frame.height); !why.empty()) throw Error(sourceName + ": " + why);
         projector.emplace(layout, frame.width, frame.height);
       }
-      const Sh9 sh = projectFrame(*projector, frame, lin, &pool);
+      const Sh9 sh = rotateSh(projectFrame(*projector, frame, lin, &pool), orientation);
       spin(inject[2]);
       t[2] = msSince(t0);
       t0 = Clock::now();
@@ -233,13 +307,20 @@ int runBench(const Args& a) {
       spin(inject[5]);
       t[5] = msSince(t0);
       times.push_back(t);
+      progress.update(std::int64_t(all.size() + times.size()));
     }
+    if (times.empty()) break;
     for (int s = 0; s < kStageCount; ++s) {
       std::vector<double> v;
-      for (const auto& t : times) v.push_back(t[s]);
-      runMedians[s].push_back(percentile(v, 0.5));
+      for (const auto& t : times) v.push_back(t[std::size_t(s)]);
+      runMedians[std::size_t(s)].push_back(percentile(v, 0.5));
     }
     all.insert(all.end(), times.begin(), times.end());
+  }
+  progress.finish();
+  if (stopRequested()) {
+    std::fprintf(stderr, "liveprobe: bench stopped by a signal after %s; nothing written\n", plural(long(all.size()), "frame").c_str());
+    return kExitInterrupted;
   }
   const double calibration = percentile(calibrations, 0.5);
 
@@ -248,12 +329,12 @@ int runBench(const Args& a) {
   out["runs"] = repeat;
   out["source"] = description;
   nlohmann::ordered_json stages;
-  std::printf("%-9s %9s %9s %9s %9s   (ms; %d runs of %d frames, %s)\n", "stage", "median", "p95", "p99", "max",
-              repeat, frames, description.c_str());
+  std::printf("%-9s %9s %9s %9s %9s   (ms; %s of %s, %s)\n", "stage", "median", "p95", "p99", "max",
+              plural(repeat, "run").c_str(), plural(frames, "frame").c_str(), description.c_str());
   for (int s = 0; s < kStageCount; ++s) {
     std::vector<double> v;
-    for (const auto& t : all) v.push_back(t[s]);
-    const double med = percentile(runMedians[s], 0.5);
+    for (const auto& t : all) v.push_back(t[std::size_t(s)]);
+    const double med = percentile(runMedians[std::size_t(s)], 0.5);
     stages[kStages[s]] = {{"median_ms", med}, {"p95_ms", percentile(v, 0.95)}, {"p99_ms", percentile(v, 0.99)},
                           {"max_ms", percentile(v, 1.0)}};
     std::printf("%-9s %9.3f %9.3f %9.3f %9.3f\n", kStages[s], med, percentile(v, 0.95), percentile(v, 0.99),
@@ -263,35 +344,51 @@ int runBench(const Args& a) {
   out["calibration_ms"] = calibration;
   std::printf("calibration kernel: %.3f ms\n", calibration);
   nlohmann::ordered_json regressions = nlohmann::ordered_json::array();
+  int compared = 0;
   if (!baseline.is_null()) {
     const double baseCal = baseline["calibration_ms"].get<double>();
     for (int s = 0; s < kStageCount; ++s) {
       if (!baseline["stages"].contains(kStages[s])) continue;
-      const double base = baseline["stages"][kStages[s]]["median_ms"].get<double>() / baseCal;
-      const double now = stages[kStages[s]]["median_ms"].get<double>() / calibration;
-      // A change under 0.5 ms (at the baseline's speed) is within scheduling noise on a 2-core
-      // machine whatever its percentage: sub-millisecond stages are judged by percent only above it.
-      const double floorMs = 0.5 / baseCal;
-      const double change = base > 0 ? 100.0 * (now - base) / base : 0.0;
-      std::printf("%-9s %+7.1f%% against the baseline (normalised by calibration)\n", kStages[s], change);
-      if (change > threshold && now - base > floorMs)
-        regressions.push_back({{"stage", kStages[s]}, {"change_pct", change},
-                               {"median_ms", stages[kStages[s]]["median_ms"]},
-                               {"baseline_median_ms", baseline["stages"][kStages[s]]["median_ms"]}});
+      const double baseMs = baseline["stages"][kStages[s]]["median_ms"].get<double>();
+      const double nowMs = stages[kStages[s]]["median_ms"].get<double>();
+      // Both normalised by the calibration kernel, then expressed at the baseline's speed.
+      const double nowAtBase = nowMs / calibration * baseCal;
+      ++compared;
+      if (baseMs < kMeasurableMs && nowAtBase < kMeasurableMs) {
+        std::printf("%-9s %8.3f ms vs %.3f ms (too small to measure)\n", kStages[s], nowAtBase, baseMs);
+        continue;
+      }
+      const double change = baseMs > kMeasurableMs ? 100.0 * (nowAtBase - baseMs) / baseMs : 0.0;
+      if (baseMs > kMeasurableMs)
+        std::printf("%-9s %8.3f ms vs %.3f ms  %+7.1f%% (normalised by calibration)\n", kStages[s], nowAtBase, baseMs, change);
+      else
+        std::printf("%-9s %8.3f ms vs %.3f ms (baseline too small for a percentage)\n", kStages[s], nowAtBase, baseMs);
+      // A change under 0.5 ms is within scheduling noise on a 2-core machine whatever its percentage.
+      const bool slower = nowAtBase - baseMs > 0.5 && (baseMs <= kMeasurableMs || change > threshold);
+      if (slower)
+        regressions.push_back({{"stage", kStages[s]}, {"change_pct", change}, {"change_ms", nowAtBase - baseMs},
+                               {"median_ms", nowMs}, {"baseline_median_ms", baseMs}});
     }
   }
   out["regressions"] = regressions;
-  if (a.has("--json")) {
-    const std::string path = a.get("--json"), tmp = path + ".tmp";
-    std::ofstream f(tmp);
-    f << out.dump(2) << "\n";
-    f.close();
-    if (!f || std::rename(tmp.c_str(), path.c_str()) != 0) throw Error(path + ": cannot write");
+  if (a.has("--json")) writeFileAtomically(a.get("--json"), out.dump(2) + "\n");
+  if (a.has("--plot"))
+    drawPlot(a.get("--plot"), all, frames,
+             "liveprobe bench: " + description + " (" + plural(repeat, "run") + " of " + plural(frames, "frame") + ")");
+  if (!baseline.is_null()) {
+    if (regressions.empty()) {
+      std::printf("verdict: no regression (%d stages within %.0f%% of the baseline)\n", compared, threshold);
+    } else {
+      std::string text;
+      for (const auto& r : regressions) {
+        char b[160];
+        std::snprintf(b, sizeof b, "%s%s +%.2f ms (%+.1f%%)", text.empty() ? "" : ", ", r["stage"].get<std::string>().c_str(),
+                      r["change_ms"].get<double>(), r["change_pct"].get<double>());
+        text += b;
+      }
+      std::printf("verdict: REGRESSION: %s (threshold %.0f%% and 0.5 ms)\n", text.c_str(), threshold);
+    }
   }
-  if (a.has("--plot")) drawPlot(a.get("--plot"), all);
-  for (const auto& r : regressions)
-    std::printf("REGRESSION: %s is %.1f%% slower than the baseline (threshold %.0f%%)\n",
-                r["stage"].get<std::string>().c_str(), r["change_pct"].get<double>(), threshold);
   return regressions.empty() ? 0 : 1;
 }
 

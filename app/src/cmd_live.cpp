@@ -17,9 +17,7 @@ namespace lp::cli {
 
 const CommandSpec kLiveSpec{
     "live",
-    "DEVICE [--layout ...] [--format mjpeg|yuyv|nv12|rgb24] [--size WxH] [--fps N]\n"
-    "       [--lock-exposure [SECONDS]] [--smooth S] [--coeffs-out FILE.jsonl] [--headless] [--record FILE]\n"
-    "       [--view-size WxH] [model and look options]",
+    "DEVICE",
     "A live light probe: streams a V4L2 camera (a 360 camera over UVC, or a webcam looking at a\n"
     "chrome ball with --layout mirrorball --circle cx,cy,r), re-projects the nine coefficients every\n"
     "frame and lights the model with them. Capture runs on its own thread and is never held back\n"
@@ -28,19 +26,15 @@ const CommandSpec kLiveSpec{
       std::vector<OptionSpec> o;
       for (const auto& opt : streamOptions())
         if (opt.name != "--fps") o.push_back(opt);  // --fps is the camera's here
-      o.insert(o.end(), {{"--format", "FMT", "pixel format: mjpeg, yuyv, nv12, rgb24 or auto (default: MJPEG first)"},
-                         {"--size", "WxH", "capture size asked of the camera (default: its largest)"},
-                         {"--fps", "N", "frame rate asked of the camera"},
-                         {"--lock-exposure", "SECONDS", "let auto exposure settle (default 2 s), then lock exposure, gain, white balance", false, true},
-                         {"--mjpeg-reduce", "1|2|4|8", "decode MJPEG at a reduced scale (default 1)"},
-                         {"--timeout", "SECONDS", "stop when no frame arrives for this long (default 2)"},
-                         {"--record", "FILE", "save the camera stream (.mkv FFV1 or .avi MJPEG) while it runs"},
-                         {"--frames", "N", "stop after N frames"},
-                         {"--view-size", "WxH", "window or frame size (default 1280x720; headless 640x360)"},
-                         {"--coeffs-out", "FILE.jsonl", "one JSON line per captured frame"},
-                         {"--out-dir", "DIR", "not for live: use replay on a --record file"},
-                         {"--out-video", "FILE", "not for live: use replay on a --record file"},
-                         {"--loop", "", "not for live"}});
+      const std::string g = "Camera";
+      o.insert(o.end(), {{"--format", "mjpeg|yuyv|nv12|rgb24|auto", "pixel format (default auto: MJPEG first)", false, false, g},
+                         {"--size", "WxH", "capture size asked of the camera (default: its largest)", false, false, g},
+                         {"--fps", "N", "frame rate asked of the camera, up to 1000", false, false, g},
+                         {"--lock-exposure", "SECONDS", "let auto exposure settle (default 2 s), then lock exposure, gain, white balance", false, true, g},
+                         {"--mjpeg-reduce", "1|2|4|8", "decode MJPEG at a reduced scale (default 1)", false, false, g},
+                         {"--timeout", "SECONDS", "stop when no frame arrives for this long (default 2)", false, false, g},
+                         {"--record", "FILE", "save the camera stream (.mkv FFV1, .avi MJPEG, .mp4 H.264) while it runs", false, false, g},
+                         {"--view-size", "WxH", "window or frame size (default 1280x720; headless 640x360)", false, false, "Output"}});
       auto scene = sceneOptions();
       o.insert(o.end(), scene.begin(), scene.end());
       return o;
@@ -48,8 +42,6 @@ const CommandSpec kLiveSpec{
     1, 1};
 
 int runLive(const Args& a) {
-  if (a.has("--out-dir") || a.has("--out-video") || a.has("--loop"))
-    throw Error("live: --out-dir, --out-video and --loop are for replay; record with --record FILE and replay it");
   layoutFromArgs(a);
   CameraSettings cs;
   cs.device = a.positional()[0];
@@ -64,7 +56,9 @@ int runLive(const Args& a) {
   if (cs.timeoutMs < 10) throw Error("--timeout " + a.get("--timeout") + ": too short");
   auto camera = std::make_unique<V4l2Source>(cs);
   camera->open();
-  std::fprintf(stderr, "liveprobe live: %s\n", camera->describe().c_str());
+  const bool headless = a.has("--headless") || !(std::getenv("DISPLAY") || std::getenv("WAYLAND_DISPLAY"));
+  std::fprintf(stderr, "liveprobe live: %s%s\n", camera->describe().c_str(),
+               headless && !a.has("--frames") && !a.has("--duration") ? "; running until Ctrl-C" : "");
   if (a.has("--lock-exposure")) {
     const double settle = a.get("--lock-exposure").empty() ? 2.0 : a.number("--lock-exposure", 2.0);
     const LockedExposure l = camera->lockExposure(settle);
@@ -77,7 +71,7 @@ int runLive(const Args& a) {
 
 const CommandSpec kDevicesSpec{
     "devices",
-    "[DEVICE ...]",
+    "[DEVICE...]",
     "Lists V4L2 cameras (default: every /dev/video*) with their formats, sizes, frame rates and\n"
     "controls.",
     {},

@@ -6,6 +6,8 @@
 
 #include "capture/error.h"
 #include "commands.h"
+#include "hud.h"
+#include "progress.h"
 #include "scene.h"
 
 namespace lp::cli {
@@ -21,97 +23,155 @@ std::vector<OptionSpec> concat(std::vector<OptionSpec> a, const std::vector<Opti
 
 const CommandSpec kRenderSpec{
     "render",
-    "[--env FILE [--layout ...] | --coeffs FILE.json | --coeff NAME=VALUE ...] [--model FILE|sphere]\n"
-    "       [--size WxH] [--out OUT.png] [--headless] [--yaw D] [--pitch D] [--distance D] ...",
+    "",
     "Renders one image of a model lit by nine SH coefficients (diffuse albedo * E / pi, exposure,\n"
-    "tone map, sRGB), with the environment behind it. Offscreen through OSMesa when there is no\n"
-    "display (or with --headless); otherwise in a GLFW window, read back before it is shown.",
+    "tone map, sRGB, 4x MSAA), with the environment behind it. Offscreen through OSMesa when there\n"
+    "is no display (or with --headless); otherwise in a GLFW window, read back before it is shown.",
     concat(concat(lightingOptions(), sceneOptions()),
-           {{"--size", "WxH", "image size (default 1280x720)"},
-            {"--out", "FILE.png", "output image (default render.png)"}}),
+           {{"--size", "WxH", "image size, each side up to 16384 (default 1280x720)", false, false, "Output"},
+            {"--out", "FILE.png", "output image, .png or .jpg (default render.png)", false, false, "Output"},
+            {"--hud", "", "draw the HUD (the panorama, the probe balls, the coefficients) into the image", false, false, "Output"}}),
     0, 0};
+
+namespace {
+
+/// The lighting every drawing command needs, or an error that names the three ways to give it.
+Lighting requireLighting(const Args& a) {
+  auto l = lightingFromArgs(a);
+  if (!l) throw Error("give the lighting: --env FILE, --coeffs FILE.json or --coeff NAME=VALUE");
+  return std::move(*l);
+}
+
+/// A HUD that shows a still's lighting (one sample, no stage times).
+void showStill(Hud& hud, const Args& a, const Lighting& lighting) {
+  const std::string source = a.has("--env") ? a.get("--env") : a.has("--coeffs") ? a.get("--coeffs") : "--coeff";
+  hud.setSource(source, a.has("--env") ? std::string(layoutName(lighting.layout.layout)) : "coefficients", false, true);
+  HudSample s;
+  s.radiance = s.unsmoothed = lighting.radiance;
+  hud.push(s);
+}
+
+}  // namespace
 
 int runRender(const Args& a) {
   const auto size = parseSize(a.get("--size", "1280x720"), "--size");
-  const auto lighting = lightingFromArgs(a);
-  if (!lighting) throw Error("render: give the lighting: --env FILE, --coeffs FILE.json or --coeff NAME=VALUE");
-  const gl::Camera camera = cameraFromArgs(a);
-  const gl::ShadingSettings shading = shadingFromArgs(a, lighting->radiance);
-  const Mesh mesh = meshFromArgs(a);
   const std::string out = a.get("--out", "render.png");
+  requireExtension(out, "--out", {".png", ".jpg", ".jpeg"});
+  const Lighting lighting = requireLighting(a);
+  const gl::Camera camera = cameraFromArgs(a);
+  ViewState state;
+  state.camera = camera;
+  state.shading = shadingFromArgs(a, lighting.radiance, lighting.background.has_value());
+  const Mesh mesh = meshFromArgs(a);
   auto ctx = openContext(backendFromArgs(a), size);
   try {
     gl::Renderer renderer;
-    loadScene(renderer, mesh, *lighting);
+    loadScene(renderer, mesh, lighting);
     const glm::ivec2 fb = ctx->framebufferSize();
-    renderer.draw(fb, camera, shading);
+    renderer.draw(fb, camera, state.shading);
+    if (a.has("--hud")) {
+      Hud hud(*ctx);
+      showStill(hud, a, lighting);
+      hud.draw(fb, renderer, state, 0.0);
+    }
     const auto px = gl::Renderer::readRgb8(fb);
     saveRgb8(out, fb.x, fb.y, px.data());
   } catch (const gl::ContextError& e) {
     throw Error(std::string("GL: ") + e.what());
   }
-  std::cerr << "liveprobe render: " << out << " (" << mesh.triangleCount() << " triangles, "
-            << ctx->describe() << ")\n";
+  std::cerr << "liveprobe: " << out << " (" << mesh.triangleCount() << " triangles, " << ctx->describe() << ")\n";
   return 0;
 }
 
 const CommandSpec kViewSpec{
     "view",
-    "[--env FILE [--layout ...] | --coeffs FILE.json | --coeff ...] [--model FILE|sphere]\n"
-    "       [--size WxH] [--screenshot OUT.png --frames N] ...",
-    "Opens an interactive window: drag with the left button to orbit, scroll to zoom, Esc or Q\n"
-    "to quit. --screenshot OUT.png --frames N renders N frames, saves the last and exits.",
+    "",
+    "Opens an interactive window with the HUD: drag with the left button to orbit, scroll to\n"
+    "zoom; R resets the view, B toggles the background, H the HUD, +/- change the exposure, F1 or\n"
+    "? shows the keys, Esc or Q quits. The coefficient panel edits the nine coefficients and saves\n"
+    "them as JSON for render --coeffs. --screenshot OUT.png --frames N renders N frames, saves the\n"
+    "last and exits (headless too).",
     concat(concat(lightingOptions(), sceneOptions()),
-           {{"--size", "WxH", "window size (default 1280x720)"},
-            {"--screenshot", "FILE.png", "save the last frame here and exit (with --frames)"},
-            {"--frames", "N", "number of frames to render before the screenshot (default 1)"}}),
+           {{"--size", "WxH", "window size (default 1280x720)", false, false, "Output"},
+            {"--screenshot", "FILE.png", "save the last frame here and exit (with --frames)", false, false, "Output"},
+            {"--frames", "N", "number of frames to render before the screenshot (default 1)", false, false, "Output"},
+            {"--save-coeffs", "FILE.json", "where the coefficient panel's Save writes (default coeffs-edited.json)", false, false, "Output"},
+            {"--hud", "", "draw the HUD into a headless screenshot too", false, false, "Output"},
+            {"--no-hud", "", "start with the HUD hidden (H shows it)", false, false, "Output"}}),
     0, 0};
 
 int runView(const Args& a) {
+  installStopHandlers();
   const auto size = parseSize(a.get("--size", "1280x720"), "--size");
-  const auto lighting = lightingFromArgs(a);
-  if (!lighting) throw Error("view: give the lighting: --env FILE, --coeffs FILE.json or --coeff NAME=VALUE");
-  gl::Camera camera = cameraFromArgs(a);
-  const gl::ShadingSettings shading = shadingFromArgs(a, lighting->radiance);
+  Lighting lighting = requireLighting(a);
+  ViewState state;
+  state.camera = state.initialCamera = cameraFromArgs(a);
+  state.shading = shadingFromArgs(a, lighting.radiance, lighting.background.has_value());
   const Mesh mesh = meshFromArgs(a);
   const bool screenshot = a.has("--screenshot");
-  const int frames = a.integer("--frames", 1);
-  if (frames < 1) throw Error("--frames " + a.get("--frames") + ": must be at least 1");
+  if (screenshot) requireExtension(a.get("--screenshot"), "--screenshot", {".png", ".jpg", ".jpeg"});
+  const int frames = a.integerIn("--frames", 1, 1, 1000000);
   auto ctx = openContext(backendFromArgs(a), size);
   if (ctx->isHeadless() && !screenshot)
-    throw Error("view: no display to open a window on (use --screenshot, or liveprobe render)");
+    throw Error("no display to open a window on (use --screenshot, or liveprobe render)");
   try {
     gl::Renderer renderer;
-    loadScene(renderer, mesh, *lighting);
+    loadScene(renderer, mesh, lighting);
+    std::unique_ptr<Hud> hud;
+    if (!ctx->isHeadless() || a.has("--hud")) {
+      hud = std::make_unique<Hud>(*ctx);
+      showStill(*hud, a, lighting);
+      hud->enableEditor(&lighting.radiance, a.get("--save-coeffs", "coeffs-edited.json"));
+      state.hud = ctx->isHeadless() || !a.has("--no-hud");
+    }
     auto t0 = std::chrono::steady_clock::now();
     std::vector<double> frameMs;
-    for (int frame = 0; !ctx->shouldClose(); ++frame) {
+    std::size_t fpsFrames = 0;
+    double lastMs = 0;
+    for (int frame = 0; !ctx->shouldClose() && !stopRequested(); ++frame) {
       const auto start = std::chrono::steady_clock::now();
-      applyInput(camera, ctx->pollEvents());
+      gl::InputDelta input = ctx->pollEvents();
+      if (hud && hud->wantsMouse()) input.drag = {}, input.scroll = 0;
+      if (!(hud && hud->wantsKeyboard())) applyKeys(input.keys, state, false);
+      applyInput(state.camera, input);
       const glm::ivec2 fb = ctx->framebufferSize();
-      renderer.draw(fb, camera, shading);
+      renderer.draw(fb, state.camera, state.shading);
+      if (hud && (state.hud || state.help)) {
+        hud->draw(fb, renderer, state, lastMs);
+        if (hud->edited()) {
+          renderer.setLighting(lighting.radiance);
+          HudSample s;
+          s.radiance = s.unsmoothed = lighting.radiance;
+          hud->push(s);
+        }
+      }
       gl::Renderer::finish();
-      frameMs.push_back(std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count());
+      lastMs = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+      frameMs.push_back(lastMs);
+      ++fpsFrames;
       if (screenshot && frame + 1 >= frames) {
         const auto px = gl::Renderer::readRgb8(fb);
         saveRgb8(a.get("--screenshot"), fb.x, fb.y, px.data());
         std::sort(frameMs.begin(), frameMs.end());
-        std::fprintf(stderr, "liveprobe view: %s after %d frames, median frame %.2f ms (%dx%d, %zu triangles, %s)\n",
-                     a.get("--screenshot").c_str(), frames, frameMs[frameMs.size() / 2], fb.x, fb.y,
-                     mesh.triangleCount(), ctx->describe().c_str());
+        std::fprintf(stderr, "liveprobe: %s after %d frame%s, median frame %.2f ms (%dx%d, %zu triangles, %s)\n",
+                     a.get("--screenshot").c_str(), frames, frames == 1 ? "" : "s", frameMs[frameMs.size() / 2], fb.x,
+                     fb.y, mesh.triangleCount(), ctx->describe().c_str());
         break;
       }
       ctx->present();
-      if ((frame + 1) % 120 == 0) {
-        const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-        std::fprintf(stderr, "liveprobe view: %.1f frames/s\n", 120.0 / s);
+      const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+      if (s >= 1.0) {
+        char title[128];
+        std::snprintf(title, sizeof title, "liveprobe view - %.1f frames/s", double(fpsFrames) / s);
+        ctx->setTitle(title);
+        fpsFrames = 0;
         t0 = std::chrono::steady_clock::now();
       }
     }
   } catch (const gl::ContextError& e) {
     throw Error(std::string("GL: ") + e.what());
   }
-  return 0;
+  return stopRequested() ? kExitInterrupted : 0;
 }
 
 }  // namespace lp::cli

@@ -11,6 +11,9 @@
 #include "capture/error.h"
 #include "capture/pipeline.h"
 #include "capture/recorder.h"
+#include "atomic_file.h"
+#include "hud.h"
+#include "progress.h"
 #include "coeffs_io.h"
 #include "commands.h"
 #include "scene.h"
@@ -53,54 +56,6 @@ std::string coeffsLine(const ProcessedFrame& f, double renderMs) {
   return j.dump();
 }
 
-/// A text file written under a temporary name and renamed by commit(); removed if never
-/// committed, so an aborted run leaves nothing half-written.
-class AtomicTextFile {
- public:
-  explicit AtomicTextFile(const std::string& path) : path_(path) {
-    const fs::path p(path);
-    const fs::path dir = p.has_parent_path() ? p.parent_path() : fs::path(".");
-    std::error_code ec;
-    if (!fs::is_directory(dir, ec)) throw Error(path + ": folder " + dir.string() + " does not exist");
-    tmp_ = (dir / ("." + p.filename().string() + ".tmp")).string();
-    out_.open(tmp_);
-    if (!out_) throw Error(path + ": cannot write");
-  }
-  ~AtomicTextFile() {
-    if (!committed_) {
-      out_.close();
-      std::error_code ec;
-      fs::remove(tmp_, ec);
-    }
-  }
-  void line(const std::string& s) {
-    std::lock_guard lock(mutex_);
-    out_ << s << '\n';
-  }
-  void commit() {
-    out_.close();
-    if (!out_) throw Error(path_ + ": write failed");
-    std::error_code ec;
-    fs::rename(tmp_, path_, ec);
-    if (ec) throw Error(path_ + ": cannot rename into place: " + ec.message());
-    committed_ = true;
-  }
-
- private:
-  std::string path_, tmp_;
-  std::ofstream out_;
-  std::mutex mutex_;
-  bool committed_ = false;
-};
-
-glm::mat3 parseRotation(const std::string& text) {
-  std::vector<float> v;
-  std::stringstream s(text);
-  for (std::string part; std::getline(s, part, ',');) v.push_back(float(parseNumber(part, "--rotate")));
-  if (v.size() != 3) throw Error("--rotate " + text + ": expected yaw,pitch,roll in degrees");
-  return rotationYawPitchRoll(v[0], v[1], v[2]);
-}
-
 Photometry photometryFromArgs(const Args& a) {
   Photometry p;
   const std::string g = a.get("--gamma", "srgb");
@@ -117,35 +72,40 @@ Photometry photometryFromArgs(const Args& a) {
 
 std::vector<OptionSpec> streamOptions() {
   auto o = layoutOptions();
-  o.insert(o.end(), {{"--gamma", "srgb|G", "8-bit decoding: the sRGB curve (default) or code^G"},
-                     {"--input-exposure", "X", "linear radiance scale applied to the input (default 1)"},
-                     {"--rotate", "YAW,PITCH,ROLL", "rotate the lighting (degrees; SH rotation, no resampling)"},
-                     {"--smooth", "SECONDS", "exponential moving average of the coefficients"},
-                     {"--fps", "F", "frame rate of image sequences (default 30)"},
-                     {"--reduce", "F", "equirect: project an F x F area average (faster; error in README)"},
-                     {"--threads", "N", "threads for one frame's projection (default 2)"}});
+  const std::string g = "Stream";
+  o.insert(o.end(), {{"--gamma", "srgb|G", "8-bit decoding: the sRGB curve (default) or code^G, G in (0.2, 5)", false, false, g},
+                     {"--input-exposure", "X", "linear radiance scale applied to the input (default 1)", false, false, g},
+                     {"--smooth", "SECONDS", "exponential moving average of the coefficients (and its latency)", false, false, g},
+                     {"--fps", "F", "frame rate of image sequences, 0 to 1000 (default 30)", false, false, g},
+                     {"--reduce", "F", "equirect: project an F x F area average, 1 to 64 (error in README)", false, false, g},
+                     {"--threads", "N", "threads for one frame's projection, 1 to 64 (default 2)", false, false, g},
+                     {"--frames", "N", "stop after N frames", false, false, g},
+                     {"--duration", "SECONDS", "stop after this much of the source's time", false, false, g},
+                     {"--coeffs-out", "FILE.jsonl", "one JSON line per frame: coefficients and stage timings", false, false, g},
+                     {"--hud", "", "draw the HUD into headless frames too", false, false, g},
+                     {"--no-hud", "", "hide the HUD (H toggles it in a window)", false, false, g},
+                     {"--quiet", "", "no progress on stderr", false, false, g}});
   return o;
 }
 
 const CommandSpec kReplaySpec{
     "replay",
-    "[SOURCE] [--layout ...] [--loop] [--headless] [--frames N] [--coeffs-out FILE.jsonl]\n"
-    "       [--out-dir DIR | --out-video FILE] [--rotate Y,P,R] [--smooth S] [model and look options]",
+    "[SOURCE]",
     "Replays a panoramic stream, re-projecting the nine coefficients every frame, and draws the\n"
-    "model lit by them with the frame behind it. SOURCE: a video (mp4, webm, mkv, avi), an image\n"
-    "sequence (folder or printf pattern), an image, a folder of six cube faces, or\n"
+    "model lit by them with the frame behind it. SOURCE: a video (mp4, webm, mkv, avi, mov), an\n"
+    "image sequence (folder or printf pattern), an image, a folder of six cube faces, or\n"
     "synthetic[:WxH[@FPS]]; default: the bundled recording recordings/sky.mkv.\n"
     "In a window capture runs in real time on its own thread and the newest coefficients are\n"
-    "drawn (stale frames are dropped and counted); headless (--headless, or no display) every\n"
-    "frame is drawn, and written with --out-dir or --out-video.",
+    "drawn (stale frames are dropped and counted); Space pauses, Right steps, F1 lists the keys.\n"
+    "Headless (--headless, or no display) every frame is drawn, and written with --out-dir or\n"
+    "--out-video. Ctrl-C stops cleanly: outputs are finalised, the summary printed, exit 130.",
     [] {
       auto o = streamOptions();
-      o.insert(o.end(), {{"--loop", "", "start again at the end of the source"},
-                         {"--frames", "N", "stop after N frames"},
-                         {"--size", "WxH", "window or frame size (default 1280x720; headless 640x360)"},
-                         {"--coeffs-out", "FILE.jsonl", "one JSON line per frame: coefficients and stage timings"},
-                         {"--out-dir", "DIR", "headless: write each rendered frame as DIR/frame_NNNNNN.png"},
-                         {"--out-video", "FILE", "headless: write the rendered frames as a video (.mkv/.avi)"}});
+      const std::string g = "Output";
+      o.insert(o.end(), {{"--loop", "", "start again at the end of the source", false, false, "Stream"},
+                         {"--size", "WxH", "window or frame size (default 1280x720; headless 640x360)", false, false, g},
+                         {"--out-dir", "DIR", "headless: write each rendered frame as DIR/frame_NNNNNN.png", false, false, g},
+                         {"--out-video", "FILE", "headless: write the rendered frames as a video (.mkv FFV1, .avi MJPEG, .mp4 H.264)", false, false, g}});
       auto scene = sceneOptions();
       o.insert(o.end(), scene.begin(), scene.end());
       return o;
@@ -154,157 +114,277 @@ const CommandSpec kReplaySpec{
 
 namespace {
 
+/// The pipeline's options from the command line.
+PipelineOptions pipelineOptionsFromArgs(const Args& a) {
+  PipelineOptions opt;
+  opt.layout = layoutFromArgs(a);
+  opt.photometry = photometryFromArgs(a);
+  if (a.has("--env-rotate") || a.has("--env-flip")) opt.rotation = envOrientationFromArgs(a);
+  opt.smoothSeconds = a.numberIn("--smooth", 0.0, 0.0, 3600.0);
+  opt.loop = a.has("--loop");
+  opt.reduce = a.integerIn("--reduce", 1, 1, 64);
+  opt.threads = unsigned(a.integerIn("--threads", 2, 1, 64));
+  opt.maxFrames = a.integerIn("--frames", -1, 1, 1000000000);
+  return opt;
+}
+
+/// Where the frames go besides the screen: --coeffs-out, --out-dir, --out-video, --record.
+struct StreamOutputs {
+  std::unique_ptr<AtomicTextFile> coeffs;
+  std::string outDir;
+  std::unique_ptr<VideoRecorder> video, record;
+
+  void writeFrame(const ProcessedFrame& f, glm::ivec2 fb, const std::vector<std::uint8_t>& rgb) const {
+    if (!outDir.empty()) {
+      char name[32];
+      std::snprintf(name, sizeof name, "frame_%06llu.png", static_cast<unsigned long long>(f.index));
+      saveRgb8((fs::path(outDir) / name).string(), fb.x, fb.y, rgb.data());
+    }
+    if (video) {
+      Frame out;
+      out.format = PixelFormat::Bgr8;
+      out.width = fb.x, out.height = fb.y;
+      out.timestamp = f.timestamp;
+      out.bgr8.resize(rgb.size());
+      for (std::size_t i = 0; i < rgb.size(); i += 3)
+        out.bgr8[i] = rgb[i + 2], out.bgr8[i + 1] = rgb[i + 1], out.bgr8[i + 2] = rgb[i];
+      video->write(out);
+    }
+  }
+};
+
+StreamOutputs openOutputs(const Args& a, double fps, const std::string& description, double radianceScale) {
+  StreamOutputs o;
+  if (a.has("--out-dir") && a.has("--out-video")) throw Error("give --out-dir or --out-video, not both");
+  if (a.has("--coeffs-out")) o.coeffs = std::make_unique<AtomicTextFile>(a.get("--coeffs-out"));
+  o.outDir = a.get("--out-dir");
+  if (!o.outDir.empty()) {
+    std::error_code ec;
+    fs::create_directories(o.outDir, ec);
+    if (!fs::is_directory(o.outDir)) throw Error("--out-dir " + o.outDir + ": cannot create the folder");
+  }
+  if (a.has("--out-video")) {
+    requireExtension(a.get("--out-video"), "--out-video", {".mkv", ".avi", ".mp4"});
+    o.video = std::make_unique<VideoRecorder>(a.get("--out-video"), fps, "liveprobe replay of " + description);
+  }
+  if (a.has("--record")) {
+    requireExtension(a.get("--record"), "--record", {".mkv", ".avi", ".mp4"});
+    o.record = std::make_unique<VideoRecorder>(a.get("--record"), fps, description, radianceScale);
+  }
+  return o;
+}
+
+/// What the render loop measured, for the summary.
+struct StreamTally {
+  std::vector<double> grab, convert, project, upload, render;
+  std::size_t drawn = 0, saturated = 0;
+};
+
+/// Everything the render loop holds: GL, the HUD, the interactive state.
+struct StreamView {
+  std::unique_ptr<gl::GlContext> ctx;
+  std::unique_ptr<gl::Renderer> renderer;
+  std::unique_ptr<Hud> hud;
+  ViewState state;
+  bool autoExposure = true, haveLighting = false;
+  LayoutSpec layout;
+
+  /// Uploads a frame's lighting and background; returns the upload time in ms.
+  double use(const ProcessedFrame& f) {
+    const auto t0 = Clock::now();
+    if (!haveLighting && autoExposure) state.shading.exposure = cli::autoExposure(f.radiance);
+    haveLighting = true;
+    renderer->setLighting(f.radiance);
+    if (f.image) setBackground(*renderer, *f.image, layout);
+    if (f.raw) setBackground(*renderer, *f.raw, layout, f.rawScale);
+    gl::Renderer::finish();
+    return std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
+  }
+  void draw(double lastFrameMs) {
+    const glm::ivec2 fb = ctx->framebufferSize();
+    renderer->draw(fb, state.camera, state.shading);
+    if (hud && (state.hud || state.help)) hud->draw(fb, *renderer, state, lastFrameMs);
+  }
+};
+
+void recordSample(StreamTally& t, const ProcessedFrame& f, double uploadMs, double renderMs, Hud* hud,
+                  const CapturePipeline& pipeline) {
+  t.grab.push_back(f.times.grabMs);
+  t.convert.push_back(f.times.convertMs);
+  t.project.push_back(f.times.projectMs);
+  t.upload.push_back(uploadMs);
+  t.render.push_back(renderMs);
+  t.saturated += f.saturated;
+  if (!hud) return;
+  HudSample s;
+  s.frame = f.index;
+  s.time = f.timestamp;
+  s.grabMs = f.times.grabMs, s.convertMs = f.times.convertMs, s.projectMs = f.times.projectMs;
+  s.uploadMs = uploadMs, s.renderMs = renderMs;
+  s.radiance = f.radiance;
+  s.unsmoothed = f.unsmoothed;
+  hud->push(s);
+  const PipelineStats st = pipeline.stats();
+  hud->setCounters({st.captured, t.drawn, st.dropped, st.skipped, t.grab.empty() ? 0.0 : double(t.saturated) / double(t.grab.size())});
+}
+
+/// Headless replay: every frame drawn, in order, and written.
+void runOffline(CapturePipeline& pipeline, StreamView& view, const StreamOutputs& out, StreamTally& tally,
+                Progress& progress) {
+  double lastMs = 0;
+  while (auto f = pipeline.waitNext()) {
+    const double uploadMs = view.use(*f);
+    const auto t0 = Clock::now();
+    view.draw(lastMs);
+    const glm::ivec2 fb = view.ctx->framebufferSize();
+    const auto px = gl::Renderer::readRgb8(fb);
+    const double ms = std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
+    ++tally.drawn;
+    recordSample(tally, *f, uploadMs, ms, view.hud.get(), pipeline);
+    if (out.coeffs) out.coeffs->line(coeffsLine(*f, ms));
+    out.writeFrame(*f, fb, px);
+    lastMs = ms;
+    progress.update(std::int64_t(tally.drawn));
+    if (stopRequested()) break;  // this frame is complete; the rest is dropped
+  }
+}
+
+/// A window (or a camera headless): the newest coefficients, never waiting for capture.
+void runInteractive(CapturePipeline& pipeline, StreamView& view, StreamTally& tally, Progress& progress,
+                    bool live, const std::string& title) {
+  auto fpsT0 = Clock::now();
+  std::size_t fpsFrames = 0;
+  double lastMs = 0;
+  bool wasPaused = false;
+  const bool headless = view.ctx->isHeadless();
+  while (!view.ctx->shouldClose() && !stopRequested()) {
+    gl::InputDelta input = view.ctx->pollEvents();
+    if (view.hud && view.hud->wantsMouse()) input.drag = {}, input.scroll = 0;
+    if (!(view.hud && view.hud->wantsKeyboard())) applyKeys(input.keys, view.state, !live);
+    applyInput(view.state.camera, input);
+    if (view.state.paused != wasPaused) pipeline.setPaused(wasPaused = view.state.paused);
+    for (; view.state.steps > 0; --view.state.steps) pipeline.step();
+    double uploadMs = 0;
+    auto f = pipeline.takeLatest();
+    if (f) uploadMs = view.use(*f);
+    else if (pipeline.finished()) break;
+    else if (headless) {  // live, headless: nothing new to draw yet
+      std::this_thread::sleep_for(std::chrono::milliseconds(2));
+      continue;
+    }
+    const auto t0 = Clock::now();
+    view.draw(lastMs);
+    view.ctx->present();
+    lastMs = std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
+    if (f) {
+      ++tally.drawn;
+      recordSample(tally, *f, uploadMs, lastMs, view.hud.get(), pipeline);
+      progress.update(std::int64_t(pipeline.stats().captured));
+    }
+    ++fpsFrames;
+    const double s = std::chrono::duration<double>(Clock::now() - fpsT0).count();
+    if (s >= 1.0 && !headless) {
+      char t[256];
+      std::snprintf(t, sizeof t, "liveprobe - %s - frame %zu - %.1f frames/s%s", title.c_str(), pipeline.stats().captured,
+                    double(fpsFrames) / s, view.state.paused ? " - paused" : "");
+      view.ctx->setTitle(t);
+      fpsT0 = Clock::now(), fpsFrames = 0;
+    }
+  }
+}
+
+void printSummary(const std::string& description, const PipelineStats& st, const StreamTally& t, double smoothSeconds,
+                  bool interrupted) {
+  std::fprintf(stderr,
+               "liveprobe: %s: %zu frames captured, %zu drawn, %zu dropped (stale), %zu skipped (corrupt)%s%s%s\n"
+               "  median ms: grab %.2f, convert %.2f, project %.2f, upload %.2f, render %.2f; saturated values %.1f per frame\n",
+               description.c_str(), st.captured, t.drawn, st.dropped, st.skipped, st.endReason.empty() ? "" : "; ",
+               st.endReason.c_str(), interrupted ? "; stopped by a signal" : "", median(t.grab), median(t.convert),
+               median(t.project), median(t.upload), median(t.render),
+               t.grab.empty() ? 0.0 : double(t.saturated) / double(t.grab.size()));
+  if (smoothSeconds > 0)
+    std::fprintf(stderr, "  --smooth %.3g s: lighting lags a step change by %.3g s (63%% of the step)\n", smoothSeconds,
+                 smoothSeconds);
+}
+
 // The pipeline and the render loop, for replay (a file) and live (a camera). A camera is never
 // paced or held back: capture uses the latest-value handoff even headless, and --coeffs-out
 // lines are written as frames are captured.
 int runStream(const Args& a, std::unique_ptr<FrameSource> source, bool live) {
-  PipelineOptions opt;
-  opt.layout = layoutFromArgs(a);
-  opt.photometry = photometryFromArgs(a);
-  if (a.has("--rotate")) opt.rotation = parseRotation(a.get("--rotate"));
-  opt.smoothSeconds = a.number("--smooth", 0.0);
-  if (opt.smoothSeconds < 0) throw Error("--smooth " + a.get("--smooth") + ": must be >= 0");
-  opt.loop = a.has("--loop");
-  opt.reduce = a.integer("--reduce", 1);
-  if (opt.reduce < 1 || opt.reduce > 64) throw Error("--reduce " + a.get("--reduce") + ": expected 1 to 64");
-  opt.threads = unsigned(std::clamp(a.integer("--threads", 2), 1, 64));
-  opt.maxFrames = a.integer("--frames", -1);
-  if (a.has("--frames") && opt.maxFrames < 1) throw Error("--frames " + a.get("--frames") + ": must be at least 1");
-  if (a.has("--out-dir") && a.has("--out-video")) throw Error("give --out-dir or --out-video, not both");
+  installStopHandlers();
+  PipelineOptions opt = pipelineOptionsFromArgs(a);
   const gl::Camera cameraInit = cameraFromArgs(a);
   const Mesh mesh = meshFromArgs(a);
   const double fps = source->fps();
   const std::string description = source->describe();
-
   const bool headless = a.has("--headless") || !(std::getenv("DISPLAY") || std::getenv("WAYLAND_DISPLAY"));
   const std::string sizeOpt = live ? "--view-size" : "--size";  // live: --size is the camera's
   const auto size = parseSize(a.get(sizeOpt, headless ? "640x360" : "1280x720"), sizeOpt);
-  if (headless && opt.loop && opt.maxFrames < 0) throw Error("--loop without a window needs --frames N");
+  if (a.has("--duration")) {
+    const double d = a.numberIn("--duration", 0, 1e-3, 1e7);
+    const std::int64_t n = std::max<std::int64_t>(1, std::llround(d * (fps > 0 ? fps : 30.0)));
+    opt.maxFrames = opt.maxFrames < 0 ? n : std::min(opt.maxFrames, n);
+  }
+  // (live says so on its first line, with the camera's description)
+  const bool endless = !live && opt.maxFrames < 0 && (opt.loop || description.rfind("synthetic", 0) == 0);
   opt.handoff = headless && !live ? Handoff::Every : Handoff::Latest;
   opt.realtime = !headless && !live;
-  gl::ShadingSettings shading = shadingFromArgs(a, Sh9{});
-  const bool autoExposureWanted = a.get("--exposure", "auto") == "auto";
-  opt.keepImages = shading.background;
 
-  std::unique_ptr<AtomicTextFile> coeffsOut;
-  if (a.has("--coeffs-out")) coeffsOut = std::make_unique<AtomicTextFile>(a.get("--coeffs-out"));
-  const std::string outDir = a.get("--out-dir");
-  if (!outDir.empty()) {
-    std::error_code ec;
-    fs::create_directories(outDir, ec);
-    if (!fs::is_directory(outDir)) throw Error("--out-dir " + outDir + ": cannot create the folder");
-  }
-  std::unique_ptr<VideoRecorder> outVideo;
-  if (a.has("--out-video")) outVideo = std::make_unique<VideoRecorder>(a.get("--out-video"), fps, "liveprobe replay of " + description);
-  if ((!headless || live) && coeffsOut) {
-    AtomicTextFile* file = coeffsOut.get();
+  StreamView view;
+  view.state.shading = shadingFromArgs(a, Sh9{});
+  view.autoExposure = a.get("--exposure", "auto") == "auto";
+  view.layout = opt.layout;
+  opt.keepImages = true;  // the background can be switched on at any time (B), and the HUD shows it
+
+  StreamOutputs out = openOutputs(a, fps, description, source->radianceScale());
+  if ((!headless || live) && out.coeffs) {
+    AtomicTextFile* file = out.coeffs.get();
     opt.onCaptured = [file](const ProcessedFrame& f) { file->line(coeffsLine(f, -1)); };
   }
-  // --record (live): the raw stream, finalised even when capture stops on a fault.
-  std::unique_ptr<VideoRecorder> recorder;
-  if (a.has("--record")) {
-    recorder = std::make_unique<VideoRecorder>(a.get("--record"), fps, description, source->radianceScale());
-    VideoRecorder* rec = recorder.get();
+  if (out.record) {  // --record (live): the raw stream, finalised even when capture stops on a fault
+    VideoRecorder* rec = out.record.get();
     opt.onFrame = [rec](const Frame& f) { rec->write(f); };
   }
 
-  auto ctx = openContext(headless ? gl::Backend::Headless : gl::Backend::Auto, size);
-  gl::Camera camera = cameraInit;
-  gl::Renderer renderer;
-  loadModel(renderer, mesh);
+  view.ctx = openContext(headless ? gl::Backend::Headless : gl::Backend::Auto, size);
+  view.state.camera = view.state.initialCamera = cameraInit;
+  view.renderer = std::make_unique<gl::Renderer>();
+  loadModel(*view.renderer, mesh);
+  if (opt.rotation) view.renderer->setEnvOrientation(*opt.rotation);
+  const bool wantHud = view.ctx->isHeadless() ? a.has("--hud") : !a.has("--no-hud");
+  if (wantHud || !view.ctx->isHeadless()) {  // a window always has the HUD (H shows it, F1 the help)
+    view.hud = std::make_unique<Hud>(*view.ctx);
+    view.hud->setSource(description, std::string(layoutName(opt.layout.layout)), opt.smoothSeconds > 0);
+    view.state.hud = wantHud;
+  }
+  const bool quiet = a.has("--quiet");
+  if (endless && view.ctx->isHeadless() && !quiet)
+    std::fprintf(stderr, "liveprobe: %s has no end: running until Ctrl-C (or give --frames N or --duration S)\n",
+                 description.c_str());
+  Progress progress(live ? "live" : "replay", opt.maxFrames, quiet || !view.ctx->isHeadless());
+
   CapturePipeline pipeline(std::move(source), opt);
   pipeline.start();
-
-  std::vector<double> grab, convert, project, render;
-  std::size_t drawn = 0, saturated = 0;
-  bool haveLighting = false;
-  auto useFrame = [&](const ProcessedFrame& f) {
-    if (!haveLighting && autoExposureWanted) shading.exposure = autoExposure(f.radiance);
-    haveLighting = true;
-    renderer.setLighting(f.radiance);
-    if (f.image) setBackground(renderer, *f.image, opt.layout);
-    if (f.raw) setBackground(renderer, *f.raw, opt.layout, f.rawScale);
-    grab.push_back(f.times.grabMs);
-    convert.push_back(f.times.convertMs);
-    project.push_back(f.times.projectMs);
-    saturated += f.saturated;
-  };
+  StreamTally tally;
   try {
-    if (headless && !live) {
-      while (auto f = pipeline.waitNext()) {
-        const auto t0 = Clock::now();
-        useFrame(*f);
-        const glm::ivec2 fb = ctx->framebufferSize();
-        renderer.draw(fb, camera, shading);
-        const auto px = gl::Renderer::readRgb8(fb);
-        const double ms = std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
-        render.push_back(ms);
-        ++drawn;
-        if (coeffsOut) coeffsOut->line(coeffsLine(*f, ms));
-        if (!outDir.empty()) {
-          char name[32];
-          std::snprintf(name, sizeof name, "frame_%06llu.png", static_cast<unsigned long long>(f->index));
-          saveRgb8((fs::path(outDir) / name).string(), fb.x, fb.y, px.data());
-        }
-        if (outVideo) {
-          Frame out;
-          out.format = PixelFormat::Bgr8;
-          out.width = fb.x, out.height = fb.y;
-          out.timestamp = f->timestamp;
-          out.bgr8.resize(px.size());
-          for (std::size_t i = 0; i < px.size(); i += 3)
-            out.bgr8[i] = px[i + 2], out.bgr8[i + 1] = px[i + 1], out.bgr8[i + 2] = px[i];
-          outVideo->write(out);
-        }
-      }
-    } else {
-      auto fpsT0 = Clock::now();
-      std::size_t fpsFrames = 0;
-      while (!ctx->shouldClose()) {
-        applyInput(camera, ctx->pollEvents());
-        if (auto f = pipeline.takeLatest()) useFrame(*f);
-        else if (pipeline.finished()) break;
-        else if (headless) {  // live, headless: nothing new to draw yet
-          std::this_thread::sleep_for(std::chrono::milliseconds(2));
-          continue;
-        }
-        const auto t0 = Clock::now();
-        renderer.draw(ctx->framebufferSize(), camera, shading);
-        ctx->present();
-        render.push_back(std::chrono::duration<double, std::milli>(Clock::now() - t0).count());
-        ++drawn, ++fpsFrames;
-        const double s = std::chrono::duration<double>(Clock::now() - fpsT0).count();
-        if (s >= 2.0) {
-          std::fprintf(stderr, "liveprobe replay: %.1f frames/s drawn, %zu captured, %zu dropped\n",
-                       fpsFrames / s, pipeline.stats().captured, pipeline.stats().dropped);
-          fpsT0 = Clock::now(), fpsFrames = 0;
-        }
-      }
-    }
+    if (view.ctx->isHeadless() && !live) runOffline(pipeline, view, out, tally, progress);
+    else runInteractive(pipeline, view, tally, progress, live, description);
   } catch (const gl::ContextError& e) {
     pipeline.stop();
     throw Error(std::string("GL: ") + e.what());
   }
   pipeline.stop();
+  progress.finish();
   const PipelineStats st = pipeline.stats();
-  if (recorder) {
-    recorder->finish();
-    std::fprintf(stderr, "liveprobe: recorded %zu frames to %s\n", recorder->frames(), recorder->path().c_str());
+  if (out.record) {
+    out.record->finish();
+    std::fprintf(stderr, "liveprobe: recorded %zu frames to %s\n", out.record->frames(), out.record->path().c_str());
   }
-  if (coeffsOut && (st.error.empty() || live)) coeffsOut->commit();  // a camera's frames up to a fault are real data
+  if (out.coeffs && (st.error.empty() || live)) out.coeffs->commit();  // a camera's frames up to a fault are real data
   if (!st.error.empty()) throw Error(st.error);
-  if (outVideo) outVideo->finish();
-
-  std::fprintf(stderr,
-               "liveprobe replay: %s: %zu frames captured, %zu drawn, %zu dropped (stale), %zu skipped (corrupt)%s%s\n"
-               "  median ms: grab %.2f, convert %.2f, project %.2f, render %.2f; saturated values %.1f per frame\n",
-               description.c_str(), st.captured, drawn, st.dropped, st.skipped,
-               st.endReason.empty() ? "" : "; ", st.endReason.c_str(), median(grab), median(convert),
-               median(project), median(render), st.captured ? double(saturated) / double(grab.size()) : 0.0);
-  if (opt.smoothSeconds > 0)
-    std::fprintf(stderr, "  --smooth %.3g s: lighting lags a step change by %.3g s (63%% of the step)\n",
-                 opt.smoothSeconds, opt.smoothSeconds);
-  return 0;
+  if (out.video) out.video->finish();
+  printSummary(description, st, tally, opt.smoothSeconds, stopRequested());
+  return stopRequested() ? kExitInterrupted : 0;
 }
 
 }  // namespace
@@ -318,37 +398,54 @@ int runReplay(const Args& a) {
   SourceOptions so;
   so.fps = a.number("--fps", 30.0);
   if (!(so.fps > 0 && so.fps <= 1000)) throw Error("--fps " + a.get("--fps") + ": expected a rate in (0, 1000]");
+  if (a.has("--out-dir") || a.has("--out-video"))
+    if (a.has("--loop") && !a.has("--frames") && !a.has("--duration"))
+      throw Error("--loop with --out-dir or --out-video needs --frames N or --duration S");
   layoutFromArgs(a);  // option errors before the file is opened
   return runStream(a, openSource(sourceName, so), false);
 }
 
 const CommandSpec kRecordSpec{
     "record",
-    "SOURCE --out FILE.mkv|FILE.avi [--frames N] [--fps F]",
-    "Saves a source for replay: FFV1 in .mkv (lossless) or MJPEG in .avi, with a sidecar\n"
-    "FILE.json holding the exposure and every frame's timestamp. Float (HDR) sources are stored\n"
-    "as sRGB 8-bit with an exposure that puts the first frame's brightest pixel at 95%.\n"
-    "Synthetic sources record 5 seconds unless --frames says otherwise.",
-    {{"--out", "FILE", "output video (.mkv or .avi)"},
+    "SOURCE",
+    "Saves a source for replay: FFV1 in .mkv (lossless), MJPEG in .avi or H.264 in .mp4, with a\n"
+    "sidecar FILE.json holding the exposure and every frame's timestamp. Float (HDR) sources are\n"
+    "stored as sRGB 8-bit with an exposure that puts the first frame's brightest pixel at 95%.\n"
+    "Synthetic sources record 5 seconds unless --frames or --duration says otherwise. Ctrl-C\n"
+    "stops cleanly: what was recorded is finalised, exit 130.",
+    {{"--out", "FILE", "output video (.mkv, .avi or .mp4); required"},
      {"--frames", "N", "number of frames to record"},
-     {"--fps", "F", "frame rate of image sequences and of the recording (default: the source's)"}},
+     {"--duration", "SECONDS", "seconds of the source to record"},
+     {"--fps", "F", "frame rate of image sequences and of the recording, 0 to 1000 (default: the source's)"},
+     {"--quiet", "", "no progress on stderr"}},
     1, 1};
 
 int runRecord(const Args& a) {
-  if (!a.has("--out")) throw Error("record: --out FILE.mkv is required");
+  installStopHandlers();
+  if (!a.has("--out")) throw Error("--out FILE.mkv is required");
+  requireExtension(a.get("--out"), "--out", {".mkv", ".avi", ".mp4"});
   SourceOptions so;
-  so.fps = a.number("--fps", 30.0);
+  so.fps = a.numberIn("--fps", 30.0, 1e-3, 1000.0);
+  std::int64_t frames = a.integerIn("--frames", -1, 1, 1000000000);
   auto source = openSource(a.positional()[0], so);
   const double fps = a.has("--fps") ? so.fps : source->fps();
-  std::int64_t frames = a.integer("--frames", -1);
+  if (a.has("--duration")) {
+    const std::int64_t n = std::max<std::int64_t>(1, std::llround(a.numberIn("--duration", 0, 1e-3, 1e7) * fps));
+    frames = frames < 0 ? n : std::min(frames, n);
+  }
   if (frames < 0 && a.positional()[0].rfind("synthetic", 0) == 0) frames = std::int64_t(std::lround(5 * fps));
   VideoRecorder rec(a.get("--out"), fps, source->describe(), source->radianceScale());
+  Progress progress("record", frames, a.has("--quiet"));
   Frame f;
-  while ((frames < 0 || std::int64_t(rec.frames()) < frames) && source->next(f)) rec.write(f);
+  while ((frames < 0 || std::int64_t(rec.frames()) < frames) && !stopRequested() && source->next(f)) {
+    rec.write(f);
+    progress.update(std::int64_t(rec.frames()));
+  }
+  progress.finish();
   rec.finish();
-  std::fprintf(stderr, "liveprobe record: %s: %zu frames at %.3g fps from %s\n", a.get("--out").c_str(),
-               rec.frames(), fps, source->describe().c_str());
-  return 0;
+  std::fprintf(stderr, "liveprobe: %s: %zu frame%s at %.3g fps from %s%s\n", a.get("--out").c_str(), rec.frames(),
+               rec.frames() == 1 ? "" : "s", fps, source->describe().c_str(), stopRequested() ? "; stopped by a signal" : "");
+  return stopRequested() ? kExitInterrupted : 0;
 }
 
 }  // namespace lp::cli

@@ -10,6 +10,7 @@
 #include "coeffs_io.h"
 #include "commands.h"
 #include "compare.h"
+#include "progress.h"
 #include "scene.h"
 #include "shading/brute.h"
 
@@ -27,7 +28,7 @@ std::vector<OptionSpec> withLayout(std::vector<OptionSpec> o) {
 }
 
 Environment loadEnvironment(const Args& a) {
-  return cli::loadEnvironment(a.positional().at(0), layoutFromArgs(a));
+  return cli::loadEnvironment(a.positional().at(0), layoutFromArgs(a), envOrientationFromArgs(a));
 }
 
 /// Resolves --window against the coefficients; reports an automatic choice on stderr.
@@ -52,7 +53,7 @@ BandWindow chooseWindow(const Args& a, const Sh9& radiance) {
 
 const CommandSpec kCoeffsSpec{
     "coeffs",
-    "FILE [--layout equirect|angular] [--format json|text|glsl] [--window none|auto|W]",
+    "FILE",
     "Prints the nine radiance coefficients L_lm (R&H convention, before the A_l factors) of an\n"
     "environment map (.hdr, .exr, or 8-bit PNG/JPEG decoded from sRGB).",
     withLayout({{"--format", "json|text|glsl", "output format (default json)"}, kWindowOpt}),
@@ -88,19 +89,20 @@ int runCoeffs(const Args& a) {
 
 const CommandSpec kIrradianceSpec{
     "irradiance",
-    "FILE --out OUT.hdr|.exr|.png [--layout ...] [--size 256x128] [--method sh|brute] [--window ...]",
+    "FILE",
     "Writes the irradiance environment map E(n), equirectangular and indexed by normal, computed\n"
     "from nine coefficients (sh) or by brute-force hemispherical integration (brute).\n"
     "PNG output is sRGB-encoded E/pi (the radiance of a white diffuse surface), clamped to 1.",
     withLayout({{"--out", "FILE", "output image (.hdr, .exr: linear irradiance; .png: 8-bit)"},
-     {"--size", "WxH", "output size (default 256x128)"},
+     {"--size", "WxH", "output size, each side up to 8192 (default 256x128)"},
      {"--method", "sh|brute", "how to compute E (default sh)"},
      kWindowOpt}),
     1, 1};
 
 int runIrradiance(const Args& a) {
-  if (!a.has("--out")) throw Error("irradiance: --out FILE is required");
-  const auto [w, h] = parseSize(a.get("--size", "256x128"), "--size");
+  if (!a.has("--out")) throw Error("--out FILE is required");
+  requireExtension(a.get("--out"), "--out", {".hdr", ".exr", ".png"});
+  const auto [w, h] = parseSize(a.get("--size", "256x128"), "--size", 8192);
   const std::string method = a.get("--method", "sh");
   if (method != "sh" && method != "brute") throw Error("--method " + method + ": expected sh or brute");
   Environment env = loadEnvironment(a);
@@ -113,7 +115,8 @@ int runIrradiance(const Args& a) {
     for (std::size_t i = 0; i < normals.size(); ++i) e[i] = evalIrradianceQuadratic(m, normals[i]);
   } else {
     if (a.has("--window")) throw Error("--window applies to --method sh only");
-    const auto samples = layoutSamples(env.layout, env.image.width, env.image.height);
+    auto samples = layoutSamples(env.layout, env.image.width, env.image.height);
+    for (auto& smp : samples) smp.dir = env.orientation * smp.dir;
     e = bruteIrradiance(env.image.rgb.data(), 3, samples.data(), samples.size(), normals);
   }
   Image out(w, h);
@@ -128,20 +131,33 @@ int runIrradiance(const Args& a) {
 
 const CommandSpec kCompareSpec{
     "compare",
-    "FILE [--layout ...] [--size 64x32] [--out error.png] [--json] [--window ...]",
+    "FILE",
     "Compares SH irradiance with the brute-force integral on a WxH equirect grid of normals\n"
     "(luminance, solid-angle weighted). Errors are given as a fraction of the total intensity\n"
     "(the paper's measure) and of the mean irradiance.",
-    withLayout({{"--size", "WxH", "grid of normals (default 64x32)"},
+    withLayout({{"--size", "WxH", "grid of normals, each side up to 4096 (default 64x32)"},
      {"--out", "PNG", "figure: SH map, brute-force map and error, with a colour scale"},
      {"--json", "", "print JSON instead of text"},
+     {"--quiet", "", "no progress on stderr"},
      kWindowOpt}),
     1, 1};
 
 int runCompare(const Args& a) {
-  const auto [w, h] = parseSize(a.get("--size", "64x32"), "--size");
+  const auto [w, h] = parseSize(a.get("--size", "64x32"), "--size", 4096);
+  if (a.has("--out")) requireExtension(a.get("--out"), "--out", {".png"});
   Environment env = loadEnvironment(a);
-  const CompareResult r = compareIrradiance(env.image, env.layout, w, h, chooseWindow(a, env.radiance));
+  installStopHandlers();
+  Progress progress("compare: brute force", std::int64_t(w) * h, a.has("--quiet"), "normals");
+  const CompareResult r = compareIrradiance(env.image, env.layout, w, h, chooseWindow(a, env.radiance), 0,
+                                            env.orientation, [&](std::size_t done) {
+                                              progress.update(std::int64_t(done));
+                                              return !stopRequested();
+                                            });
+  progress.finish();
+  if (stopRequested()) {
+    std::fprintf(stderr, "liveprobe: compare stopped by a signal after %s\n", "part of the grid");
+    return kExitInterrupted;
+  }
   if (a.has("--out")) saveCompareFigure(a.get("--out"), r);
   if (a.has("--json")) {
     nlohmann::ordered_json j;

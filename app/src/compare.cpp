@@ -20,9 +20,11 @@ double msSince(std::chrono::steady_clock::time_point t0) {
 }  // namespace
 
 CompareResult compareIrradiance(const Image& img, const LayoutSpec& layout, int width, int height,
-                                const BandWindow& window, unsigned threads) {
+                                const BandWindow& window, unsigned threads, const glm::mat3& orientation,
+                                const BruteProgress& progress) {
   const Projector projector(layout, img.width, img.height);
-  const auto& samples = projector.samples();
+  auto samples = projector.samples();
+  for (auto& s : samples) s.dir = orientation * s.dir;
   const auto grid = equirectSamples(width, height);
   std::vector<glm::vec3> normals(grid.size());
   for (std::size_t i = 0; i < grid.size(); ++i) normals[i] = grid[i].dir;
@@ -34,14 +36,14 @@ CompareResult compareIrradiance(const Image& img, const LayoutSpec& layout, int 
   r.yBrute.resize(grid.size());
 
   auto t0 = std::chrono::steady_clock::now();
-  const Sh9 L = applyWindow(projector.project(img.rgb.data()), window);
+  const Sh9 L = applyWindow(rotateSh(projector.project(img.rgb.data()), orientation), window);
   const auto m = irradianceMatrices(L);
   for (std::size_t i = 0; i < grid.size(); ++i)
     r.ySh[i] = luminance(evalIrradianceQuadratic(m, normals[i]));
   r.shMs = msSince(t0);
 
   t0 = std::chrono::steady_clock::now();
-  const auto brute = bruteIrradiance(img.rgb.data(), 3, samples.data(), samples.size(), normals, threads);
+  const auto brute = bruteIrradiance(img.rgb.data(), 3, samples.data(), samples.size(), normals, threads, progress);
   r.bruteMs = msSince(t0);
   for (std::size_t i = 0; i < grid.size(); ++i) r.yBrute[i] = luminance(brute[i]);
 

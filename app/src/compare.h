@@ -5,6 +5,7 @@
 
 #include "capture/image.h"
 #include "capture/layout.h"
+#include "shading/brute.h"
 #include "shading/sh.h"
 
 namespace lp::cli {
@@ -22,8 +23,10 @@ struct CompareResult {
 
 /// Evaluates both methods on a W x H equirect grid of normals (pixel centres, weighted by their
 /// solid angle). `window` is applied to the SH coefficients first.
+/// `orientation` turns the environment (world from file) for both methods.
 CompareResult compareIrradiance(const Image& img, const LayoutSpec& layout, int width, int height,
-                                const BandWindow& window = {}, unsigned threads = 0);
+                                const BandWindow& window = {}, unsigned threads = 0,
+                                const glm::mat3& orientation = glm::mat3(1.0f), const BruteProgress& progress = {});
 
 /// The SH map, the brute-force map (same exposure) and |error| / total intensity with a colour
 /// scale, side by side, as an 8-bit PNG.

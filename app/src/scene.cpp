@@ -6,56 +6,100 @@
 #include "capture/frame.h"
 #include "capture/photometry.h"
 #include "coeffs_io.h"
+#include "progress.h"
+
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <glm/gtc/matrix_transform.hpp>
 
 namespace lp::cli {
 
 std::vector<OptionSpec> sceneOptions() {
-  return {{"--model", "FILE|sphere", "model to light (OBJ, PLY, glTF, ...; default: a UV sphere)"},
-          {"--yaw", "DEG", "camera yaw around the vertical axis (default 0: front view)"},
-          {"--pitch", "DEG", "camera pitch (default 0)"},
-          {"--distance", "D", "camera distance; the model fits the unit sphere (default 3.2)"},
-          {"--exposure", "X|auto", "exposure multiplier; auto maps the mean radiance to 0.18 (default)"},
-          {"--tonemap", "aces|reinhard|linear", "tone map (default aces)"},
-          {"--no-background", "", "do not draw the panorama behind the model"},
-          {"--headless", "", "render offscreen through OSMesa even when a display exists"}};
+  const std::string m = "Model and camera", l = "Look";
+  return {{"--model", "FILE|sphere", "model to light (OBJ, PLY, glTF, ...; default: a UV sphere)", false, false, m},
+          {"--model-rotate", "YAW,PITCH,ROLL", "turn the model (degrees, about its up, right and view axes)", false, false, m},
+          {"--up", "y|z", "the model file's up axis (default y, as OBJ and glTF)", false, false, m},
+          {"--yaw", "DEG", "camera yaw around the vertical axis (default 0: front view)", false, false, m},
+          {"--pitch", "DEG", "camera pitch, -89.9 to 89.9 (default 0)", false, false, m},
+          {"--distance", "D", "camera distance; the model fits the unit sphere (default 3.2)", false, false, m},
+          {"--exposure", "X|auto", "exposure multiplier; auto (default): mean radiance to 0.18, or from the irradiance without an environment", false, false, l},
+          {"--tonemap", "aces|reinhard|linear", "tone map (default aces)", false, false, l},
+          {"--tonemap-background", "", "expose and tone-map an 8-bit background like HDR (default: shown as the source looks)", false, false, l},
+          {"--no-background", "", "do not draw the panorama behind the model", false, false, l},
+          {"--msaa", "1|2|4|8", "multisample anti-aliasing, samples per pixel (default 4)", false, false, l},
+          {"--headless", "", "render offscreen through OSMesa even when a display exists", false, false, l}};
 }
 
 std::vector<OptionSpec> layoutOptions() {
-  return {{"--layout", "equirect|angular|mirrorball|cube|fisheye", "panorama layout (default equirect)"},
-          {"--circle", "CX,CY,R", "mirrorball: the ball's circle in pixels"},
-          {"--fov", "DEG", "fisheye: field of view of each lens (default 190)"}};
+  const std::string g = "Panorama";
+  return {{"--layout", "equirect|angular|mirrorball|cube|fisheye", "panorama layout (default equirect)", false, false, g},
+          {"--circle", "CX,CY,R", "mirrorball: the ball's circle in pixels", false, false, g},
+          {"--fov", "DEG", "fisheye: field of view of each lens, 180 to 360 (default 190)", false, false, g},
+          {"--env-rotate,--rotate", "YAW,PITCH,ROLL", "turn the environment, lighting and background together (degrees, about +z, +y, +x)", false, false, g},
+          {"--env-flip", "", "the panorama is stored upside down: mirror it top to bottom (before --env-rotate)", false, false, g}};
+}
+
+glm::mat3 envOrientationFromArgs(const Args& a) {
+  glm::mat3 o(1.0f);
+  if (a.has("--env-rotate")) {
+    const auto v = parseNumberList(a.get("--env-rotate"), "--env-rotate", 3, "yaw,pitch,roll in degrees");
+    o = rotationYawPitchRoll(float(v[0]), float(v[1]), float(v[2]));
+  }
+  if (a.has("--env-flip")) o = o * glm::mat3(glm::vec3(1, 0, 0), glm::vec3(0, 1, 0), glm::vec3(0, 0, -1));
+  return o;
 }
 
 LayoutSpec layoutFromArgs(const Args& a) {
   LayoutSpec spec(parseLayout(a.get("--layout", "equirect")));
   if (a.has("--circle")) {
     if (spec.layout != Layout::MirrorBall) throw Error("--circle applies to --layout mirrorball only");
-    std::vector<float> v;
-    std::stringstream s(a.get("--circle"));
-    for (std::string part; std::getline(s, part, ',');) v.push_back(float(parseNumber(part, "--circle")));
-    if (v.size() != 3 || !(v[2] > 0)) throw Error("--circle " + a.get("--circle") + ": expected cx,cy,r with r > 0");
-    spec.circle = {v[0], v[1], v[2]};
+    const auto v = parseNumberList(a.get("--circle"), "--circle", 3, "cx,cy,r with r > 0");
+    if (!(v[2] > 0)) throw Error("--circle " + a.get("--circle") + ": expected cx,cy,r with r > 0");
+    spec.circle = {float(v[0]), float(v[1]), float(v[2])};
   }
   if (a.has("--fov")) {
     if (spec.layout != Layout::DualFisheye) throw Error("--fov applies to --layout fisheye only");
-    spec.fisheyeFovDeg = float(a.number("--fov", 190));
+    spec.fisheyeFovDeg = float(a.numberIn("--fov", 190, 180, 360));
   }
   return spec;
 }
 
-Environment loadEnvironment(const std::string& source, const LayoutSpec& layout) {
+Environment loadEnvironment(const std::string& source, const LayoutSpec& layout, const glm::mat3& orientation) {
   auto src = openSource(source);
   Frame frame;
   if (!src->next(frame)) throw Error(source + ": no frame to read");
   Environment env;
   env.layout = layout;
+  env.orientation = orientation;
   Photometry photometry;
   photometry.exposure = float(src->radianceScale());
   Linearizer(photometry).convert(frame, env.image);
   if (auto why = layoutMismatch(layout, env.image.width, env.image.height); !why.empty())
     throw Error(source + ": " + why);
-  env.radiance = Projector(layout, env.image.width, env.image.height).project(env.image.rgb.data());
+  warnIfLayoutLooksWrong(source, layout, env.image.width, env.image.height, env.image.rgb.data());
+  env.radiance = rotateSh(Projector(layout, env.image.width, env.image.height).project(env.image.rgb.data()), orientation);
   return env;
+}
+
+void warnIfLayoutLooksWrong(const std::string& source, const LayoutSpec& layout, int w, int h, const float* rgb) {
+  if (layout.layout == Layout::Equirect && w == h) {
+    warn(source + ": a square image taken as equirect (an angular map or a mirror ball? give --layout)");
+  } else if (layout.layout == Layout::Equirect && std::abs(double(w) / h - 16.0 / 9.0) < 0.02) {
+    warn(source + ": a 16:9 frame taken as equirect (a 2:1 panorama stretched? results assume it covers the sphere)");
+  } else if (layout.layout == Layout::Angular && rgb && w >= 8 && h >= 8) {
+    // Outside the disc an angular map is black: look at the four corner pixels' neighbourhoods.
+    double corner = 0, centre = 0;
+    for (int cy : {1, h - 2})
+      for (int cx : {1, w - 2}) {
+        const float* p = rgb + 3 * (std::size_t(cy) * w + cx);
+        corner += p[0] + p[1] + p[2];
+      }
+    const float* c = rgb + 3 * (std::size_t(h / 2) * w + w / 2);
+    centre = c[0] + c[1] + c[2];
+    if (corner > 0.01 * std::max(centre, 1e-6) * 4)
+      warn(source + ": an angular map whose corners are not black (is it an equirect? give --layout)");
+  }
 }
 
 void setBackground(gl::Renderer& r, const Image& frame, const LayoutSpec& layout) {
@@ -105,14 +149,27 @@ std::optional<Lighting> lightingFromArgs(const Args& a) {
   if (kinds == 0) return std::nullopt;
   Lighting l;
   if (a.has("--env")) {
-    Environment env = loadEnvironment(a.get("--env"), layoutFromArgs(a));
+    Environment env = loadEnvironment(a.get("--env"), layoutFromArgs(a), envOrientationFromArgs(a));
     l.layout = env.layout;
+    l.orientation = env.orientation;
     l.radiance = env.radiance;
     l.background = std::move(env.image);
-  } else if (a.has("--coeffs")) {
-    l.radiance = loadCoefficients(a.get("--coeffs"));
   } else {
-    for (const auto& c : a.all("--coeff")) applyCoeffAssignment(c, l.radiance);
+    if (a.has("--coeffs")) {
+      l.radiance = loadCoefficients(a.get("--coeffs"));
+    } else {
+      std::vector<int> seen;
+      for (const auto& c : a.all("--coeff")) {
+        Sh9 one;
+        applyCoeffAssignment(c, one);
+        const int k = shIndex(c.substr(0, c.find('=')));
+        if (std::find(seen.begin(), seen.end(), k) != seen.end())
+          throw Error("--coeff " + c + ": " + c.substr(0, c.find('=')) + " is given twice");
+        seen.push_back(k);
+        l.radiance.c[std::size_t(k)] = one.c[std::size_t(k)];
+      }
+    }
+    l.radiance = rotateSh(l.radiance, envOrientationFromArgs(a));
   }
   return l;
 }
@@ -129,6 +186,24 @@ Mesh meshFromArgs(const Args& a) {
       throw Error(e.what());
     }
   }
+  const std::string up = a.get("--up", "y");
+  if (up != "y" && up != "z") throw Error("--up " + up + ": expected y or z");
+  glm::mat3 turn(1.0f);
+  if (up == "z") turn = glm::mat3(glm::vec3(1, 0, 0), glm::vec3(0, 0, -1), glm::vec3(0, 1, 0));  // file z -> GL y
+  // The bundled test models face the camera by default; spot.obj (Keenan Crane's cow) is stored
+  // facing -z, away from the default camera on +z. --model-rotate replaces this default.
+  const std::string file = std::filesystem::path(model).filename().string();
+  const std::string defaultTurn = file == "spot.obj" ? "180,0,0" : "0,0,0";
+  {
+    const auto v = parseNumberList(a.get("--model-rotate", defaultTurn), "--model-rotate", 3, "yaw,pitch,roll in degrees");
+    // About the model's own up (GL y), right (x) and view (z) axes, applied yaw first.
+    const glm::mat4 r = glm::rotate(glm::mat4(1.0f), glm::radians(float(v[2])), glm::vec3(0, 0, 1)) *
+                        glm::rotate(glm::mat4(1.0f), glm::radians(float(v[1])), glm::vec3(1, 0, 0)) *
+                        glm::rotate(glm::mat4(1.0f), glm::radians(float(v[0])), glm::vec3(0, 1, 0));
+    turn = glm::mat3(r) * turn;
+  }
+  for (auto& p : m.positions) p = turn * p;
+  for (auto& n : m.normals) n = turn * n;
   fitToUnitSphere(m);
   return m;
 }
@@ -143,15 +218,28 @@ gl::Camera cameraFromArgs(const Args& a) {
   return c;
 }
 
-float autoExposure(const Sh9& radiance) {
-  const float meanRadiance = luminance(radiance.c[0]) * 0.282095f;
-  return meanRadiance > 1e-12f ? 0.18f / meanRadiance : 1.0f;
+float autoExposure(const Sh9& radiance, bool environment) {
+  if (environment) {
+    const float meanRadiance = luminance(radiance.c[0]) * 0.282095f;
+    return meanRadiance > 1e-12f ? 0.18f / meanRadiance : 1.0f;
+  }
+  // Fibonacci sphere: 2048 normals find the peak of a quadratic form to well under 1%.
+  const auto m = irradianceMatrices(radiance);
+  float peak = 0;
+  const int n = 2048;
+  for (int i = 0; i < n; ++i) {
+    const float z = 1 - (2 * float(i) + 1) / float(n), r = std::sqrt(std::max(0.0f, 1 - z * z));
+    const float phi = float(i) * 2.39996323f;
+    peak = std::max(peak, luminance(evalIrradianceQuadratic(m, {r * std::cos(phi), r * std::sin(phi), z})));
+  }
+  const float peakRadiance = peak / kA0;  // a white Lambertian surface shows E / pi
+  return peakRadiance > 1e-12f ? 1.0f / peakRadiance : 1.0f;
 }
 
-gl::ShadingSettings shadingFromArgs(const Args& a, const Sh9& radiance) {
+gl::ShadingSettings shadingFromArgs(const Args& a, const Sh9& radiance, bool environment) {
   gl::ShadingSettings s;
   const std::string e = a.get("--exposure", "auto");
-  s.exposure = e == "auto" ? autoExposure(radiance) : float(parseNumber(e, "--exposure"));
+  s.exposure = e == "auto" ? autoExposure(radiance, environment) : float(parseNumber(e, "--exposure"));
   if (!(s.exposure > 0)) throw Error("--exposure " + e + ": must be positive or auto");
   const std::string tm = a.get("--tonemap", "aces");
   if (tm == "aces") s.toneMap = gl::ToneMap::Aces;
@@ -159,6 +247,10 @@ gl::ShadingSettings shadingFromArgs(const Args& a, const Sh9& radiance) {
   else if (tm == "linear") s.toneMap = gl::ToneMap::Linear;
   else throw Error("--tonemap " + tm + ": expected aces, reinhard or linear");
   s.background = !a.has("--no-background");
+  s.displayReferredBackground = !a.has("--tonemap-background");
+  s.samples = a.integer("--msaa", 4);
+  if (s.samples != 1 && s.samples != 2 && s.samples != 4 && s.samples != 8)
+    throw Error("--msaa " + a.get("--msaa") + ": expected 1, 2, 4 or 8");
   return s;
 }
 
@@ -185,6 +277,7 @@ void loadModel(gl::Renderer& r, const Mesh& mesh) {
 void loadScene(gl::Renderer& r, const Mesh& mesh, const Lighting& lighting) {
   loadModel(r, mesh);
   r.setLighting(lighting.radiance);
+  r.setEnvOrientation(lighting.orientation);
   if (lighting.background) setBackground(r, *lighting.background, lighting.layout);
 }
 

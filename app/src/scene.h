@@ -18,25 +18,38 @@ namespace lp::cli {
 std::vector<OptionSpec> sceneOptions();
 /// Options choosing the lighting: --env and the layout options, --coeffs, --coeff.
 std::vector<OptionSpec> lightingOptions();
-/// --layout, --circle, --fov.
+/// --layout, --circle, --fov, and the environment's orientation (--env-rotate, --env-flip).
 std::vector<OptionSpec> layoutOptions();
+/// --env-rotate YAW,PITCH,ROLL and --env-flip as one orthogonal matrix O: a light at file
+/// direction d lies in world direction O d, with O = Rz(yaw) Ry(pitch) Rx(roll) * F, F the
+/// flip z -> -z (a panorama stored upside down) or the identity. Identity when neither is given.
+glm::mat3 envOrientationFromArgs(const Args& a);
 /// The layout options as a spec (option errors are reported before any file is read).
 LayoutSpec layoutFromArgs(const Args& a);
 
 /// A still environment in any layout: FILE is an image, or a folder of six cube faces.
 struct Environment {
-  Image image;  ///< linear RGB
+  Image image;  ///< linear RGB, as stored in the file
   LayoutSpec layout;
-  Sh9 radiance;  ///< unwindowed, unrotated
+  glm::mat3 orientation{1.0f};  ///< world from file (envOrientationFromArgs)
+  Sh9 radiance;                 ///< unwindowed, turned by `orientation`
 };
 /// Reads the first frame of `source` through the capture path (photometry, layout check) and
-/// projects it. Throws lp::Error naming the source.
-Environment loadEnvironment(const std::string& source, const LayoutSpec& layout);
+/// projects it, turned by `orientation`. Warns (one line) about a likely layout mistake. Throws
+/// lp::Error naming the source.
+Environment loadEnvironment(const std::string& source, const LayoutSpec& layout,
+                            const glm::mat3& orientation = glm::mat3(1.0f));
+
+/// One warning line when the frame's shape suggests another layout than the one given: a square
+/// image or a 16:9 frame taken as equirect, or an angular map whose corners are not black.
+void warnIfLayoutLooksWrong(const std::string& source, const LayoutSpec& layout, int width, int height,
+                            const float* rgb = nullptr);
 
 struct Lighting {
   Sh9 radiance;
   std::optional<Image> background;  ///< the environment, when lighting came from one
   LayoutSpec layout;
+  glm::mat3 orientation{1.0f};
 };
 
 /// The background texture for a frame: equirect and angular frames are drawn directly; other
@@ -57,10 +70,13 @@ Mesh meshFromArgs(const Args& a);
 gl::Camera cameraFromArgs(const Args& a);
 /// --exposure X|auto (default auto: the environment's mean radiance maps to 0.18), --tonemap,
 /// --no-background.
-gl::ShadingSettings shadingFromArgs(const Args& a, const Sh9& radiance);
+gl::ShadingSettings shadingFromArgs(const Args& a, const Sh9& radiance, bool environment = true);
 
-/// Exposure that maps the mean radiance of `radiance` (L00 Y00, luminance) to 0.18; 1 if dark.
-float autoExposure(const Sh9& radiance);
+/// The automatic exposure. With an environment (a background to match): the photographic rule,
+/// the mean radiance (L00 Y00, luminance) maps to 0.18. Without one (coefficients only), from the
+/// irradiance itself: the brightest white diffuse surface (max over n of Y(E(n)) / pi) maps to
+/// 1.0, so any set of coefficients, a single one included, is visible. 1 if all is dark.
+float autoExposure(const Sh9& radiance, bool environment = true);
 gl::Backend backendFromArgs(const Args& a);
 
 /// Creates a GL context (lp::Error on failure).

@@ -2,6 +2,7 @@
 
 #include <chrono>
 #include <cmath>
+#include <utility>
 
 #include "capture/error.h"
 #include "shading/thread_pool.h"
@@ -84,6 +85,13 @@ void CapturePipeline::run() {
   double streamStart = -1, loopOffset = 0, lastTimestamp = 0;
   try {
     while (!stop_ && (opt_.maxFrames < 0 || std::int64_t(index) < opt_.maxFrames)) {
+      {
+        std::unique_lock lock(mutex_);
+        cv_.wait(lock, [&] { return !paused_ || steps_ > 0 || stop_; });
+        if (stop_) break;
+        if (paused_) --steps_;
+        if (std::exchange(resync_, false)) streamStart = -1;
+      }
       const auto t0 = Clock::now();
       if (!source_->next(frame)) {
         if (opt_.loop && source_->rewind() && source_->next(frame)) {
@@ -139,6 +147,7 @@ void CapturePipeline::run() {
       }
       const float rawScale = float(scale) * opt_.photometry.exposure;
       if (opt_.rotation) sh = rotateSh(sh, *opt_.rotation);
+      const Sh9 unsmoothed = sh;
       sh = smoother.update(sh, timestamp);
       const auto t3 = Clock::now();
 
@@ -147,6 +156,7 @@ void CapturePipeline::run() {
       out.sequence = frame.sequence;
       out.timestamp = timestamp;
       out.radiance = sh;
+      out.unsmoothed = unsmoothed;
       if (opt_.keepImages && !raw) out.image = std::move(image);  // one background per frame
       out.raw = std::move(raw);
       out.rawScale = rawScale;
@@ -194,6 +204,25 @@ std::optional<ProcessedFrame> CapturePipeline::waitNext() {
   std::unique_lock lock(mutex_);
   cv_.wait(lock, [&] { return slot_ || finished_ || stop_; });
   return takeFromSlot(lock);
+}
+
+void CapturePipeline::setPaused(bool paused) {
+  {
+    std::lock_guard lock(mutex_);
+    if (paused_ && !paused) resync_ = true;
+    paused_ = paused;
+    steps_ = 0;
+  }
+  cv_.notify_all();
+}
+
+void CapturePipeline::step() {
+  {
+    std::lock_guard lock(mutex_);
+    ++steps_;
+    resync_ = true;
+  }
+  cv_.notify_all();
 }
 
 PipelineStats CapturePipeline::stats() const {

@@ -31,7 +31,8 @@ VideoRecorder::VideoRecorder(std::string path, double fps, std::string sourceDes
   for (auto& c : ext) c = char(std::tolower(static_cast<unsigned char>(c)));
   if (ext == ".mkv") impl_->fourcc = cv::VideoWriter::fourcc('F', 'F', 'V', '1');
   else if (ext == ".avi") impl_->fourcc = cv::VideoWriter::fourcc('M', 'J', 'P', 'G');
-  else throw Error(path_ + ": record to .mkv (FFV1, lossless) or .avi (MJPEG)");
+  else if (ext == ".mp4") impl_->fourcc = cv::VideoWriter::fourcc('a', 'v', 'c', '1');  // H.264
+  else throw Error(path_ + ": unsupported extension (expected .mkv: FFV1, lossless; .avi: MJPEG; .mp4: H.264)");
   const fs::path dir = p.has_parent_path() ? p.parent_path() : fs::path(".");
   std::error_code ec;
   if (!fs::is_directory(dir, ec)) throw Error(path_ + ": folder " + dir.string() + " does not exist");
@@ -68,7 +69,9 @@ void VideoRecorder::write(const Frame& f) {
   }
   if (!impl_->writer.isOpened()) {
     if (!impl_->writer.open(tmp_, cv::CAP_FFMPEG, impl_->fourcc, fps_, cv::Size(f.width, f.height), true))
-      throw Error(path_ + ": cannot open a video writer (FFmpeg codec missing?)");
+      throw Error(path_ + ": cannot open a video writer (this FFmpeg has no " +
+                  (impl_->fourcc == cv::VideoWriter::fourcc('a', 'v', 'c', '1') ? std::string("H.264") : std::string("such")) +
+                  " encoder)");
   }
   impl_->writer.write(bgr);
   stamps_.push_back(f.timestamp);

@@ -8,7 +8,8 @@ namespace lp {
 
 std::vector<Rgb> bruteIrradiance(const float* rgb, std::size_t pixelStride,
                                  const SphereSample* samples, std::size_t count,
-                                 const std::vector<glm::vec3>& normals, unsigned threads) {
+                                 const std::vector<glm::vec3>& normals, unsigned threads,
+                                 const BruteProgress& progress) {
   // Structure-of-arrays copy of the non-empty pixels with radiance pre-multiplied by dw, so the
   // inner loop is five contiguous streams the compiler vectorises (this file is compiled with
   // reassociation allowed; see shading/CMakeLists.txt).
@@ -28,8 +29,12 @@ std::vector<Rgb> bruteIrradiance(const float* rgb, std::size_t pixelStride,
   const std::size_t n = wx.size();
   std::vector<Rgb> out(normals.size());
   std::atomic<std::size_t> next{0};
-  auto worker = [&] {
+  auto worker = [&](bool reports) {
     for (std::size_t t; (t = next.fetch_add(1)) < normals.size();) {
+      if (reports && progress && !progress(t)) {
+        next = normals.size();  // stop: the other threads finish the normal they hold
+        break;
+      }
       const glm::vec3 nrm = normals[t];
       double er = 0, eg = 0, eb = 0;
       constexpr std::size_t kBlock = 4096;
@@ -52,8 +57,8 @@ std::vector<Rgb> bruteIrradiance(const float* rgb, std::size_t pixelStride,
   if (threads == 0) threads = std::max(1u, std::thread::hardware_concurrency());
   threads = std::min<unsigned>(threads, std::max<std::size_t>(1, normals.size()));
   std::vector<std::thread> pool;
-  for (unsigned i = 1; i < threads; ++i) pool.emplace_back(worker);
-  worker();
+  for (unsigned i = 1; i < threads; ++i) pool.emplace_back(worker, false);
+  worker(true);
   for (auto& th : pool) th.join();
   return out;
 }

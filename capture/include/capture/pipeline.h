@@ -32,7 +32,8 @@ struct ProcessedFrame {
   std::uint64_t index = 0;     ///< position in this pipeline's output, from 0
   std::uint64_t sequence = 0;  ///< the source's frame number
   double timestamp = 0;        ///< the source's timestamp, seconds
-  Sh9 radiance;                ///< after rotation and smoothing
+  Sh9 radiance;                ///< after orientation and smoothing
+  Sh9 unsmoothed;              ///< after orientation, before smoothing
   std::shared_ptr<const Image> image;  ///< the linear frame (when PipelineOptions::keepImages)
   /// Instead of `image`, for sRGB 8-bit frames: the frame as captured, with the linear scale
   /// (exposure) that applies to its decoded values. The GPU decodes sRGB for display.
@@ -47,7 +48,9 @@ enum class Handoff : std::uint8_t { Latest, Every };
 struct PipelineOptions {
   LayoutSpec layout;
   Photometry photometry;
-  std::optional<glm::mat3> rotation;  ///< applied to the coefficients (SH rotation)
+  /// The environment's orientation (world from file; orthogonal, a reflection allowed), applied
+  /// to the coefficients by lp::rotateSh. The display turns the background by the same matrix.
+  std::optional<glm::mat3> rotation;
   double smoothSeconds = 0;           ///< EMA time constant on the 27 numbers; 0 = off
   bool loop = false;                  ///< rewind at the end of the source
   std::int64_t maxFrames = -1;        ///< stop after this many frames; -1 = the whole source
@@ -109,6 +112,11 @@ class CapturePipeline {
   std::optional<ProcessedFrame> takeLatest();
   /// Waits for the next frame; nullopt when capture has ended and nothing is left.
   std::optional<ProcessedFrame> waitNext();
+  /// Pauses capture before its next frame (a replay's Space key); resuming restarts the pacing
+  /// clock, so a paused replay does not rush to catch up.
+  void setPaused(bool paused);
+  /// While paused: capture exactly one more frame.
+  void step();
   /// Capture has ended (end of source, frame limit, error or stop).
   bool finished() const { return finished_; }
   PipelineStats stats() const;
@@ -127,6 +135,8 @@ class CapturePipeline {
   std::condition_variable cv_;
   std::optional<ProcessedFrame> slot_;
   PipelineStats stats_;
+  bool paused_ = false, resync_ = false;
+  int steps_ = 0;
 };
 
 }  // namespace lp

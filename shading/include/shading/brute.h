@@ -3,17 +3,23 @@
 // brute-force hemispherical integration E(n) = sum_i L_i max(n . w_i, 0) dw_i for every output
 // normal. O(T S) for T normals and S pixels. Same conventions as shading/sh.h.
 #include <cstddef>
+#include <functional>
 #include <vector>
 
 #include "shading/sh.h"
 
 namespace lp {
 
+/// Called on the calling thread with the number of normals started; returning false stops the
+/// integration early (the remaining normals are left zero).
+using BruteProgress = std::function<bool(std::size_t done)>;
+
 /// Irradiance at each of `normals` (unit, R&H frame) from an image given as samples (see
 /// projectSamples for rgb/pixelStride). Runs on `threads` threads (0 = all hardware threads).
 /// Inner sums are float over blocks, totals in double.
 std::vector<Rgb> bruteIrradiance(const float* rgb, std::size_t pixelStride,
                                  const SphereSample* samples, std::size_t count,
-                                 const std::vector<glm::vec3>& normals, unsigned threads = 0);
+                                 const std::vector<glm::vec3>& normals, unsigned threads = 0,
+                                 const BruteProgress& progress = {});
 
 }  // namespace lp

@@ -6,6 +6,7 @@
 #include <GLFW/glfw3.h>
 
 #include <cstdlib>
+#include <utility>
 #include <vector>
 
 #include "shading/gl/context.h"
@@ -45,8 +46,34 @@ class GlfwContext final : public GlContext {
     }
     glfwSwapInterval(spec.vsync ? 1 : 0);
     glfwSetWindowUserPointer(window_, this);
+    // Installed before Dear ImGui's backend, which chains to them.
     glfwSetScrollCallback(window_, [](GLFWwindow* w, double, double dy) {
       static_cast<GlfwContext*>(glfwGetWindowUserPointer(w))->input_.scroll += float(dy);
+    });
+    glfwSetKeyCallback(window_, [](GLFWwindow* w, int key, int, int action, int) {
+      if (action != GLFW_PRESS && action != GLFW_REPEAT) return;
+      auto* self = static_cast<GlfwContext*>(glfwGetWindowUserPointer(w));
+      if (key == GLFW_KEY_ESCAPE || key == GLFW_KEY_Q) {
+        glfwSetWindowShouldClose(w, GLFW_TRUE);
+        return;
+      }
+      auto& keys = self->input_.keys;
+      switch (key) {
+        case GLFW_KEY_SPACE: if (action == GLFW_PRESS) keys.push_back(KeyAction::Pause); break;
+        case GLFW_KEY_RIGHT: keys.push_back(KeyAction::Step); break;
+        case GLFW_KEY_R: keys.push_back(KeyAction::ResetView); break;
+        case GLFW_KEY_B: keys.push_back(KeyAction::ToggleBackground); break;
+        case GLFW_KEY_H: keys.push_back(KeyAction::ToggleHud); break;
+        case GLFW_KEY_EQUAL: case GLFW_KEY_KP_ADD: keys.push_back(KeyAction::ExposureUp); break;
+        case GLFW_KEY_MINUS: case GLFW_KEY_KP_SUBTRACT: keys.push_back(KeyAction::ExposureDown); break;
+        case GLFW_KEY_F1: keys.push_back(KeyAction::Help); break;
+        default: break;
+      }
+    });
+    glfwSetCharCallback(window_, [](GLFWwindow* w, unsigned codepoint) {  // layout-independent '?' and '+'
+      auto& keys = static_cast<GlfwContext*>(glfwGetWindowUserPointer(w))->input_.keys;
+      if (codepoint == '?') keys.push_back(KeyAction::Help);
+      if (codepoint == '+') keys.push_back(KeyAction::ExposureUp);
     });
     glfwGetCursorPos(window_, &lastX_, &lastY_);
   }
@@ -63,19 +90,19 @@ class GlfwContext final : public GlContext {
   }
   bool shouldClose() const override { return glfwWindowShouldClose(window_); }
   InputDelta pollEvents() override {
-    input_ = {};
     glfwPollEvents();
     double x, y;
     glfwGetCursorPos(window_, &x, &y);
     if (glfwGetMouseButton(window_, GLFW_MOUSE_BUTTON_LEFT) == GLFW_PRESS)
       input_.drag = {float(x - lastX_), float(y - lastY_)};
     lastX_ = x, lastY_ = y;
-    if (glfwGetKey(window_, GLFW_KEY_ESCAPE) == GLFW_PRESS || glfwGetKey(window_, GLFW_KEY_Q) == GLFW_PRESS)
-      glfwSetWindowShouldClose(window_, GLFW_TRUE);
-    return input_;
+    return std::exchange(input_, {});
   }
   bool isHeadless() const override { return false; }
   std::string describe() const override { return "GLFW window (" + rendererString() + ")"; }
+  void* nativeWindow() const override { return window_; }
+  void setTitle(const std::string& title) override { glfwSetWindowTitle(window_, title.c_str()); }
+  void requestClose() override { glfwSetWindowShouldClose(window_, GLFW_TRUE); }
 
  private:
   GLFWwindow* window_ = nullptr;
@@ -109,6 +136,9 @@ class OsMesaContext final : public GlContext {
   InputDelta pollEvents() override { return {}; }
   bool isHeadless() const override { return true; }
   std::string describe() const override { return "OSMesa offscreen (" + rendererString() + ")"; }
+  void* nativeWindow() const override { return nullptr; }
+  void setTitle(const std::string&) override {}
+  void requestClose() override {}
 
  private:
   OSMesaContext ctx_ = nullptr;

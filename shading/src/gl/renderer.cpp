@@ -137,7 +137,8 @@ std::vector<float> FloatTarget::readRgba() const {
 
 Renderer::Renderer()
     : modelProgram_(link(shaders::kModelVs, shaders::kModelFs, "model shader")),
-      backgroundProgram_(link(shaders::kBackgroundVs, shaders::kBackgroundFs, "background shader")) {
+      backgroundProgram_(link(shaders::kBackgroundVs, shaders::kBackgroundFs, "background shader")),
+      probeProgram_(link(shaders::kBackgroundVs, shaders::kProbeFs, "probe view shader")) {
   GLuint id = 0;
   glGenVertexArrays(1, &id);
   emptyVao_.reset(id);
@@ -201,7 +202,52 @@ void Renderer::setBackgroundSrgb8(const std::uint8_t* bgr, int width, int height
   backgroundScale_ = scale;
 }
 
+void Renderer::setEnvOrientation(const glm::mat3& worldFromFile) { fileFromWorld_ = glm::transpose(worldFromFile); }
+
+void Renderer::bindPanorama(const Program& p, const ShadingSettings& s) const {
+  glUniformMatrix3fv(loc(p, "uFileFromWorld"), 1, GL_FALSE, glm::value_ptr(fileFromWorld_));
+  glUniform1f(loc(p, "uExposure"), s.exposure);
+  glUniform1i(loc(p, "uToneMap"), int(s.toneMap));
+  glUniform1f(loc(p, "uPanoramaScale"), backgroundScale_);
+  glUniform1i(loc(p, "uDisplayReferred"), backgroundSrgb_ && s.displayReferredBackground);
+  glUniform1i(loc(p, "uMapping"), int(backgroundMapping_));
+  glActiveTexture(GL_TEXTURE0);
+  glBindTexture(GL_TEXTURE_2D, backgroundTex_.get());
+  glUniform1i(loc(p, "uPanorama"), 0);
+}
+
+void Renderer::ensureMultisample(glm::ivec2 size, int samples) {
+  if (msaa_.fbo.isValid() && msaa_.size == size && msaa_.samples == samples) return;
+  msaa_ = Target{};
+  GLuint id = 0;
+  glGenFramebuffers(1, &id);
+  msaa_.fbo.reset(id);
+  glGenRenderbuffers(1, &id);
+  msaa_.colourMs.reset(id);
+  glBindRenderbuffer(GL_RENDERBUFFER, id);
+  glRenderbufferStorageMultisample(GL_RENDERBUFFER, samples, GL_RGBA8, size.x, size.y);
+  glGenRenderbuffers(1, &id);
+  msaa_.depth.reset(id);
+  glBindRenderbuffer(GL_RENDERBUFFER, id);
+  glRenderbufferStorageMultisample(GL_RENDERBUFFER, samples, GL_DEPTH_COMPONENT24, size.x, size.y);
+  glBindFramebuffer(GL_FRAMEBUFFER, msaa_.fbo.get());
+  glFramebufferRenderbuffer(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_RENDERBUFFER, msaa_.colourMs.get());
+  glFramebufferRenderbuffer(GL_FRAMEBUFFER, GL_DEPTH_ATTACHMENT, GL_RENDERBUFFER, msaa_.depth.get());
+  if (glCheckFramebufferStatus(GL_FRAMEBUFFER) != GL_FRAMEBUFFER_COMPLETE)
+    throw ContextError("multisample framebuffer (" + std::to_string(samples) + " samples) is incomplete");
+  msaa_.size = size;
+  msaa_.samples = samples;
+  checkGl("Renderer: multisample target");
+}
+
 void Renderer::draw(glm::ivec2 size, const Camera& camera, const ShadingSettings& s) {
+  GLint target = 0;
+  glGetIntegerv(GL_DRAW_FRAMEBUFFER_BINDING, &target);
+  const bool multisample = s.samples > 1 && s.output == OutputMode::Display;
+  if (multisample) {
+    ensureMultisample(size, s.samples);
+    glBindFramebuffer(GL_FRAMEBUFFER, msaa_.fbo.get());
+  }
   glViewport(0, 0, size.x, size.y);
   glClearColor(0.0f, 0.0f, 0.0f, 1.0f);
   glClear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
@@ -214,16 +260,10 @@ void Renderer::draw(glm::ivec2 size, const Camera& camera, const ShadingSettings
     glUniformMatrix4fv(loc(backgroundProgram_, "uInvViewProj"), 1, GL_FALSE,
                        glm::value_ptr(glm::inverse(viewProj)));
     glUniformMatrix3fv(loc(backgroundProgram_, "uWorldFromGl"), 1, GL_FALSE, glm::value_ptr(worldFromGl));
-    glUniform1f(loc(backgroundProgram_, "uExposure"), s.exposure * backgroundScale_);
-    glUniform1i(loc(backgroundProgram_, "uToneMap"), int(s.toneMap));
-    glUniform1i(loc(backgroundProgram_, "uMapping"), int(backgroundMapping_));
-    glActiveTexture(GL_TEXTURE0);
-    glBindTexture(GL_TEXTURE_2D, backgroundTex_.get());
-    glUniform1i(loc(backgroundProgram_, "uPanorama"), 0);
+    bindPanorama(backgroundProgram_, s);
     glBindVertexArray(emptyVao_.get());
     glDrawArrays(GL_TRIANGLES, 0, 3);
   }
-
   if (indexCount_ > 0) {
     glEnable(GL_DEPTH_TEST);
     glDepthFunc(GL_LESS);
@@ -245,8 +285,59 @@ void Renderer::draw(glm::ivec2 size, const Camera& camera, const ShadingSettings
     glDrawElements(GL_TRIANGLES, indexCount_, GL_UNSIGNED_INT, nullptr);
   }
   glBindVertexArray(0);
+  if (multisample) {
+    glBindFramebuffer(GL_READ_FRAMEBUFFER, msaa_.fbo.get());
+    glBindFramebuffer(GL_DRAW_FRAMEBUFFER, GLuint(target));
+    glBlitFramebuffer(0, 0, size.x, size.y, 0, 0, size.x, size.y, GL_COLOR_BUFFER_BIT, GL_NEAREST);
+  }
+  glBindFramebuffer(GL_FRAMEBUFFER, GLuint(target));
   checkGl("Renderer::draw");
 }
+
+void Renderer::drawProbeViews(const Camera& camera, const ShadingSettings& s) {
+  GLint target = 0, viewport[4];
+  glGetIntegerv(GL_DRAW_FRAMEBUFFER_BINDING, &target);
+  glGetIntegerv(GL_VIEWPORT, viewport);
+  const glm::ivec2 sizes[3] = {{256, 128}, {128, 128}, {128, 128}};
+  const glm::mat3 worldFromView = axes::worldFromGlMatrix() * glm::transpose(glm::mat3(camera.view()));
+  glDisable(GL_DEPTH_TEST);
+  glUseProgram(probeProgram_.get());
+  bindPanorama(probeProgram_, s);
+  glUniform1i(loc(probeProgram_, "uHavePanorama"), backgroundTex_.isValid());
+  glUniformMatrix3fv(loc(probeProgram_, "uWorldFromView"), 1, GL_FALSE, glm::value_ptr(worldFromView));
+  glUniformMatrix4fv(loc(probeProgram_, "uShR"), 1, GL_FALSE, glm::value_ptr(sh_[0]));
+  glUniformMatrix4fv(loc(probeProgram_, "uShG"), 1, GL_FALSE, glm::value_ptr(sh_[1]));
+  glUniformMatrix4fv(loc(probeProgram_, "uShB"), 1, GL_FALSE, glm::value_ptr(sh_[2]));
+  glBindVertexArray(emptyVao_.get());
+  for (int v = 0; v < 3; ++v) {
+    Target& t = probes_[std::size_t(v)];
+    if (!t.fbo.isValid()) {
+      GLuint id = 0;
+      glGenFramebuffers(1, &id);
+      t.fbo.reset(id);
+      t.colour = makeTexture(GL_RGBA8, sizes[v].x, sizes[v].y, GL_RGBA, GL_UNSIGNED_BYTE, nullptr, GL_CLAMP_TO_EDGE);
+      glBindFramebuffer(GL_FRAMEBUFFER, t.fbo.get());
+      glFramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_TEXTURE_2D, t.colour.get(), 0);
+      t.size = sizes[v];
+      glActiveTexture(GL_TEXTURE0);
+      glBindTexture(GL_TEXTURE_2D, backgroundTex_.get());
+    }
+    glBindFramebuffer(GL_FRAMEBUFFER, t.fbo.get());
+    glViewport(0, 0, t.size.x, t.size.y);
+    glClearColor(0, 0, 0, 0);
+    glClear(GL_COLOR_BUFFER_BIT);
+    glUniform1i(loc(probeProgram_, "uMode"), v);
+    glDrawArrays(GL_TRIANGLES, 0, 3);
+  }
+  glBindVertexArray(0);
+  glBindFramebuffer(GL_FRAMEBUFFER, GLuint(target));
+  glViewport(viewport[0], viewport[1], viewport[2], viewport[3]);
+  checkGl("Renderer::drawProbeViews");
+}
+
+unsigned Renderer::probeTexture(ProbeView view) const { return probes_[std::size_t(view)].colour.get(); }
+glm::ivec2 Renderer::probeSize(ProbeView view) const { return probes_[std::size_t(view)].size; }
+
 
 void Renderer::finish() { glFinish(); }
 

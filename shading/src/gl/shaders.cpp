@@ -72,31 +72,84 @@ void main() {
 }
 )";
 
-const char* const kBackgroundFs = "#version 330 core\n" LP_DISPLAY_GLSL R"(
+// The panorama seen in world direction w (R&H frame): the environment's orientation, the
+// layout's mapping and the background look. Shared by the background and the probe views.
+#define LP_PANORAMA_GLSL                                                                 \
+  "uniform sampler2D uPanorama;\n"                                                       \
+  "uniform int uMapping;          // 0 equirect, 1 angular (capture/layout.h)\n"         \
+  "uniform mat3 uFileFromWorld;   // inverse of the environment's orientation\n"         \
+  "uniform float uPanoramaScale;  // the input exposure of an 8-bit frame, else 1\n"     \
+  "uniform bool uDisplayReferred; // show the texels as the source looks: no exposure, no tone map\n" \
+  "const float PI = 3.14159265358979;\n"                                                 \
+  "vec2 panoramaUv(vec3 w) {\n"                                                          \
+  "  w = uFileFromWorld * w;\n"                                                          \
+  "  if (uMapping == 0) {\n"                                                             \
+  "    float t = acos(clamp(w.z, -1.0, 1.0));\n"                                         \
+  "    float p = atan(w.y, w.x);\n"                                                      \
+  "    if (p < 0.0) p += 2.0 * PI;\n"                                                    \
+  "    return vec2(p / (2.0 * PI), t / PI);\n"                                           \
+  "  }\n"                                                                                \
+  "  vec3 l = vec3(-w.y, w.z, -w.x);  // worldToAngular\n"                               \
+  "  float r = acos(clamp(l.z, -1.0, 1.0)) / PI;\n"                                      \
+  "  float p = atan(l.y, l.x);\n"                                                        \
+  "  return vec2(0.5 + 0.5 * r * cos(p), 0.5 - 0.5 * r * sin(p));\n"                     \
+  "}\n"                                                                                  \
+  "vec3 panoramaDisplay(vec3 w) {\n"                                                     \
+  "  vec3 c = textureLod(uPanorama, panoramaUv(w), 0.0).rgb;\n"                          \
+  "  if (uDisplayReferred) return srgbEncode(clamp(c, 0.0, 1.0));\n"                     \
+  "  return srgbEncode(toneMap(c * uPanoramaScale));\n"                                  \
+  "}\n"
+
+const char* const kBackgroundFs = "#version 330 core\n" LP_DISPLAY_GLSL LP_PANORAMA_GLSL R"(
 in vec2 vNdc;
 out vec4 fragColor;
 uniform mat4 uInvViewProj;
 uniform mat3 uWorldFromGl;
-uniform sampler2D uPanorama;
-uniform int uMapping;  // 0 equirect, 1 angular (capture/layout.h)
-const float PI = 3.14159265358979;
 
 void main() {
   vec4 a = uInvViewProj * vec4(vNdc, -1.0, 1.0), b = uInvViewProj * vec4(vNdc, 1.0, 1.0);
   vec3 w = normalize(uWorldFromGl * (b.xyz / b.w - a.xyz / a.w));
-  vec2 uv;
-  if (uMapping == 0) {
-    float t = acos(clamp(w.z, -1.0, 1.0));
-    float p = atan(w.y, w.x);
-    if (p < 0.0) p += 2.0 * PI;
-    uv = vec2(p / (2.0 * PI), t / PI);
-  } else {
-    vec3 l = vec3(-w.y, w.z, -w.x);  // worldToAngular
-    float r = acos(clamp(l.z, -1.0, 1.0)) / PI;
-    float p = atan(l.y, l.x);
-    uv = vec2(0.5 + 0.5 * r * cos(p), 0.5 - 0.5 * r * sin(p));
+  fragColor = vec4(panoramaDisplay(w), 1.0);
+}
+)";
+
+// The probe views of the HUD, each drawn into a small texture by a full-screen triangle:
+// 0: the whole panorama unwrapped as an equirect (the world's, after orientation);
+// 1: a grey (50%) diffuse ball lit by the coefficients; 2: a chrome ball reflecting the
+// environment. The balls are seen orthographically from the camera's direction.
+const char* const kProbeFs = "#version 330 core\n" LP_DISPLAY_GLSL LP_PANORAMA_GLSL R"(
+in vec2 vNdc;
+out vec4 fragColor;
+uniform int uMode;
+uniform mat3 uWorldFromView;   // camera space -> R&H world
+uniform mat4 uShR, uShG, uShB;
+uniform bool uHavePanorama;
+
+vec3 shIrradiance(vec3 n) {
+  vec4 n4 = vec4(n, 1.0);
+  return vec3(dot(n4, uShR * n4), dot(n4, uShG * n4), dot(n4, uShB * n4));
+}
+
+void main() {
+  if (uMode == 0) {
+    float p = (vNdc.x * 0.5 + 0.5) * 2.0 * PI, t = (0.5 - 0.5 * vNdc.y) * PI;
+    vec3 w = vec3(sin(t) * cos(p), sin(t) * sin(p), cos(t));
+    fragColor = vec4(uHavePanorama ? panoramaDisplay(w) : vec3(0.0), 1.0);
+    return;
   }
-  fragColor = vec4(srgbEncode(toneMap(textureLod(uPanorama, uv, 0.0).rgb)), 1.0);
+  float r2 = dot(vNdc, vNdc);
+  if (r2 > 1.0) {
+    fragColor = vec4(0.0);
+    return;
+  }
+  vec3 nView = vec3(vNdc, sqrt(1.0 - r2));
+  if (uMode == 1) {
+    vec3 E = shIrradiance(normalize(uWorldFromView * nView));
+    fragColor = vec4(srgbEncode(toneMap(0.5 * E / PI)), 1.0);
+  } else {
+    vec3 r = reflect(vec3(0.0, 0.0, -1.0), nView);
+    fragColor = vec4(uHavePanorama ? panoramaDisplay(normalize(uWorldFromView * r)) : vec3(0.0), 1.0);
+  }
 }
 )";
 

@@ -6,6 +6,7 @@
 #include <memory>
 #include <stdexcept>
 #include <string>
+#include <vector>
 
 #include <glm/glm.hpp>
 
@@ -25,10 +26,24 @@ struct ContextSpec {
   bool vsync = true;
 };
 
-/// Mouse input gathered since the last pollEvents(), for orbit and zoom.
+/// What a key press asks for. Keys arrive through GLFW's callbacks, so a tap shorter than a frame
+/// is never lost; Esc and Q close the window from the callback itself.
+enum class KeyAction : std::uint8_t {
+  Pause,           ///< Space
+  Step,            ///< Right arrow
+  ResetView,       ///< R
+  ToggleBackground,///< B
+  ToggleHud,       ///< H
+  ExposureUp,      ///< + or = (keypad +)
+  ExposureDown,    ///< - (keypad -)
+  Help,            ///< F1 or ?
+};
+
+/// Input gathered since the last pollEvents().
 struct InputDelta {
   glm::vec2 drag{0.0f};  ///< cursor movement with the left button held, in pixels
   float scroll = 0.0f;   ///< wheel steps
+  std::vector<KeyAction> keys;  ///< in the order pressed
 };
 
 class GlContext {
@@ -43,6 +58,11 @@ class GlContext {
   virtual bool isHeadless() const = 0;
   /// "GLFW window" or "OSMesa offscreen", plus GL_RENDERER.
   virtual std::string describe() const = 0;
+  /// The GLFWwindow* of a window (for Dear ImGui's GLFW backend); nullptr headless.
+  virtual void* nativeWindow() const = 0;
+  virtual void setTitle(const std::string& title) = 0;
+  /// Asks the window to close (as Esc does).
+  virtual void requestClose() = 0;
 };
 
 /// Creates a context and loads GL into it. Throws ContextError with the cause.

@@ -40,7 +40,15 @@ struct ShadingSettings {
   ToneMap toneMap = ToneMap::Aces;
   bool background = true;
   OutputMode output = OutputMode::Display;
+  /// Multisample anti-aliasing: 1 (off) or the samples per pixel of an offscreen target that is
+  /// resolved into the bound framebuffer. Display output only. (The app's default is 4.)
+  int samples = 1;
+  /// An 8-bit (sRGB) background is shown as the source looks: no exposure, no tone map.
+  bool displayReferredBackground = true;
 };
+
+/// The small views the HUD shows (Renderer::drawProbeViews).
+enum class ProbeView : std::uint8_t { Panorama, DiffuseBall, ChromeBall };
 
 /// A float RGBA offscreen target with depth, for exact readback.
 class FloatTarget {
@@ -75,8 +83,21 @@ class Renderer {
   /// the shader multiplies by `scale` (the input exposure). Saves a per-frame CPU conversion.
   void setBackgroundSrgb8(const std::uint8_t* bgr, int width, int height, BackgroundMapping mapping, float scale);
 
+  /// Orientation of the environment: a light at file direction d lies in world direction O d.
+  /// O is orthogonal (a rotation, or a rotation times a reflection for a flipped panorama). The
+  /// background and the probe views look up the panorama through its inverse; the lighting
+  /// passed to setLighting() must already be turned by the same O (lp::rotateSh).
+  void setEnvOrientation(const glm::mat3& worldFromFile);
+
   /// Draws into the currently bound framebuffer (viewport `size`).
   void draw(glm::ivec2 size, const Camera& camera, const ShadingSettings& settings);
+
+  /// Renders the probe views (the panorama unwrapped, a grey diffuse ball, a chrome ball) into
+  /// small textures for the HUD, seen from `camera`'s direction. Restores the bound framebuffer.
+  void drawProbeViews(const Camera& camera, const ShadingSettings& settings);
+  /// The GL texture name of a probe view (0 before the first drawProbeViews), and its size.
+  unsigned probeTexture(ProbeView view) const;
+  glm::ivec2 probeSize(ProbeView view) const;
 
   /// Waits until GL has finished all commands (for frame timing).
   static void finish();
@@ -85,7 +106,20 @@ class Renderer {
   static std::vector<std::uint8_t> readRgb8(glm::ivec2 size);
 
  private:
-  Program modelProgram_, backgroundProgram_;
+  struct Target {  ///< an offscreen colour (+ depth) target
+    Framebuffer fbo;
+    Texture colour;
+    Renderbuffer colourMs, depth;
+    glm::ivec2 size{0};
+    int samples = 0;
+  };
+  void ensureMultisample(glm::ivec2 size, int samples);
+  void bindPanorama(const Program& program, const ShadingSettings& s) const;
+
+  Program modelProgram_, backgroundProgram_, probeProgram_;
+  Target msaa_;
+  std::array<Target, 3> probes_;
+  glm::mat3 fileFromWorld_{1.0f};
   VertexArray meshVao_, emptyVao_;
   Buffer positions_, normals_, uvs_, indices_;
   GLsizei indexCount_ = 0;

@@ -1,0 +1,299 @@
+#include "hud.h"
+
+#include <imgui.h>
+#include <imgui_impl_glfw.h>
+#include <imgui_impl_opengl3.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+
+#include "atomic_file.h"
+#include "capture/error.h"
+#include "coeffs_io.h"
+
+namespace lp::cli {
+
+namespace {
+
+constexpr std::size_t kHistory = 300;  // frames kept for the plots
+const ImU32 kChannel[3] = {IM_COL32(235, 80, 70, 255), IM_COL32(90, 200, 90, 255), IM_COL32(80, 140, 240, 255)};
+const ImU32 kStageColour[5] = {IM_COL32(31, 119, 180, 255), IM_COL32(255, 127, 14, 255), IM_COL32(44, 160, 44, 255),
+                               IM_COL32(214, 39, 40, 255), IM_COL32(148, 103, 189, 255)};
+const char* const kStageName[5] = {"grab", "convert", "project", "upload", "render"};
+
+/// Several series on one set of axes (ImGui's PlotLines draws one), scaled to [lo, hi].
+void plotSeries(const char* id, const std::vector<std::vector<float>>& series, const std::vector<ImU32>& colours,
+                ImVec2 size, float lo, float hi) {
+  ImGui::PushID(id);
+  const ImVec2 p0 = ImGui::GetCursorScreenPos(), p1(p0.x + size.x, p0.y + size.y);
+  ImDrawList* dl = ImGui::GetWindowDrawList();
+  dl->AddRectFilled(p0, p1, IM_COL32(20, 20, 24, 200));
+  if (lo < 0 && hi > 0) {
+    const float y0 = p1.y - size.y * (0 - lo) / (hi - lo);
+    dl->AddLine({p0.x, y0}, {p1.x, y0}, IM_COL32(90, 90, 90, 255));
+  }
+  for (std::size_t s = 0; s < series.size(); ++s) {
+    const auto& v = series[s];
+    if (v.size() < 2) continue;
+    std::vector<ImVec2> pts(v.size());
+    for (std::size_t i = 0; i < v.size(); ++i) {
+      const float t = std::clamp((v[i] - lo) / std::max(1e-12f, hi - lo), 0.0f, 1.0f);
+      pts[i] = {p0.x + size.x * float(i) / float(kHistory - 1), p1.y - size.y * t};
+    }
+    dl->AddPolyline(pts.data(), int(pts.size()), colours[s], 0, 1.5f);
+  }
+  ImGui::Dummy(size);
+  ImGui::PopID();
+}
+
+}  // namespace
+
+void applyKeys(const std::vector<gl::KeyAction>& keys, ViewState& s, bool canPause) {
+  for (const auto k : keys) switch (k) {
+      case gl::KeyAction::Pause:
+        if (canPause) s.paused = !s.paused;
+        break;
+      case gl::KeyAction::Step:
+        if (canPause) s.paused = true, ++s.steps;
+        break;
+      case gl::KeyAction::ResetView: s.camera = s.initialCamera; break;
+      case gl::KeyAction::ToggleBackground: s.shading.background = !s.shading.background; break;
+      case gl::KeyAction::ToggleHud: s.hud = !s.hud; break;
+      case gl::KeyAction::ExposureUp: s.shading.exposure *= std::sqrt(2.0f); break;  // half a stop
+      case gl::KeyAction::ExposureDown: s.shading.exposure /= std::sqrt(2.0f); break;
+      case gl::KeyAction::Help: s.help = !s.help; break;
+    }
+}
+
+Hud::Hud(gl::GlContext& ctx) : window_(ctx.nativeWindow() != nullptr) {
+  IMGUI_CHECKVERSION();
+  ImGui::CreateContext();
+  ImGuiIO& io = ImGui::GetIO();
+  io.IniFilename = nullptr;  // no imgui.ini left in the user's folder
+  ImGui::StyleColorsDark();
+  ImGui::GetStyle().WindowRounding = 4.0f;
+  ImGui::GetStyle().Alpha = 0.95f;
+  if (window_ && !ImGui_ImplGlfw_InitForOpenGL(static_cast<GLFWwindow*>(ctx.nativeWindow()), true))
+    throw Error("HUD: cannot attach Dear ImGui to the window");
+  if (!ImGui_ImplOpenGL3_Init("#version 330 core")) {
+    if (window_) ImGui_ImplGlfw_Shutdown();
+    ImGui::DestroyContext();
+    throw Error("HUD: cannot initialise Dear ImGui's OpenGL 3 renderer");
+  }
+}
+
+Hud::~Hud() {
+  ImGui_ImplOpenGL3_Shutdown();
+  if (window_) ImGui_ImplGlfw_Shutdown();
+  ImGui::DestroyContext();
+}
+
+void Hud::setSource(std::string source, std::string layout, bool smoothing, bool still) {
+  still_ = still;
+  source_ = std::move(source);
+  layout_ = std::move(layout);
+  smoothing_ = smoothing;
+}
+
+void Hud::push(const HudSample& s) {
+  history_.push_back(s);
+  while (history_.size() > kHistory) history_.pop_front();
+}
+
+void Hud::enableEditor(Sh9* radiance, std::string savePath) {
+  editing_ = radiance;
+  savePath_ = std::move(savePath);
+}
+
+bool Hud::wantsMouse() const { return ImGui::GetIO().WantCaptureMouse; }
+bool Hud::wantsKeyboard() const { return ImGui::GetIO().WantCaptureKeyboard; }
+
+void Hud::draw(glm::ivec2 fb, gl::Renderer& renderer, ViewState& state, double frameMs) {
+  edited_ = false;
+  ImGuiIO& io = ImGui::GetIO();
+  ImGui_ImplOpenGL3_NewFrame();
+  if (window_) {
+    ImGui_ImplGlfw_NewFrame();
+  } else {
+    io.DisplaySize = ImVec2(float(fb.x), float(fb.y));
+    io.DeltaTime = 1.0f / 30.0f;
+  }
+  fpsSmoothed_ = fpsSmoothed_ == 0 ? frameMs : 0.9 * fpsSmoothed_ + 0.1 * frameMs;
+  if (state.hud) renderer.drawProbeViews(state.camera, state.shading);
+  // ImGui sizes auto-fitting windows on their first frame and shows them from the second: a
+  // headless still has only one, so lay the HUD out once unseen first.
+  for (int pass = laidOut_ ? 1 : 0; pass < 2; ++pass) {
+    ImGui::NewFrame();
+    if (state.hud) {
+      drawStatus(state, frameMs);
+      drawLight(renderer);
+      if (editing_) drawEditor();
+    }
+    if (state.help) drawHelp(state);
+    if (pass == 0) ImGui::EndFrame();
+  }
+  laidOut_ = true;
+  ImGui::Render();
+  ImGui_ImplOpenGL3_RenderDrawData(ImGui::GetDrawData());
+}
+
+void Hud::drawStatus(ViewState& state, double frameMs) {
+  ImGui::SetNextWindowPos({8, 8}, ImGuiCond_Always);
+  ImGui::SetNextWindowSize({330, 0}, ImGuiCond_Always);
+  ImGui::SetNextWindowBgAlpha(0.6f);
+  ImGui::Begin("liveprobe", nullptr, ImGuiWindowFlags_NoMove | ImGuiWindowFlags_NoResize | ImGuiWindowFlags_NoSavedSettings |
+                                        ImGuiWindowFlags_NoFocusOnAppearing);
+  ImGui::TextWrapped("%s", source_.c_str());
+  ImGui::Text("layout %s%s", layout_.c_str(), state.paused ? "   [PAUSED]" : "");
+  if (!still_ && !history_.empty())
+    ImGui::Text("frame %llu   t = %.3f s", static_cast<unsigned long long>(history_.back().frame), history_.back().time);
+  ImGui::Text("%.1f frames/s   %.2f ms/frame", fpsSmoothed_ > 0 ? 1000.0 / fpsSmoothed_ : 0.0, frameMs);
+  if (!still_ && !history_.empty()) {
+    std::vector<std::vector<float>> series(5);
+    float top = 1.0f;
+    for (const auto& h : history_) {
+      const double v[5] = {h.grabMs, h.convertMs, h.projectMs, h.uploadMs, h.renderMs};
+      for (int k = 0; k < 5; ++k) {
+        series[std::size_t(k)].push_back(float(v[k]));
+        top = std::max(top, float(v[k]));
+      }
+    }
+    ImGui::Text("stage times, last %zu frames (0 .. %.1f ms)", history_.size(), top);
+    plotSeries("stages", series, {std::begin(kStageColour), std::end(kStageColour)}, {310, 70}, 0, top);
+    const auto& b = history_.back();
+    const double now[5] = {b.grabMs, b.convertMs, b.projectMs, b.uploadMs, b.renderMs};
+    for (int k = 0; k < 5; ++k) {
+      if (k % 3) ImGui::SameLine();
+      ImGui::TextColored(ImColor(kStageColour[k]), "%-7s %5.1f ms", kStageName[k], now[k]);
+    }
+  }
+  if (!still_) {
+    ImGui::Text("captured %zu  drawn %zu  dropped %zu", counters_.captured, counters_.drawn, counters_.dropped);
+    ImGui::Text("skipped %zu  saturated %.1f/frame", counters_.skipped, counters_.saturatedPerFrame);
+  }
+  float ev = std::log2(state.shading.exposure);
+  if (ImGui::SliderFloat("exposure (EV)", &ev, -16.0f, 16.0f, "%.2f")) state.shading.exposure = std::exp2(ev);
+  ImGui::Checkbox("background", &state.shading.background);
+  ImGui::SameLine();
+  ImGui::TextDisabled("F1: help");
+  ImGui::End();
+}
+
+void Hud::drawLight(gl::Renderer& renderer) {
+  const ImGuiIO& io = ImGui::GetIO();
+  ImGui::SetNextWindowPos({io.DisplaySize.x - 8, 8}, ImGuiCond_Always, {1, 0});
+  ImGui::SetNextWindowSize({290, 0}, ImGuiCond_Always);
+  ImGui::SetNextWindowBgAlpha(0.6f);
+  ImGui::Begin("light", nullptr, ImGuiWindowFlags_NoMove | ImGuiWindowFlags_NoResize | ImGuiWindowFlags_NoSavedSettings |
+                                     ImGuiWindowFlags_NoFocusOnAppearing);
+  auto image = [&](gl::ProbeView v, float scale) {
+    const glm::ivec2 s = renderer.probeSize(v);
+    // The textures are rendered bottom-up (GL): flip v.
+    ImGui::Image(reinterpret_cast<ImTextureID>(static_cast<std::uintptr_t>(renderer.probeTexture(v))),
+                 {float(s.x) * scale, float(s.y) * scale}, {0, 1}, {1, 0});
+  };
+  image(gl::ProbeView::Panorama, 1.05f);
+  image(gl::ProbeView::DiffuseBall, 1.0f);
+  ImGui::SameLine();
+  image(gl::ProbeView::ChromeBall, 1.0f);
+  ImGui::TextDisabled("grey 50%% diffuse      chrome");
+
+  // The nine coefficients: bars per channel, scaled to the largest magnitude.
+  const Sh9& L = history_.empty() ? Sh9{} : history_.back().radiance;
+  float scale = 1e-12f;
+  for (const auto& c : L.c) scale = std::max({scale, std::abs(c.x), std::abs(c.y), std::abs(c.z)});
+  ImDrawList* dl = ImGui::GetWindowDrawList();
+  for (int k = 0; k < kShCount; ++k) {
+    ImGui::Text("%-4s", std::string(kShNames[std::size_t(k)]).c_str());
+    ImGui::SameLine(44);
+    const ImVec2 p = ImGui::GetCursorScreenPos();
+    const float w = 120, h = 4, mid = p.x + w / 2;
+    dl->AddLine({mid, p.y}, {mid, p.y + 3 * h}, IM_COL32(120, 120, 120, 255));
+    for (int ch = 0; ch < 3; ++ch) {
+      const float v = L.c[std::size_t(k)][ch] / scale * (w / 2);
+      dl->AddRectFilled({std::min(mid, mid + v), p.y + float(ch) * h}, {std::max(mid, mid + v), p.y + float(ch + 1) * h - 1},
+                        kChannel[ch]);
+    }
+    ImGui::Dummy({w, 3 * h});
+    ImGui::SameLine();
+    ImGui::Text("%+.3f", luminance(L.c[std::size_t(k)]));
+  }
+  // Each coefficient's luminance over time; with --smooth the raw value is drawn in grey.
+  if (!still_) ImGui::Text("luminance over time%s", smoothing_ ? " (grey: before --smooth)" : "");
+  for (int k = 0; k < kShCount && !still_; ++k) {
+    std::vector<std::vector<float>> series(2);
+    float lo = 0, hi = 0;
+    for (const auto& h : history_) {
+      const float a = luminance(h.unsmoothed.c[std::size_t(k)]), b = luminance(h.radiance.c[std::size_t(k)]);
+      series[0].push_back(a);
+      series[1].push_back(b);
+      lo = std::min({lo, a, b});
+      hi = std::max({hi, a, b});
+    }
+    if (!smoothing_) series.erase(series.begin());
+    if (k % 3) ImGui::SameLine();
+    const float pad = 0.05f * std::max(1e-9f, hi - lo);
+    const std::vector<ImU32> colours = smoothing_ ? std::vector<ImU32>{IM_COL32(150, 150, 150, 255), IM_COL32(250, 210, 80, 255)}
+                                                  : std::vector<ImU32>{IM_COL32(250, 210, 80, 255)};
+    plotSeries(std::string(kShNames[std::size_t(k)]).c_str(), series, colours, {88, 26}, lo - pad, hi + pad);
+  }
+  ImGui::End();
+}
+
+void Hud::drawEditor() {
+  const ImGuiIO& io = ImGui::GetIO();
+  ImGui::SetNextWindowPos({8, io.DisplaySize.y - 8}, ImGuiCond_Always, {0, 1});
+  ImGui::SetNextWindowSize({330, 0}, ImGuiCond_Always);
+  ImGui::SetNextWindowBgAlpha(0.6f);
+  ImGui::Begin("coefficients", nullptr, ImGuiWindowFlags_NoMove | ImGuiWindowFlags_NoResize | ImGuiWindowFlags_NoSavedSettings);
+  float scale = 0.5f;
+  for (const auto& c : editing_->c) scale = std::max({scale, std::abs(c.x), std::abs(c.y), std::abs(c.z)});
+  for (int k = 0; k < kShCount; ++k) {
+    float v[3] = {editing_->c[std::size_t(k)].x, editing_->c[std::size_t(k)].y, editing_->c[std::size_t(k)].z};
+    if (ImGui::SliderFloat3(std::string(kShNames[std::size_t(k)]).c_str(), v, -2 * scale, 2 * scale, "%.3f")) {
+      editing_->c[std::size_t(k)] = {v[0], v[1], v[2]};
+      edited_ = true;
+    }
+  }
+  if (ImGui::Button("Save JSON")) {
+    try {
+      nlohmann::ordered_json j;
+      j["source"] = "liveprobe view (edited)";
+      j["coefficients"] = coefficientsJson(*editing_);
+      writeFileAtomically(savePath_, j.dump() + "\n");
+      saveMessage_ = "saved " + savePath_;
+    } catch (const Error& e) {
+      saveMessage_ = e.what();
+    }
+  }
+  ImGui::SameLine();
+  if (ImGui::Button("Zero")) {
+    *editing_ = Sh9{};
+    edited_ = true;
+  }
+  if (!saveMessage_.empty()) ImGui::TextWrapped("%s", saveMessage_.c_str());
+  ImGui::End();
+}
+
+void Hud::drawHelp(ViewState& state) {
+  const ImGuiIO& io = ImGui::GetIO();
+  ImGui::SetNextWindowPos({io.DisplaySize.x / 2, io.DisplaySize.y / 2}, ImGuiCond_Always, {0.5f, 0.5f});
+  ImGui::SetNextWindowBgAlpha(0.85f);
+  bool open = true;
+  ImGui::Begin("keys", &open, ImGuiWindowFlags_AlwaysAutoResize | ImGuiWindowFlags_NoSavedSettings);
+  const char* const rows[][2] = {{"left drag", "orbit"},       {"wheel", "zoom"},
+                                 {"Space", "pause / resume"},  {"Right", "one frame (paused)"},
+                                 {"R", "reset the view"},      {"B", "background on/off"},
+                                 {"H", "HUD on/off"},          {"+ / -", "exposure, half a stop"},
+                                 {"F1 or ?", "this help"},     {"Esc or Q", "quit"}};
+  for (const auto& r : rows) {
+    ImGui::Text("%-10s", r[0]);
+    ImGui::SameLine(90);
+    ImGui::TextUnformatted(r[1]);
+  }
+  ImGui::End();
+  if (!open) state.help = false;
+}
+
+}  // namespace lp::cli

@@ -1,0 +1,87 @@
+#pragma once
+// The on-screen HUD of view, replay and live (Dear ImGui), and the interactive state its keys
+// and sliders change. In a window it uses ImGui's GLFW backend for input; headless (--hud) the
+// same HUD is drawn into the offscreen frame, so tests and recorded frames show it.
+#include <cstdint>
+#include <deque>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "shading/gl/context.h"
+#include "shading/gl/renderer.h"
+#include "shading/sh.h"
+
+namespace lp::cli {
+
+/// One drawn frame's numbers, for the HUD's history plots.
+struct HudSample {
+  std::uint64_t frame = 0;
+  double time = 0;  ///< the source's timestamp, seconds
+  double grabMs = 0, convertMs = 0, projectMs = 0, uploadMs = 0, renderMs = 0;
+  Sh9 radiance;     ///< as lit (after rotation and smoothing)
+  Sh9 unsmoothed;   ///< before smoothing (equal to radiance without --smooth)
+};
+
+struct HudCounters {
+  std::size_t captured = 0, drawn = 0, dropped = 0, skipped = 0;
+  double saturatedPerFrame = 0;
+};
+
+/// What the viewer's keys and the HUD's widgets change.
+struct ViewState {
+  gl::Camera camera, initialCamera;
+  gl::ShadingSettings shading;
+  bool hud = true;
+  bool help = false;
+  bool paused = false;
+  int steps = 0;  ///< single-frame steps asked for while paused
+};
+
+/// Applies key presses to the state (a window's Esc/Q close it in the context itself).
+void applyKeys(const std::vector<gl::KeyAction>& keys, ViewState& state, bool canPause);
+
+class Hud {
+ public:
+  /// Creates the ImGui context on `ctx` (current). A window gets ImGui's GLFW input backend.
+  explicit Hud(gl::GlContext& ctx);
+  ~Hud();
+  Hud(const Hud&) = delete;
+  Hud& operator=(const Hud&) = delete;
+
+  /// A still (render, view) shows no stage times, counters or history.
+  void setSource(std::string source, std::string layout, bool smoothing, bool still = false);
+  void push(const HudSample& s);
+  void setCounters(const HudCounters& c) { counters_ = c; }
+  /// Turns on the coefficient editor (view): sliders edit `*radiance`; Save writes `savePath`.
+  void enableEditor(Sh9* radiance, std::string savePath);
+  /// True when the editor changed the coefficients in the last draw().
+  bool edited() const { return edited_; }
+
+  /// ImGui has the mouse / keyboard (the viewer then ignores them).
+  bool wantsMouse() const;
+  bool wantsKeyboard() const;
+
+  /// Draws the HUD (and the help overlay) over the bound framebuffer, after the scene.
+  void draw(glm::ivec2 framebuffer, gl::Renderer& renderer, ViewState& state, double frameMs);
+
+ private:
+  void drawStatus(ViewState& state, double frameMs);
+  void drawLight(gl::Renderer& renderer);
+  void drawEditor();
+  void drawHelp(ViewState& state);
+
+  bool window_ = false;
+  std::string source_, layout_;
+  bool smoothing_ = false, still_ = false;
+  std::deque<HudSample> history_;
+  HudCounters counters_;
+  Sh9* editing_ = nullptr;
+  std::string savePath_, saveMessage_;
+  bool edited_ = false;
+  double fpsSmoothed_ = 0;
+  bool laidOut_ = false;
+};
+
+}  // namespace lp::cli

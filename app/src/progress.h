@@ -1,0 +1,45 @@
+#pragma once
+// Progress of long runs, and clean stops. SIGINT and SIGTERM set a flag that every long loop
+// polls: the loop finishes or drops its current frame, the command finalises its outputs, prints
+// its summary and exits with kExitInterrupted. A second signal ends the process at once.
+#include <chrono>
+#include <cstdint>
+#include <string>
+
+namespace lp::cli {
+
+inline constexpr int kExitInterrupted = 130;  ///< 128 + SIGINT, as shells report it
+
+/// Installs the SIGINT/SIGTERM handlers (idempotent).
+void installStopHandlers();
+/// A stop was asked for by a signal.
+bool stopRequested();
+/// The signal that asked for the stop (0 if none).
+int stopSignal();
+
+/// Frames done, rate and ETA on stderr: a bar redrawn in place on a terminal (at most 10 times a
+/// second), a line every few seconds otherwise. Silent with quiet.
+class Progress {
+ public:
+  /// total < 0: the end is unknown (no ETA).
+  Progress(std::string what, std::int64_t total, bool quiet, std::string unit = "frames");
+  ~Progress();
+  Progress(const Progress&) = delete;
+  Progress& operator=(const Progress&) = delete;
+
+  void update(std::int64_t done);
+  /// Clears the bar (terminal) so the summary starts on a clean line.
+  void finish();
+
+ private:
+  using Clock = std::chrono::steady_clock;
+  std::string what_, unit_;
+  std::int64_t total_;
+  bool quiet_, tty_, open_ = false;
+  Clock::time_point start_, last_;
+};
+
+/// One warning line on stderr ("liveprobe: warning: ..."); the run goes on.
+void warn(const std::string& text);
+
+}  // namespace lp::cli
