@@ -121,8 +121,8 @@ void drawPlot(const std::string& path, const std::vector<std::array<double, kSta
     << "set key outside right top vertical\nset yrange [0:" << top << "]\nset xrange [0:" << std::max<std::size_t>(1, frames.size() - 1) << "]\n";
   for (std::size_t start = 0, k = 1; start < frames.size(); start += std::size_t(framesPerRun), ++k)
     g << "set object " << k << " rect from " << start << ",0 to " << start + kWarmup - 1 << "," << top
-      << " fc rgb '#bbbbbb' fs solid 0.35 behind\n";
-  g << "set label 1 'shaded: warm-up' at graph 0.01, graph 0.96\n";
+      << " fc rgb '#ffb000' fs solid 0.45 noborder behind\n";
+  g << "set label 1 'orange: warm-up frames of each run' at graph 0.01, graph 0.96\n";
   const char* colours[kStageCount] = {"#1f77b4", "#ff7f0e", "#2ca02c", "#d62728", "#9467bd", "#8c564b"};
   g << "plot ";
   for (int s = kStageCount - 1; s >= 0; --s) {
@@ -134,8 +134,8 @@ void drawPlot(const std::string& path, const std::vector<std::array<double, kSta
     << "]\nset yrange [0:*]\nset boxwidth " << width * 0.9 << "\n"
     << "set arrow 1 from " << med << ", graph 0 to " << med << ", graph 1 nohead lc rgb '#2ca02c' lw 2\n"
     << "set arrow 2 from " << p95 << ", graph 0 to " << p95 << ", graph 1 nohead lc rgb '#d62728' lw 2 dt 2\n"
-    << "set label 2 sprintf('median %.2f ms', " << med << ") at " << med << ", graph 0.95 offset 0.5,0 tc rgb '#2ca02c'\n"
-    << "set label 3 sprintf('p95 %.2f ms', " << p95 << ") at " << p95 << ", graph 0.88 offset 0.5,0 tc rgb '#d62728'\n"
+    << "set label 2 sprintf('median %.2f ms', " << med << ") at " << med << ", graph 0.95 offset 1,0 tc rgb '#2ca02c'\n"
+    << "set label 3 sprintf('p95 %.2f ms', " << p95 << ") at " << p95 << ", graph 0.88 offset 1,0 tc rgb '#d62728'\n"
     << "plot '" << hist << "' using 1:2 with boxes lc rgb '#777777' title 'frames'\nunset multiplot\n";
   {
     std::ofstream f(script);

@@ -188,10 +188,15 @@ struct StreamView {
   ViewState state;
   bool autoExposure = true, haveLighting = false;
   LayoutSpec layout;
+  std::string source;
 
   /// Uploads a frame's lighting and background; returns the upload time in ms.
   double use(const ProcessedFrame& f) {
     const auto t0 = Clock::now();
+    if (!haveLighting) {  // the first frame: does its shape fit the layout?
+      const int w = f.image ? f.image->width : f.raw ? f.raw->width : 0, h = f.image ? f.image->height : f.raw ? f.raw->height : 0;
+      if (w > 0) warnIfLayoutLooksWrong(source, layout, w, h, f.image ? f.image->rgb.data() : nullptr);
+    }
     if (!haveLighting && autoExposure) state.shading.exposure = cli::autoExposure(f.radiance);
     haveLighting = true;
     renderer->setLighting(f.radiance);
@@ -334,6 +339,7 @@ int runStream(const Args& a, std::unique_ptr<FrameSource> source, bool live) {
   view.state.shading = shadingFromArgs(a, Sh9{});
   view.autoExposure = a.get("--exposure", "auto") == "auto";
   view.layout = opt.layout;
+  view.source = description;
   opt.keepImages = true;  // the background can be switched on at any time (B), and the HUD shows it
 
   StreamOutputs out = openOutputs(a, fps, description, source->radianceScale());

@@ -18,8 +18,8 @@ namespace {
 
 constexpr std::size_t kHistory = 300;  // frames kept for the plots
 const ImU32 kChannel[3] = {IM_COL32(235, 80, 70, 255), IM_COL32(90, 200, 90, 255), IM_COL32(80, 140, 240, 255)};
-const ImU32 kStageColour[5] = {IM_COL32(31, 119, 180, 255), IM_COL32(255, 127, 14, 255), IM_COL32(44, 160, 44, 255),
-                               IM_COL32(214, 39, 40, 255), IM_COL32(148, 103, 189, 255)};
+const ImU32 kStageColour[5] = {IM_COL32(100, 180, 255, 255), IM_COL32(255, 160, 60, 255), IM_COL32(110, 220, 110, 255),
+                               IM_COL32(255, 110, 110, 255), IM_COL32(200, 150, 255, 255)};
 const char* const kStageName[5] = {"grab", "convert", "project", "upload", "render"};
 
 /// Several series on one set of axes (ImGui's PlotLines draws one), scaled to [lo, hi].
@@ -151,21 +151,27 @@ void Hud::drawStatus(ViewState& state, double frameMs) {
   ImGui::Text("%.1f frames/s   %.2f ms/frame", fpsSmoothed_ > 0 ? 1000.0 / fpsSmoothed_ : 0.0, frameMs);
   if (!still_ && !history_.empty()) {
     std::vector<std::vector<float>> series(5);
-    float top = 1.0f;
+    std::vector<float> all;
     for (const auto& h : history_) {
       const double v[5] = {h.grabMs, h.convertMs, h.projectMs, h.uploadMs, h.renderMs};
       for (int k = 0; k < 5; ++k) {
         series[std::size_t(k)].push_back(float(v[k]));
-        top = std::max(top, float(v[k]));
+        all.push_back(float(v[k]));
       }
     }
+    // The scale follows the 95th percentile: a warm-up spike does not flatten everything else.
+    std::nth_element(all.begin(), all.begin() + std::ptrdiff_t(all.size() * 95 / 100), all.end());
+    const float top = std::max(1.0f, 1.3f * all[all.size() * 95 / 100]);
     ImGui::Text("stage times, last %zu frames (0 .. %.1f ms)", history_.size(), top);
     plotSeries("stages", series, {std::begin(kStageColour), std::end(kStageColour)}, {310, 70}, 0, top);
     const auto& b = history_.back();
     const double now[5] = {b.grabMs, b.convertMs, b.projectMs, b.uploadMs, b.renderMs};
-    for (int k = 0; k < 5; ++k) {
-      if (k % 3) ImGui::SameLine();
-      ImGui::TextColored(ImColor(kStageColour[k]), "%-7s %5.1f ms", kStageName[k], now[k]);
+    if (ImGui::BeginTable("stages", 3)) {
+      for (int k = 0; k < 5; ++k) {
+        ImGui::TableNextColumn();
+        ImGui::TextColored(ImColor(kStageColour[k]), "%s %.1f ms", kStageName[k], now[k]);
+      }
+      ImGui::EndTable();
     }
   }
   if (!still_) {

@@ -6,6 +6,7 @@
 #include <csignal>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 
 namespace lp::cli {
 
@@ -54,7 +55,12 @@ void Progress::update(std::int64_t done) {
   if (quiet_) return;
   const auto now = Clock::now();
   const double sinceLast = std::chrono::duration<double>(now - last_).count();
-  if (sinceLast < (tty_ ? 0.1 : 5.0)) return;
+  static const double lineEvery = [] {  // LIVEPROBE_PROGRESS_SECONDS: the interval between lines off a terminal
+    const char* e = std::getenv("LIVEPROBE_PROGRESS_SECONDS");
+    const double v = e ? std::atof(e) : 0.0;
+    return v > 0 ? v : 5.0;
+  }();
+  if (sinceLast < (tty_ ? 0.1 : lineEvery)) return;
   last_ = now;
   const double elapsed = std::chrono::duration<double>(now - start_).count();
   const double rate = elapsed > 0 ? double(done) / elapsed : 0;

@@ -242,9 +242,9 @@ void Renderer::ensureMultisample(glm::ivec2 size, int samples) {
 
 void Renderer::draw(glm::ivec2 size, const Camera& camera, const ShadingSettings& s) {
   GLint target = 0;
-  glGetIntegerv(GL_DRAW_FRAMEBUFFER_BINDING, &target);
   const bool multisample = s.samples > 1 && s.output == OutputMode::Display;
   if (multisample) {
+    glGetIntegerv(GL_DRAW_FRAMEBUFFER_BINDING, &target);
     ensureMultisample(size, s.samples);
     glBindFramebuffer(GL_FRAMEBUFFER, msaa_.fbo.get());
   }
@@ -289,8 +289,8 @@ void Renderer::draw(glm::ivec2 size, const Camera& camera, const ShadingSettings
     glBindFramebuffer(GL_READ_FRAMEBUFFER, msaa_.fbo.get());
     glBindFramebuffer(GL_DRAW_FRAMEBUFFER, GLuint(target));
     glBlitFramebuffer(0, 0, size.x, size.y, 0, 0, size.x, size.y, GL_COLOR_BUFFER_BIT, GL_NEAREST);
+    glBindFramebuffer(GL_FRAMEBUFFER, GLuint(target));
   }
-  glBindFramebuffer(GL_FRAMEBUFFER, GLuint(target));
   checkGl("Renderer::draw");
 }
 

@@ -1,0 +1,159 @@
+// Every command example in README.md runs as written, so the README cannot drift from the
+// program. An example is a line starting with `liveprobe ` inside a ```sh block (a trailing
+// backslash continues it). It runs with `liveprobe` on PATH, from a working folder where
+// ../shared/data and recordings/ resolve as they do from the source tree, under Xvfb (so the
+// window path is taken, as on a desktop), and for `live` against the emulated camera
+// (tests/v4l2emu) standing in for the device it names. It must exit 0, or with the status a
+// trailing "# exits N" gives; one marked "# runs until Esc or Ctrl-C" must still be running after
+// a few seconds, and then stop cleanly on SIGINT (exit 130).
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <fstream>
+#include <regex>
+#include <set>
+#include <sstream>
+
+#include <opencv2/imgcodecs.hpp>
+
+#include "capture/frame.h"
+#include "capture/image.h"
+#include "shading/sh.h"
+#include "test_util.h"
+
+namespace {
+
+namespace fs = std::filesystem;
+
+struct Example {
+  int line = 0;
+  std::string command;
+  int exitCode = 0;
+  bool endless = false;
+};
+
+std::vector<Example> readmeExamples() {
+  std::ifstream in(std::string(LIVEPROBE_SOURCE_DIR) + "/README.md");
+  std::vector<Example> out;
+  bool sh = false;
+  std::string pending;
+  int pendingLine = 0, n = 0;
+  for (std::string line; std::getline(in, line);) {
+    ++n;
+    if (line.rfind("```", 0) == 0) {
+      sh = line == "```sh";
+      continue;
+    }
+    if (!sh) continue;
+    if (pending.empty()) pendingLine = n;
+    if (!line.empty() && line.back() == '\\') {
+      pending += line.substr(0, line.size() - 1) + " ";
+      continue;
+    }
+    const std::string full = pending + line;
+    pending.clear();
+    if (full.rfind("liveprobe ", 0) != 0) continue;
+    Example e;
+    e.line = pendingLine;
+    e.command = full;
+    std::smatch m;
+    if (std::regex_search(full, m, std::regex(R"(#\s*exits (\d+))"))) e.exitCode = std::stoi(m[1]);
+    e.endless = full.find("# runs until") != std::string::npos;
+    e.command = std::regex_replace(full, std::regex(R"(\s+#.*$)"), "");  // the comment is for the reader
+    out.push_back(e);
+  }
+  return out;
+}
+
+void PrintTo(const Example& e, std::ostream* os) { *os << "README.md:" << e.line << ": " << e.command; }
+
+class ReadmeExample : public ::testing::TestWithParam<Example> {};
+
+std::string quote(const std::string& s) {
+  std::string q = "'";
+  for (char c : s) q += c == '\'' ? std::string("'\\''") : std::string(1, c);
+  return q + "'";
+}
+
+// The emulated camera's modes: an MJPEG equirect sky at the sizes the README's live examples ask.
+void makeCameraModes(const fs::path& dir) {
+  for (const auto& [w, h] : {std::pair{1920, 960}, std::pair{1280, 720}}) {
+    const fs::path m = dir / ("MJPG_" + std::to_string(w) + "x" + std::to_string(h));
+    fs::create_directories(m);
+    for (int i = 0; i < 4; ++i) {
+      std::vector<float> sky;
+      lp::renderSyntheticSky(w, h, i * 0.3, sky);
+      cv::Mat bgr(h, w, CV_8UC3);
+      for (int p = 0; p < w * h; ++p)
+        for (int c = 0; c < 3; ++c)
+          bgr.data[3 * p + 2 - c] = std::uint8_t(std::lround(255 * lp::linearToSrgb(sky[3 * p + c] * 0.1f)));
+      ASSERT_TRUE(cv::imwrite((m / (std::to_string(i) + ".jpg")).string(), bgr));
+    }
+  }
+}
+
+TEST_P(ReadmeExample, RunsAsWritten) {
+  const Example& e = GetParam();
+  lpt::TempDir tmp;
+  // tmp/shared -> the data's parent; tmp/work/recordings/* -> the project's recordings (links, so
+  // an example that records there replaces the link, never the file).
+  const fs::path data = fs::path(LIVEPROBE_DATA_DIR);
+  fs::create_directory_symlink(fs::absolute(data.parent_path()), tmp.path / "shared");
+  const fs::path work = tmp.path / "work";
+  fs::create_directories(work / "recordings");
+  for (const auto& f : fs::directory_iterator(std::string(LIVEPROBE_SOURCE_DIR) + "/recordings"))
+    fs::create_symlink(f.path(), work / "recordings" / f.path().filename());
+  ASSERT_TRUE(fs::exists(work / "../shared/data")) << "the README's data paths must resolve";
+
+  std::string env = "export PATH=" + fs::path(LIVEPROBE_BIN).parent_path().string() + ":$PATH; ";
+  std::smatch m;
+  if (std::regex_search(e.command, m, std::regex(R"(^liveprobe live (/dev/video\d+))"))) {
+    makeCameraModes(tmp.path / "modes");
+    env += "export LD_PRELOAD=" + std::string(LIVEPROBE_EMU) + " LPEMU_DEVICE=" + m[1].str() +
+           " LPEMU_SOURCE=" + (tmp.path / "modes").string() + "; ";
+  }
+  const std::string run = e.endless
+      ? env + e.command + " & pid=$!; sleep 6; kill -0 $pid 2>/dev/null && echo still-running; kill -INT $pid; wait $pid; echo rc=$?"
+      : env + e.command + "\necho rc=$?";
+  const std::string cmd = "cd " + quote(work.string()) + " && timeout -k 10 400 xvfb-run -a -s '-screen 0 1600x1000x24' bash -c " +
+                          quote(run) + " 2>&1";
+  FILE* p = popen(cmd.c_str(), "r");
+  ASSERT_NE(p, nullptr);
+  std::string out;
+  char buf[4096];
+  std::size_t n;
+  while ((n = fread(buf, 1, sizeof buf, p)) > 0) out.append(buf, n);
+  pclose(p);
+  const std::string where = "README.md:" + std::to_string(e.line) + ": " + e.command + "\n" + out;
+  ASSERT_TRUE(std::regex_search(out, m, std::regex(R"(rc=(\d+))"))) << where;
+  if (e.endless) {
+    EXPECT_NE(out.find("still-running"), std::string::npos) << "ended before it was stopped: " << where;
+    EXPECT_EQ(std::stoi(m[1]), 130) << "no clean stop on SIGINT: " << where;
+  } else {
+    EXPECT_EQ(std::stoi(m[1]), e.exitCode) << where;
+  }
+}
+
+std::string exampleName(const ::testing::TestParamInfo<Example>& info) {
+  std::string word;  // the subcommand
+  std::istringstream(info.param.command) >> word >> word;
+  for (char& c : word)
+    if (!std::isalnum(static_cast<unsigned char>(c))) c = '_';
+  return "line" + std::to_string(info.param.line) + "_" + word;
+}
+
+INSTANTIATE_TEST_SUITE_P(Readme, ReadmeExample, ::testing::ValuesIn(readmeExamples()), exampleName);
+
+// The README has examples for every command (so a command cannot lose its example).
+TEST(Readme, EveryCommandHasAnExample) {
+  std::set<std::string> seen;
+  for (const auto& e : readmeExamples()) {
+    std::string word;
+    std::istringstream(e.command) >> word >> word;
+    seen.insert(word);
+  }
+  for (const char* c : {"coeffs", "irradiance", "compare", "render", "view", "replay", "record", "live", "devices", "bench"})
+    EXPECT_TRUE(seen.count(c)) << "README.md has no example of liveprobe " << c;
+}
+
+}  // namespace

@@ -1,0 +1,407 @@
+// What a person running liveprobe sees: the HUD (headless and in a real window under Xvfb, driven
+// by xdotool), keys, orientation of lighting and background together, visible single-coefficient
+// figures, clean stops on SIGINT, progress, the command line's refusals, and bench's report.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <fstream>
+#include <regex>
+
+#include <nlohmann/json.hpp>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+#include <opencv2/videoio.hpp>
+
+#include "commands.h"
+#include "shading/sh.h"
+#include "test_util.h"
+
+namespace {
+
+namespace fs = std::filesystem;
+using lpt::expectOneLineError;
+using lpt::runLiveprobe;
+
+/// Runs a bash script line (the liveprobe binary is $LP), capturing stdout and stderr.
+lpt::RunResult runShell(const std::string& script) {
+  const std::string cmd = "LP='" + std::string(LIVEPROBE_BIN) + "' bash -c '" + script + "' 2>&1";
+  FILE* p = popen(cmd.c_str(), "r");
+  lpt::RunResult r{-1, {}};
+  if (!p) return r;
+  char buf[4096];
+  std::size_t n;
+  while ((n = fread(buf, 1, sizeof buf, p)) > 0) r.output.append(buf, n);
+  const int status = pclose(p);
+  r.exitCode = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
+  return r;
+}
+
+double meanAbsDiff(const cv::Mat& a, const cv::Mat& b) {
+  cv::Mat d;
+  cv::absdiff(a, b, d);
+  const cv::Scalar m = cv::mean(d);
+  return (m[0] + m[1] + m[2]) / 3;
+}
+
+// ---- the HUD, headless ------------------------------------------------------------------------
+
+// The HUD's left panel sits at the top left and the light panel at the top right; the middle of
+// the frame (the model) is the same with and without it.
+TEST(Hud, HeadlessHudIsDrawnAndNoHudIsNot) {
+  lpt::TempDir tmp;
+  const std::string common = "--headless --msaa 1 --size 1280x720 --env " +
+                             lpt::dataPath("probes/latlong_256x128/uffizi.hdr") + " --out ";
+  ASSERT_EQ(runLiveprobe("render " + common + tmp / "plain.png").exitCode, 0);
+  const auto r = runLiveprobe("render --hud " + common + tmp / "hud.png");
+  ASSERT_EQ(r.exitCode, 0) << r.output;
+  const cv::Mat plain = cv::imread(tmp / "plain.png"), hud = cv::imread(tmp / "hud.png");
+  ASSERT_FALSE(plain.empty());
+  ASSERT_EQ(plain.size(), hud.size());
+  const cv::Rect left(12, 12, 300, 200), right(1000, 12, 260, 300), middle(540, 300, 200, 200);
+  EXPECT_GT(meanAbsDiff(plain(left), hud(left)), 10) << "no HUD status panel";
+  EXPECT_GT(meanAbsDiff(plain(right), hud(right)), 10) << "no HUD light panel";
+  EXPECT_LT(meanAbsDiff(plain(middle), hud(middle)), 0.5) << "the HUD must not cover the model";
+
+  // replay: --hud draws it into the written frames, --no-hud (the headless default) does not.
+  const std::string src = "synthetic:128x64@30 --frames 3 --headless --msaa 1 --size 1280x720 --quiet --out-dir ";
+  ASSERT_EQ(runLiveprobe("replay " + src + tmp / "a --hud").exitCode, 0);
+  ASSERT_EQ(runLiveprobe("replay " + src + tmp / "b --no-hud").exitCode, 0);
+  const cv::Mat a = cv::imread(tmp / "a/frame_000002.png"), b = cv::imread(tmp / "b/frame_000002.png");
+  ASSERT_FALSE(a.empty());
+  ASSERT_FALSE(b.empty());
+  EXPECT_GT(meanAbsDiff(a(left), b(left)), 10);
+  EXPECT_LT(meanAbsDiff(a(middle), b(middle)), 0.5);
+}
+
+// ---- the look -----------------------------------------------------------------------------------
+
+// The restatement's figure (one coefficient, the others zero) must be visible with the defaults:
+// auto exposure comes from the irradiance when there is no environment.
+TEST(Look, SingleCoefficientFiguresAreVisibleWithDefaults) {
+  lpt::TempDir tmp;
+  for (const auto name : lp::kShNames) {
+    // Positive values, and the README's L20=-0.2 (a negative L11, say, lights only the far side).
+    for (const char* value : {"0.2", "-0.2"}) {
+      if (value[0] == '-' && name != "L20") continue;
+      const std::string out = tmp / (std::string(name) + value + ".png");
+      const auto r = runLiveprobe("render --headless --size 160x120 --coeff " + std::string(name) + "=" + value +
+                                  " --out " + out);
+      ASSERT_EQ(r.exitCode, 0) << r.output;
+      const cv::Mat img = cv::imread(out, cv::IMREAD_GRAYSCALE);
+      ASSERT_FALSE(img.empty());
+      double hi = 0;
+      cv::minMaxLoc(img, nullptr, &hi);
+      EXPECT_GT(hi, 127.5) << name << "=" << value << ": brightest pixel " << hi << " is below 50% grey";
+    }
+  }
+}
+
+// ---- orientation --------------------------------------------------------------------------------
+
+// An HDR equirect, dim everywhere but for a small bright spot at file direction f.
+// The spot is a Gaussian of 0.6 degrees around f, evaluated at each pixel centre (the equirect
+// convention of shading/sh.h), so its centroid is f to well under a pixel.
+void writeSpotMap(const std::string& path, glm::vec3 f) {
+  const int w = 1024, h = 512;
+  cv::Mat m(h, w, CV_32FC3, cv::Scalar(0.05, 0.05, 0.05));
+  const double sigma = 0.6 * M_PI / 180;
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) {
+      const double t = M_PI * (y + 0.5) / h, p = 2 * M_PI * (x + 0.5) / w;
+      const glm::dvec3 d(std::sin(t) * std::cos(p), std::sin(t) * std::sin(p), std::cos(t));
+      const double a = std::acos(std::clamp(glm::dot(d, glm::dvec3(f)), -1.0, 1.0));
+      if (a < 4 * sigma) m.at<cv::Vec3f>(y, x) += cv::Vec3f::all(float(3000 * std::exp(-0.5 * a * a / (sigma * sigma))));
+    }
+  ASSERT_TRUE(cv::imwrite(path, m));
+}
+
+// Centroid of the pixels within 2% of the brightest, among those `mask` selects.
+cv::Point2d brightest(const cv::Mat& gray, const cv::Mat& mask) {
+  double hi = 0;
+  cv::minMaxLoc(gray, nullptr, &hi, nullptr, nullptr, mask);
+  double sx = 0, sy = 0, n = 0;
+  for (int y = 0; y < gray.rows; ++y)
+    for (int x = 0; x < gray.cols; ++x)
+      if (mask.at<std::uint8_t>(y, x) && gray.at<std::uint8_t>(y, x) >= 0.98 * hi) sx += x, sy += y, n += 1;
+  return {sx / std::max(n, 1.0), sy / std::max(n, 1.0)};
+}
+
+// --env-rotate (and --env-flip) turn the lighting and the background by the same rotation: the
+// spot shows where perspective puts its world direction, and the sphere's brightest point faces
+// it. The world direction is chosen in view; the file direction is solved from it, so each
+// rotation is checked against geometry, not against liveprobe's own output.
+TEST(Orientation, EnvRotateTurnsLightingAndBackgroundTogether) {
+  lpt::TempDir tmp;
+  const int W = 480, H = 270;
+  const glm::vec3 gl = glm::normalize(glm::vec3(0.45f, 0.25f, -1.0f));  // right of and above straight ahead, clear of the sphere
+  const glm::vec3 world(gl.z, -gl.x, gl.y);                           // shading/axes.h
+  const float tanHalf = std::tan(glm::radians(20.0f)), aspect = float(W) / H;
+  const cv::Point2d expected(W / 2.0 * (1 + gl.x / -gl.z / (tanHalf * aspect)), H / 2.0 * (1 - gl.y / -gl.z / tanHalf));
+  struct Case {
+    float yaw, pitch, roll;
+    bool flip;
+  };
+  for (const Case c : {Case{0, 0, 0, false}, Case{90, 0, 0, false}, Case{30, 20, 10, false}, Case{-45, -10, 0, true}}) {
+    glm::mat3 o = lp::rotationYawPitchRoll(c.yaw, c.pitch, c.roll);
+    if (c.flip) o = o * glm::mat3(glm::vec3(1, 0, 0), glm::vec3(0, 1, 0), glm::vec3(0, 0, -1));
+    const glm::vec3 f = glm::transpose(o) * world;  // O is orthogonal
+    const std::string map = tmp / "spot.hdr";
+    writeSpotMap(map, f);
+    char rot[96];
+    std::snprintf(rot, sizeof rot, " --env-rotate=%g,%g,%g%s", c.yaw, c.pitch, c.roll, c.flip ? " --env-flip" : "");
+    const std::string args = "render --headless --msaa 1 --size 480x270 --env " + map + rot;
+    ASSERT_EQ(runLiveprobe(args + " --out " + tmp / "bg.png").exitCode, 0);
+    const auto r = runLiveprobe(args + " --no-background --out " + tmp / "model.png");
+    ASSERT_EQ(r.exitCode, 0) << r.output;
+    const cv::Mat bg = cv::imread(tmp / "bg.png", cv::IMREAD_GRAYSCALE), model = cv::imread(tmp / "model.png", cv::IMREAD_GRAYSCALE);
+    ASSERT_FALSE(bg.empty());
+    const cv::Mat onModel = model > 0, offModel = model == 0;
+    const cv::Point2d spot = brightest(bg, offModel), lit = brightest(model, onModel);
+    EXPECT_LT(cv::norm(spot - expected), 2.5) << rot << ": the spot is drawn at " << spot << ", geometry says " << expected;
+    const cv::Point2d centre(W / 2.0, H / 2.0);
+    const double a = std::atan2(spot.y - centre.y, spot.x - centre.x), b = std::atan2(lit.y - centre.y, lit.x - centre.x);
+    const double diff = std::abs(std::remainder(a - b, 2 * M_PI)) * 180 / M_PI;
+    EXPECT_LT(diff, 10.0) << rot << ": the sphere's brightest point " << lit << " does not face the spot " << spot;
+  }
+}
+
+// --env-flip on coeffs negates exactly the coefficients odd in z (an independent rule).
+TEST(Orientation, FlipNegatesTheCoefficientsOddInZ) {
+  const std::string grace = lpt::dataPath("probes/latlong_256x128/grace.hdr");
+  const auto a = runLiveprobe("coeffs " + grace), b = runLiveprobe("coeffs --env-flip " + grace);
+  ASSERT_EQ(a.exitCode, 0) << a.output;
+  ASSERT_EQ(b.exitCode, 0) << b.output;
+  const auto ja = nlohmann::json::parse(a.output)["coefficients"], jb = nlohmann::json::parse(b.output)["coefficients"];
+  const double scale = ja["L00"][1].get<double>();
+  for (const auto name : lp::kShNames) {
+    const bool odd = name == "L10" || name == "L2-1" || name == "L21";
+    for (int ch = 0; ch < 3; ++ch)
+      EXPECT_NEAR(jb[std::string(name)][ch].get<double>(), (odd ? -1 : 1) * ja[std::string(name)][ch].get<double>(),
+                  1e-5 * scale) << name;
+  }
+}
+
+// ---- clean stops and progress -------------------------------------------------------------------
+
+TEST(Stops, SigintDuringHeadlessReplayLeavesCompleteOutputs) {
+  lpt::TempDir tmp;
+  const std::string d = tmp.path.string();
+  const auto r = runShell("\"$LP\" replay synthetic:128x64@30 --headless --msaa 1 --size 160x90 --coeffs-out " + d +
+                          "/c.jsonl --out-dir " + d + "/frames & pid=$!; sleep 3; kill -INT $pid; wait $pid; echo rc=$?");
+  EXPECT_NE(r.output.find("rc=130"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("frames captured"), std::string::npos) << "no summary: " << r.output;
+  EXPECT_NE(r.output.find("until Ctrl-C"), std::string::npos) << "an endless source must say so: " << r.output;
+  std::ifstream in(d + "/c.jsonl");
+  ASSERT_TRUE(in) << "--coeffs-out was not finalised";
+  std::size_t lines = 0;
+  for (std::string line; std::getline(in, line); ++lines) {
+    const auto j = nlohmann::json::parse(line);  // every line complete
+    EXPECT_EQ(j["frame"].get<std::size_t>(), lines);
+  }
+  std::size_t pngs = 0;
+  for (const auto& e : fs::directory_iterator(d + "/frames")) pngs += e.path().extension() == ".png";
+  EXPECT_GT(lines, 0u);
+  EXPECT_EQ(lines, pngs) << "every frame drawn is written, and listed";
+  for (const auto& e : fs::recursive_directory_iterator(d))
+    EXPECT_NE(e.path().filename().string()[0], '.') << "left behind: " << e.path();
+}
+
+TEST(Stops, SigintDuringRecordFinalisesTheRecording) {
+  lpt::TempDir tmp;
+  const std::string out = tmp / "rec.mkv";
+  const auto r = runShell("\"$LP\" record synthetic:64x32@30 --frames 100000 --out " + out +
+                          " & pid=$!; sleep 2; kill -TERM $pid; wait $pid; echo rc=$?");
+  EXPECT_NE(r.output.find("rc=130"), std::string::npos) << r.output;
+  cv::VideoCapture cap(out);
+  ASSERT_TRUE(cap.isOpened()) << "the recording was not finalised: " << r.output;
+  EXPECT_GT(cap.get(cv::CAP_PROP_FRAME_COUNT), 1);
+  EXPECT_TRUE(fs::exists(out + ".json"));
+}
+
+TEST(Progress, HeadlessRunsReportFramesRateAndEta) {
+  lpt::TempDir tmp;
+  const auto r = runShell("LIVEPROBE_PROGRESS_SECONDS=0.2 \"$LP\" replay synthetic:64x32@30 --headless --msaa 1 "
+                          "--size 64x36 --frames 40");
+  ASSERT_EQ(r.exitCode, 0) << r.output;
+  EXPECT_TRUE(std::regex_search(r.output, std::regex(R"(replay: \d+/40 frames, [0-9.]+/s, ETA)"))) << r.output;
+  const auto q = runShell("LIVEPROBE_PROGRESS_SECONDS=0.2 \"$LP\" replay synthetic:64x32@30 --headless --msaa 1 "
+                          "--size 64x36 --frames 40 --quiet");
+  EXPECT_EQ(q.output.find("/40 frames"), std::string::npos) << q.output;
+}
+
+// ---- the command line ---------------------------------------------------------------------------
+
+TEST(CommandLine, EveryHelpNamesEveryOptionItAccepts) {
+  for (const auto& c : lp::cli::commands()) {
+    const auto r = runLiveprobe(c.spec.name + " --help");
+    EXPECT_EQ(r.exitCode, 0) << c.spec.name;
+    for (const auto& o : c.spec.options) {
+      std::size_t start = 0;
+      while (start < o.name.size()) {  // "--env-rotate,--rotate": every name
+        const auto comma = o.name.find(',', start);
+        const std::string one = o.name.substr(start, comma == std::string::npos ? std::string::npos : comma - start);
+        EXPECT_NE(r.output.find(one), std::string::npos) << c.spec.name << " --help does not name " << one;
+        start = comma == std::string::npos ? o.name.size() : comma + 1;
+      }
+    }
+  }
+}
+
+TEST(CommandLine, RefusalsAreOneLineWithExit1) {
+  expectOneLineError("frobnicate", "frobnicate", "unknown command");
+  expectOneLineError("render --coeff L00=1 --bogus", "--bogus", "unknown option");
+  expectOneLineError("render --coeff L00=1 --size 64x64 --size 32x32", "--size", "more than once");
+  expectOneLineError("render --coeff L00=1 --coeff L00=2", "L00", "given twice");
+  expectOneLineError("render --coeff L00=1 --out x.tiff", "x.tiff", "unsupported extension");
+  expectOneLineError("render --coeff L00=1 --size 100000x100000", "100000x100000", "at most 16384");
+  expectOneLineError("replay --frames 0", "--frames", "expected an integer from 1");
+  expectOneLineError("bench --threshold -5", "--threshold", "expected 0 to 1000");
+  expectOneLineError("record synthetic --out x.mkv --fps -1", "--fps", "expected");
+  const auto r = runLiveprobe("render --coeff L00=1 --bogus");
+  EXPECT_EQ(r.output.rfind("liveprobe render: ", 0), 0u) << "one prefix: " << r.output;
+  EXPECT_EQ(r.output.find("render: render"), std::string::npos) << r.output;
+}
+
+TEST(CommandLine, VersionNamesTheCommit) {
+  const auto r = runLiveprobe("--version");
+  EXPECT_EQ(r.exitCode, 0);
+  EXPECT_TRUE(std::regex_search(r.output, std::regex(R"(^liveprobe \d+\.\d+\.\d+ \(commit [0-9a-f]{7,}(-dirty)?\))")))
+      << r.output;
+}
+
+TEST(CommandLine, LikelyLayoutMistakesWarnOnce) {
+  lpt::TempDir tmp;
+  const auto probe = runLiveprobe("coeffs " + lpt::dataPath("probes/beach_probe.hdr"));
+  EXPECT_EQ(probe.exitCode, 0) << probe.output;
+  EXPECT_NE(probe.output.find("warning: "), std::string::npos) << "a 640x640 probe taken as equirect: " << probe.output;
+  EXPECT_NE(probe.output.find("square image taken as equirect"), std::string::npos);
+  const auto video = runLiveprobe("replay " + lpt::dataPath("video/pano.mp4") + " --headless --frames 1 --quiet --msaa 1 --size 64x36");
+  EXPECT_EQ(video.exitCode, 0) << video.output;
+  EXPECT_NE(video.output.find("16:9 frame taken as equirect"), std::string::npos) << video.output;
+  // A square map that is bright in its corners read as an angular map.
+  const std::string square = tmp / "square.hdr";
+  ASSERT_TRUE(cv::imwrite(square, cv::Mat(64, 64, CV_32FC3, cv::Scalar(1, 1, 1))));
+  const auto eq = runLiveprobe("coeffs --layout angular " + square);
+  EXPECT_NE(eq.output.find("corners are not black"), std::string::npos) << eq.output;
+  // The right layout: no warning.
+  const auto ok = runLiveprobe("coeffs --layout angular " + lpt::dataPath("probes/beach_probe.hdr"));
+  EXPECT_EQ(ok.output.find("warning"), std::string::npos) << ok.output;
+}
+
+// ---- outputs ------------------------------------------------------------------------------------
+
+TEST(Outputs, Mp4IsH264AndReadsBack) {
+  lpt::TempDir tmp;
+  const std::string out = tmp / "lit.mp4";
+  const auto r = runLiveprobe("replay synthetic:128x64@30 --frames 12 --headless --msaa 1 --size 160x90 --quiet --out-video " + out);
+  ASSERT_EQ(r.exitCode, 0) << r.output;
+  cv::VideoCapture cap(out);
+  ASSERT_TRUE(cap.isOpened());
+  const int fourcc = int(cap.get(cv::CAP_PROP_FOURCC));
+  const std::string cc{char(fourcc & 255), char((fourcc >> 8) & 255), char((fourcc >> 16) & 255), char((fourcc >> 24) & 255)};
+  EXPECT_TRUE(cc == "avc1" || cc == "h264" || cc == "H264") << cc;
+  int n = 0;
+  for (cv::Mat f; cap.read(f);) ++n;
+  EXPECT_EQ(n, 12);
+}
+
+// ---- bench ----------------------------------------------------------------------------------------
+
+TEST(BenchReport, VerdictSmallStagesAndPlot) {
+  lpt::TempDir tmp;
+  const std::string base = tmp / "base.json";
+  const std::string run = "bench synthetic:128x64@30 --frames 12 --repeat 1 --size 160x90 --quiet";
+  ASSERT_EQ(runLiveprobe(run + " --json " + base).exitCode, 0);
+  // A baseline whose convert stage took no time: no percentage for it.
+  nlohmann::json b = nlohmann::json::parse(std::ifstream(base));
+  b["stages"]["convert"]["median_ms"] = 0.0;
+  std::ofstream(base) << b.dump();
+  const auto r = runLiveprobe(run + " --baseline " + base + " --threshold 1000 --plot " + tmp / "plot.png");
+  ASSERT_EQ(r.exitCode, 0) << r.output;
+  EXPECT_TRUE(std::regex_search(r.output, std::regex(R"(verdict: no regression \(\d+ stages within 1000%)"))) << r.output;
+  EXPECT_EQ(r.output.find("1 runs"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("1 run of 12 frames"), std::string::npos) << r.output;
+  std::istringstream lines(r.output);
+  for (std::string line; std::getline(lines, line);)
+    if (line.rfind("convert ", 0) == 0 && line.find(" vs ") != std::string::npos)
+      EXPECT_EQ(line.find('%'), std::string::npos) << "a percentage of nothing: " << line;
+  const cv::Mat plot = cv::imread(tmp / "plot.png");
+  ASSERT_FALSE(plot.empty()) << "no plot";
+  EXPECT_EQ(plot.cols, 1400);
+  EXPECT_EQ(plot.rows, 480);
+  for (const auto& e : fs::directory_iterator(tmp.path))
+    EXPECT_NE(e.path().filename().string()[0], '.') << "left behind: " << e.path();
+}
+
+// ---- a real window ------------------------------------------------------------------------------
+
+/// Reads an X window dump (xwd -root) into BGR.
+cv::Mat readXwd(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::vector<unsigned char> d((std::istreambuf_iterator<char>(in)), {});
+  auto be = [&](std::size_t field) {
+    const unsigned char* p = d.data() + 4 * field;
+    return std::uint32_t(p[0]) << 24 | std::uint32_t(p[1]) << 16 | std::uint32_t(p[2]) << 8 | p[3];
+  };
+  if (d.size() < 100) return {};
+  const std::uint32_t headerSize = be(0), width = be(4), height = be(5), byteOrder = be(7), bpp = be(11),
+                      bytesPerLine = be(12), ncolors = be(19);
+  if (bpp != 24 && bpp != 32) return {};
+  const std::uint32_t step = bpp / 8;  // Xvfb at depth 24 packs 3 bytes a pixel, rows bytesPerLine apart
+  const std::size_t offset = headerSize + std::size_t(ncolors) * 12;
+  if (d.size() < offset + std::size_t(bytesPerLine) * height) return {};
+  cv::Mat img(int(height), int(width), CV_8UC3);
+  for (std::uint32_t y = 0; y < height; ++y)
+    for (std::uint32_t x = 0; x < width; ++x) {
+      const unsigned char* p = d.data() + offset + std::size_t(y) * bytesPerLine + step * x;
+      auto* q = img.ptr<std::uint8_t>(int(y)) + 3 * x;
+      if (byteOrder == 0) q[0] = p[0], q[1] = p[1], q[2] = p[2];  // LSBFirst: B G R (X)
+      else q[0] = p[step - 1], q[1] = p[step - 2], q[2] = p[step - 3];
+    }
+  return img;
+}
+
+int frameInTitle(const std::string& output, const std::string& key) {
+  std::smatch m;
+  const std::regex re(key + R"(: liveprobe - .* - frame (\d+) -)");
+  return std::regex_search(output, m, re) ? std::stoi(m[1]) : -1;
+}
+
+// The HUD in a real GLFW window under Xvfb, driven by xdotool: Space pauses (the frame index in
+// the title stops), H hides the HUD (the screenshots differ only where the HUD is), and a single
+// short tap of Esc quits within a second.
+TEST(Window, HudAndKeysUnderXvfb) {
+  lpt::TempDir tmp;
+  const std::string cmd = "xvfb-run -a -s '-screen 0 1280x800x24' " + std::string(LIVEPROBE_SOURCE_DIR) +
+                          "/tests/scripts/window_keys.sh " + LIVEPROBE_BIN + " " + tmp.path.string() + " 2>&1";
+  FILE* p = popen(cmd.c_str(), "r");
+  ASSERT_NE(p, nullptr);
+  std::string out;
+  char buf[512];
+  while (fgets(buf, sizeof buf, p)) out += buf;
+  ASSERT_EQ(pclose(p), 0) << out;
+  std::ifstream logf(tmp / "log");
+  const std::string log((std::istreambuf_iterator<char>(logf)), {});
+  const int a = frameInTitle(out, "paused_a"), b = frameInTitle(out, "paused_b"), c = frameInTitle(out, "resumed");
+  ASSERT_GE(a, 0) << out;
+  EXPECT_EQ(a, b) << "Space did not pause: " << out;
+  EXPECT_GT(c, b) << "Space did not resume: " << out;
+  std::smatch m;
+  ASSERT_TRUE(std::regex_search(out, m, std::regex(R"(quit_ms: (\d+))"))) << out;
+  EXPECT_LT(std::stoi(m[1]), 1000) << "Esc took too long: " << out;
+  EXPECT_NE(out.find("rc: 0"), std::string::npos) << out << log;
+  EXPECT_NE(log.find("frames captured"), std::string::npos) << log;
+
+  const cv::Mat hud = readXwd(tmp / "hud.xwd"), plain = readXwd(tmp / "nohud.xwd");
+  ASSERT_FALSE(hud.empty());
+  ASSERT_EQ(hud.size(), plain.size());
+  cv::imwrite(std::string(LIVEPROBE_TEST_OUTPUT) + "/window_hud.png", hud(cv::Rect(0, 0, 960, 540)));
+  const cv::Rect status(12, 12, 300, 200), model(400, 200, 160, 140);
+  EXPECT_GT(meanAbsDiff(hud(status), plain(status)), 10) << "the HUD region is empty";
+  double lo, hi;
+  cv::minMaxLoc(hud(status).reshape(1), &lo, &hi);
+  EXPECT_GT(hi - lo, 100) << "the HUD region has no text";
+  EXPECT_LT(meanAbsDiff(hud(model), plain(model)), 1.0) << "paused: the scene must not change";
+}
+
+}  // namespace
