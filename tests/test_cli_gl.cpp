@@ -43,13 +43,9 @@ TEST(CliGl, ViewWindowUnderXvfb) {
   const std::string common = "--coeff L00=0.8 --coeff L10=0.3,0.1,0.0 --size 200x150 --frames 3 --no-hud ";
   const std::string win = tmp / "window.png", off = tmp / "offscreen.png";
   const std::string xvfb = "xvfb-run -a -s '-screen 0 640x480x24' ";
-  const std::string cmd = xvfb + LIVEPROBE_BIN + " view " + common + "--screenshot " + win + " 2>&1";
-  FILE* p = popen(cmd.c_str(), "r");
-  ASSERT_NE(p, nullptr);
-  std::string out;
-  char buf[512];
-  while (fgets(buf, sizeof buf, p)) out += buf;
-  ASSERT_EQ(pclose(p), 0) << out;
+  const auto run = lpt::runCommand(xvfb + LIVEPROBE_BIN + " view " + common + "--screenshot " + win);
+  const std::string& out = run.output;
+  ASSERT_EQ(run.exitCode, 0) << out;
   EXPECT_NE(out.find("GLFW window"), std::string::npos) << "did not use a window: " << out;
   const cv::Mat a = cv::imread(win);
   ASSERT_FALSE(a.empty());

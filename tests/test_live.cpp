@@ -14,6 +14,7 @@
 #include "capture/frame.h"
 #include "capture/image.h"
 #include "shading/sh.h"
+#include "sky_frames.h"
 #include "test_util.h"
 
 namespace {
@@ -28,15 +29,9 @@ void makeModes(const fs::path& dir, const std::vector<std::string>& modes) {
     std::sscanf(m.c_str() + 5, "%dx%d", &w, &h);
     fs::create_directories(dir / m);
     for (int i = 0; i < kFrames; ++i) {
-      std::vector<float> sky;
-      lp::renderSyntheticSky(w, h, i * 0.4, sky);
-      cv::Mat bgr(h, w, CV_8UC3);
-      for (int p = 0; p < w * h; ++p)
-        for (int c = 0; c < 3; ++c)
-          bgr.data[3 * p + 2 - c] = std::uint8_t(std::lround(255 * lp::linearToSrgb(sky[3 * p + c] * 0.1f)));
       char name[32];
       std::snprintf(name, sizeof name, "%04d.%s", i, m.rfind("MJPG", 0) == 0 ? "jpg" : "png");
-      ASSERT_TRUE(cv::imwrite((dir / m / name).string(), bgr));
+      ASSERT_TRUE(cv::imwrite((dir / m / name).string(), lpt::skyFrame8(w, h, i * 0.4)));
     }
   }
 }
@@ -51,15 +46,7 @@ struct Emulator {
   lpt::RunResult run(const std::string& args) const {
     const std::string env = "LD_PRELOAD=" + std::string(LIVEPROBE_EMU) + " LPEMU_DEVICE=/dev/video7 LPEMU_SOURCE=" +
                             (tmp.path / "modes").string() + " LPEMU_LOG=" + log() + " LPEMU_FAULTS=" + faults + " ";
-    const std::string cmd = env + LIVEPROBE_BIN + " " + args + " 2>&1";
-    FILE* p = popen(cmd.c_str(), "r");
-    lpt::RunResult r{-1, {}};
-    char buf[4096];
-    std::size_t n;
-    while ((n = fread(buf, 1, sizeof buf, p)) > 0) r.output.append(buf, n);
-    const int status = pclose(p);
-    r.exitCode = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
-    return r;
+    return lpt::runCommand(env + LIVEPROBE_BIN + " " + args);
   }
   std::string logText() const {
     std::ifstream in(log());

@@ -16,9 +16,7 @@
 
 #include <opencv2/imgcodecs.hpp>
 
-#include "capture/frame.h"
-#include "capture/image.h"
-#include "shading/sh.h"
+#include "sky_frames.h"
 #include "test_util.h"
 
 namespace {
@@ -69,26 +67,13 @@ void PrintTo(const Example& e, std::ostream* os) { *os << "README.md:" << e.line
 
 class ReadmeExample : public ::testing::TestWithParam<Example> {};
 
-std::string quote(const std::string& s) {
-  std::string q = "'";
-  for (char c : s) q += c == '\'' ? std::string("'\\''") : std::string(1, c);
-  return q + "'";
-}
-
 // The emulated camera's modes: an MJPEG equirect sky at the sizes the README's live examples ask.
 void makeCameraModes(const fs::path& dir) {
   for (const auto& [w, h] : {std::pair{1920, 960}, std::pair{1280, 720}}) {
     const fs::path m = dir / ("MJPG_" + std::to_string(w) + "x" + std::to_string(h));
     fs::create_directories(m);
-    for (int i = 0; i < 4; ++i) {
-      std::vector<float> sky;
-      lp::renderSyntheticSky(w, h, i * 0.3, sky);
-      cv::Mat bgr(h, w, CV_8UC3);
-      for (int p = 0; p < w * h; ++p)
-        for (int c = 0; c < 3; ++c)
-          bgr.data[3 * p + 2 - c] = std::uint8_t(std::lround(255 * lp::linearToSrgb(sky[3 * p + c] * 0.1f)));
-      ASSERT_TRUE(cv::imwrite((m / (std::to_string(i) + ".jpg")).string(), bgr));
-    }
+    for (int i = 0; i < 4; ++i)
+      ASSERT_TRUE(cv::imwrite((m / (std::to_string(i) + ".jpg")).string(), lpt::skyFrame8(w, h, i * 0.3)));
   }
 }
 
@@ -115,15 +100,9 @@ TEST_P(ReadmeExample, RunsAsWritten) {
   const std::string run = e.endless
       ? env + e.command + " & pid=$!; sleep 6; kill -0 $pid 2>/dev/null && echo still-running; kill -INT $pid; wait $pid; echo rc=$?"
       : env + e.command + "\necho rc=$?";
-  const std::string cmd = "cd " + quote(work.string()) + " && timeout -k 10 400 xvfb-run -a -s '-screen 0 1600x1000x24' bash -c " +
-                          quote(run) + " 2>&1";
-  FILE* p = popen(cmd.c_str(), "r");
-  ASSERT_NE(p, nullptr);
-  std::string out;
-  char buf[4096];
-  std::size_t n;
-  while ((n = fread(buf, 1, sizeof buf, p)) > 0) out.append(buf, n);
-  pclose(p);
+  const std::string cmd = "cd " + lpt::shellQuote(work.string()) + " && timeout -k 10 400 xvfb-run -a -s '-screen 0 1600x1000x24' bash -c " +
+                          lpt::shellQuote(run);
+  const std::string out = lpt::runCommand(cmd).output;
   const std::string where = "README.md:" + std::to_string(e.line) + ": " + e.command + "\n" + out;
   ASSERT_TRUE(std::regex_search(out, m, std::regex(R"(rc=(\d+))"))) << where;
   if (e.endless) {

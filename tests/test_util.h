@@ -37,9 +37,9 @@ struct RunResult {
   std::string output;  ///< stdout and stderr together
 };
 
-/// Runs `liveprobe ARGS` through the shell, capturing output.
-inline RunResult runLiveprobe(const std::string& args) {
-  const std::string cmd = std::string(LIVEPROBE_BIN) + " " + args + " 2>&1";
+/// Runs a shell command line, capturing stdout and stderr together.
+inline RunResult runCommand(const std::string& commandLine) {
+  const std::string cmd = commandLine + " 2>&1";
   FILE* p = popen(cmd.c_str(), "r");
   RunResult r{-1, {}};
   if (!p) return r;
@@ -49,6 +49,16 @@ inline RunResult runLiveprobe(const std::string& args) {
   const int status = pclose(p);
   r.exitCode = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
   return r;
+}
+
+/// Runs `liveprobe ARGS` through the shell, capturing output.
+inline RunResult runLiveprobe(const std::string& args) { return runCommand(std::string(LIVEPROBE_BIN) + " " + args); }
+
+/// Single quotes for the shell.
+inline std::string shellQuote(const std::string& s) {
+  std::string q = "'";
+  for (char c : s) q += c == '\'' ? std::string("'\\''") : std::string(1, c);
+  return q + "'";
 }
 
 inline int lineCount(const std::string& s) { return int(std::count(s.begin(), s.end(), '\n')); }

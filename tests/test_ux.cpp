@@ -24,16 +24,7 @@ using lpt::runLiveprobe;
 
 /// Runs a bash script line (the liveprobe binary is $LP), capturing stdout and stderr.
 lpt::RunResult runShell(const std::string& script) {
-  const std::string cmd = "LP='" + std::string(LIVEPROBE_BIN) + "' bash -c '" + script + "' 2>&1";
-  FILE* p = popen(cmd.c_str(), "r");
-  lpt::RunResult r{-1, {}};
-  if (!p) return r;
-  char buf[4096];
-  std::size_t n;
-  while ((n = fread(buf, 1, sizeof buf, p)) > 0) r.output.append(buf, n);
-  const int status = pclose(p);
-  r.exitCode = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
-  return r;
+  return lpt::runCommand("LP=" + lpt::shellQuote(LIVEPROBE_BIN) + " bash -c " + lpt::shellQuote(script));
 }
 
 double meanAbsDiff(const cv::Mat& a, const cv::Mat& b) {
@@ -372,14 +363,10 @@ int frameInTitle(const std::string& output, const std::string& key) {
 // short tap of Esc quits within a second.
 TEST(Window, HudAndKeysUnderXvfb) {
   lpt::TempDir tmp;
-  const std::string cmd = "xvfb-run -a -s '-screen 0 1280x800x24' " + std::string(LIVEPROBE_SOURCE_DIR) +
-                          "/tests/scripts/window_keys.sh " + LIVEPROBE_BIN + " " + tmp.path.string() + " 2>&1";
-  FILE* p = popen(cmd.c_str(), "r");
-  ASSERT_NE(p, nullptr);
-  std::string out;
-  char buf[512];
-  while (fgets(buf, sizeof buf, p)) out += buf;
-  ASSERT_EQ(pclose(p), 0) << out;
+  const auto run = lpt::runCommand("xvfb-run -a -s '-screen 0 1280x800x24' " + std::string(LIVEPROBE_SOURCE_DIR) +
+                                   "/tests/scripts/window_keys.sh " + LIVEPROBE_BIN + " " + tmp.path.string());
+  const std::string& out = run.output;
+  ASSERT_EQ(run.exitCode, 0) << out;
   std::ifstream logf(tmp / "log");
   const std::string log((std::istreambuf_iterator<char>(logf)), {});
   const int a = frameInTitle(out, "paused_a"), b = frameInTitle(out, "paused_b"), c = frameInTitle(out, "resumed");
