@@ -87,6 +87,42 @@ TEST(Look, SingleCoefficientFiguresAreVisibleWithDefaults) {
   }
 }
 
+// An 8-bit panorama is shown as the source looks (display-referred): a background pixel equals
+// the source's pixel in that direction, within a few codes (bilinear filtering of a smooth
+// gradient); with --tonemap-background it is exposed and tone-mapped instead.
+TEST(Look, EightBitBackgroundIsShownAsTheSourceLooks) {
+  lpt::TempDir tmp;
+  const int w = 512, h = 256;
+  cv::Mat src(h, w, CV_8UC3);
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) src.at<cv::Vec3b>(y, x) = cv::Vec3b(std::uint8_t(40 + y * 150 / h), 90, std::uint8_t(30 + x * 200 / w));
+  ASSERT_TRUE(cv::imwrite(tmp / "pano.png", src));
+  const int W = 480, H = 270;
+  // A screen pixel right of the model, on the horizon row: its world direction (shading/axes.h),
+  // then its equirect pixel (shading/sh.h).
+  const int sx = 440, sy = 135;
+  const float tanHalf = std::tan(glm::radians(20.0f)), aspect = float(W) / H;
+  const glm::vec3 g = glm::normalize(glm::vec3((2 * (sx + 0.5f) / W - 1) * tanHalf * aspect, (1 - 2 * (sy + 0.5f) / H) * tanHalf, -1));
+  const glm::vec3 d(g.z, -g.x, g.y);
+  const float t = std::acos(d.z), p = std::fmod(std::atan2(d.y, d.x) + 2 * float(M_PI), 2 * float(M_PI));
+  const cv::Vec3b want = src.at<cv::Vec3b>(int(t / M_PI * h), int(p / (2 * M_PI) * w));
+  for (const char* cmd : {"replay", "render"}) {
+    const std::string args = std::string(cmd) + " --headless --msaa 1 --size 480x270 " +
+                             (std::string(cmd) == "replay" ? tmp / "pano.png" + " --frames 1 --quiet --out-dir " + tmp / "r"
+                                                           : "--env " + tmp / "pano.png" + " --out " + tmp / "r.png");
+    const auto r = runLiveprobe(args);
+    ASSERT_EQ(r.exitCode, 0) << r.output;
+    const cv::Mat img = cv::imread(std::string(cmd) == "replay" ? tmp / "r/frame_000000.png" : tmp / "r.png");
+    ASSERT_FALSE(img.empty());
+    const cv::Vec3b got = img.at<cv::Vec3b>(sy, sx);
+    for (int c = 0; c < 3; ++c) EXPECT_NEAR(got[c], want[c], 4) << cmd << ": channel " << c;
+    const auto tm = runLiveprobe(args + " --tonemap-background");
+    ASSERT_EQ(tm.exitCode, 0) << tm.output;
+    const cv::Mat img2 = cv::imread(std::string(cmd) == "replay" ? tmp / "r/frame_000000.png" : tmp / "r.png");
+    EXPECT_GT(cv::norm(cv::Vec3d(img2.at<cv::Vec3b>(sy, sx)) - cv::Vec3d(want)), 10) << cmd << ": not tone-mapped";
+  }
+}
+
 // ---- orientation --------------------------------------------------------------------------------
 
 // An HDR equirect, dim everywhere but for a small bright spot at file direction f.
@@ -314,81 +350,15 @@ TEST(BenchReport, VerdictSmallStagesAndPlot) {
   EXPECT_NE(r.output.find("1 run of 12 frames"), std::string::npos) << r.output;
   std::istringstream lines(r.output);
   for (std::string line; std::getline(lines, line);)
-    if (line.rfind("convert ", 0) == 0 && line.find(" vs ") != std::string::npos)
+    if (line.rfind("convert ", 0) == 0 && line.find(" vs ") != std::string::npos) {
       EXPECT_EQ(line.find('%'), std::string::npos) << "a percentage of nothing: " << line;
+    }
   const cv::Mat plot = cv::imread(tmp / "plot.png");
   ASSERT_FALSE(plot.empty()) << "no plot";
   EXPECT_EQ(plot.cols, 1400);
   EXPECT_EQ(plot.rows, 480);
   for (const auto& e : fs::directory_iterator(tmp.path))
     EXPECT_NE(e.path().filename().string()[0], '.') << "left behind: " << e.path();
-}
-
-// ---- a real window ------------------------------------------------------------------------------
-
-/// Reads an X window dump (xwd -root) into BGR.
-cv::Mat readXwd(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  std::vector<unsigned char> d((std::istreambuf_iterator<char>(in)), {});
-  auto be = [&](std::size_t field) {
-    const unsigned char* p = d.data() + 4 * field;
-    return std::uint32_t(p[0]) << 24 | std::uint32_t(p[1]) << 16 | std::uint32_t(p[2]) << 8 | p[3];
-  };
-  if (d.size() < 100) return {};
-  const std::uint32_t headerSize = be(0), width = be(4), height = be(5), byteOrder = be(7), bpp = be(11),
-                      bytesPerLine = be(12), ncolors = be(19);
-  if (bpp != 24 && bpp != 32) return {};
-  const std::uint32_t step = bpp / 8;  // Xvfb at depth 24 packs 3 bytes a pixel, rows bytesPerLine apart
-  const std::size_t offset = headerSize + std::size_t(ncolors) * 12;
-  if (d.size() < offset + std::size_t(bytesPerLine) * height) return {};
-  cv::Mat img(int(height), int(width), CV_8UC3);
-  for (std::uint32_t y = 0; y < height; ++y)
-    for (std::uint32_t x = 0; x < width; ++x) {
-      const unsigned char* p = d.data() + offset + std::size_t(y) * bytesPerLine + step * x;
-      auto* q = img.ptr<std::uint8_t>(int(y)) + 3 * x;
-      if (byteOrder == 0) q[0] = p[0], q[1] = p[1], q[2] = p[2];  // LSBFirst: B G R (X)
-      else q[0] = p[step - 1], q[1] = p[step - 2], q[2] = p[step - 3];
-    }
-  return img;
-}
-
-int frameInTitle(const std::string& output, const std::string& key) {
-  std::smatch m;
-  const std::regex re(key + R"(: liveprobe - .* - frame (\d+) -)");
-  return std::regex_search(output, m, re) ? std::stoi(m[1]) : -1;
-}
-
-// The HUD in a real GLFW window under Xvfb, driven by xdotool: Space pauses (the frame index in
-// the title stops), H hides the HUD (the screenshots differ only where the HUD is), and a single
-// short tap of Esc quits within a second.
-TEST(Window, HudAndKeysUnderXvfb) {
-  lpt::TempDir tmp;
-  const auto run = lpt::runCommand("xvfb-run -a -s '-screen 0 1280x800x24' " + std::string(LIVEPROBE_SOURCE_DIR) +
-                                   "/tests/scripts/window_keys.sh " + LIVEPROBE_BIN + " " + tmp.path.string());
-  const std::string& out = run.output;
-  ASSERT_EQ(run.exitCode, 0) << out;
-  std::ifstream logf(tmp / "log");
-  const std::string log((std::istreambuf_iterator<char>(logf)), {});
-  const int a = frameInTitle(out, "paused_a"), b = frameInTitle(out, "paused_b"), c = frameInTitle(out, "resumed");
-  ASSERT_GE(a, 0) << out;
-  EXPECT_EQ(a, b) << "Space did not pause: " << out;
-  EXPECT_GT(c, b) << "Space did not resume: " << out;
-  std::smatch m;
-  ASSERT_TRUE(std::regex_search(out, m, std::regex(R"(quit_ms: (\d+))"))) << out;
-  EXPECT_LT(std::stoi(m[1]), 1000) << "Esc took too long: " << out;
-  EXPECT_NE(out.find("rc: 0"), std::string::npos) << out << log;
-  EXPECT_NE(log.find("frames captured"), std::string::npos) << log;
-
-  const cv::Mat hud = readXwd(tmp / "hud.xwd"), plain = readXwd(tmp / "nohud.xwd");
-  ASSERT_FALSE(hud.empty());
-  ASSERT_EQ(hud.size(), plain.size());
-  cv::imwrite(std::string(LIVEPROBE_TEST_OUTPUT) + "/window_hud.png", hud(cv::Rect(0, 0, 960, 540)));
-  const cv::Rect status(12, 12, 300, 200), model(400, 200, 160, 140);
-  EXPECT_GT(meanAbsDiff(hud(status), plain(status)), 10) << "the HUD region is empty";
-  double lo, hi;
-  cv::minMaxLoc(hud(status).reshape(1), &lo, &hi);
-  EXPECT_GT(hi - lo, 100) << "the HUD region has no text";
-  EXPECT_LT(meanAbsDiff(hud(model), plain(model)), 1.0) << "paused: the scene must not change";
 }
 
 }  // namespace

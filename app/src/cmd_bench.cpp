@@ -291,7 +291,7 @@ int runBench(const Args& a) {
       if (i == 0) exposure = autoExposure(sh);
       renderer.setLighting(sh);
       if (asIs) setBackground(renderer, frame, layout, lin.exposure());
-      else setBackground(renderer, image, layout);
+      else setBackground(renderer, image, layout, frame.format == PixelFormat::Bgr8 ? lin.exposure() : 0.0f);
       gl::Renderer::finish();
       spin(inject[3]);
       t[3] = msSince(t0);

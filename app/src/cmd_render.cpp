@@ -133,6 +133,8 @@ int runView(const Args& a) {
       gl::InputDelta input = ctx->pollEvents();
       if (hud && hud->wantsMouse()) input.drag = {}, input.scroll = 0;
       if (!(hud && hud->wantsKeyboard())) applyKeys(input.keys, state, false);
+      if (hud && std::count(input.keys.begin(), input.keys.end(), gl::KeyAction::Save))
+        std::fprintf(stderr, "liveprobe: %s\n", hud->saveCoefficients().c_str());
       applyInput(state.camera, input);
       const glm::ivec2 fb = ctx->framebufferSize();
       renderer.draw(fb, state.camera, state.shading);

@@ -200,7 +200,7 @@ struct StreamView {
     if (!haveLighting && autoExposure) state.shading.exposure = cli::autoExposure(f.radiance);
     haveLighting = true;
     renderer->setLighting(f.radiance);
-    if (f.image) setBackground(*renderer, *f.image, layout);
+    if (f.image) setBackground(*renderer, *f.image, layout, f.displayScale);
     if (f.raw) setBackground(*renderer, *f.raw, layout, f.rawScale);
     gl::Renderer::finish();
     return std::chrono::duration<double, std::milli>(Clock::now() - t0).count();

@@ -63,6 +63,7 @@ void applyKeys(const std::vector<gl::KeyAction>& keys, ViewState& s, bool canPau
       case gl::KeyAction::ExposureUp: s.shading.exposure *= std::sqrt(2.0f); break;  // half a stop
       case gl::KeyAction::ExposureDown: s.shading.exposure /= std::sqrt(2.0f); break;
       case gl::KeyAction::Help: s.help = !s.help; break;
+      case gl::KeyAction::Save: break;  // the coefficient editor's (view)
     }
 }
 
@@ -104,6 +105,20 @@ void Hud::push(const HudSample& s) {
 void Hud::enableEditor(Sh9* radiance, std::string savePath) {
   editing_ = radiance;
   savePath_ = std::move(savePath);
+}
+
+std::string Hud::saveCoefficients() {
+  if (!editing_) return {};
+  try {
+    nlohmann::ordered_json j;
+    j["source"] = "liveprobe view (edited)";
+    j["coefficients"] = coefficientsJson(*editing_);
+    writeFileAtomically(savePath_, j.dump() + "\n");
+    saveMessage_ = "saved the coefficients to " + savePath_;
+  } catch (const Error& e) {
+    saveMessage_ = e.what();
+  }
+  return saveMessage_;
 }
 
 bool Hud::wantsMouse() const { return ImGui::GetIO().WantCaptureMouse; }
@@ -262,17 +277,7 @@ void Hud::drawEditor() {
       edited_ = true;
     }
   }
-  if (ImGui::Button("Save JSON")) {
-    try {
-      nlohmann::ordered_json j;
-      j["source"] = "liveprobe view (edited)";
-      j["coefficients"] = coefficientsJson(*editing_);
-      writeFileAtomically(savePath_, j.dump() + "\n");
-      saveMessage_ = "saved " + savePath_;
-    } catch (const Error& e) {
-      saveMessage_ = e.what();
-    }
-  }
+  if (ImGui::Button("Save JSON (Ctrl+S)")) saveCoefficients();
   ImGui::SameLine();
   if (ImGui::Button("Zero")) {
     *editing_ = Sh9{};
@@ -292,7 +297,8 @@ void Hud::drawHelp(ViewState& state) {
                                  {"Space", "pause / resume"},  {"Right", "one frame (paused)"},
                                  {"R", "reset the view"},      {"B", "background on/off"},
                                  {"H", "HUD on/off"},          {"+ / -", "exposure, half a stop"},
-                                 {"F1 or ?", "this help"},     {"Esc or Q", "quit"}};
+                                 {"F1 or ?", "this help"},     {"Ctrl+S", "save the coefficients (view)"},
+                                 {"Esc or Q", "quit"}};
   for (const auto& r : rows) {
     ImGui::Text("%-10s", r[0]);
     ImGui::SameLine(90);

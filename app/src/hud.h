@@ -39,7 +39,8 @@ struct ViewState {
   int steps = 0;  ///< single-frame steps asked for while paused
 };
 
-/// Applies key presses to the state (a window's Esc/Q close it in the context itself).
+/// Applies key presses to the state (a window's Esc/Q close it in the context itself; Save is
+/// the coefficient editor's, Hud::saveCoefficients).
 void applyKeys(const std::vector<gl::KeyAction>& keys, ViewState& state, bool canPause);
 
 class Hud {
@@ -56,6 +57,8 @@ class Hud {
   void setCounters(const HudCounters& c) { counters_ = c; }
   /// Turns on the coefficient editor (view): sliders edit `*radiance`; Save writes `savePath`.
   void enableEditor(Sh9* radiance, std::string savePath);
+  /// Writes the edited coefficients as `liveprobe coeffs` JSON (atomically); returns what it did.
+  std::string saveCoefficients();
   /// True when the editor changed the coefficients in the last draw().
   bool edited() const { return edited_; }
 

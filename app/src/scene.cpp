@@ -75,6 +75,7 @@ Environment loadEnvironment(const std::string& source, const LayoutSpec& layout,
   Photometry photometry;
   photometry.exposure = float(src->radianceScale());
   Linearizer(photometry).convert(frame, env.image);
+  if (frame.format == PixelFormat::Bgr8) env.displayScale = photometry.exposure;
   if (auto why = layoutMismatch(layout, env.image.width, env.image.height); !why.empty())
     throw Error(source + ": " + why);
   warnIfLayoutLooksWrong(source, layout, env.image.width, env.image.height, env.image.rgb.data());
@@ -102,15 +103,16 @@ void warnIfLayoutLooksWrong(const std::string& source, const LayoutSpec& layout,
   }
 }
 
-void setBackground(gl::Renderer& r, const Image& frame, const LayoutSpec& layout) {
+void setBackground(gl::Renderer& r, const Image& frame, const LayoutSpec& layout, float displayScale) {
   if (layout.layout == Layout::Equirect || layout.layout == Layout::Angular) {
     r.setBackground(frame.rgb.data(), frame.width, frame.height,
                     layout.layout == Layout::Angular ? gl::BackgroundMapping::Angular
-                                                     : gl::BackgroundMapping::Equirect);
+                                                     : gl::BackgroundMapping::Equirect,
+                    displayScale);
     return;
   }
   const Image eq = resampleToEquirect(frame, layout, 1024, 512);
-  r.setBackground(eq.rgb.data(), eq.width, eq.height, gl::BackgroundMapping::Equirect);
+  r.setBackground(eq.rgb.data(), eq.width, eq.height, gl::BackgroundMapping::Equirect, displayScale);
 }
 
 void setBackground(gl::Renderer& r, const Frame& frame, const LayoutSpec& layout, float scale) {
@@ -152,6 +154,7 @@ std::optional<Lighting> lightingFromArgs(const Args& a) {
     Environment env = loadEnvironment(a.get("--env"), layoutFromArgs(a), envOrientationFromArgs(a));
     l.layout = env.layout;
     l.orientation = env.orientation;
+    l.displayScale = env.displayScale;
     l.radiance = env.radiance;
     l.background = std::move(env.image);
   } else {
@@ -278,7 +281,7 @@ void loadScene(gl::Renderer& r, const Mesh& mesh, const Lighting& lighting) {
   loadModel(r, mesh);
   r.setLighting(lighting.radiance);
   r.setEnvOrientation(lighting.orientation);
-  if (lighting.background) setBackground(r, *lighting.background, lighting.layout);
+  if (lighting.background) setBackground(r, *lighting.background, lighting.layout, lighting.displayScale);
 }
 
 void applyInput(gl::Camera& camera, const gl::InputDelta& input) {

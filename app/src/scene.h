@@ -33,6 +33,7 @@ struct Environment {
   LayoutSpec layout;
   glm::mat3 orientation{1.0f};  ///< world from file (envOrientationFromArgs)
   Sh9 radiance;                 ///< unwindowed, turned by `orientation`
+  float displayScale = 0.0f;    ///< an 8-bit file: the scale its decoded values carry; 0 for HDR
 };
 /// Reads the first frame of `source` through the capture path (photometry, layout check) and
 /// projects it, turned by `orientation`. Warns (one line) about a likely layout mistake. Throws
@@ -50,11 +51,13 @@ struct Lighting {
   std::optional<Image> background;  ///< the environment, when lighting came from one
   LayoutSpec layout;
   glm::mat3 orientation{1.0f};
+  float displayScale = 0.0f;  ///< see Environment
 };
 
 /// The background texture for a frame: equirect and angular frames are drawn directly; other
 /// layouts are resampled to a 1024x512 equirect on the CPU (bilinear).
-void setBackground(gl::Renderer& r, const Image& frame, const LayoutSpec& layout);
+/// `displayScale`: see gl::Renderer::setBackground (0 for an HDR frame).
+void setBackground(gl::Renderer& r, const Image& frame, const LayoutSpec& layout, float displayScale = 0.0f);
 /// The background from an 8-bit sRGB frame the display takes as it is
 /// (capture/pipeline.h, displayTakesFrameAsIs), its decoded values times `scale`.
 void setBackground(gl::Renderer& r, const Frame& frame, const LayoutSpec& layout, float scale);

@@ -160,6 +160,7 @@ void CapturePipeline::run() {
       if (opt_.keepImages && !raw) out.image = std::move(image);  // one background per frame
       out.raw = std::move(raw);
       out.rawScale = rawScale;
+      out.displayScale = frame.format == PixelFormat::Bgr8 ? rawScale : 0.0f;
       out.times = {msBetween(t0, t1), msBetween(t1, t2), msBetween(t2, t3)};
       out.saturated = saturated;
       if (opt_.onCaptured) opt_.onCaptured(out);

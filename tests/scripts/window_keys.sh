@@ -1,31 +1,38 @@
 #!/usr/bin/env bash
-# Drives a real liveprobe window with xdotool, under xvfb-run (tests/test_ux.cpp). Prints one
+# Drives a real liveprobe window with xdotool, under xvfb-run (tests/test_window.cpp). Prints one
 # "key: value" line per observation. $1: the liveprobe binary, $2: a folder for the screenshots.
 set -u
 lp=$1 out=$2
 "$lp" replay synthetic:256x128@30 --size 960x540 --msaa 1 >"$out/log" 2>&1 &
 pid=$!
-wid=
-for _ in $(seq 200); do
-  wid=$(xdotool search --name '^liveprobe' 2>/dev/null | head -1)
-  [[ -n $wid ]] && break
-  sleep 0.1
-done
-echo "window: ${wid:-none}"
-[[ -z $wid ]] && { kill "$pid"; exit 1; }
-sleep 2  # a few frames drawn, the title updated
+source "$(dirname "$0")/window_lib.sh"
+wait_for_window "$pid" || exit 1
+# The title is updated about once a second, after a frame is drawn: wait for what it says.
+title_until() {  # $1: a pattern the title must match (grep -E), within 15 s
+  local t=
+  for _ in $(seq 150); do
+    t=$(xdotool getwindowname "$wid")
+    grep -qE "$1" <<<"$t" && break
+    sleep 0.1
+  done
+  echo "$t"
+}
+title_until 'frames/s$' >/dev/null
+sleep 1
 xdotool windowfocus --sync "$wid"
 xdotool key space  # pause
+title_until 'paused$' >/dev/null
 sleep 1.5
-echo "paused_a: $(xdotool getwindowname "$wid")"
+echo "paused_a: $(title_until 'paused$')"
 xwd -root -silent >"$out/hud.xwd"
 xdotool key h  # hide the HUD: the same paused frame without it
-sleep 1
+sleep 1.5
 xwd -root -silent >"$out/nohud.xwd"
-echo "paused_b: $(xdotool getwindowname "$wid")"
+echo "paused_b: $(title_until 'paused$')"
 xdotool key h space  # HUD back, resume
+title_until 'frames/s$' >/dev/null
 sleep 2
-echo "resumed: $(xdotool getwindowname "$wid")"
+echo "resumed: $(title_until 'frames/s$')"
 t0=$(date +%s%N)
 xdotool key Escape  # one short tap
 wait "$pid"

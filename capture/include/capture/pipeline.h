@@ -39,6 +39,9 @@ struct ProcessedFrame {
   /// (exposure) that applies to its decoded values. The GPU decodes sRGB for display.
   std::shared_ptr<const Frame> raw;
   float rawScale = 1.0f;
+  /// For `image` made from an 8-bit frame: the scale its decoded values carry (0 for HDR frames),
+  /// so the display can show it as the source looks (gl::Renderer::setBackground).
+  float displayScale = 0.0f;
   StageTimes times;
   std::size_t saturated = 0;
 };

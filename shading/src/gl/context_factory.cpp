@@ -50,7 +50,7 @@ class GlfwContext final : public GlContext {
     glfwSetScrollCallback(window_, [](GLFWwindow* w, double, double dy) {
       static_cast<GlfwContext*>(glfwGetWindowUserPointer(w))->input_.scroll += float(dy);
     });
-    glfwSetKeyCallback(window_, [](GLFWwindow* w, int key, int, int action, int) {
+    glfwSetKeyCallback(window_, [](GLFWwindow* w, int key, int, int action, int mods) {
       if (action != GLFW_PRESS && action != GLFW_REPEAT) return;
       auto* self = static_cast<GlfwContext*>(glfwGetWindowUserPointer(w));
       if (key == GLFW_KEY_ESCAPE || key == GLFW_KEY_Q) {
@@ -62,6 +62,7 @@ class GlfwContext final : public GlContext {
         case GLFW_KEY_SPACE: if (action == GLFW_PRESS) keys.push_back(KeyAction::Pause); break;
         case GLFW_KEY_RIGHT: keys.push_back(KeyAction::Step); break;
         case GLFW_KEY_R: keys.push_back(KeyAction::ResetView); break;
+        case GLFW_KEY_S: if (mods & GLFW_MOD_CONTROL) keys.push_back(KeyAction::Save); break;
         case GLFW_KEY_B: keys.push_back(KeyAction::ToggleBackground); break;
         case GLFW_KEY_H: keys.push_back(KeyAction::ToggleHud); break;
         case GLFW_KEY_EQUAL: case GLFW_KEY_KP_ADD: keys.push_back(KeyAction::ExposureUp); break;

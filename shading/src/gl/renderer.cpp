@@ -178,11 +178,12 @@ void Renderer::setAlbedoTexture(const float* rgb, int width, int height) {
 
 void Renderer::setLighting(const Sh9& radiance) { sh_ = irradianceMatrices(radiance); }
 
-void Renderer::setBackground(const float* rgb, int width, int height, BackgroundMapping mapping) {
+void Renderer::setBackground(const float* rgb, int width, int height, BackgroundMapping mapping, float displayScale) {
   backgroundTex_ = makeFloatTexture(rgb, width, height,
                                     mapping == BackgroundMapping::Equirect ? GL_REPEAT : GL_CLAMP_TO_EDGE);
   backgroundMapping_ = mapping;
   backgroundScale_ = 1.0f;
+  backgroundDisplayScale_ = displayScale;
   backgroundSrgb_ = false;
 }
 
@@ -209,7 +210,9 @@ void Renderer::bindPanorama(const Program& p, const ShadingSettings& s) const {
   glUniform1f(loc(p, "uExposure"), s.exposure);
   glUniform1i(loc(p, "uToneMap"), int(s.toneMap));
   glUniform1f(loc(p, "uPanoramaScale"), backgroundScale_);
-  glUniform1i(loc(p, "uDisplayReferred"), backgroundSrgb_ && s.displayReferredBackground);
+  const bool from8bit = backgroundSrgb_ || backgroundDisplayScale_ > 0;
+  glUniform1i(loc(p, "uDisplayReferred"), from8bit && s.displayReferredBackground);
+  glUniform1f(loc(p, "uDisplayDivide"), backgroundSrgb_ ? 1.0f : std::max(backgroundDisplayScale_, 1e-30f));
   glUniform1i(loc(p, "uMapping"), int(backgroundMapping_));
   glActiveTexture(GL_TEXTURE0);
   glBindTexture(GL_TEXTURE_2D, backgroundTex_.get());

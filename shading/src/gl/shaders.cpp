@@ -80,6 +80,7 @@ void main() {
   "uniform mat3 uFileFromWorld;   // inverse of the environment's orientation\n"         \
   "uniform float uPanoramaScale;  // the input exposure of an 8-bit frame, else 1\n"     \
   "uniform bool uDisplayReferred; // show the texels as the source looks: no exposure, no tone map\n" \
+  "uniform float uDisplayDivide;  // undoes the input exposure of a decoded 8-bit float panorama\n" \
   "const float PI = 3.14159265358979;\n"                                                 \
   "vec2 panoramaUv(vec3 w) {\n"                                                          \
   "  w = uFileFromWorld * w;\n"                                                          \
@@ -96,7 +97,7 @@ void main() {
   "}\n"                                                                                  \
   "vec3 panoramaDisplay(vec3 w) {\n"                                                     \
   "  vec3 c = textureLod(uPanorama, panoramaUv(w), 0.0).rgb;\n"                          \
-  "  if (uDisplayReferred) return srgbEncode(clamp(c, 0.0, 1.0));\n"                     \
+  "  if (uDisplayReferred) return srgbEncode(clamp(c / uDisplayDivide, 0.0, 1.0));\n"    \
   "  return srgbEncode(toneMap(c * uPanoramaScale));\n"                                  \
   "}\n"
 

@@ -37,6 +37,7 @@ enum class KeyAction : std::uint8_t {
   ExposureUp,      ///< + or = (keypad +)
   ExposureDown,    ///< - (keypad -)
   Help,            ///< F1 or ?
+  Save,            ///< Ctrl+S
 };
 
 /// Input gathered since the last pollEvents().

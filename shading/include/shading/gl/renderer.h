@@ -76,8 +76,11 @@ class Renderer {
   /// Linear RGB albedo texture (rows top to bottom); multiplies Mesh::albedo.
   void setAlbedoTexture(const float* rgb, int width, int height);
   void setLighting(const Sh9& radiance);
-  /// Linear RGB panorama for the background (rows top to bottom).
-  void setBackground(const float* rgb, int width, int height, BackgroundMapping mapping);
+  /// Linear RGB panorama for the background (rows top to bottom). `displayScale` > 0 says it was
+  /// decoded from an 8-bit (sRGB) source and multiplied by that scale: shown display-referred
+  /// (ShadingSettings::displayReferredBackground), it is divided by it and encoded back, so it
+  /// looks as the source does. 0: a scene-referred (HDR) panorama, exposed and tone-mapped.
+  void setBackground(const float* rgb, int width, int height, BackgroundMapping mapping, float displayScale = 0.0f);
 
   /// 8-bit sRGB BGR panorama (rows top to bottom): the texture unit decodes sRGB to linear, and
   /// the shader multiplies by `scale` (the input exposure). Saves a per-frame CPU conversion.
@@ -127,7 +130,7 @@ class Renderer {
   glm::vec3 albedo_{0.8f};
   Texture albedoTex_, backgroundTex_;
   BackgroundMapping backgroundMapping_ = BackgroundMapping::Equirect;
-  float backgroundScale_ = 1.0f;
+  float backgroundScale_ = 1.0f, backgroundDisplayScale_ = 0.0f;
   int backgroundW_ = 0, backgroundH_ = 0;
   bool backgroundSrgb_ = false;
   std::array<glm::mat4, 3> sh_{};
