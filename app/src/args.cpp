@@ -53,8 +53,7 @@ void declare(Args::Parsed& p, const CommandSpec& spec) {
     p.options[key] = opt;
   }
   if (spec.maxPositional > 0) {
-    auto* pos = app.add_option(positionalName(spec.positional), p.positional,
-                               spec.maxPositional > 1 ? "zero or more" : spec.minPositional ? "required" : "optional");
+    auto* pos = app.add_option(positionalName(spec.positional), p.positional, spec.positionalHelp);
     pos->expected(0, spec.maxPositional)->type_name("");
   }
 }

@@ -29,6 +29,7 @@ struct CommandSpec {
   std::vector<OptionSpec> options;
   int minPositional = 0;
   int maxPositional = 0;
+  std::string positionalHelp = {};  ///< what the positional argument is, for --help
 };
 
 /// The parsed command line of one subcommand.

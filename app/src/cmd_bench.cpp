@@ -187,7 +187,7 @@ const CommandSpec kBenchSpec{
                          {"--quiet", "", "no progress on stderr", false, false, g}});
       return o;
     }(),
-    0, 1};
+    0, 1, "a video, an image sequence (a folder, or a pattern like frames/%04d.png), an image, a folder of six cube faces, or synthetic[:WxH[@FPS]]; default: the bundled recording"};
 
 namespace {
 

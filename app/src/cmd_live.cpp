@@ -39,7 +39,7 @@ const CommandSpec kLiveSpec{
       o.insert(o.end(), scene.begin(), scene.end());
       return o;
     }(),
-    1, 1};
+    1, 1, "a V4L2 video-capture node, e.g. /dev/video0"};
 
 int runLive(const Args& a) {
   layoutFromArgs(a);
@@ -75,7 +75,7 @@ const CommandSpec kDevicesSpec{
     "Lists V4L2 cameras (default: every /dev/video*) with their formats, sizes, frame rates and\n"
     "controls.",
     {},
-    0, 64};
+    0, 64, "V4L2 nodes to list (default: every /dev/video*)"};
 
 int runDevices(const Args& a) {
   std::vector<std::string> paths = a.positional();

@@ -110,7 +110,7 @@ const CommandSpec kReplaySpec{
       o.insert(o.end(), scene.begin(), scene.end());
       return o;
     }(),
-    0, 1};
+    0, 1, "a video, an image sequence (a folder, or a pattern like frames/%04d.png), an image, a folder of six cube faces, or synthetic[:WxH[@FPS]]; default: the bundled recording recordings/sky.mkv"};
 
 namespace {
 
@@ -424,7 +424,7 @@ const CommandSpec kRecordSpec{
      {"--duration", "SECONDS", "seconds of the source to record"},
      {"--fps", "F", "frame rate of image sequences and of the recording, 0 to 1000 (default: the source's)"},
      {"--quiet", "", "no progress on stderr"}},
-    1, 1};
+    1, 1, "a video, an image sequence (a folder, or a pattern like frames/%04d.png), an image, a folder of six cube faces, or synthetic[:WxH[@FPS]]"};
 
 int runRecord(const Args& a) {
   installStopHandlers();

@@ -57,7 +57,7 @@ const CommandSpec kCoeffsSpec{
     "Prints the nine radiance coefficients L_lm (R&H convention, before the A_l factors) of an\n"
     "environment map (.hdr, .exr, or 8-bit PNG/JPEG decoded from sRGB).",
     withLayout({{"--format", "json|text|glsl", "output format (default json)"}, kWindowOpt}),
-    1, 1};
+    1, 1, "an environment map (.hdr, .exr, .png, .jpg), or a folder of six cube faces"};
 
 int runCoeffs(const Args& a) {
   const std::string format = a.get("--format", "json");
@@ -97,7 +97,7 @@ const CommandSpec kIrradianceSpec{
      {"--size", "WxH", "output size, each side up to 8192 (default 256x128)"},
      {"--method", "sh|brute", "how to compute E (default sh)"},
      kWindowOpt}),
-    1, 1};
+    1, 1, "an environment map (.hdr, .exr, .png, .jpg), or a folder of six cube faces"};
 
 int runIrradiance(const Args& a) {
   if (!a.has("--out")) throw Error("--out FILE is required");
@@ -140,7 +140,7 @@ const CommandSpec kCompareSpec{
      {"--json", "", "print JSON instead of text"},
      {"--quiet", "", "no progress on stderr"},
      kWindowOpt}),
-    1, 1};
+    1, 1, "an environment map (.hdr, .exr, .png, .jpg), or a folder of six cube faces"};
 
 int runCompare(const Args& a) {
   const auto [w, h] = parseSize(a.get("--size", "64x32"), "--size", 4096);
