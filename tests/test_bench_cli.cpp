@@ -3,7 +3,6 @@
 #include <gtest/gtest.h>
 
 #include <fstream>
-
 #include <nlohmann/json.hpp>
 
 #include "test_util.h"
@@ -14,7 +13,8 @@ namespace {
 // threshold it passes; an injected delay in one stage is caught and named.
 TEST(BenchCli, PassesAgainstTheBaselineAndCatchesAnInjectedDelay) {
   lpt::TempDir tmp;
-  const std::string baseline = std::string(LIVEPROBE_SOURCE_DIR) + "/recordings/bench-baseline.json";
+  const std::string baseline =
+      std::string(LIVEPROBE_SOURCE_DIR) + "/recordings/bench-baseline.json";
   const std::string json = tmp / "bench.json", plot = tmp / "bench.png";
   auto r = lpt::runLiveprobe("bench --frames 100 --repeat 1 --baseline " + baseline +
                              " --threshold 150 --json " + json + " --plot " + plot);
@@ -23,7 +23,8 @@ TEST(BenchCli, PassesAgainstTheBaselineAndCatchesAnInjectedDelay) {
   const auto j = nlohmann::json::parse(in);
   EXPECT_EQ(j["frames"], 100);
   for (const char* s : {"grab", "convert", "project", "upload", "render", "readback"})
-    for (const char* k : {"median_ms", "p95_ms", "p99_ms", "max_ms"}) EXPECT_TRUE(j["stages"][s][k].is_number()) << s << k;
+    for (const char* k : {"median_ms", "p95_ms", "p99_ms", "max_ms"})
+      EXPECT_TRUE(j["stages"][s][k].is_number()) << s << k;
   EXPECT_GT(j["calibration_ms"].get<double>(), 0);
   EXPECT_TRUE(j["regressions"].empty());
   EXPECT_TRUE(std::filesystem::exists(plot));

@@ -3,9 +3,8 @@
 
 #include <cmath>
 #include <fstream>
-#include <numbers>
-
 #include <nlohmann/json.hpp>
+#include <numbers>
 #include <opencv2/imgcodecs.hpp>
 
 #include "capture/image.h"
@@ -22,7 +21,6 @@ void writeConstantHdr(const std::string& path, int w, int h, float c) {
   cv::Mat m(h, w, CV_32FC3, cv::Scalar(c, c, c));
   ASSERT_TRUE(cv::imwrite(path, m));
 }
-
 
 TEST(Cli, HelpForEveryCommand) {
   for (const char* cmd : {"coeffs", "irradiance", "compare"}) {
@@ -43,7 +41,8 @@ TEST(Cli, CoeffsJsonIsExactlyTheDocumentedShape) {
   const auto j = nlohmann::ordered_json::parse(r.output);
   std::vector<std::string> keys;
   for (auto& [k, v] : j.items()) keys.push_back(k);
-  EXPECT_EQ(keys, (std::vector<std::string>{"source", "layout", "width", "height", "coefficients"}));
+  EXPECT_EQ(keys,
+            (std::vector<std::string>{"source", "layout", "width", "height", "coefficients"}));
   EXPECT_EQ(j["layout"], "equirect");
   EXPECT_EQ(j["width"], 64);
   std::vector<std::string> names;
@@ -79,7 +78,8 @@ TEST(Cli, IrradianceMapOfConstantEnvironment) {
   writeConstantHdr(f, 128, 64, 0.5f);
   for (const char* method : {"sh", "brute"}) {
     const std::string out = tmp / (std::string("e_") + method + ".exr");
-    const auto r = runLiveprobe("irradiance " + f + " --out " + out + " --size 32x16 --method " + method);
+    const auto r =
+        runLiveprobe("irradiance " + f + " --out " + out + " --size 32x16 --method " + method);
     ASSERT_EQ(r.exitCode, 0) << r.output;
     const lp::Image e = lp::loadImage(out);
     ASSERT_EQ(e.width, 32);
@@ -89,7 +89,8 @@ TEST(Cli, IrradianceMapOfConstantEnvironment) {
   int files = 0;
   for (auto& entry : fs::directory_iterator(tmp.path)) files += entry.is_regular_file();
   EXPECT_EQ(files, 3);
-  expectOneLineError("irradiance " + f + " --out " + tmp / "nodir/x.hdr", "nodir", "does not exist");
+  expectOneLineError("irradiance " + f + " --out " + tmp / "nodir/x.hdr", "nodir",
+                     "does not exist");
   expectOneLineError("irradiance " + f, "irradiance", "--out");
 }
 

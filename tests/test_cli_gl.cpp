@@ -3,7 +3,6 @@
 #include <gtest/gtest.h>
 
 #include <fstream>
-
 #include <opencv2/imgcodecs.hpp>
 
 #include "test_util.h"
@@ -13,7 +12,6 @@ namespace {
 using lpt::expectOneLineError;
 using lpt::lineCount;
 using lpt::runLiveprobe;
-
 
 // Spread of pixel values: a blank image has none.
 double spread(const cv::Mat& img) {
@@ -25,9 +23,9 @@ double spread(const cv::Mat& img) {
 TEST(CliGl, RenderHeadlessWithEnvironment) {
   lpt::TempDir tmp;
   const std::string out = tmp / "bunny.png";
-  const auto r = runLiveprobe("render --headless --env " + lpt::dataPath("probes/latlong_256x128/grace.hdr") +
-                              " --model " + lpt::dataPath("models/stanford-bunny.obj") +
-                              " --size 320x240 --out " + out);
+  const auto r = runLiveprobe(
+      "render --headless --env " + lpt::dataPath("probes/latlong_256x128/grace.hdr") + " --model " +
+      lpt::dataPath("models/stanford-bunny.obj") + " --size 320x240 --out " + out);
   ASSERT_EQ(r.exitCode, 0) << r.output;
   EXPECT_NE(r.output.find("OSMesa"), std::string::npos) << r.output;
   const cv::Mat img = cv::imread(out);
@@ -40,10 +38,12 @@ TEST(CliGl, RenderHeadlessWithEnvironment) {
 // pixels as the OSMesa path (both are llvmpipe; stack-notes.md found them byte-identical).
 TEST(CliGl, ViewWindowUnderXvfb) {
   lpt::TempDir tmp;
-  const std::string common = "--coeff L00=0.8 --coeff L10=0.3,0.1,0.0 --size 200x150 --frames 3 --no-hud ";
+  const std::string common =
+      "--coeff L00=0.8 --coeff L10=0.3,0.1,0.0 --size 200x150 --frames 3 --no-hud ";
   const std::string win = tmp / "window.png", off = tmp / "offscreen.png";
   const std::string xvfb = "xvfb-run -a -s '-screen 0 640x480x24' ";
-  const auto run = lpt::runCommand(xvfb + LIVEPROBE_BIN + " view " + common + "--screenshot " + win);
+  const auto run =
+      lpt::runCommand(xvfb + LIVEPROBE_BIN + " view " + common + "--screenshot " + win);
   const std::string& out = run.output;
   ASSERT_EQ(run.exitCode, 0) << out;
   EXPECT_NE(out.find("GLFW window"), std::string::npos) << "did not use a window: " << out;
@@ -65,7 +65,7 @@ TEST(CliGl, ViewWindowUnderXvfb) {
 // green under white light shows both colours.
 TEST(CliGl, AlbedoTextureFromMaterial) {
   lpt::TempDir tmp;
-  cv::Mat tex(64, 64, CV_8UC3, cv::Scalar(0, 0, 255));  // BGR: red
+  cv::Mat tex(64, 64, CV_8UC3, cv::Scalar(0, 0, 255));        // BGR: red
   tex(cv::Rect(32, 0, 32, 64)).setTo(cv::Scalar(0, 255, 0));  // right half green
   ASSERT_TRUE(cv::imwrite(tmp / "albedo.png", tex));
   std::ofstream(tmp / "quad.mtl") << "newmtl m\nKd 1 1 1\nmap_Kd albedo.png\n";
@@ -92,8 +92,9 @@ TEST(CliGlBadInput, MissingModel) {
 TEST(CliGlBadInput, CorruptModel) {
   lpt::TempDir tmp;
   const std::string f = tmp / "broken.ply";
-  std::ofstream(f, std::ios::binary) << "ply\nformat binary_little_endian 1.0\nelement vertex 1000\n"
-                                        "property float x\nend_header\n\x01\x02";
+  std::ofstream(f, std::ios::binary)
+      << "ply\nformat binary_little_endian 1.0\nelement vertex 1000\n"
+         "property float x\nend_header\n\x01\x02";
   expectOneLineError("render --headless --coeff L00=1 --model " + f, f, "model");
 }
 
@@ -128,9 +129,11 @@ TEST(CliGl, RenderFromCoefficientFileMatchesRenderFromEnvironment) {
   const std::string json = tmp / "uffizi.json", a = tmp / "a.png", b = tmp / "b.png";
   auto r = lpt::runLiveprobe("coeffs " + env + " > " + json);
   ASSERT_EQ(r.exitCode, 0) << r.output;
-  r = lpt::runLiveprobe("render --headless --coeffs " + json + " --size 160x120 --exposure 2 --out " + a);
+  r = lpt::runLiveprobe("render --headless --coeffs " + json +
+                        " --size 160x120 --exposure 2 --out " + a);
   ASSERT_EQ(r.exitCode, 0) << r.output;
-  r = lpt::runLiveprobe("render --headless --env " + env + " --no-background --size 160x120 --exposure 2 --out " + b);
+  r = lpt::runLiveprobe("render --headless --env " + env +
+                        " --no-background --size 160x120 --exposure 2 --out " + b);
   ASSERT_EQ(r.exitCode, 0) << r.output;
   const cv::Mat x = cv::imread(a), y = cv::imread(b);
   ASSERT_EQ(x.size(), y.size());

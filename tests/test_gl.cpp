@@ -3,10 +3,9 @@
 
 #include <cmath>
 #include <filesystem>
+#include <glm/gtc/matrix_transform.hpp>
 #include <numbers>
 #include <random>
-
-#include <glm/gtc/matrix_transform.hpp>
 
 #include "capture/image.h"
 #include "scene.h"
@@ -125,13 +124,15 @@ class SingleCoefficient : public GlTest, public ::testing::WithParamInterface<co
 
 TEST_P(SingleCoefficient, PaperFigures) {
   const std::string model = GetParam();
-  lp::Mesh mesh = model == "sphere" ? lp::makeUvSphere() : lp::loadMesh(lpt::dataPath("models/" + model));
+  lp::Mesh mesh =
+      model == "sphere" ? lp::makeUvSphere() : lp::loadMesh(lpt::dataPath("models/" + model));
   lp::fitToUnitSphere(mesh);
   mesh.albedo = glm::vec3(1.0f);
   lp::gl::Renderer r;
   r.setMesh(mesh);
   lp::gl::Camera cam;
-  const Single figs[] = {{"L00", "L00=0.5"}, {"L10", "L10=0.05"}, {"L20", "L20=-0.2"}, {"L22", "L22=-0.06"}};
+  const Single figs[] = {
+      {"L00", "L00=0.5"}, {"L10", "L10=0.05"}, {"L20", "L20=-0.2"}, {"L22", "L22=-0.06"}};
   const auto normals = pass(r, cam, OutputMode::Normal);
   for (const auto& f : figs) {
     Sh9 L;
@@ -163,25 +164,31 @@ TEST_P(SingleCoefficient, PaperFigures) {
     if (name == "L00") {
       float lo = 1, hi = 0;
       for (int i = 0; i < kSize * kSize; ++i)
-        if (normals[4 * i + 3] != 0 && glm::length(glm::vec3(normals[4 * i], normals[4 * i + 1], normals[4 * i + 2])) > 0.5f)
+        if (normals[4 * i + 3] != 0 &&
+            glm::length(glm::vec3(normals[4 * i], normals[4 * i + 1], normals[4 * i + 2])) > 0.5f)
           lo = std::min(lo, img[4 * i]), hi = std::max(hi, img[4 * i]);
       EXPECT_LT(hi - lo, 1.5f / 255) << "L00 must be uniform on " << model;
       EXPECT_GT(lo, 0.5f);
     } else if (name == "L10") {  // brighter at the top (+z) than at the bottom
       EXPECT_GT(meanWhere([](glm::vec3 n) { return n.z > 0.5f; }),
-                meanWhere([](glm::vec3 n) { return n.z < -0.5f; }) + 0.3) << model;
+                meanWhere([](glm::vec3 n) { return n.z < -0.5f; }) + 0.3)
+          << model;
     } else if (name == "L20") {  // negative: darker at the poles than at the equator
       EXPECT_LT(meanWhere([](glm::vec3 n) { return std::abs(n.z) > 0.8f; }) + 0.2,
-                meanWhere([](glm::vec3 n) { return std::abs(n.z) < 0.3f; })) << model;
+                meanWhere([](glm::vec3 n) { return std::abs(n.z) < 0.3f; }))
+          << model;
     } else {  // L22 < 0: the x^2 - y^2 pattern, bright towards +-y, dark towards +-x
       EXPECT_GT(meanWhere([](glm::vec3 n) { return std::abs(n.y) > 0.7f; }),
-                meanWhere([](glm::vec3 n) { return std::abs(n.x) > 0.7f; }) + 0.2) << model;
+                meanWhere([](glm::vec3 n) { return std::abs(n.x) > 0.7f; }) + 0.2)
+          << model;
     }
   }
 }
 
-INSTANTIATE_TEST_SUITE_P(Models, SingleCoefficient, ::testing::Values("sphere", "stanford-bunny.obj"),
-                         [](const auto& info) { return std::string(info.param) == "sphere" ? "sphere" : "bunny"; });
+INSTANTIATE_TEST_SUITE_P(Models, SingleCoefficient,
+                         ::testing::Values("sphere", "stanford-bunny.obj"), [](const auto& info) {
+                           return std::string(info.param) == "sphere" ? "sphere" : "bunny";
+                         });
 
 // An equirect with one bright disc around world direction `dir`, dim grey elsewhere.
 lp::Image spotEnvironment(glm::vec3 dir) {
@@ -238,7 +245,8 @@ TEST_F(GlTest, LightComesFromTheSpotInTheBackground) {
       if (!sphereNormal(front, x, y, &n, 0.05f)) continue;
       if (e[4 * (y * kSize + x) + 1] > best) best = e[4 * (y * kSize + x) + 1], brightest = n;
     }
-  const float angle = glm::degrees(std::acos(std::min(1.0f, glm::dot(lp::axes::worldFromGl(brightest), seen))));
+  const float angle =
+      glm::degrees(std::acos(std::min(1.0f, glm::dot(lp::axes::worldFromGl(brightest), seen))));
   EXPECT_LT(angle, 3.0f) << "brightest point of the sphere vs the spot in the background";
 }
 

@@ -19,7 +19,8 @@ double sumSolidAngle(const std::vector<lp::SphereSample>& s) {
 }
 
 TEST(Layout, EquirectSolidAnglesSumTo4PiAtAnyAspect) {
-  for (auto [w, h] : {std::pair{300, 300}, std::pair{1024, 512}, std::pair{7, 3}, std::pair{1920, 1080}})
+  for (auto [w, h] :
+       {std::pair{300, 300}, std::pair{1024, 512}, std::pair{7, 3}, std::pair{1920, 1080}})
     EXPECT_NEAR(sumSolidAngle(lp::layoutSamples(lp::Layout::Equirect, w, h)), 4 * kPi, 1e-4)
         << w << "x" << h;
 }
@@ -70,9 +71,9 @@ TEST(Layout, AngularDirections) {
   const glm::vec3 centre = dirAt(0.0, 0.0), top = dirAt(0.0, 0.5), right = dirAt(0.5, 0.0),
                   back = dirAt(0.0, 0.995);
   EXPECT_LT(centre.x, -0.999f);
-  EXPECT_GT(top.z, 0.99f);    // r = 1/2 -> t = pi/2, straight up
+  EXPECT_GT(top.z, 0.99f);     // r = 1/2 -> t = pi/2, straight up
   EXPECT_LT(right.y, -0.99f);  // image right -> -y
-  EXPECT_GT(back.x, 0.99f);   // the rim is the direction behind the map's centre: +x
+  EXPECT_GT(back.x, 0.99f);    // the rim is the direction behind the map's centre: +x
   EXPECT_NEAR(glm::length(centre), 1.0f, 1e-6f);
 }
 
@@ -91,7 +92,8 @@ TEST(Layout, AngularAgreesWithEquirect) {
   // A smooth but not band-limited sky: sun-ish lobe plus gradient.
   auto radiance = [](glm::dvec3 d) {
     const glm::dvec3 sun = glm::normalize(glm::dvec3(-0.4, 0.3, 0.5));
-    return glm::dvec3(0.2 + 0.3 * std::max(0.0, d.z)) + glm::dvec3(4, 3, 2) * std::pow(std::max(0.0, glm::dot(d, sun)), 8.0);
+    return glm::dvec3(0.2 + 0.3 * std::max(0.0, d.z)) +
+           glm::dvec3(4, 3, 2) * std::pow(std::max(0.0, glm::dot(d, sun)), 8.0);
   };
   for (int i = 0; i < he; ++i)
     for (int j = 0; j < we; ++j) {

@@ -19,7 +19,8 @@ using glm::dvec3;
 dvec3 sampleEquirect(const lp::Image& eq, dvec3 d) {
   double p = std::atan2(d.y, d.x);
   if (p < 0) p += 2 * kPi;
-  const double x = p / (2 * kPi) * eq.width - 0.5, y = std::acos(std::clamp(d.z, -1.0, 1.0)) / kPi * eq.height - 0.5;
+  const double x = p / (2 * kPi) * eq.width - 0.5,
+               y = std::acos(std::clamp(d.z, -1.0, 1.0)) / kPi * eq.height - 0.5;
   const int x0 = int(std::floor(x)), y0 = std::clamp(int(std::floor(y)), 0, eq.height - 1);
   const int y1 = std::min(y0 + 1, eq.height - 1);
   const double ax = x - std::floor(x), ay = std::clamp(y - y0, 0.0, 1.0);
@@ -28,7 +29,8 @@ dvec3 sampleEquirect(const lp::Image& eq, dvec3 d) {
     const float* v = eq.pixel(xx, yy);
     return dvec3(v[0], v[1], v[2]);
   };
-  return (1 - ay) * ((1 - ax) * px(x0, y0) + ax * px(x0 + 1, y0)) + ay * ((1 - ax) * px(x0, y1) + ax * px(x0 + 1, y1));
+  return (1 - ay) * ((1 - ax) * px(x0, y0) + ax * px(x0 + 1, y0)) +
+         ay * ((1 - ax) * px(x0, y1) + ax * px(x0 + 1, y1));
 }
 
 // Fills a W x H image by asking `dirAt(x, y)` (pixel centre) for each pixel's world direction;
@@ -42,7 +44,8 @@ lp::Image resample(const lp::Image& eq, int w, int h, DirFn dirAt) {
       int n = 0;
       for (int a = 0; a < 4; ++a)
         for (int b = 0; b < 4; ++b)
-          if (auto d = dirAt(j + (b + 0.5) / 4, i + (a + 0.5) / 4)) sum += sampleEquirect(eq, *d), ++n;
+          if (auto d = dirAt(j + (b + 0.5) / 4, i + (a + 0.5) / 4))
+            sum += sampleEquirect(eq, *d), ++n;
       if (n) {
         sum /= double(n);
         float* p = out.pixel(j, i);
@@ -66,14 +69,18 @@ std::array<double, 3> bandNorms(const lp::Sh9& L, int ch) {
 void expectSameLighting(const lp::Sh9& ref, const lp::Sh9& got, const std::string& what) {
   for (int ch = 0; ch < 3; ++ch) {
     for (int k = 0; k < 9; ++k)
-      EXPECT_NEAR(got.c[k][ch], ref.c[k][ch], 0.01 * ref.c[0][ch]) << what << " " << lp::kShNames[k] << " ch " << ch;
+      EXPECT_NEAR(got.c[k][ch], ref.c[k][ch], 0.01 * ref.c[0][ch])
+          << what << " " << lp::kShNames[k] << " ch " << ch;
     const auto a = bandNorms(ref, ch), b = bandNorms(got, ch);
-    for (int l = 0; l < 3; ++l) EXPECT_NEAR(b[l], a[l], 0.01 * a[l]) << what << " band " << l << " ch " << ch;
+    for (int l = 0; l < 3; ++l)
+      EXPECT_NEAR(b[l], a[l], 0.01 * a[l]) << what << " band " << l << " ch " << ch;
   }
 }
 
 // Directions from the conventions in capture/layout.h, written out again.
-dvec3 lensLocal(double t, double p) { return {std::sin(t) * std::cos(p), std::sin(t) * std::sin(p), std::cos(t)}; }
+dvec3 lensLocal(double t, double p) {
+  return {std::sin(t) * std::cos(p), std::sin(t) * std::sin(p), std::cos(t)};
+}
 
 class EveryLayout : public ::testing::Test {
  protected:
@@ -113,7 +120,8 @@ TEST_F(EveryLayout, MirrorBall) {
 // OpenGL's face table, and the world = (Z, -X, Y) map of shading/axes.h.
 dvec3 glFace(int face, double s, double t) {
   const double sc = 2 * s - 1, tc = 2 * t - 1;
-  const dvec3 g[6] = {{1, -tc, -sc}, {-1, -tc, sc}, {sc, 1, tc}, {sc, -1, -tc}, {sc, -tc, 1}, {-sc, -tc, -1}};
+  const dvec3 g[6] = {{1, -tc, -sc}, {-1, -tc, sc}, {sc, 1, tc},
+                      {sc, -1, -tc}, {sc, -tc, 1},  {-sc, -tc, -1}};
   const dvec3 r = glm::normalize(g[face]);
   return {r.z, -r.x, r.y};
 }
@@ -124,7 +132,8 @@ TEST_F(EveryLayout, CubeCrosses) {
   const int hc[6][2] = {{2, 1}, {0, 1}, {1, 0}, {1, 2}, {1, 1}, {3, 1}};
   auto h = resample(eq_, 4 * n, 3 * n, [&](double x, double y) -> std::optional<dvec3> {
     for (int f = 0; f < 6; ++f)
-      if (int(x / n) == hc[f][0] && int(y / n) == hc[f][1]) return glFace(f, x / n - hc[f][0], y / n - hc[f][1]);
+      if (int(x / n) == hc[f][0] && int(y / n) == hc[f][1])
+        return glFace(f, x / n - hc[f][0], y / n - hc[f][1]);
     return std::nullopt;
   });
   expectSameLighting(ref_, project(h, lp::Layout::Cube), "horizontal cross");
@@ -148,7 +157,8 @@ TEST_F(EveryLayout, DualFisheye) {
     const double half = glm::radians(double(fov)) / 2, R = h / 2.0;
     auto img = resample(eq_, w, h, [&](double x, double y) -> std::optional<dvec3> {
       const bool front = x < w / 2.0;
-      const double u = (x - (front ? w / 4.0 : 3 * w / 4.0)) / R, v = (h / 2.0 - y) / R, r = std::hypot(u, v);
+      const double u = (x - (front ? w / 4.0 : 3 * w / 4.0)) / R, v = (h / 2.0 - y) / R,
+                   r = std::hypot(u, v);
       if (r > 1) return std::nullopt;
       const dvec3 l = lensLocal(r * half, std::atan2(v, u));  // (right, up, forward)
       return front ? dvec3(-l.z, -l.x, l.y) : dvec3(l.z, l.x, l.y);
@@ -176,14 +186,16 @@ TEST(CubeFaces, PisaFacesMatchPisaLatlong) {
   for (int ch = 0; ch < 3; ++ch) {
     const auto na = bandNorms(a, ch), nb = bandNorms(b, ch);
     for (int l = 1; l < 3; ++l)
-      EXPECT_NEAR(nb[l] / nb[0], na[l] / na[0], 0.1 * na[l] / na[0]) << "band " << l << " ch " << ch;
+      EXPECT_NEAR(nb[l] / nb[0], na[l] / na[0], 0.1 * na[l] / na[0])
+          << "band " << l << " ch " << ch;
   }
 }
 
 TEST(Layouts, RejectFramesThatDoNotFit) {
   EXPECT_NE(lp::layoutMismatch(lp::Layout::Cube, 1000, 500).find("4:3"), std::string::npos);
   EXPECT_NE(lp::layoutMismatch(lp::Layout::DualFisheye, 1000, 1000).find("2:1"), std::string::npos);
-  EXPECT_NE(lp::layoutMismatch(lp::Layout::MirrorBall, 640, 480).find("--circle"), std::string::npos);
+  EXPECT_NE(lp::layoutMismatch(lp::Layout::MirrorBall, 640, 480).find("--circle"),
+            std::string::npos);
   lp::LayoutSpec ball(lp::Layout::MirrorBall);
   ball.circle = {600, 240, 200};
   EXPECT_NE(lp::layoutMismatch(ball, 640, 480).find("does not fit"), std::string::npos);
@@ -194,8 +206,12 @@ TEST(Layouts, SolidAnglesAndInverse) {
   lp::LayoutSpec ball(lp::Layout::MirrorBall);
   ball.circle = {160, 120, 100};
   const std::vector<std::tuple<lp::LayoutSpec, int, int>> cases = {
-      {lp::Layout::Equirect, 256, 128}, {lp::Layout::Angular, 256, 256}, {ball, 320, 240},
-      {lp::Layout::Cube, 256, 192}, {lp::Layout::Cube, 192, 256}, {lp::Layout::DualFisheye, 512, 256}};
+      {lp::Layout::Equirect, 256, 128},
+      {lp::Layout::Angular, 256, 256},
+      {ball, 320, 240},
+      {lp::Layout::Cube, 256, 192},
+      {lp::Layout::Cube, 192, 256},
+      {lp::Layout::DualFisheye, 512, 256}};
   for (const auto& [spec, w, h] : cases) {
     const auto s = lp::layoutSamples(spec, w, h);
     double total = 0;

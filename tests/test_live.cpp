@@ -5,11 +5,10 @@
 #include <chrono>
 #include <cmath>
 #include <fstream>
-#include <regex>
-
 #include <nlohmann/json.hpp>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/videoio.hpp>
+#include <regex>
 
 #include "capture/frame.h"
 #include "capture/image.h"
@@ -39,13 +38,16 @@ void makeModes(const fs::path& dir, const std::vector<std::string>& modes) {
 struct Emulator {
   lpt::TempDir tmp;
   std::string faults;
-  explicit Emulator(const std::vector<std::string>& modes, std::string f = "") : faults(std::move(f)) {
+  explicit Emulator(const std::vector<std::string>& modes, std::string f = "")
+      : faults(std::move(f)) {
     makeModes(tmp.path / "modes", modes);
   }
   std::string log() const { return tmp / "emu.log"; }
   lpt::RunResult run(const std::string& args) const {
-    const std::string env = "LD_PRELOAD=" + std::string(LIVEPROBE_EMU) + " LPEMU_DEVICE=/dev/video7 LPEMU_SOURCE=" +
-                            (tmp.path / "modes").string() + " LPEMU_LOG=" + log() + " LPEMU_FAULTS=" + faults + " ";
+    const std::string env =
+        "LD_PRELOAD=" + std::string(LIVEPROBE_EMU) +
+        " LPEMU_DEVICE=/dev/video7 LPEMU_SOURCE=" + (tmp.path / "modes").string() +
+        " LPEMU_LOG=" + log() + " LPEMU_FAULTS=" + faults + " ";
     return lpt::runCommand(env + LIVEPROBE_BIN + " " + args);
   }
   std::string logText() const {
@@ -57,7 +59,9 @@ struct Emulator {
   // the mappings are ours to undo.)
   void expectNoLeak(bool unplugged = false) const {
     const std::string l = logText();
-    EXPECT_NE(l.find(unplugged ? "close mapped=0" : "close mapped=0 buffers=0 streaming=0"), std::string::npos) << l;
+    EXPECT_NE(l.find(unplugged ? "close mapped=0" : "close mapped=0 buffers=0 streaming=0"),
+              std::string::npos)
+        << l;
   }
 };
 
@@ -73,20 +77,26 @@ const std::string kReplay = " --headless --size 64x36 --no-background ";
 
 // A full session per format: the coefficients of every frame equal those of the same frames read
 // from the files by the replay pipeline, once divided by the camera's exposure time (live
-// coefficients are radiance per second; the emulated camera's auto exposure settles at 33.3 ms). MJPEG frames are the files' own JPEG bytes, so they agree
-// to float rounding; YUYV and NV12 carry the frames through 4:2:2 / 4:2:0 chroma and 8-bit YUV,
-// which moves a coefficient by at most ~0.5% of L00 (tolerance 1%).
+// coefficients are radiance per second; the emulated camera's auto exposure settles at 33.3 ms).
+// MJPEG frames are the files' own JPEG bytes, so they agree to float rounding; YUYV and NV12 carry
+// the frames through 4:2:2 / 4:2:0 chroma and 8-bit YUV, which moves a coefficient by at most ~0.5%
+// of L00 (tolerance 1%).
 TEST(Live, FullSessionInEveryFormat) {
   Emulator emu({"MJPG_640x320", "YUYV_640x320", "YUYV_320x160", "NV12_640x320"});
   const std::vector<std::tuple<std::string, std::string, double>> cases = {
-      {"mjpeg", "640x320", 1e-5}, {"yuyv", "640x320", 0.01}, {"yuyv", "320x160", 0.01}, {"nv12", "640x320", 0.01}};
+      {"mjpeg", "640x320", 1e-5},
+      {"yuyv", "640x320", 0.01},
+      {"yuyv", "320x160", 0.01},
+      {"nv12", "640x320", 0.01}};
   for (const auto& [fmt, size, tol] : cases) {
-    const std::string live = emu.tmp / ("live_" + fmt + size + ".jsonl"), ref = emu.tmp / ("ref_" + fmt + size + ".jsonl");
-    auto r = emu.run("live /dev/video7 --format " + fmt + " --size " + size + " --frames " + std::to_string(kFrames) +
-                     kCommon + "--coeffs-out " + live);
+    const std::string live = emu.tmp / ("live_" + fmt + size + ".jsonl"),
+                      ref = emu.tmp / ("ref_" + fmt + size + ".jsonl");
+    auto r = emu.run("live /dev/video7 --format " + fmt + " --size " + size + " --frames " +
+                     std::to_string(kFrames) + kCommon + "--coeffs-out " + live);
     ASSERT_EQ(r.exitCode, 0) << r.output;
     std::string folder = fmt == "mjpeg" ? "MJPG_" : fmt == "yuyv" ? "YUYV_" : "NV12_";
-    r = lpt::runLiveprobe("replay " + (emu.tmp.path / "modes" / (folder + size)).string() + kReplay + "--coeffs-out " + ref);
+    r = lpt::runLiveprobe("replay " + (emu.tmp.path / "modes" / (folder + size)).string() +
+                          kReplay + "--coeffs-out " + ref);
     ASSERT_EQ(r.exitCode, 0) << r.output;
     const auto a = readJsonl(live), b = readJsonl(ref);
     ASSERT_EQ(a.size(), std::size_t(kFrames)) << fmt << " " << size;
@@ -107,7 +117,8 @@ TEST(Live, FullSessionInEveryFormat) {
   emu.expectNoLeak();
 }
 
-void expectFault(const Emulator& emu, const std::string& args, const std::string& says, double maxSeconds = 5) {
+void expectFault(const Emulator& emu, const std::string& args, const std::string& says,
+                 double maxSeconds = 5) {
   const auto t0 = std::chrono::steady_clock::now();
   const auto r = emu.run("live /dev/video7" + kCommon + args);
   const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
@@ -115,7 +126,8 @@ void expectFault(const Emulator& emu, const std::string& args, const std::string
   // The error is one line; before it at most the camera's description and "recorded N frames".
   EXPECT_LE(lpt::lineCount(r.output), 3) << r.output;
   const std::string last = r.output.substr(r.output.rfind('\n', r.output.size() - 2) + 1);
-  EXPECT_NE(last.find(says), std::string::npos) << "the last line should say what went wrong: " << r.output;
+  EXPECT_NE(last.find(says), std::string::npos)
+      << "the last line should say what went wrong: " << r.output;
   EXPECT_NE(r.output.find("/dev/video7"), std::string::npos) << r.output;
   EXPECT_NE(r.output.find(says), std::string::npos) << r.output;
   EXPECT_LT(s, maxSeconds) << "took too long: " << r.output;
@@ -189,12 +201,19 @@ TEST(Live, LockExposureOrder) {
   EXPECT_EQ(flag.exitCode, 0) << flag.output;
   EXPECT_NE(flag.output.find("locked after 2.0 s"), std::string::npos) << flag.output;
   ASSERT_EQ(r.exitCode, 0) << r.output;
-  EXPECT_NE(r.output.find("exposure 333 x 100 us, gain 96, white balance 5200 K"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("exposure 333 x 100 us, gain 96, white balance 5200 K"),
+            std::string::npos)
+      << r.output;
   const std::string l = emu.logText();
-  const std::vector<std::string> order = {
-      "S_CTRL Auto Exposure 3",   "S_CTRL Gain, Automatic 1",    "S_CTRL White Balance, Automatic 1",
-      "S_CTRL Auto Exposure 1",   "S_CTRL Exposure Time, Absolute 333\n", "S_CTRL Gain, Automatic 0",
-      "S_CTRL Gain 96\n",         "S_CTRL White Balance, Automatic 0", "S_CTRL White Balance Temperature 5200\n"};
+  const std::vector<std::string> order = {"S_CTRL Auto Exposure 3",
+                                          "S_CTRL Gain, Automatic 1",
+                                          "S_CTRL White Balance, Automatic 1",
+                                          "S_CTRL Auto Exposure 1",
+                                          "S_CTRL Exposure Time, Absolute 333\n",
+                                          "S_CTRL Gain, Automatic 0",
+                                          "S_CTRL Gain 96\n",
+                                          "S_CTRL White Balance, Automatic 0",
+                                          "S_CTRL White Balance Temperature 5200\n"};
   std::size_t at = 0;
   for (const auto& step : order) {
     const auto p = l.find(step, at);
@@ -208,8 +227,9 @@ TEST(Live, DevicesListsFormatsSizesRatesControls) {
   Emulator emu({"MJPG_640x320", "YUYV_320x160"});
   const auto r = emu.run("devices /dev/video7");
   ASSERT_EQ(r.exitCode, 0) << r.output;
-  for (const char* s : {"liveprobe emulated camera", "MJPG 640x320 @ 30 fps", "YUYV 320x160 @ 30 fps",
-                        "control Exposure Time, Absolute", "control White Balance Temperature"})
+  for (const char* s :
+       {"liveprobe emulated camera", "MJPG 640x320 @ 30 fps", "YUYV 320x160 @ 30 fps",
+        "control Exposure Time, Absolute", "control White Balance Temperature"})
     EXPECT_NE(r.output.find(s), std::string::npos) << s << "\n" << r.output;
 }
 

@@ -25,7 +25,8 @@ constexpr double kPi = std::numbers::pi;
 TEST(ShRotation, EqualsProjectingTheRotatedPanorama) {
   const lp::Image eq = lp::loadImage(lpt::dataPath("probes/latlong_full/grace_latlong.exr"));
   const lp::Sh9 L = lp::projectEquirect(eq.rgb.data(), eq.width, eq.height);
-  for (auto [y, p, r] : {std::tuple{30.0f, 0.0f, 0.0f}, std::tuple{-70.0f, 25.0f, 10.0f}, std::tuple{120.0f, -40.0f, 75.0f}}) {
+  for (auto [y, p, r] : {std::tuple{30.0f, 0.0f, 0.0f}, std::tuple{-70.0f, 25.0f, 10.0f},
+                         std::tuple{120.0f, -40.0f, 75.0f}}) {
     const glm::mat3 R = lp::rotationYawPitchRoll(y, p, r);
     const glm::mat3 Rt = glm::transpose(R);
     // Rotated panorama: L'(w) = L(R^T w), nearest-neighbour lookups at 4x4 sub-pixel points.
@@ -35,13 +36,16 @@ TEST(ShRotation, EqualsProjectingTheRotatedPanorama) {
         glm::dvec3 acc(0);
         for (int a = 0; a < 4; ++a)
           for (int b = 0; b < 4; ++b) {
-            const double t = kPi * (i + (a + 0.5) / 4) / rot.height, ph = 2 * kPi * (j + (b + 0.5) / 4) / rot.width;
+            const double t = kPi * (i + (a + 0.5) / 4) / rot.height,
+                         ph = 2 * kPi * (j + (b + 0.5) / 4) / rot.width;
             const glm::vec3 w(std::sin(t) * std::cos(ph), std::sin(t) * std::sin(ph), std::cos(t));
             const glm::vec3 s = Rt * w;
             double sp = std::atan2(s.y, s.x);
             if (sp < 0) sp += 2 * kPi;
             const int sx = std::min(eq.width - 1, int(sp / (2 * kPi) * eq.width));
-            const int sy = std::min(eq.height - 1, int(std::acos(std::clamp(double(s.z), -1.0, 1.0)) / kPi * eq.height));
+            const int sy =
+                std::min(eq.height - 1,
+                         int(std::acos(std::clamp(double(s.z), -1.0, 1.0)) / kPi * eq.height));
             const float* v = eq.pixel(sx, sy);
             acc += glm::dvec3(v[0], v[1], v[2]);
           }
@@ -103,7 +107,8 @@ TEST(Handoff, SlowRendererDoesNotBlockCapture) {
   EXPECT_LE(taken, 25);
   EXPECT_GE(st.dropped, 170u);
   EXPECT_EQ(st.taken, std::size_t(taken));
-  EXPECT_LE(st.captured - st.dropped - st.taken, 1u);  // at most the last frame is still in the slot
+  EXPECT_LE(st.captured - st.dropped - st.taken,
+            1u);  // at most the last frame is still in the slot
 }
 
 // Handoff::Every hands over every frame, in order.
@@ -221,7 +226,8 @@ TEST(Accuracy, FourKFrameAgainstFloat64) {
     const lp::Sh9 L = proj.project(sky.data(), 0, pool);
     for (int k = 0; k < 9; ++k)
       for (int c = 0; c < 3; ++c)
-        EXPECT_NEAR(L.c[k][c], ref[3 * k + c], 1e-4 * ref[c]) << lp::kShNames[k] << " threads " << (pool ? 2 : 1);
+        EXPECT_NEAR(L.c[k][c], ref[3 * k + c], 1e-4 * ref[c])
+            << lp::kShNames[k] << " threads " << (pool ? 2 : 1);
   }
   double naiveErr = 0;
   for (int c = 0; c < 3; ++c) naiveErr = std::max(naiveErr, std::abs(naive[c] - ref[c]) / ref[c]);
@@ -242,7 +248,8 @@ TEST(Accuracy, EightBitAndHalfInputs) {
   lin.convert(f, img);
   for (lp::Layout layout : {lp::Layout::Equirect, lp::Layout::DualFisheye}) {
     const lp::Projector proj(layout, w, h);
-    const lp::Sh9 a = proj.project(img.rgb.data()), b = proj.projectBgr8(bgr.data(), lin.table().data());
+    const lp::Sh9 a = proj.project(img.rgb.data()),
+                  b = proj.projectBgr8(bgr.data(), lin.table().data());
     for (int k = 0; k < 9; ++k) EXPECT_NEAR(a.c[k].x, b.c[k].x, 1e-5 * a.c[0].x) << lp::kShNames[k];
   }
   // Half floats: values exactly representable in binary16.
@@ -254,7 +261,8 @@ TEST(Accuracy, EightBitAndHalfInputs) {
     back[i] = 1.0f + q / 1024.0f;
   }
   const lp::EquirectProjector ep(w, h);
-  const lp::Sh9 a = ep.project(back.data(), std::size_t(w) * 3), b = ep.projectHalf(half.data(), std::size_t(w) * 3);
+  const lp::Sh9 a = ep.project(back.data(), std::size_t(w) * 3),
+                b = ep.projectHalf(half.data(), std::size_t(w) * 3);
   for (int k = 0; k < 9; ++k) EXPECT_NEAR(a.c[k].y, b.c[k].y, 1e-6 * a.c[0].y) << lp::kShNames[k];
 }
 
@@ -274,8 +282,10 @@ TEST(Accuracy, ReducedResolutionErrorIsBounded) {
       const lp::Sh9 r = lp::projectEquirect(small.rgb.data(), small.width, small.height);
       double worst = 0;
       for (int k = 0; k < 9; ++k)
-        for (int c = 0; c < 3; ++c) worst = std::max(worst, double(std::abs(r.c[k][c] - full.c[k][c]) / full.c[0][c]));
-      std::cout << file << " reduced " << f << "x: worst coefficient change " << 100 * worst << "% of L00\n";
+        for (int c = 0; c < 3; ++c)
+          worst = std::max(worst, double(std::abs(r.c[k][c] - full.c[k][c]) / full.c[0][c]));
+      std::cout << file << " reduced " << f << "x: worst coefficient change " << 100 * worst
+                << "% of L00\n";
       if (f <= 4) {
         EXPECT_LT(worst, sun ? 0.02 : 1e-3) << file << " factor " << f;
       }

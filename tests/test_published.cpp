@@ -12,9 +12,9 @@
 namespace {
 
 // R&H Table: L00, L1-1, L10, L11, L2-2, L2-1, L20, L21, L22 (RGB).
-constexpr float kGrace[9][3] = {{.79f, .44f, .54f},    {.39f, .35f, .60f},   {-.34f, -.18f, -.27f},
+constexpr float kGrace[9][3] = {{.79f, .44f, .54f},    {.39f, .35f, .60f},    {-.34f, -.18f, -.27f},
                                 {-.29f, -.06f, .01f},  {-.11f, -.05f, -.12f}, {-.26f, -.22f, -.47f},
-                                {-.16f, -.09f, -.15f}, {.56f, .21f, .14f},   {.21f, -.05f, -.30f}};
+                                {-.16f, -.09f, -.15f}, {.56f, .21f, .14f},    {.21f, -.05f, -.30f}};
 
 std::array<double, 3> bandNorms(auto get) {
   std::array<double, 3> n{};
@@ -37,7 +37,9 @@ TEST(Published, GraceCathedral) {
   // 1.5% of the small bands. We require our norm within 2% of that interval, and report the
   // deviation from the printed value itself (green band 2 is 2.1% off the printed norm and
   // inside its rounding interval).
-  auto shrink = [](float v) { return v > 0 ? std::max(0.0f, v - 0.005f) : std::min(0.0f, v + 0.005f); };
+  auto shrink = [](float v) {
+    return v > 0 ? std::max(0.0f, v - 0.005f) : std::min(0.0f, v + 0.005f);
+  };
   auto grow = [](float v) { return v >= 0 ? v + 0.005f : v - 0.005f; };
   for (int ch = 0; ch < 3; ++ch) {
     const auto ours = bandNorms([&](int k) { return L.c[k][ch] / mean; });

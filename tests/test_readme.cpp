@@ -10,11 +10,10 @@
 
 #include <cmath>
 #include <fstream>
+#include <opencv2/imgcodecs.hpp>
 #include <regex>
 #include <set>
 #include <sstream>
-
-#include <opencv2/imgcodecs.hpp>
 
 #include "sky_frames.h"
 #include "test_util.h"
@@ -57,13 +56,16 @@ std::vector<Example> readmeExamples() {
     std::smatch m;
     if (std::regex_search(full, m, std::regex(R"(#\s*exits (\d+))"))) e.exitCode = std::stoi(m[1]);
     e.endless = full.find("# runs until") != std::string::npos;
-    e.command = std::regex_replace(full, std::regex(R"(\s+#.*$)"), "");  // the comment is for the reader
+    e.command =
+        std::regex_replace(full, std::regex(R"(\s+#.*$)"), "");  // the comment is for the reader
     out.push_back(e);
   }
   return out;
 }
 
-void PrintTo(const Example& e, std::ostream* os) { *os << "README.md:" << e.line << ": " << e.command; }
+void PrintTo(const Example& e, std::ostream* os) {
+  *os << "README.md:" << e.line << ": " << e.command;
+}
 
 class ReadmeExample : public ::testing::TestWithParam<Example> {};
 
@@ -73,7 +75,8 @@ void makeCameraModes(const fs::path& dir) {
     const fs::path m = dir / ("MJPG_" + std::to_string(w) + "x" + std::to_string(h));
     fs::create_directories(m);
     for (int i = 0; i < 4; ++i)
-      ASSERT_TRUE(cv::imwrite((m / (std::to_string(i) + ".jpg")).string(), lpt::skyFrame8(w, h, i * 0.3)));
+      ASSERT_TRUE(
+          cv::imwrite((m / (std::to_string(i) + ".jpg")).string(), lpt::skyFrame8(w, h, i * 0.3)));
   }
 }
 
@@ -97,16 +100,19 @@ TEST_P(ReadmeExample, RunsAsWritten) {
     env += "export LD_PRELOAD=" + std::string(LIVEPROBE_EMU) + " LPEMU_DEVICE=" + m[1].str() +
            " LPEMU_SOURCE=" + (tmp.path / "modes").string() + "; ";
   }
-  const std::string run = e.endless
-      ? env + e.command + " & pid=$!; sleep 6; kill -0 $pid 2>/dev/null && echo still-running; kill -INT $pid; wait $pid; echo rc=$?"
-      : env + e.command + "\necho rc=$?";
-  const std::string cmd = "cd " + lpt::shellQuote(work.string()) + " && timeout -k 10 400 xvfb-run -a -s '-screen 0 1600x1000x24' bash -c " +
+  const std::string run = e.endless ? env + e.command +
+                                          " & pid=$!; sleep 6; kill -0 $pid 2>/dev/null && echo "
+                                          "still-running; kill -INT $pid; wait $pid; echo rc=$?"
+                                    : env + e.command + "\necho rc=$?";
+  const std::string cmd = "cd " + lpt::shellQuote(work.string()) +
+                          " && timeout -k 10 400 xvfb-run -a -s '-screen 0 1600x1000x24' bash -c " +
                           lpt::shellQuote(run);
   const std::string out = lpt::runCommand(cmd).output;
   const std::string where = "README.md:" + std::to_string(e.line) + ": " + e.command + "\n" + out;
   ASSERT_TRUE(std::regex_search(out, m, std::regex(R"(rc=(\d+))"))) << where;
   if (e.endless) {
-    EXPECT_NE(out.find("still-running"), std::string::npos) << "ended before it was stopped: " << where;
+    EXPECT_NE(out.find("still-running"), std::string::npos)
+        << "ended before it was stopped: " << where;
     EXPECT_EQ(std::stoi(m[1]), 130) << "no clean stop on SIGINT: " << where;
   } else {
     EXPECT_EQ(std::stoi(m[1]), e.exitCode) << where;
@@ -131,7 +137,8 @@ TEST(Readme, EveryCommandHasAnExample) {
     std::istringstream(e.command) >> word >> word;
     seen.insert(word);
   }
-  for (const char* c : {"coeffs", "irradiance", "compare", "render", "view", "replay", "record", "live", "devices", "bench"})
+  for (const char* c : {"coeffs", "irradiance", "compare", "render", "view", "replay", "record",
+                        "live", "devices", "bench"})
     EXPECT_TRUE(seen.count(c)) << "README.md has no example of liveprobe " << c;
 }
 

@@ -4,13 +4,12 @@
 
 #include <cmath>
 #include <fstream>
+#include <nlohmann/json.hpp>
 #include <numbers>
+#include <opencv2/videoio.hpp>
 #include <random>
 #include <regex>
 #include <thread>
-
-#include <nlohmann/json.hpp>
-#include <opencv2/videoio.hpp>
 
 #include "shading/sh.h"
 #include "test_util.h"
@@ -71,7 +70,8 @@ TEST(ReplayCli, RealVideoCheckedFrameByFrame) {
   lpt::TempDir tmp;
   const std::string video = lpt::dataPath("video/pano.mp4");
   const std::string out = tmp / "c.jsonl";
-  const auto r = runLiveprobe("replay " + video + " --headless --coeffs-out " + out + " --size 64x36");
+  const auto r =
+      runLiveprobe("replay " + video + " --headless --coeffs-out " + out + " --size 64x36");
   ASSERT_EQ(r.exitCode, 0) << r.output;
   const auto lines = readJsonl(out);
   cv::VideoCapture cap(video, cv::CAP_FFMPEG);
@@ -93,7 +93,8 @@ TEST(ReplayCli, RealVideoCheckedFrameByFrame) {
     if (i > 0) {
       EXPECT_GT(j["time"].get<double>(), lines[i - 1]["time"].get<double>());
     }
-    for (const char* key : {"grab", "convert", "project", "render"}) EXPECT_TRUE(j["timings_ms"][key].is_number());
+    for (const char* key : {"grab", "convert", "project", "render"})
+      EXPECT_TRUE(j["timings_ms"][key].is_number());
     for (int k = 0; k < 9; ++k)
       for (int c = 0; c < 3; ++c) {
         const double got = j["coefficients"][std::string(lp::kShNames[k])][c].get<double>();
@@ -102,7 +103,8 @@ TEST(ReplayCli, RealVideoCheckedFrameByFrame) {
         ASSERT_LT(diff, 1e-4) << "frame " << i << " " << lp::kShNames[k] << " ch " << c;
       }
   }
-  std::cout << "worst |coefficient - reference| / L00 over " << lines.size() << " frames: " << worst << "\n";
+  std::cout << "worst |coefficient - reference| / L00 over " << lines.size() << " frames: " << worst
+            << "\n";
 }
 
 // A copy of pano.mp4 with garbage written over two stretches in the middle.
@@ -123,7 +125,8 @@ TEST(ReplayCliBadInput, CorruptFramesAreSkippedAndCounted) {
   const auto r = runLiveprobe("replay " + f + " --headless --size 32x18 --coeffs-out " + out);
   ASSERT_EQ(r.exitCode, 0) << r.output;
   std::smatch m;
-  ASSERT_TRUE(std::regex_search(r.output, m, std::regex(R"((\d+) frames captured.*, (\d+) skipped \(corrupt\))")))
+  ASSERT_TRUE(std::regex_search(
+      r.output, m, std::regex(R"((\d+) frames captured.*, (\d+) skipped \(corrupt\))")))
       << r.output;
   const int captured = std::stoi(m[1]), skipped = std::stoi(m[2]);
   EXPECT_GT(skipped, 0);
@@ -141,7 +144,8 @@ TEST(ReplayCliBadInput, TruncatedVideoEndsCleanlyWithTheCount) {
   const auto r = runLiveprobe("replay " + f + " --headless --size 32x18 --coeffs-out " + out);
   ASSERT_EQ(r.exitCode, 0) << r.output;
   std::smatch m;
-  ASSERT_TRUE(std::regex_search(r.output, m, std::regex(R"(ended after (\d+) frames of (\d+))"))) << r.output;
+  ASSERT_TRUE(std::regex_search(r.output, m, std::regex(R"(ended after (\d+) frames of (\d+))")))
+      << r.output;
   EXPECT_LT(std::stoi(m[1]), std::stoi(m[2]));
   EXPECT_EQ(readJsonl(out).size(), std::size_t(std::stoi(m[1])));
   // An mp4 cut short loses its index (moov at the end): nothing can be read, one clear line.
@@ -155,7 +159,8 @@ TEST(ReplayCliBadInput, TruncatedVideoEndsCleanlyWithTheCount) {
 
 TEST(ReplayCliBadInput, LayoutThatDoesNotFitTheFrame) {
   const std::string v = lpt::dataPath("video/pano.mp4");
-  expectOneLineError("replay " + v + " --headless --layout angular --size 32x18", "pano.mp4", "must be square");
+  expectOneLineError("replay " + v + " --headless --layout angular --size 32x18", "pano.mp4",
+                     "must be square");
   expectOneLineError("replay " + v + " --headless --layout cube --size 32x18", "pano.mp4", "4:3");
   expectOneLineError("replay " + v + " --headless --layout mirrorball", "mirror ball", "--circle");
 }
@@ -163,7 +168,8 @@ TEST(ReplayCliBadInput, LayoutThatDoesNotFitTheFrame) {
 TEST(ReplayCliBadInput, NothingHalfWrittenOnFailure) {
   lpt::TempDir tmp;
   const std::string out = tmp / "c.jsonl";
-  const auto r = runLiveprobe("replay " + lpt::dataPath("video/pano.mp4") + " --headless --layout angular --coeffs-out " + out);
+  const auto r = runLiveprobe("replay " + lpt::dataPath("video/pano.mp4") +
+                              " --headless --layout angular --coeffs-out " + out);
   EXPECT_EQ(r.exitCode, 1);
   EXPECT_TRUE(std::filesystem::is_empty(tmp.path)) << "a partial output was left behind";
 }
@@ -176,7 +182,8 @@ TEST(ReplayCli, RecordThenReplayWithOutputs) {
   ASSERT_EQ(r.exitCode, 0) << r.output;
   ASSERT_TRUE(std::filesystem::exists(rec + ".json"));
   const std::string out = tmp / "c.jsonl", dir = tmp / "frames", vid = tmp / "render.avi";
-  r = runLiveprobe("replay " + rec + " --headless --size 64x48 --coeffs-out " + out + " --out-dir " + dir);
+  r = runLiveprobe("replay " + rec + " --headless --size 64x48 --coeffs-out " + out +
+                   " --out-dir " + dir);
   ASSERT_EQ(r.exitCode, 0) << r.output;
   EXPECT_EQ(readJsonl(out).size(), 15u);
   int pngs = 0;
@@ -201,7 +208,8 @@ TEST(ReplayCli, DefaultRecordingPlays) {
 
 TEST(ReplayCli, EveryLayoutOption) {
   // coeffs accepts every layout; six cube faces as a folder.
-  const auto r = runLiveprobe("coeffs " + lpt::dataPath("cube/pisaHDR") + " --layout cube --format text");
+  const auto r =
+      runLiveprobe("coeffs " + lpt::dataPath("cube/pisaHDR") + " --layout cube --format text");
   EXPECT_EQ(r.exitCode, 0) << r.output;
   EXPECT_NE(r.output.find("L22"), std::string::npos);
 }

@@ -255,7 +255,8 @@ TEST(ShCore, MinimumIrradianceDiagnostic) {
     for (int k = 1; k < 9; ++k) L.c[k] = {u(rng), u(rng), u(rng)};
     const lp::MinIrradiance mn = lp::minIrradiance(L);
     glm::vec3 dense(INFINITY);
-    for (int n = 0; n < 200000; ++n) dense = glm::min(dense, lp::evalIrradiance(L, randomUnit(rng)));
+    for (int n = 0; n < 200000; ++n)
+      dense = glm::min(dense, lp::evalIrradiance(L, randomUnit(rng)));
     for (int ch = 0; ch < 3; ++ch) {
       EXPECT_LE(mn.value[ch], dense[ch] + 1e-6f);
       EXPECT_GT(mn.value[ch], dense[ch] - 2e-3f);  // random search is coarser than the solver
@@ -284,7 +285,8 @@ TEST(ShCore, AutoWindowIsMildestNonNegative) {
   const lp::AutoWindow aw = lp::autoWindow(L);
   ASSERT_TRUE(std::isfinite(aw.width));
   EXPECT_GE(lp::minIrradiance(lp::applyWindow(L, aw.window)).minOfChannels(), -1e-6f);
-  EXPECT_LT(lp::minIrradiance(lp::applyWindow(L, lp::hannWindow(aw.width * 1.03f))).minOfChannels(), 0.0f);
+  EXPECT_LT(lp::minIrradiance(lp::applyWindow(L, lp::hannWindow(aw.width * 1.03f))).minOfChannels(),
+            0.0f);
   // A constant environment needs none.
   Sh9 c;
   c.c[0] = glm::vec3(1.0f);

@@ -13,8 +13,8 @@ namespace lpt {
 
 inline std::string dataPath(const std::string& rel) {
   const std::string p = std::string(LIVEPROBE_DATA_DIR) + "/" + rel;
-  EXPECT_TRUE(std::filesystem::exists(p)) << "test data missing: " << p
-                                          << " (set -DLIVEPROBE_DATA_DIR=...)";
+  EXPECT_TRUE(std::filesystem::exists(p))
+      << "test data missing: " << p << " (set -DLIVEPROBE_DATA_DIR=...)";
   return p;
 }
 
@@ -52,7 +52,9 @@ inline RunResult runCommand(const std::string& commandLine) {
 }
 
 /// Runs `liveprobe ARGS` through the shell, capturing output.
-inline RunResult runLiveprobe(const std::string& args) { return runCommand(std::string(LIVEPROBE_BIN) + " " + args); }
+inline RunResult runLiveprobe(const std::string& args) {
+  return runCommand(std::string(LIVEPROBE_BIN) + " " + args);
+}
 
 /// Single quotes for the shell.
 inline std::string shellQuote(const std::string& s) {

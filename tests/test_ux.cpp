@@ -5,12 +5,11 @@
 
 #include <cmath>
 #include <fstream>
-#include <regex>
-
 #include <nlohmann/json.hpp>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 #include <opencv2/videoio.hpp>
+#include <regex>
 
 #include "commands.h"
 #include "shading/sh.h"
@@ -24,7 +23,8 @@ using lpt::runLiveprobe;
 
 /// Runs a bash script line (the liveprobe binary is $LP), capturing stdout and stderr.
 lpt::RunResult runShell(const std::string& script) {
-  return lpt::runCommand("LP=" + lpt::shellQuote(LIVEPROBE_BIN) + " bash -c " + lpt::shellQuote(script));
+  return lpt::runCommand("LP=" + lpt::shellQuote(LIVEPROBE_BIN) + " bash -c " +
+                         lpt::shellQuote(script));
 }
 
 double meanAbsDiff(const cv::Mat& a, const cv::Mat& b) {
@@ -54,10 +54,12 @@ TEST(Hud, HeadlessHudIsDrawnAndNoHudIsNot) {
   EXPECT_LT(meanAbsDiff(plain(middle), hud(middle)), 0.5) << "the HUD must not cover the model";
 
   // replay: --hud draws it into the written frames, --no-hud (the headless default) does not.
-  const std::string src = "synthetic:128x64@30 --frames 3 --headless --msaa 1 --size 1280x720 --quiet --out-dir ";
+  const std::string src =
+      "synthetic:128x64@30 --frames 3 --headless --msaa 1 --size 1280x720 --quiet --out-dir ";
   ASSERT_EQ(runLiveprobe("replay " + src + tmp / "a --hud").exitCode, 0);
   ASSERT_EQ(runLiveprobe("replay " + src + tmp / "b --no-hud").exitCode, 0);
-  const cv::Mat a = cv::imread(tmp / "a/frame_000002.png"), b = cv::imread(tmp / "b/frame_000002.png");
+  const cv::Mat a = cv::imread(tmp / "a/frame_000002.png"),
+                b = cv::imread(tmp / "b/frame_000002.png");
   ASSERT_FALSE(a.empty());
   ASSERT_FALSE(b.empty());
   EXPECT_GT(meanAbsDiff(a(left), b(left)), 10);
@@ -75,14 +77,15 @@ TEST(Look, SingleCoefficientFiguresAreVisibleWithDefaults) {
     for (const char* value : {"0.2", "-0.2"}) {
       if (value[0] == '-' && name != "L20") continue;
       const std::string out = tmp / (std::string(name) + value + ".png");
-      const auto r = runLiveprobe("render --headless --size 160x120 --coeff " + std::string(name) + "=" + value +
-                                  " --out " + out);
+      const auto r = runLiveprobe("render --headless --size 160x120 --coeff " + std::string(name) +
+                                  "=" + value + " --out " + out);
       ASSERT_EQ(r.exitCode, 0) << r.output;
       const cv::Mat img = cv::imread(out, cv::IMREAD_GRAYSCALE);
       ASSERT_FALSE(img.empty());
       double hi = 0;
       cv::minMaxLoc(img, nullptr, &hi);
-      EXPECT_GT(hi, 127.5) << name << "=" << value << ": brightest pixel " << hi << " is below 50% grey";
+      EXPECT_GT(hi, 127.5) << name << "=" << value << ": brightest pixel " << hi
+                           << " is below 50% grey";
     }
   }
 }
@@ -95,31 +98,39 @@ TEST(Look, EightBitBackgroundIsShownAsTheSourceLooks) {
   const int w = 512, h = 256;
   cv::Mat src(h, w, CV_8UC3);
   for (int y = 0; y < h; ++y)
-    for (int x = 0; x < w; ++x) src.at<cv::Vec3b>(y, x) = cv::Vec3b(std::uint8_t(40 + y * 150 / h), 90, std::uint8_t(30 + x * 200 / w));
+    for (int x = 0; x < w; ++x)
+      src.at<cv::Vec3b>(y, x) =
+          cv::Vec3b(std::uint8_t(40 + y * 150 / h), 90, std::uint8_t(30 + x * 200 / w));
   ASSERT_TRUE(cv::imwrite(tmp / "pano.png", src));
   const int W = 480, H = 270;
   // A screen pixel right of the model, on the horizon row: its world direction (shading/axes.h),
   // then its equirect pixel (shading/sh.h).
   const int sx = 440, sy = 135;
   const float tanHalf = std::tan(glm::radians(20.0f)), aspect = float(W) / H;
-  const glm::vec3 g = glm::normalize(glm::vec3((2 * (sx + 0.5f) / W - 1) * tanHalf * aspect, (1 - 2 * (sy + 0.5f) / H) * tanHalf, -1));
+  const glm::vec3 g = glm::normalize(glm::vec3((2 * (sx + 0.5f) / W - 1) * tanHalf * aspect,
+                                               (1 - 2 * (sy + 0.5f) / H) * tanHalf, -1));
   const glm::vec3 d(g.z, -g.x, g.y);
-  const float t = std::acos(d.z), p = std::fmod(std::atan2(d.y, d.x) + 2 * float(M_PI), 2 * float(M_PI));
+  const float t = std::acos(d.z),
+              p = std::fmod(std::atan2(d.y, d.x) + 2 * float(M_PI), 2 * float(M_PI));
   const cv::Vec3b want = src.at<cv::Vec3b>(int(t / M_PI * h), int(p / (2 * M_PI) * w));
   for (const char* cmd : {"replay", "render"}) {
     const std::string args = std::string(cmd) + " --headless --msaa 1 --size 480x270 " +
-                             (std::string(cmd) == "replay" ? tmp / "pano.png" + " --frames 1 --quiet --out-dir " + tmp / "r"
-                                                           : "--env " + tmp / "pano.png" + " --out " + tmp / "r.png");
+                             (std::string(cmd) == "replay"
+                                  ? tmp / "pano.png" + " --frames 1 --quiet --out-dir " + tmp / "r"
+                                  : "--env " + tmp / "pano.png" + " --out " + tmp / "r.png");
     const auto r = runLiveprobe(args);
     ASSERT_EQ(r.exitCode, 0) << r.output;
-    const cv::Mat img = cv::imread(std::string(cmd) == "replay" ? tmp / "r/frame_000000.png" : tmp / "r.png");
+    const cv::Mat img =
+        cv::imread(std::string(cmd) == "replay" ? tmp / "r/frame_000000.png" : tmp / "r.png");
     ASSERT_FALSE(img.empty());
     const cv::Vec3b got = img.at<cv::Vec3b>(sy, sx);
     for (int c = 0; c < 3; ++c) EXPECT_NEAR(got[c], want[c], 4) << cmd << ": channel " << c;
     const auto tm = runLiveprobe(args + " --tonemap-background");
     ASSERT_EQ(tm.exitCode, 0) << tm.output;
-    const cv::Mat img2 = cv::imread(std::string(cmd) == "replay" ? tmp / "r/frame_000000.png" : tmp / "r.png");
-    EXPECT_GT(cv::norm(cv::Vec3d(img2.at<cv::Vec3b>(sy, sx)) - cv::Vec3d(want)), 10) << cmd << ": not tone-mapped";
+    const cv::Mat img2 =
+        cv::imread(std::string(cmd) == "replay" ? tmp / "r/frame_000000.png" : tmp / "r.png");
+    EXPECT_GT(cv::norm(cv::Vec3d(img2.at<cv::Vec3b>(sy, sx)) - cv::Vec3d(want)), 10)
+        << cmd << ": not tone-mapped";
   }
 }
 
@@ -137,7 +148,9 @@ void writeSpotMap(const std::string& path, glm::vec3 f) {
       const double t = M_PI * (y + 0.5) / h, p = 2 * M_PI * (x + 0.5) / w;
       const glm::dvec3 d(std::sin(t) * std::cos(p), std::sin(t) * std::sin(p), std::cos(t));
       const double a = std::acos(std::clamp(glm::dot(d, glm::dvec3(f)), -1.0, 1.0));
-      if (a < 4 * sigma) m.at<cv::Vec3f>(y, x) += cv::Vec3f::all(float(3000 * std::exp(-0.5 * a * a / (sigma * sigma))));
+      if (a < 4 * sigma)
+        m.at<cv::Vec3f>(y, x) +=
+            cv::Vec3f::all(float(3000 * std::exp(-0.5 * a * a / (sigma * sigma))));
     }
   ASSERT_TRUE(cv::imwrite(path, m));
 }
@@ -149,7 +162,8 @@ cv::Point2d brightest(const cv::Mat& gray, const cv::Mat& mask) {
   double sx = 0, sy = 0, n = 0;
   for (int y = 0; y < gray.rows; ++y)
     for (int x = 0; x < gray.cols; ++x)
-      if (mask.at<std::uint8_t>(y, x) && gray.at<std::uint8_t>(y, x) >= 0.98 * hi) sx += x, sy += y, n += 1;
+      if (mask.at<std::uint8_t>(y, x) && gray.at<std::uint8_t>(y, x) >= 0.98 * hi)
+        sx += x, sy += y, n += 1;
   return {sx / std::max(n, 1.0), sy / std::max(n, 1.0)};
 }
 
@@ -160,35 +174,43 @@ cv::Point2d brightest(const cv::Mat& gray, const cv::Mat& mask) {
 TEST(Orientation, EnvRotateTurnsLightingAndBackgroundTogether) {
   lpt::TempDir tmp;
   const int W = 480, H = 270;
-  const glm::vec3 gl = glm::normalize(glm::vec3(0.45f, 0.25f, -1.0f));  // right of and above straight ahead, clear of the sphere
-  const glm::vec3 world(gl.z, -gl.x, gl.y);                           // shading/axes.h
+  const glm::vec3 gl = glm::normalize(
+      glm::vec3(0.45f, 0.25f, -1.0f));  // right of and above straight ahead, clear of the sphere
+  const glm::vec3 world(gl.z, -gl.x, gl.y);  // shading/axes.h
   const float tanHalf = std::tan(glm::radians(20.0f)), aspect = float(W) / H;
-  const cv::Point2d expected(W / 2.0 * (1 + gl.x / -gl.z / (tanHalf * aspect)), H / 2.0 * (1 - gl.y / -gl.z / tanHalf));
+  const cv::Point2d expected(W / 2.0 * (1 + gl.x / -gl.z / (tanHalf * aspect)),
+                             H / 2.0 * (1 - gl.y / -gl.z / tanHalf));
   struct Case {
     float yaw, pitch, roll;
     bool flip;
   };
-  for (const Case c : {Case{0, 0, 0, false}, Case{90, 0, 0, false}, Case{30, 20, 10, false}, Case{-45, -10, 0, true}}) {
+  for (const Case c : {Case{0, 0, 0, false}, Case{90, 0, 0, false}, Case{30, 20, 10, false},
+                       Case{-45, -10, 0, true}}) {
     glm::mat3 o = lp::rotationYawPitchRoll(c.yaw, c.pitch, c.roll);
     if (c.flip) o = o * glm::mat3(glm::vec3(1, 0, 0), glm::vec3(0, 1, 0), glm::vec3(0, 0, -1));
     const glm::vec3 f = glm::transpose(o) * world;  // O is orthogonal
     const std::string map = tmp / "spot.hdr";
     writeSpotMap(map, f);
     char rot[96];
-    std::snprintf(rot, sizeof rot, " --env-rotate=%g,%g,%g%s", c.yaw, c.pitch, c.roll, c.flip ? " --env-flip" : "");
+    std::snprintf(rot, sizeof rot, " --env-rotate=%g,%g,%g%s", c.yaw, c.pitch, c.roll,
+                  c.flip ? " --env-flip" : "");
     const std::string args = "render --headless --msaa 1 --size 480x270 --env " + map + rot;
     ASSERT_EQ(runLiveprobe(args + " --out " + tmp / "bg.png").exitCode, 0);
     const auto r = runLiveprobe(args + " --no-background --out " + tmp / "model.png");
     ASSERT_EQ(r.exitCode, 0) << r.output;
-    const cv::Mat bg = cv::imread(tmp / "bg.png", cv::IMREAD_GRAYSCALE), model = cv::imread(tmp / "model.png", cv::IMREAD_GRAYSCALE);
+    const cv::Mat bg = cv::imread(tmp / "bg.png", cv::IMREAD_GRAYSCALE),
+                  model = cv::imread(tmp / "model.png", cv::IMREAD_GRAYSCALE);
     ASSERT_FALSE(bg.empty());
     const cv::Mat onModel = model > 0, offModel = model == 0;
     const cv::Point2d spot = brightest(bg, offModel), lit = brightest(model, onModel);
-    EXPECT_LT(cv::norm(spot - expected), 2.5) << rot << ": the spot is drawn at " << spot << ", geometry says " << expected;
+    EXPECT_LT(cv::norm(spot - expected), 2.5)
+        << rot << ": the spot is drawn at " << spot << ", geometry says " << expected;
     const cv::Point2d centre(W / 2.0, H / 2.0);
-    const double a = std::atan2(spot.y - centre.y, spot.x - centre.x), b = std::atan2(lit.y - centre.y, lit.x - centre.x);
+    const double a = std::atan2(spot.y - centre.y, spot.x - centre.x),
+                 b = std::atan2(lit.y - centre.y, lit.x - centre.x);
     const double diff = std::abs(std::remainder(a - b, 2 * M_PI)) * 180 / M_PI;
-    EXPECT_LT(diff, 10.0) << rot << ": the sphere's brightest point " << lit << " does not face the spot " << spot;
+    EXPECT_LT(diff, 10.0) << rot << ": the sphere's brightest point " << lit
+                          << " does not face the spot " << spot;
   }
 }
 
@@ -198,13 +220,15 @@ TEST(Orientation, FlipNegatesTheCoefficientsOddInZ) {
   const auto a = runLiveprobe("coeffs " + grace), b = runLiveprobe("coeffs --env-flip " + grace);
   ASSERT_EQ(a.exitCode, 0) << a.output;
   ASSERT_EQ(b.exitCode, 0) << b.output;
-  const auto ja = nlohmann::json::parse(a.output)["coefficients"], jb = nlohmann::json::parse(b.output)["coefficients"];
+  const auto ja = nlohmann::json::parse(a.output)["coefficients"],
+             jb = nlohmann::json::parse(b.output)["coefficients"];
   const double scale = ja["L00"][1].get<double>();
   for (const auto name : lp::kShNames) {
     const bool odd = name == "L10" || name == "L2-1" || name == "L21";
     for (int ch = 0; ch < 3; ++ch)
-      EXPECT_NEAR(jb[std::string(name)][ch].get<double>(), (odd ? -1 : 1) * ja[std::string(name)][ch].get<double>(),
-                  1e-5 * scale) << name;
+      EXPECT_NEAR(jb[std::string(name)][ch].get<double>(),
+                  (odd ? -1 : 1) * ja[std::string(name)][ch].get<double>(), 1e-5 * scale)
+          << name;
   }
 }
 
@@ -213,11 +237,14 @@ TEST(Orientation, FlipNegatesTheCoefficientsOddInZ) {
 TEST(Stops, SigintDuringHeadlessReplayLeavesCompleteOutputs) {
   lpt::TempDir tmp;
   const std::string d = tmp.path.string();
-  const auto r = runShell("\"$LP\" replay synthetic:128x64@30 --headless --msaa 1 --size 160x90 --coeffs-out " + d +
-                          "/c.jsonl --out-dir " + d + "/frames & pid=$!; sleep 3; kill -INT $pid; wait $pid; echo rc=$?");
+  const auto r = runShell(
+      "\"$LP\" replay synthetic:128x64@30 --headless --msaa 1 --size 160x90 --coeffs-out " + d +
+      "/c.jsonl --out-dir " + d +
+      "/frames & pid=$!; sleep 3; kill -INT $pid; wait $pid; echo rc=$?");
   EXPECT_NE(r.output.find("rc=130"), std::string::npos) << r.output;
   EXPECT_NE(r.output.find("frames captured"), std::string::npos) << "no summary: " << r.output;
-  EXPECT_NE(r.output.find("until Ctrl-C"), std::string::npos) << "an endless source must say so: " << r.output;
+  EXPECT_NE(r.output.find("until Ctrl-C"), std::string::npos)
+      << "an endless source must say so: " << r.output;
   std::ifstream in(d + "/c.jsonl");
   ASSERT_TRUE(in) << "--coeffs-out was not finalised";
   std::size_t lines = 0;
@@ -226,7 +253,8 @@ TEST(Stops, SigintDuringHeadlessReplayLeavesCompleteOutputs) {
     EXPECT_EQ(j["frame"].get<std::size_t>(), lines);
   }
   std::size_t pngs = 0;
-  for (const auto& e : fs::directory_iterator(d + "/frames")) pngs += e.path().extension() == ".png";
+  for (const auto& e : fs::directory_iterator(d + "/frames"))
+    pngs += e.path().extension() == ".png";
   EXPECT_GT(lines, 0u);
   EXPECT_EQ(lines, pngs) << "every frame drawn is written, and listed";
   for (const auto& e : fs::recursive_directory_iterator(d))
@@ -247,12 +275,15 @@ TEST(Stops, SigintDuringRecordFinalisesTheRecording) {
 
 TEST(Progress, HeadlessRunsReportFramesRateAndEta) {
   lpt::TempDir tmp;
-  const auto r = runShell("LIVEPROBE_PROGRESS_SECONDS=0.2 \"$LP\" replay synthetic:64x32@30 --headless --msaa 1 "
-                          "--size 64x36 --frames 40");
+  const auto r = runShell(
+      "LIVEPROBE_PROGRESS_SECONDS=0.2 \"$LP\" replay synthetic:64x32@30 --headless --msaa 1 "
+      "--size 64x36 --frames 40");
   ASSERT_EQ(r.exitCode, 0) << r.output;
-  EXPECT_TRUE(std::regex_search(r.output, std::regex(R"(replay: \d+/40 frames, [0-9.]+/s, ETA)"))) << r.output;
-  const auto q = runShell("LIVEPROBE_PROGRESS_SECONDS=0.2 \"$LP\" replay synthetic:64x32@30 --headless --msaa 1 "
-                          "--size 64x36 --frames 40 --quiet");
+  EXPECT_TRUE(std::regex_search(r.output, std::regex(R"(replay: \d+/40 frames, [0-9.]+/s, ETA)")))
+      << r.output;
+  const auto q = runShell(
+      "LIVEPROBE_PROGRESS_SECONDS=0.2 \"$LP\" replay synthetic:64x32@30 --headless --msaa 1 "
+      "--size 64x36 --frames 40 --quiet");
   EXPECT_EQ(q.output.find("/40 frames"), std::string::npos) << q.output;
 }
 
@@ -266,8 +297,10 @@ TEST(CommandLine, EveryHelpNamesEveryOptionItAccepts) {
       std::size_t start = 0;
       while (start < o.name.size()) {  // "--env-rotate,--rotate": every name
         const auto comma = o.name.find(',', start);
-        const std::string one = o.name.substr(start, comma == std::string::npos ? std::string::npos : comma - start);
-        EXPECT_NE(r.output.find(one), std::string::npos) << c.spec.name << " --help does not name " << one;
+        const std::string one =
+            o.name.substr(start, comma == std::string::npos ? std::string::npos : comma - start);
+        EXPECT_NE(r.output.find(one), std::string::npos)
+            << c.spec.name << " --help does not name " << one;
         start = comma == std::string::npos ? o.name.size() : comma + 1;
       }
     }
@@ -292,7 +325,8 @@ TEST(CommandLine, RefusalsAreOneLineWithExit1) {
 TEST(CommandLine, VersionNamesTheCommit) {
   const auto r = runLiveprobe("--version");
   EXPECT_EQ(r.exitCode, 0);
-  EXPECT_TRUE(std::regex_search(r.output, std::regex(R"(^liveprobe \d+\.\d+\.\d+ \(commit [0-9a-f]{7,}(-dirty)?\))")))
+  EXPECT_TRUE(std::regex_search(
+      r.output, std::regex(R"(^liveprobe \d+\.\d+\.\d+ \(commit [0-9a-f]{7,}(-dirty)?\))")))
       << r.output;
 }
 
@@ -300,9 +334,11 @@ TEST(CommandLine, LikelyLayoutMistakesWarnOnce) {
   lpt::TempDir tmp;
   const auto probe = runLiveprobe("coeffs " + lpt::dataPath("probes/beach_probe.hdr"));
   EXPECT_EQ(probe.exitCode, 0) << probe.output;
-  EXPECT_NE(probe.output.find("warning: "), std::string::npos) << "a 640x640 probe taken as equirect: " << probe.output;
+  EXPECT_NE(probe.output.find("warning: "), std::string::npos)
+      << "a 640x640 probe taken as equirect: " << probe.output;
   EXPECT_NE(probe.output.find("square image taken as equirect"), std::string::npos);
-  const auto video = runLiveprobe("replay " + lpt::dataPath("video/pano.mp4") + " --headless --frames 1 --quiet --msaa 1 --size 64x36");
+  const auto video = runLiveprobe("replay " + lpt::dataPath("video/pano.mp4") +
+                                  " --headless --frames 1 --quiet --msaa 1 --size 64x36");
   EXPECT_EQ(video.exitCode, 0) << video.output;
   EXPECT_NE(video.output.find("16:9 frame taken as equirect"), std::string::npos) << video.output;
   // A square map that is bright in its corners read as an angular map.
@@ -311,7 +347,8 @@ TEST(CommandLine, LikelyLayoutMistakesWarnOnce) {
   const auto eq = runLiveprobe("coeffs --layout angular " + square);
   EXPECT_NE(eq.output.find("corners are not black"), std::string::npos) << eq.output;
   // The right layout: no warning.
-  const auto ok = runLiveprobe("coeffs --layout angular " + lpt::dataPath("probes/beach_probe.hdr"));
+  const auto ok =
+      runLiveprobe("coeffs --layout angular " + lpt::dataPath("probes/beach_probe.hdr"));
   EXPECT_EQ(ok.output.find("warning"), std::string::npos) << ok.output;
 }
 
@@ -320,19 +357,24 @@ TEST(CommandLine, LikelyLayoutMistakesWarnOnce) {
 TEST(Outputs, Mp4IsH264AndReadsBack) {
   lpt::TempDir tmp;
   const std::string out = tmp / "lit.mp4";
-  const auto r = runLiveprobe("replay synthetic:128x64@30 --frames 12 --headless --msaa 1 --size 160x90 --quiet --out-video " + out);
+  const auto r = runLiveprobe(
+      "replay synthetic:128x64@30 --frames 12 --headless --msaa 1 --size 160x90 --quiet "
+      "--out-video " +
+      out);
   ASSERT_EQ(r.exitCode, 0) << r.output;
   cv::VideoCapture cap(out);
   ASSERT_TRUE(cap.isOpened());
   const int fourcc = int(cap.get(cv::CAP_PROP_FOURCC));
-  const std::string cc{char(fourcc & 255), char((fourcc >> 8) & 255), char((fourcc >> 16) & 255), char((fourcc >> 24) & 255)};
+  const std::string cc{char(fourcc & 255), char((fourcc >> 8) & 255), char((fourcc >> 16) & 255),
+                       char((fourcc >> 24) & 255)};
   EXPECT_TRUE(cc == "avc1" || cc == "h264" || cc == "H264") << cc;
   int n = 0;
   for (cv::Mat f; cap.read(f);) ++n;
   EXPECT_EQ(n, 12);
 }
 
-// ---- bench ----------------------------------------------------------------------------------------
+// ---- bench
+// ----------------------------------------------------------------------------------------
 
 TEST(BenchReport, VerdictSmallStagesAndPlot) {
   lpt::TempDir tmp;
@@ -343,9 +385,12 @@ TEST(BenchReport, VerdictSmallStagesAndPlot) {
   nlohmann::json b = nlohmann::json::parse(std::ifstream(base));
   b["stages"]["convert"]["median_ms"] = 0.0;
   std::ofstream(base) << b.dump();
-  const auto r = runLiveprobe(run + " --baseline " + base + " --threshold 1000 --plot " + tmp / "plot.png");
+  const auto r =
+      runLiveprobe(run + " --baseline " + base + " --threshold 1000 --plot " + tmp / "plot.png");
   ASSERT_EQ(r.exitCode, 0) << r.output;
-  EXPECT_TRUE(std::regex_search(r.output, std::regex(R"(verdict: no regression \(\d+ stages within 1000%)"))) << r.output;
+  EXPECT_TRUE(std::regex_search(r.output,
+                                std::regex(R"(verdict: no regression \(\d+ stages within 1000%)")))
+      << r.output;
   EXPECT_EQ(r.output.find("1 runs"), std::string::npos) << r.output;
   EXPECT_NE(r.output.find("1 run of 12 frames"), std::string::npos) << r.output;
   std::istringstream lines(r.output);

@@ -4,10 +4,9 @@
 
 #include <array>
 #include <fstream>
-#include <regex>
-
 #include <nlohmann/json.hpp>
 #include <opencv2/imgcodecs.hpp>
+#include <regex>
 
 #include "shading/sh.h"
 #include "test_util.h"
@@ -34,10 +33,11 @@ cv::Mat readXwd(const std::string& path) {
     return std::uint32_t(p[0]) << 24 | std::uint32_t(p[1]) << 16 | std::uint32_t(p[2]) << 8 | p[3];
   };
   if (d.size() < 100) return {};
-  const std::uint32_t headerSize = be(0), width = be(4), height = be(5), byteOrder = be(7), bpp = be(11),
-                      bytesPerLine = be(12), ncolors = be(19);
+  const std::uint32_t headerSize = be(0), width = be(4), height = be(5), byteOrder = be(7),
+                      bpp = be(11), bytesPerLine = be(12), ncolors = be(19);
   if (bpp != 24 && bpp != 32) return {};
-  const std::uint32_t step = bpp / 8;  // Xvfb at depth 24 packs 3 bytes a pixel, rows bytesPerLine apart
+  const std::uint32_t step =
+      bpp / 8;  // Xvfb at depth 24 packs 3 bytes a pixel, rows bytesPerLine apart
   const std::size_t offset = headerSize + std::size_t(ncolors) * 12;
   if (d.size() < offset + std::size_t(bytesPerLine) * height) return {};
   cv::Mat img(int(height), int(width), CV_8UC3);
@@ -45,8 +45,10 @@ cv::Mat readXwd(const std::string& path) {
     for (std::uint32_t x = 0; x < width; ++x) {
       const unsigned char* p = d.data() + offset + std::size_t(y) * bytesPerLine + step * x;
       auto* q = img.ptr<std::uint8_t>(int(y)) + 3 * x;
-      if (byteOrder == 0) q[0] = p[0], q[1] = p[1], q[2] = p[2];  // LSBFirst: B G R (X)
-      else q[0] = p[step - 1], q[1] = p[step - 2], q[2] = p[step - 3];
+      if (byteOrder == 0)
+        q[0] = p[0], q[1] = p[1], q[2] = p[2];  // LSBFirst: B G R (X)
+      else
+        q[0] = p[step - 1], q[1] = p[step - 2], q[2] = p[step - 3];
     }
   return img;
 }
@@ -62,13 +64,15 @@ int frameInTitle(const std::string& output, const std::string& key) {
 // short tap of Esc quits within a second.
 TEST(Window, HudAndKeysUnderXvfb) {
   lpt::TempDir tmp;
-  const auto run = lpt::runCommand("xvfb-run -a -s '-screen 0 1280x800x24' " + std::string(LIVEPROBE_SOURCE_DIR) +
-                                   "/tests/scripts/window_keys.sh " + LIVEPROBE_BIN + " " + tmp.path.string());
+  const auto run = lpt::runCommand(
+      "xvfb-run -a -s '-screen 0 1280x800x24' " + std::string(LIVEPROBE_SOURCE_DIR) +
+      "/tests/scripts/window_keys.sh " + LIVEPROBE_BIN + " " + tmp.path.string());
   const std::string& out = run.output;
   ASSERT_EQ(run.exitCode, 0) << out;
   std::ifstream logf(tmp / "log");
   const std::string log((std::istreambuf_iterator<char>(logf)), {});
-  const int a = frameInTitle(out, "paused_a"), b = frameInTitle(out, "paused_b"), c = frameInTitle(out, "resumed");
+  const int a = frameInTitle(out, "paused_a"), b = frameInTitle(out, "paused_b"),
+            c = frameInTitle(out, "resumed");
   ASSERT_GE(a, 0) << out;
   EXPECT_EQ(a, b) << "Space did not pause: " << out;
   EXPECT_GT(c, b) << "Space did not resume: " << out;
@@ -81,7 +85,8 @@ TEST(Window, HudAndKeysUnderXvfb) {
   const cv::Mat hud = readXwd(tmp / "hud.xwd"), plain = readXwd(tmp / "nohud.xwd");
   ASSERT_FALSE(hud.empty());
   ASSERT_EQ(hud.size(), plain.size());
-  cv::imwrite(std::string(LIVEPROBE_TEST_OUTPUT) + "/window_hud.png", hud(cv::Rect(0, 0, 960, 540)));
+  cv::imwrite(std::string(LIVEPROBE_TEST_OUTPUT) + "/window_hud.png",
+              hud(cv::Rect(0, 0, 960, 540)));
   const cv::Rect status(12, 12, 300, 200), model(400, 200, 160, 140);
   EXPECT_GT(meanAbsDiff(hud(status), plain(status)), 10) << "the HUD region is empty";
   double lo, hi;
@@ -94,19 +99,23 @@ TEST(Window, HudAndKeysUnderXvfb) {
 TEST(Window, ViewSavesTheCoefficientsForRender) {
   lpt::TempDir tmp;
   const std::string out = tmp / "edited.json";
-  const auto run = lpt::runCommand("xvfb-run -a -s '-screen 0 1024x768x24' " + std::string(LIVEPROBE_SOURCE_DIR) +
-                                   "/tests/scripts/view_save.sh " + LIVEPROBE_BIN + " " + out +
-                                   " --coeff L00=0.5 --coeff L10=0.2,0.1,0");
+  const auto run =
+      lpt::runCommand("xvfb-run -a -s '-screen 0 1024x768x24' " +
+                      std::string(LIVEPROBE_SOURCE_DIR) + "/tests/scripts/view_save.sh " +
+                      LIVEPROBE_BIN + " " + out + " --coeff L00=0.5 --coeff L10=0.2,0.1,0");
   ASSERT_EQ(run.exitCode, 0) << run.output;
   EXPECT_NE(run.output.find("rc: 0"), std::string::npos) << run.output;
   EXPECT_NE(run.output.find("saved the coefficients to"), std::string::npos) << run.output;
   const auto j = nlohmann::json::parse(std::ifstream(out))["coefficients"];
   for (const auto name : lp::kShNames)
     for (int ch = 0; ch < 3; ++ch) {
-      const double want = name == "L00" ? 0.5 : name == "L10" ? std::array{0.2, 0.1, 0.0}[std::size_t(ch)] : 0.0;
+      const double want = name == "L00"   ? 0.5
+                          : name == "L10" ? std::array{0.2, 0.1, 0.0}[std::size_t(ch)]
+                                          : 0.0;
       EXPECT_NEAR(j[std::string(name)][ch].get<double>(), want, 1e-6) << name;
     }
-  const auto r = runLiveprobe("render --headless --size 64x64 --coeffs " + out + " --out " + tmp / "r.png");
+  const auto r =
+      runLiveprobe("render --headless --size 64x64 --coeffs " + out + " --out " + tmp / "r.png");
   EXPECT_EQ(r.exitCode, 0) << r.output;
 }
 

@@ -1,7 +1,6 @@
 #include "args.h"
 
 #include <CLI/CLI.hpp>
-
 #include <algorithm>
 #include <cmath>
 #include <map>
@@ -45,8 +44,10 @@ void declare(Args::Parsed& p, const CommandSpec& spec) {
       opt = app.add_flag(o.name, o.help)->multi_option_policy(CLI::MultiOptionPolicy::TakeAll);
     } else {
       opt = app.add_option(o.name, store, o.help)->type_name(o.value)->allow_extra_args(false);
-      if (o.optionalValue) opt->expected(0, 1);
-      else opt->expected(1);
+      if (o.optionalValue)
+        opt->expected(0, 1);
+      else
+        opt->expected(1);
       opt->multi_option_policy(CLI::MultiOptionPolicy::TakeAll);  // repeats are judged below
     }
     if (!o.group.empty()) opt->group(o.group);
@@ -60,7 +61,8 @@ void declare(Args::Parsed& p, const CommandSpec& spec) {
 
 }  // namespace
 
-Args::Args(const CommandSpec& spec, const std::vector<std::string>& argv) : p_(std::make_unique<Parsed>()) {
+Args::Args(const CommandSpec& spec, const std::vector<std::string>& argv)
+    : p_(std::make_unique<Parsed>()) {
   declare(*p_, spec);
   std::vector<std::string> reversed(argv.rbegin(), argv.rend());  // CLI11 takes them reversed
   try {
@@ -74,7 +76,8 @@ Args::Args(const CommandSpec& spec, const std::vector<std::string>& argv) : p_(s
     extra = extra.substr(extra.find(':') + 1);
     extra.erase(0, extra.find_first_not_of(' '));
     const bool option = extra.rfind("-", 0) == 0;
-    throw Error((option ? "unknown option " : "unexpected argument ") + extra + " (see liveprobe " + spec.name + " --help)");
+    throw Error((option ? "unknown option " : "unexpected argument ") + extra + " (see liveprobe " +
+                spec.name + " --help)");
   } catch (const CLI::ParseError& e) {
     std::string what = e.what();
     std::replace(what.begin(), what.end(), '\n', ' ');
@@ -85,7 +88,8 @@ Args::Args(const CommandSpec& spec, const std::vector<std::string>& argv) : p_(s
       throw Error("option " + optionKey(o) + " given more than once");
   positional_ = p_->positional;
   if (int(positional_.size()) < spec.minPositional)
-    throw Error("missing argument " + positionalName(spec.positional) + " (see liveprobe " + spec.name + " --help)");
+    throw Error("missing argument " + positionalName(spec.positional) + " (see liveprobe " +
+                spec.name + " --help)");
   if (int(positional_.size()) > spec.maxPositional)
     throw Error("unexpected argument '" + positional_[std::size_t(spec.maxPositional)] + "'");
 }
@@ -116,7 +120,8 @@ double Args::number(const std::string& name, double fallback) const {
 int Args::integer(const std::string& name, int fallback) const {
   if (!has(name)) return fallback;
   const double v = parseNumber(get(name), name);
-  if (v != std::floor(v) || std::abs(v) > 1e9) throw Error(name + " " + get(name) + ": not an integer");
+  if (v != std::floor(v) || std::abs(v) > 1e9)
+    throw Error(name + " " + get(name) + ": not an integer");
   return int(v);
 }
 
@@ -130,13 +135,15 @@ std::string rangeText(double lo, double hi) {
 
 double Args::numberIn(const std::string& name, double fallback, double lo, double hi) const {
   const double v = number(name, fallback);
-  if (has(name) && !(v >= lo && v <= hi)) throw Error(name + " " + get(name) + ": expected " + rangeText(lo, hi));
+  if (has(name) && !(v >= lo && v <= hi))
+    throw Error(name + " " + get(name) + ": expected " + rangeText(lo, hi));
   return v;
 }
 
 int Args::integerIn(const std::string& name, int fallback, int lo, int hi) const {
   const int v = integer(name, fallback);
-  if (has(name) && (v < lo || v > hi)) throw Error(name + " " + get(name) + ": expected an integer from " + rangeText(lo, hi));
+  if (has(name) && (v < lo || v > hi))
+    throw Error(name + " " + get(name) + ": expected an integer from " + rangeText(lo, hi));
   return v;
 }
 
@@ -165,12 +172,13 @@ double parseNumber(const std::string& text, const std::string& what) {
   } catch (...) {
     used = 0;
   }
-  if (used == 0 || used != text.size() || !std::isfinite(v)) throw Error(what + " " + text + ": not a number");
+  if (used == 0 || used != text.size() || !std::isfinite(v))
+    throw Error(what + " " + text + ": not a number");
   return v;
 }
 
-std::vector<double> parseNumberList(const std::string& text, const std::string& what, std::size_t count,
-                                    const std::string& expected) {
+std::vector<double> parseNumberList(const std::string& text, const std::string& what,
+                                    std::size_t count, const std::string& expected) {
   std::vector<double> v;
   std::stringstream s(text);
   for (std::string part; std::getline(s, part, ',');) v.push_back(parseNumber(part, what));
@@ -178,10 +186,12 @@ std::vector<double> parseNumberList(const std::string& text, const std::string& 
   return v;
 }
 
-void requireExtension(const std::string& path, const std::string& what, const std::vector<std::string>& allowed) {
+void requireExtension(const std::string& path, const std::string& what,
+                      const std::vector<std::string>& allowed) {
   const auto dot = path.find_last_of('.');
   std::string ext = dot == std::string::npos ? "" : path.substr(dot);
-  std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return char(std::tolower(c)); });
+  std::transform(ext.begin(), ext.end(), ext.begin(),
+                 [](unsigned char c) { return char(std::tolower(c)); });
   if (std::find(allowed.begin(), allowed.end(), ext) != allowed.end()) return;
   std::string list;
   for (const auto& a : allowed) list += (list.empty() ? "" : ", ") + a;

@@ -14,8 +14,8 @@ class App;
 namespace lp::cli {
 
 struct OptionSpec {
-  std::string name;     ///< "--size"
-  std::string value;    ///< placeholder for the value ("WxH"); empty for a flag
+  std::string name;   ///< "--size"
+  std::string value;  ///< placeholder for the value ("WxH"); empty for a flag
   std::string help;
   bool repeatable = false;
   bool optionalValue = false;  ///< the value may be left out (then the option is a flag)
@@ -52,7 +52,7 @@ class Args {
   double numberIn(const std::string& name, double fallback, double lo, double hi) const;
   int integerIn(const std::string& name, int fallback, int lo, int hi) const;
 
- struct Parsed;  ///< CLI11's app and the values bound to it (args.cpp)
+  struct Parsed;  ///< CLI11's app and the values bound to it (args.cpp)
 
  private:
   std::unique_ptr<Parsed> p_;
@@ -64,13 +64,15 @@ class Args {
 std::string usage(const CommandSpec& spec);
 
 /// "256x128" -> {256, 128}, each side 1..maxSide; throws lp::Error naming `what`.
-std::pair<int, int> parseSize(const std::string& text, const std::string& what, int maxSide = 16384);
+std::pair<int, int> parseSize(const std::string& text, const std::string& what,
+                              int maxSide = 16384);
 double parseNumber(const std::string& text, const std::string& what);
 /// "a,b,c" -> three numbers; throws lp::Error naming `what` and `expected`.
-std::vector<double> parseNumberList(const std::string& text, const std::string& what, std::size_t count,
-                                    const std::string& expected);
+std::vector<double> parseNumberList(const std::string& text, const std::string& what,
+                                    std::size_t count, const std::string& expected);
 
 /// Refuses an output path whose extension is not one of `allowed` (".png", ...), naming `what`.
-void requireExtension(const std::string& path, const std::string& what, const std::vector<std::string>& allowed);
+void requireExtension(const std::string& path, const std::string& what,
+                      const std::vector<std::string>& allowed);
 
 }  // namespace lp::cli

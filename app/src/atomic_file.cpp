@@ -16,7 +16,8 @@ AtomicTextFile::AtomicTextFile(const std::string& path) : path_(path) {
   const fs::path p(path);
   const fs::path dir = p.has_parent_path() ? p.parent_path() : fs::path(".");
   std::error_code ec;
-  if (!fs::is_directory(dir, ec)) throw Error(path + ": folder " + dir.string() + " does not exist");
+  if (!fs::is_directory(dir, ec))
+    throw Error(path + ": folder " + dir.string() + " does not exist");
   if (fs::is_directory(p, ec)) throw Error(path + ": is a folder");
   tmp_ = (dir / ("." + p.filename().string() + "." + std::to_string(::getpid()) + ".tmp")).string();
   out_.open(tmp_);

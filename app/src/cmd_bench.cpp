@@ -1,17 +1,18 @@
 // liveprobe bench: a frame-time regression run of the whole replay pipeline, headless.
+#include <unistd.h>
+
 #include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
 #include <fstream>
 #include <iostream>
 #include <map>
+#include <sstream>
 #include <thread>
 
-#include <unistd.h>
-#include <filesystem>
-#include <sstream>
-
+#include "atomic_file.h"
 #include "capture/error.h"
 #include "capture/frame.h"
 #include "capture/layout.h"
@@ -19,7 +20,6 @@
 #include "capture/pipeline.h"
 #include "coeffs_io.h"
 #include "commands.h"
-#include "atomic_file.h"
 #include "progress.h"
 #include "scene.h"
 #include "shading/thread_pool.h"
@@ -72,17 +72,20 @@ double calibrationMs() {
   return percentile(t, 0.5);
 }
 
-constexpr int kWarmup = 3;  // frames at the start of each run shown as warm-up (caches, JIT of llvmpipe's shaders)
+constexpr int kWarmup =
+    3;  // frames at the start of each run shown as warm-up (caches, JIT of llvmpipe's shaders)
 
 /// The frame-time plot, by gnuplot (pngcairo): stages stacked and filled against the frame
 /// number, the warm-up frames shaded, and a histogram of the total with median and p95 marked.
 /// Written to a temporary file and renamed; lp::Error when gnuplot is missing or fails.
-void drawPlot(const std::string& path, const std::vector<std::array<double, kStageCount>>& frames, int framesPerRun,
-              const std::string& title) {
+void drawPlot(const std::string& path, const std::vector<std::array<double, kStageCount>>& frames,
+              int framesPerRun, const std::string& title) {
   const fs::path out(path);
   const fs::path dir = out.has_parent_path() ? out.parent_path() : fs::path(".");
-  const std::string stem = (dir / ("." + out.filename().string() + "." + std::to_string(::getpid()))).string();
-  const std::string data = stem + ".dat", hist = stem + ".hist", script = stem + ".gp", png = stem + ".tmp.png";
+  const std::string stem =
+      (dir / ("." + out.filename().string() + "." + std::to_string(::getpid()))).string();
+  const std::string data = stem + ".dat", hist = stem + ".hist", script = stem + ".gp",
+                    png = stem + ".tmp.png";
   struct Cleanup {
     std::vector<std::string> files;
     ~Cleanup() {
@@ -104,7 +107,8 @@ void drawPlot(const std::string& path, const std::vector<std::array<double, kSta
     if (!d) throw Error(path + ": cannot write the plot's data beside it");
   }
   const double med = percentile(total, 0.5), p95 = percentile(total, 0.95);
-  const double top = std::max(1e-3, percentile(total, 0.99) * 1.25);  // a warm-up spike does not set the scale
+  const double top =
+      std::max(1e-3, percentile(total, 0.99) * 1.25);  // a warm-up spike does not set the scale
   const int bins = 40;
   const double width = top / bins;
   std::vector<int> counts(bins, 0);
@@ -118,25 +122,33 @@ void drawPlot(const std::string& path, const std::vector<std::array<double, kSta
     << "set multiplot layout 1,2 title '" << title << "'\n"
     << "set style fill solid 0.85 noborder\nset grid ytics lc rgb '#dddddd'\n"
     << "set xlabel 'frame (all runs in order)'\nset ylabel 'time per frame (ms), stages stacked'\n"
-    << "set key outside right top vertical\nset yrange [0:" << top << "]\nset xrange [0:" << std::max<std::size_t>(1, frames.size() - 1) << "]\n";
+    << "set key outside right top vertical\nset yrange [0:" << top
+    << "]\nset xrange [0:" << std::max<std::size_t>(1, frames.size() - 1) << "]\n";
   for (std::size_t start = 0, k = 1; start < frames.size(); start += std::size_t(framesPerRun), ++k)
-    g << "set object " << k << " rect from " << start << ",0 to " << start + kWarmup - 1 << "," << top
-      << " fc rgb '#ffb000' fs solid 0.45 noborder behind\n";
+    g << "set object " << k << " rect from " << start << ",0 to " << start + kWarmup - 1 << ","
+      << top << " fc rgb '#ffb000' fs solid 0.45 noborder behind\n";
   g << "set label 1 'orange: warm-up frames of each run' at graph 0.01, graph 0.96\n";
-  const char* colours[kStageCount] = {"#1f77b4", "#ff7f0e", "#2ca02c", "#d62728", "#9467bd", "#8c564b"};
+  const char* colours[kStageCount] = {"#1f77b4", "#ff7f0e", "#2ca02c",
+                                      "#d62728", "#9467bd", "#8c564b"};
   g << "plot ";
   for (int s = kStageCount - 1; s >= 0; --s) {
-    g << "'" << data << "' using 1:" << (s + 2) << " with filledcurves x1 lc rgb '" << colours[s] << "' title '"
-      << kStages[s] << "'";
+    g << "'" << data << "' using 1:" << (s + 2) << " with filledcurves x1 lc rgb '" << colours[s]
+      << "' title '" << kStages[s] << "'";
     g << (s ? ", " : "\n");
   }
-  g << "unset object\nunset label\nset xlabel 'frame time (ms)'\nset ylabel 'frames'\nset xrange [0:" << top
-    << "]\nset yrange [0:*]\nset boxwidth " << width * 0.9 << "\n"
-    << "set arrow 1 from " << med << ", graph 0 to " << med << ", graph 1 nohead lc rgb '#2ca02c' lw 2\n"
-    << "set arrow 2 from " << p95 << ", graph 0 to " << p95 << ", graph 1 nohead lc rgb '#d62728' lw 2 dt 2\n"
-    << "set label 2 sprintf('median %.2f ms', " << med << ") at " << med << ", graph 0.95 offset 1,0 tc rgb '#2ca02c'\n"
-    << "set label 3 sprintf('p95 %.2f ms', " << p95 << ") at " << p95 << ", graph 0.88 offset 1,0 tc rgb '#d62728'\n"
-    << "plot '" << hist << "' using 1:2 with boxes lc rgb '#777777' title 'frames'\nunset multiplot\n";
+  g << "unset object\nunset label\nset xlabel 'frame time (ms)'\nset ylabel 'frames'\nset xrange "
+       "[0:"
+    << top << "]\nset yrange [0:*]\nset boxwidth " << width * 0.9 << "\n"
+    << "set arrow 1 from " << med << ", graph 0 to " << med
+    << ", graph 1 nohead lc rgb '#2ca02c' lw 2\n"
+    << "set arrow 2 from " << p95 << ", graph 0 to " << p95
+    << ", graph 1 nohead lc rgb '#d62728' lw 2 dt 2\n"
+    << "set label 2 sprintf('median %.2f ms', " << med << ") at " << med
+    << ", graph 0.95 offset 1,0 tc rgb '#2ca02c'\n"
+    << "set label 3 sprintf('p95 %.2f ms', " << p95 << ") at " << p95
+    << ", graph 0.88 offset 1,0 tc rgb '#d62728'\n"
+    << "plot '" << hist
+    << "' using 1:2 with boxes lc rgb '#777777' title 'frames'\nunset multiplot\n";
   {
     std::ofstream f(script);
     f << g.str();
@@ -151,8 +163,10 @@ void drawPlot(const std::string& path, const std::vector<std::array<double, kSta
   const int rc = ::pclose(pipe);
   if (rc != 0 || !fs::exists(png)) {
     const auto nl = said.find('\n');
-    throw Error(path + ": gnuplot failed (" + (rc == 127 * 256 ? std::string("not installed: scripts/deps installs gnuplot-nox")
-                                                                : said.substr(0, nl)) + ")");
+    throw Error(path + ": gnuplot failed (" +
+                (rc == 127 * 256 ? std::string("not installed: scripts/deps installs gnuplot-nox")
+                                 : said.substr(0, nl)) +
+                ")");
   }
   std::error_code ec;
   fs::rename(png, path, ec);
@@ -174,27 +188,42 @@ const CommandSpec kBenchSpec{
     [] {
       auto o = layoutOptions();
       const std::string g = "Benchmark";
-      o.insert(o.end(), {{"--frames", "N", "frames per run, 1 to 100000 (default 100)", false, false, g},
-                         {"--repeat", "R", "runs, 1 to 1000; stage medians are taken per run, then the median of those (default 3)", false, false, g},
-                         {"--json", "FILE", "write the results as JSON", false, false, g},
-                         {"--plot", "FILE.png", "frame times by stage (stacked) and their histogram, drawn by gnuplot", false, false, g},
-                         {"--baseline", "FILE", "JSON from an earlier --json run to compare with", false, false, g},
-                         {"--threshold", "PCT", "allowed slow-down per stage, percent, 0 to 1000 (default 25)", false, false, g},
-                         {"--inject-delay", "STAGE=MS", "add MS (0 to 10000) milliseconds of busy work to STAGE; repeatable", true, false, g},
-                         {"--size", "WxH", "render size (default 640x360)", false, false, g},
-                         {"--threads", "N", "projection threads, 1 to 64 (default 2)", false, false, g},
-                         {"--model", "FILE|sphere", "model (default sphere)", false, false, g},
-                         {"--quiet", "", "no progress on stderr", false, false, g}});
+      o.insert(
+          o.end(),
+          {{"--frames", "N", "frames per run, 1 to 100000 (default 100)", false, false, g},
+           {"--repeat", "R",
+            "runs, 1 to 1000; stage medians are taken per run, then the median of those (default "
+            "3)",
+            false, false, g},
+           {"--json", "FILE", "write the results as JSON", false, false, g},
+           {"--plot", "FILE.png",
+            "frame times by stage (stacked) and their histogram, drawn by gnuplot", false, false,
+            g},
+           {"--baseline", "FILE", "JSON from an earlier --json run to compare with", false, false,
+            g},
+           {"--threshold", "PCT", "allowed slow-down per stage, percent, 0 to 1000 (default 25)",
+            false, false, g},
+           {"--inject-delay", "STAGE=MS",
+            "add MS (0 to 10000) milliseconds of busy work to STAGE; repeatable", true, false, g},
+           {"--size", "WxH", "render size (default 640x360)", false, false, g},
+           {"--threads", "N", "projection threads, 1 to 64 (default 2)", false, false, g},
+           {"--model", "FILE|sphere", "model (default sphere)", false, false, g},
+           {"--quiet", "", "no progress on stderr", false, false, g}});
       return o;
     }(),
-    0, 1, "a video, an image sequence (a folder, or a pattern like frames/%04d.png), an image, a folder of six cube faces, or synthetic[:WxH[@FPS]]; default: the bundled recording"};
+    0,
+    1,
+    "a video, an image sequence (a folder, or a pattern like frames/%04d.png), an image, a folder "
+    "of six cube faces, or synthetic[:WxH[@FPS]]; default: the bundled recording"};
 
 namespace {
 
 /// A stage's median below this (ms) is too small to judge by percent on this machine.
 constexpr double kMeasurableMs = 0.05;
 
-std::string plural(long n, const char* word) { return std::to_string(n) + " " + word + (n == 1 ? "" : "s"); }
+std::string plural(long n, const char* word) {
+  return std::to_string(n) + " " + word + (n == 1 ? "" : "s");
+}
 
 nlohmann::json readBaseline(const std::string& path) {
   std::ifstream in(path);
@@ -203,7 +232,8 @@ nlohmann::json readBaseline(const std::string& path) {
   try {
     in >> b;
     const double cal = b.at("calibration_ms").get<double>();
-    if (!(cal > 0) || !std::isfinite(cal)) throw Error(path + ": calibration_ms must be a positive number");
+    if (!(cal > 0) || !std::isfinite(cal))
+      throw Error(path + ": calibration_ms must be a positive number");
     for (const auto& [name, st] : b.at("stages").items()) (void)st.at("median_ms").get<double>();
   } catch (const nlohmann::json::exception& e) {
     throw Error(path + ": not a liveprobe bench JSON (" + e.what() + ")");
@@ -218,7 +248,9 @@ std::array<double, kStageCount> parseInjections(const Args& a) {
     int stage = -1;
     for (int s = 0; s < kStageCount; ++s)
       if (eq != std::string::npos && d.substr(0, eq) == kStages[s]) stage = s;
-    if (stage < 0) throw Error("--inject-delay " + d + ": expected STAGE=MS, STAGE one of grab convert project upload render readback");
+    if (stage < 0)
+      throw Error("--inject-delay " + d +
+                  ": expected STAGE=MS, STAGE one of grab convert project upload render readback");
     const double ms = parseNumber(d.substr(eq + 1), "--inject-delay");
     if (ms < 0 || ms > 10000) throw Error("--inject-delay " + d + ": expected 0 to 10000 ms");
     inject[std::size_t(stage)] += ms;
@@ -231,7 +263,8 @@ std::array<double, kStageCount> parseInjections(const Args& a) {
 int runBench(const Args& a) {
   installStopHandlers();
   const std::string sourceName = a.positional().empty() ? defaultRecording() : a.positional()[0];
-  const int frames = a.integerIn("--frames", 100, 1, 100000), repeat = a.integerIn("--repeat", 3, 1, 1000);
+  const int frames = a.integerIn("--frames", 100, 1, 100000),
+            repeat = a.integerIn("--repeat", 3, 1, 1000);
   const double threshold = a.numberIn("--threshold", 25.0, 0.0, 1000.0);
   const auto size = parseSize(a.get("--size", "640x360"), "--size");
   const unsigned threads = unsigned(a.integerIn("--threads", 2, 1, 64));
@@ -268,7 +301,8 @@ int runBench(const Args& a) {
       std::array<double, kStageCount> t{};
       auto t0 = Clock::now();
       if (!source->next(frame)) {
-        if (!source->rewind() || !source->next(frame)) throw Error(sourceName + ": no frames to benchmark");
+        if (!source->rewind() || !source->next(frame))
+          throw Error(sourceName + ": no frames to benchmark");
       }
       spin(inject[0]);
       t[0] = msSince(t0);
@@ -281,7 +315,8 @@ int runBench(const Args& a) {
       t[1] = msSince(t0);
       t0 = Clock::now();
       if (!projector || projector->width() != frame.width || projector->height() != frame.height) {
-        if (auto why = layoutMismatch(layout, frame.width, frame.height); !why.empty()) throw Error(sourceName + ": " + why);
+        if (auto why = layoutMismatch(layout, frame.width, frame.height); !why.empty())
+          throw Error(sourceName + ": " + why);
         projector.emplace(layout, frame.width, frame.height);
       }
       const Sh9 sh = rotateSh(projectFrame(*projector, frame, lin, &pool), orientation);
@@ -290,8 +325,11 @@ int runBench(const Args& a) {
       t0 = Clock::now();
       if (i == 0) exposure = autoExposure(sh);
       renderer.setLighting(sh);
-      if (asIs) setBackground(renderer, frame, layout, lin.exposure());
-      else setBackground(renderer, image, layout, frame.format == PixelFormat::Bgr8 ? lin.exposure() : 0.0f);
+      if (asIs)
+        setBackground(renderer, frame, layout, lin.exposure());
+      else
+        setBackground(renderer, image, layout,
+                      frame.format == PixelFormat::Bgr8 ? lin.exposure() : 0.0f);
       gl::Renderer::finish();
       spin(inject[3]);
       t[3] = msSince(t0);
@@ -319,7 +357,8 @@ int runBench(const Args& a) {
   }
   progress.finish();
   if (stopRequested()) {
-    std::fprintf(stderr, "liveprobe: bench stopped by a signal after %s; nothing written\n", plural(long(all.size()), "frame").c_str());
+    std::fprintf(stderr, "liveprobe: bench stopped by a signal after %s; nothing written\n",
+                 plural(long(all.size()), "frame").c_str());
     return kExitInterrupted;
   }
   const double calibration = percentile(calibrations, 0.5);
@@ -335,10 +374,12 @@ int runBench(const Args& a) {
     std::vector<double> v;
     for (const auto& t : all) v.push_back(t[std::size_t(s)]);
     const double med = percentile(runMedians[std::size_t(s)], 0.5);
-    stages[kStages[s]] = {{"median_ms", med}, {"p95_ms", percentile(v, 0.95)}, {"p99_ms", percentile(v, 0.99)},
+    stages[kStages[s]] = {{"median_ms", med},
+                          {"p95_ms", percentile(v, 0.95)},
+                          {"p99_ms", percentile(v, 0.99)},
                           {"max_ms", percentile(v, 1.0)}};
-    std::printf("%-9s %9.3f %9.3f %9.3f %9.3f\n", kStages[s], med, percentile(v, 0.95), percentile(v, 0.99),
-                percentile(v, 1.0));
+    std::printf("%-9s %9.3f %9.3f %9.3f %9.3f\n", kStages[s], med, percentile(v, 0.95),
+                percentile(v, 0.99), percentile(v, 1.0));
   }
   out["stages"] = stages;
   out["calibration_ms"] = calibration;
@@ -355,38 +396,50 @@ int runBench(const Args& a) {
       const double nowAtBase = nowMs / calibration * baseCal;
       ++compared;
       if (baseMs < kMeasurableMs && nowAtBase < kMeasurableMs) {
-        std::printf("%-9s %8.3f ms vs %.3f ms (too small to measure)\n", kStages[s], nowAtBase, baseMs);
+        std::printf("%-9s %8.3f ms vs %.3f ms (too small to measure)\n", kStages[s], nowAtBase,
+                    baseMs);
         continue;
       }
       const double change = baseMs > kMeasurableMs ? 100.0 * (nowAtBase - baseMs) / baseMs : 0.0;
       if (baseMs > kMeasurableMs)
-        std::printf("%-9s %8.3f ms vs %.3f ms  %+7.1f%% (normalised by calibration)\n", kStages[s], nowAtBase, baseMs, change);
+        std::printf("%-9s %8.3f ms vs %.3f ms  %+7.1f%% (normalised by calibration)\n", kStages[s],
+                    nowAtBase, baseMs, change);
       else
-        std::printf("%-9s %8.3f ms vs %.3f ms (baseline too small for a percentage)\n", kStages[s], nowAtBase, baseMs);
-      // A change under 0.5 ms is within scheduling noise on a 2-core machine whatever its percentage.
-      const bool slower = nowAtBase - baseMs > 0.5 && (baseMs <= kMeasurableMs || change > threshold);
+        std::printf("%-9s %8.3f ms vs %.3f ms (baseline too small for a percentage)\n", kStages[s],
+                    nowAtBase, baseMs);
+      // A change under 0.5 ms is within scheduling noise on a 2-core machine whatever its
+      // percentage.
+      const bool slower =
+          nowAtBase - baseMs > 0.5 && (baseMs <= kMeasurableMs || change > threshold);
       if (slower)
-        regressions.push_back({{"stage", kStages[s]}, {"change_pct", change}, {"change_ms", nowAtBase - baseMs},
-                               {"median_ms", nowMs}, {"baseline_median_ms", baseMs}});
+        regressions.push_back({{"stage", kStages[s]},
+                               {"change_pct", change},
+                               {"change_ms", nowAtBase - baseMs},
+                               {"median_ms", nowMs},
+                               {"baseline_median_ms", baseMs}});
     }
   }
   out["regressions"] = regressions;
   if (a.has("--json")) writeFileAtomically(a.get("--json"), out.dump(2) + "\n");
   if (a.has("--plot"))
     drawPlot(a.get("--plot"), all, frames,
-             "liveprobe bench: " + description + " (" + plural(repeat, "run") + " of " + plural(frames, "frame") + ")");
+             "liveprobe bench: " + description + " (" + plural(repeat, "run") + " of " +
+                 plural(frames, "frame") + ")");
   if (!baseline.is_null()) {
     if (regressions.empty()) {
-      std::printf("verdict: no regression (%d stages within %.0f%% of the baseline)\n", compared, threshold);
+      std::printf("verdict: no regression (%d stages within %.0f%% of the baseline)\n", compared,
+                  threshold);
     } else {
       std::string text;
       for (const auto& r : regressions) {
         char b[160];
-        std::snprintf(b, sizeof b, "%s%s +%.2f ms (%+.1f%%)", text.empty() ? "" : ", ", r["stage"].get<std::string>().c_str(),
-                      r["change_ms"].get<double>(), r["change_pct"].get<double>());
+        std::snprintf(b, sizeof b, "%s%s +%.2f ms (%+.1f%%)", text.empty() ? "" : ", ",
+                      r["stage"].get<std::string>().c_str(), r["change_ms"].get<double>(),
+                      r["change_pct"].get<double>());
         text += b;
       }
-      std::printf("verdict: REGRESSION: %s (threshold %.0f%% and 0.5 ms)\n", text.c_str(), threshold);
+      std::printf("verdict: REGRESSION: %s (threshold %.0f%% and 0.5 ms)\n", text.c_str(),
+                  threshold);
     }
   }
   return regressions.empty() ? 0 : 1;

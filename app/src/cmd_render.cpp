@@ -25,13 +25,19 @@ const CommandSpec kRenderSpec{
     "render",
     "",
     "Renders one image of a model lit by nine SH coefficients (diffuse albedo * E / pi, exposure,\n"
-    "tone map, sRGB, 4x MSAA), with the environment behind it. Offscreen through OSMesa when there\n"
+    "tone map, sRGB, 4x MSAA), with the environment behind it. Offscreen through OSMesa when "
+    "there\n"
     "is no display (or with --headless); otherwise in a GLFW window, read back before it is shown.",
     concat(concat(lightingOptions(), sceneOptions()),
-           {{"--size", "WxH", "image size, each side up to 16384 (default 1280x720)", false, false, "Output"},
-            {"--out", "FILE.png", "output image, .png or .jpg (default render.png)", false, false, "Output"},
-            {"--hud", "", "draw the HUD (the panorama, the probe balls, the coefficients) into the image", false, false, "Output"}}),
-    0, 0};
+           {{"--size", "WxH", "image size, each side up to 16384 (default 1280x720)", false, false,
+             "Output"},
+            {"--out", "FILE.png", "output image, .png or .jpg (default render.png)", false, false,
+             "Output"},
+            {"--hud", "",
+             "draw the HUD (the panorama, the probe balls, the coefficients) into the image", false,
+             false, "Output"}}),
+    0,
+    0};
 
 namespace {
 
@@ -44,8 +50,12 @@ Lighting requireLighting(const Args& a) {
 
 /// A HUD that shows a still's lighting (one sample, no stage times).
 void showStill(Hud& hud, const Args& a, const Lighting& lighting) {
-  const std::string source = a.has("--env") ? a.get("--env") : a.has("--coeffs") ? a.get("--coeffs") : "--coeff";
-  hud.setSource(source, a.has("--env") ? std::string(layoutName(lighting.layout.layout)) : "coefficients", false, true);
+  const std::string source = a.has("--env")      ? a.get("--env")
+                             : a.has("--coeffs") ? a.get("--coeffs")
+                                                 : "--coeff";
+  hud.setSource(source,
+                a.has("--env") ? std::string(layoutName(lighting.layout.layout)) : "coefficients",
+                false, true);
   HudSample s;
   s.radiance = s.unsmoothed = lighting.radiance;
   hud.push(s);
@@ -79,7 +89,8 @@ int runRender(const Args& a) {
   } catch (const gl::ContextError& e) {
     throw Error(std::string("GL: ") + e.what());
   }
-  std::cerr << "liveprobe: " << out << " (" << mesh.triangleCount() << " triangles, " << ctx->describe() << ")\n";
+  std::cerr << "liveprobe: " << out << " (" << mesh.triangleCount() << " triangles, "
+            << ctx->describe() << ")\n";
   return 0;
 }
 
@@ -88,17 +99,24 @@ const CommandSpec kViewSpec{
     "",
     "Opens an interactive window with the HUD: drag with the left button to orbit, scroll to\n"
     "zoom; R resets the view, B toggles the background, H the HUD, +/- change the exposure, F1 or\n"
-    "? shows the keys, Esc or Q quits. The coefficient panel edits the nine coefficients and saves\n"
-    "them as JSON for render --coeffs. --screenshot OUT.png --frames N renders N frames, saves the\n"
+    "? shows the keys, Esc or Q quits. The coefficient panel edits the nine coefficients and "
+    "saves\n"
+    "them as JSON for render --coeffs. --screenshot OUT.png --frames N renders N frames, saves "
+    "the\n"
     "last and exits (headless too).",
     concat(concat(lightingOptions(), sceneOptions()),
            {{"--size", "WxH", "window size (default 1280x720)", false, false, "Output"},
-            {"--screenshot", "FILE.png", "save the last frame here and exit (with --frames)", false, false, "Output"},
-            {"--frames", "N", "number of frames to render before the screenshot (default 1)", false, false, "Output"},
-            {"--save-coeffs", "FILE.json", "where the coefficient panel's Save writes (default coeffs-edited.json)", false, false, "Output"},
+            {"--screenshot", "FILE.png", "save the last frame here and exit (with --frames)", false,
+             false, "Output"},
+            {"--frames", "N", "number of frames to render before the screenshot (default 1)", false,
+             false, "Output"},
+            {"--save-coeffs", "FILE.json",
+             "where the coefficient panel's Save writes (default coeffs-edited.json)", false, false,
+             "Output"},
             {"--hud", "", "draw the HUD into a headless screenshot too", false, false, "Output"},
             {"--no-hud", "", "start with the HUD hidden (H shows it)", false, false, "Output"}}),
-    0, 0};
+    0,
+    0};
 
 int runView(const Args& a) {
   installStopHandlers();
@@ -109,7 +127,8 @@ int runView(const Args& a) {
   state.shading = shadingFromArgs(a, lighting.radiance, lighting.background.has_value());
   const Mesh mesh = meshFromArgs(a);
   const bool screenshot = a.has("--screenshot");
-  if (screenshot) requireExtension(a.get("--screenshot"), "--screenshot", {".png", ".jpg", ".jpeg"});
+  if (screenshot)
+    requireExtension(a.get("--screenshot"), "--screenshot", {".png", ".jpg", ".jpeg"});
   const int frames = a.integerIn("--frames", 1, 1, 1000000);
   auto ctx = openContext(backendFromArgs(a), size);
   if (ctx->isHeadless() && !screenshot)
@@ -148,16 +167,19 @@ int runView(const Args& a) {
         }
       }
       gl::Renderer::finish();
-      lastMs = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+      lastMs = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start)
+                   .count();
       frameMs.push_back(lastMs);
       ++fpsFrames;
       if (screenshot && frame + 1 >= frames) {
         const auto px = gl::Renderer::readRgb8(fb);
         saveRgb8(a.get("--screenshot"), fb.x, fb.y, px.data());
         std::sort(frameMs.begin(), frameMs.end());
-        std::fprintf(stderr, "liveprobe: %s after %d frame%s, median frame %.2f ms (%dx%d, %zu triangles, %s)\n",
-                     a.get("--screenshot").c_str(), frames, frames == 1 ? "" : "s", frameMs[frameMs.size() / 2], fb.x,
-                     fb.y, mesh.triangleCount(), ctx->describe().c_str());
+        std::fprintf(
+            stderr,
+            "liveprobe: %s after %d frame%s, median frame %.2f ms (%dx%d, %zu triangles, %s)\n",
+            a.get("--screenshot").c_str(), frames, frames == 1 ? "" : "s",
+            frameMs[frameMs.size() / 2], fb.x, fb.y, mesh.triangleCount(), ctx->describe().c_str());
         break;
       }
       ctx->present();

@@ -8,14 +8,14 @@
 #include <iostream>
 #include <sstream>
 
+#include "atomic_file.h"
 #include "capture/error.h"
 #include "capture/pipeline.h"
 #include "capture/recorder.h"
-#include "atomic_file.h"
-#include "hud.h"
-#include "progress.h"
 #include "coeffs_io.h"
 #include "commands.h"
+#include "hud.h"
+#include "progress.h"
 #include "scene.h"
 
 namespace lp::cli {
@@ -61,10 +61,12 @@ Photometry photometryFromArgs(const Args& a) {
   const std::string g = a.get("--gamma", "srgb");
   if (g != "srgb") {
     p.gamma = float(parseNumber(g, "--gamma"));
-    if (!(p.gamma > 0.2f && p.gamma < 5.0f)) throw Error("--gamma " + g + ": expected srgb or a gamma in (0.2, 5)");
+    if (!(p.gamma > 0.2f && p.gamma < 5.0f))
+      throw Error("--gamma " + g + ": expected srgb or a gamma in (0.2, 5)");
   }
   p.exposure = float(a.number("--input-exposure", 1.0));
-  if (!(p.exposure > 0)) throw Error("--input-exposure " + a.get("--input-exposure") + ": must be positive");
+  if (!(p.exposure > 0))
+    throw Error("--input-exposure " + a.get("--input-exposure") + ": must be positive");
   return p;
 }
 
@@ -73,18 +75,26 @@ Photometry photometryFromArgs(const Args& a) {
 std::vector<OptionSpec> streamOptions() {
   auto o = layoutOptions();
   const std::string g = "Stream";
-  o.insert(o.end(), {{"--gamma", "srgb|G", "8-bit decoding: the sRGB curve (default) or code^G, G in (0.2, 5)", false, false, g},
-                     {"--input-exposure", "X", "linear radiance scale applied to the input (default 1)", false, false, g},
-                     {"--smooth", "SECONDS", "exponential moving average of the coefficients (and its latency)", false, false, g},
-                     {"--fps", "F", "frame rate of image sequences, 0 to 1000 (default 30)", false, false, g},
-                     {"--reduce", "F", "equirect: project an F x F area average, 1 to 64 (error in README)", false, false, g},
-                     {"--threads", "N", "threads for one frame's projection, 1 to 64 (default 2)", false, false, g},
-                     {"--frames", "N", "stop after N frames", false, false, g},
-                     {"--duration", "SECONDS", "stop after this much of the source's time", false, false, g},
-                     {"--coeffs-out", "FILE.jsonl", "one JSON line per frame: coefficients and stage timings", false, false, g},
-                     {"--hud", "", "draw the HUD into headless frames too", false, false, g},
-                     {"--no-hud", "", "hide the HUD (H toggles it in a window)", false, false, g},
-                     {"--quiet", "", "no progress on stderr", false, false, g}});
+  o.insert(
+      o.end(),
+      {{"--gamma", "srgb|G", "8-bit decoding: the sRGB curve (default) or code^G, G in (0.2, 5)",
+        false, false, g},
+       {"--input-exposure", "X", "linear radiance scale applied to the input (default 1)", false,
+        false, g},
+       {"--smooth", "SECONDS", "exponential moving average of the coefficients (and its latency)",
+        false, false, g},
+       {"--fps", "F", "frame rate of image sequences, 0 to 1000 (default 30)", false, false, g},
+       {"--reduce", "F", "equirect: project an F x F area average, 1 to 64 (error in README)",
+        false, false, g},
+       {"--threads", "N", "threads for one frame's projection, 1 to 64 (default 2)", false, false,
+        g},
+       {"--frames", "N", "stop after N frames", false, false, g},
+       {"--duration", "SECONDS", "stop after this much of the source's time", false, false, g},
+       {"--coeffs-out", "FILE.jsonl", "one JSON line per frame: coefficients and stage timings",
+        false, false, g},
+       {"--hud", "", "draw the HUD into headless frames too", false, false, g},
+       {"--no-hud", "", "hide the HUD (H toggles it in a window)", false, false, g},
+       {"--quiet", "", "no progress on stderr", false, false, g}});
   return o;
 }
 
@@ -102,15 +112,25 @@ const CommandSpec kReplaySpec{
     [] {
       auto o = streamOptions();
       const std::string g = "Output";
-      o.insert(o.end(), {{"--loop", "", "start again at the end of the source", false, false, "Stream"},
-                         {"--size", "WxH", "window or frame size (default 1280x720; headless 640x360)", false, false, g},
-                         {"--out-dir", "DIR", "headless: write each rendered frame as DIR/frame_NNNNNN.png", false, false, g},
-                         {"--out-video", "FILE", "headless: write the rendered frames as a video (.mkv FFV1, .avi MJPEG, .mp4 H.264)", false, false, g}});
+      o.insert(
+          o.end(),
+          {{"--loop", "", "start again at the end of the source", false, false, "Stream"},
+           {"--size", "WxH", "window or frame size (default 1280x720; headless 640x360)", false,
+            false, g},
+           {"--out-dir", "DIR", "headless: write each rendered frame as DIR/frame_NNNNNN.png",
+            false, false, g},
+           {"--out-video", "FILE",
+            "headless: write the rendered frames as a video (.mkv FFV1, .avi MJPEG, .mp4 H.264)",
+            false, false, g}});
       auto scene = sceneOptions();
       o.insert(o.end(), scene.begin(), scene.end());
       return o;
     }(),
-    0, 1, "a video, an image sequence (a folder, or a pattern like frames/%04d.png), an image, a folder of six cube faces, or synthetic[:WxH[@FPS]]; default: the bundled recording recordings/sky.mkv"};
+    0,
+    1,
+    "a video, an image sequence (a folder, or a pattern like frames/%04d.png), an image, a folder "
+    "of six cube faces, or synthetic[:WxH[@FPS]]; default: the bundled recording "
+    "recordings/sky.mkv"};
 
 namespace {
 
@@ -134,10 +154,12 @@ struct StreamOutputs {
   std::string outDir;
   std::unique_ptr<VideoRecorder> video, record;
 
-  void writeFrame(const ProcessedFrame& f, glm::ivec2 fb, const std::vector<std::uint8_t>& rgb) const {
+  void writeFrame(const ProcessedFrame& f, glm::ivec2 fb,
+                  const std::vector<std::uint8_t>& rgb) const {
     if (!outDir.empty()) {
       char name[32];
-      std::snprintf(name, sizeof name, "frame_%06llu.png", static_cast<unsigned long long>(f.index));
+      std::snprintf(name, sizeof name, "frame_%06llu.png",
+                    static_cast<unsigned long long>(f.index));
       saveRgb8((fs::path(outDir) / name).string(), fb.x, fb.y, rgb.data());
     }
     if (video) {
@@ -153,19 +175,23 @@ struct StreamOutputs {
   }
 };
 
-StreamOutputs openOutputs(const Args& a, double fps, const std::string& description, double radianceScale) {
+StreamOutputs openOutputs(const Args& a, double fps, const std::string& description,
+                          double radianceScale) {
   StreamOutputs o;
-  if (a.has("--out-dir") && a.has("--out-video")) throw Error("give --out-dir or --out-video, not both");
+  if (a.has("--out-dir") && a.has("--out-video"))
+    throw Error("give --out-dir or --out-video, not both");
   if (a.has("--coeffs-out")) o.coeffs = std::make_unique<AtomicTextFile>(a.get("--coeffs-out"));
   o.outDir = a.get("--out-dir");
   if (!o.outDir.empty()) {
     std::error_code ec;
     fs::create_directories(o.outDir, ec);
-    if (!fs::is_directory(o.outDir)) throw Error("--out-dir " + o.outDir + ": cannot create the folder");
+    if (!fs::is_directory(o.outDir))
+      throw Error("--out-dir " + o.outDir + ": cannot create the folder");
   }
   if (a.has("--out-video")) {
     requireExtension(a.get("--out-video"), "--out-video", {".mkv", ".avi", ".mp4"});
-    o.video = std::make_unique<VideoRecorder>(a.get("--out-video"), fps, "liveprobe replay of " + description);
+    o.video = std::make_unique<VideoRecorder>(a.get("--out-video"), fps,
+                                              "liveprobe replay of " + description);
   }
   if (a.has("--record")) {
     requireExtension(a.get("--record"), "--record", {".mkv", ".avi", ".mp4"});
@@ -194,8 +220,14 @@ struct StreamView {
   double use(const ProcessedFrame& f) {
     const auto t0 = Clock::now();
     if (!haveLighting) {  // the first frame: does its shape fit the layout?
-      const int w = f.image ? f.image->width : f.raw ? f.raw->width : 0, h = f.image ? f.image->height : f.raw ? f.raw->height : 0;
-      if (w > 0) warnIfLayoutLooksWrong(source, layout, w, h, f.image ? f.image->rgb.data() : nullptr);
+      const int w = f.image ? f.image->width
+                    : f.raw ? f.raw->width
+                            : 0,
+                h = f.image ? f.image->height
+                    : f.raw ? f.raw->height
+                            : 0;
+      if (w > 0)
+        warnIfLayoutLooksWrong(source, layout, w, h, f.image ? f.image->rgb.data() : nullptr);
     }
     if (!haveLighting && autoExposure) state.shading.exposure = cli::autoExposure(f.radiance);
     haveLighting = true;
@@ -212,8 +244,8 @@ struct StreamView {
   }
 };
 
-void recordSample(StreamTally& t, const ProcessedFrame& f, double uploadMs, double renderMs, Hud* hud,
-                  const CapturePipeline& pipeline) {
+void recordSample(StreamTally& t, const ProcessedFrame& f, double uploadMs, double renderMs,
+                  Hud* hud, const CapturePipeline& pipeline) {
   t.grab.push_back(f.times.grabMs);
   t.convert.push_back(f.times.convertMs);
   t.project.push_back(f.times.projectMs);
@@ -230,12 +262,13 @@ void recordSample(StreamTally& t, const ProcessedFrame& f, double uploadMs, doub
   s.unsmoothed = f.unsmoothed;
   hud->push(s);
   const PipelineStats st = pipeline.stats();
-  hud->setCounters({st.captured, t.drawn, st.dropped, st.skipped, t.grab.empty() ? 0.0 : double(t.saturated) / double(t.grab.size())});
+  hud->setCounters({st.captured, t.drawn, st.dropped, st.skipped,
+                    t.grab.empty() ? 0.0 : double(t.saturated) / double(t.grab.size())});
 }
 
 /// Headless replay: every frame drawn, in order, and written.
-void runOffline(CapturePipeline& pipeline, StreamView& view, const StreamOutputs& out, StreamTally& tally,
-                Progress& progress) {
+void runOffline(CapturePipeline& pipeline, StreamView& view, const StreamOutputs& out,
+                StreamTally& tally, Progress& progress) {
   double lastMs = 0;
   while (auto f = pipeline.waitNext()) {
     const double uploadMs = view.use(*f);
@@ -255,8 +288,8 @@ void runOffline(CapturePipeline& pipeline, StreamView& view, const StreamOutputs
 }
 
 /// A window (or a camera headless): the newest coefficients, never waiting for capture.
-void runInteractive(CapturePipeline& pipeline, StreamView& view, StreamTally& tally, Progress& progress,
-                    bool live, const std::string& title) {
+void runInteractive(CapturePipeline& pipeline, StreamView& view, StreamTally& tally,
+                    Progress& progress, bool live, const std::string& title) {
   auto fpsT0 = Clock::now();
   std::size_t fpsFrames = 0;
   double lastMs = 0;
@@ -271,8 +304,10 @@ void runInteractive(CapturePipeline& pipeline, StreamView& view, StreamTally& ta
     for (; view.state.steps > 0; --view.state.steps) pipeline.step();
     double uploadMs = 0;
     auto f = pipeline.takeLatest();
-    if (f) uploadMs = view.use(*f);
-    else if (pipeline.finished()) break;
+    if (f)
+      uploadMs = view.use(*f);
+    else if (pipeline.finished())
+      break;
     else if (headless) {  // live, headless: nothing new to draw yet
       std::this_thread::sleep_for(std::chrono::milliseconds(2));
       continue;
@@ -290,26 +325,31 @@ void runInteractive(CapturePipeline& pipeline, StreamView& view, StreamTally& ta
     const double s = std::chrono::duration<double>(Clock::now() - fpsT0).count();
     if (s >= 1.0 && !headless) {
       char t[256];
-      std::snprintf(t, sizeof t, "liveprobe - %s - frame %zu - %.1f frames/s%s", title.c_str(), pipeline.stats().captured,
-                    double(fpsFrames) / s, view.state.paused ? " - paused" : "");
+      std::snprintf(t, sizeof t, "liveprobe - %s - frame %zu - %.1f frames/s%s", title.c_str(),
+                    pipeline.stats().captured, double(fpsFrames) / s,
+                    view.state.paused ? " - paused" : "");
       view.ctx->setTitle(t);
       fpsT0 = Clock::now(), fpsFrames = 0;
     }
   }
 }
 
-void printSummary(const std::string& description, const PipelineStats& st, const StreamTally& t, double smoothSeconds,
-                  bool interrupted) {
+void printSummary(const std::string& description, const PipelineStats& st, const StreamTally& t,
+                  double smoothSeconds, bool interrupted) {
   std::fprintf(stderr,
-               "liveprobe: %s: %zu frames captured, %zu drawn, %zu dropped (stale), %zu skipped (corrupt)%s%s%s\n"
-               "  median ms: grab %.2f, convert %.2f, project %.2f, upload %.2f, render %.2f; saturated values %.1f per frame\n",
-               description.c_str(), st.captured, t.drawn, st.dropped, st.skipped, st.endReason.empty() ? "" : "; ",
-               st.endReason.c_str(), interrupted ? "; stopped by a signal" : "", median(t.grab), median(t.convert),
+               "liveprobe: %s: %zu frames captured, %zu drawn, %zu dropped (stale), %zu skipped "
+               "(corrupt)%s%s%s\n"
+               "  median ms: grab %.2f, convert %.2f, project %.2f, upload %.2f, render %.2f; "
+               "saturated values %.1f per frame\n",
+               description.c_str(), st.captured, t.drawn, st.dropped, st.skipped,
+               st.endReason.empty() ? "" : "; ", st.endReason.c_str(),
+               interrupted ? "; stopped by a signal" : "", median(t.grab), median(t.convert),
                median(t.project), median(t.upload), median(t.render),
                t.grab.empty() ? 0.0 : double(t.saturated) / double(t.grab.size()));
   if (smoothSeconds > 0)
-    std::fprintf(stderr, "  --smooth %.3g s: lighting lags a step change by %.3g s (63%% of the step)\n", smoothSeconds,
-                 smoothSeconds);
+    std::fprintf(stderr,
+                 "  --smooth %.3g s: lighting lags a step change by %.3g s (63%% of the step)\n",
+                 smoothSeconds, smoothSeconds);
 }
 
 // The pipeline and the render loop, for replay (a file) and live (a camera). A camera is never
@@ -322,7 +362,8 @@ int runStream(const Args& a, std::unique_ptr<FrameSource> source, bool live) {
   const Mesh mesh = meshFromArgs(a);
   const double fps = source->fps();
   const std::string description = source->describe();
-  const bool headless = a.has("--headless") || !(std::getenv("DISPLAY") || std::getenv("WAYLAND_DISPLAY"));
+  const bool headless =
+      a.has("--headless") || !(std::getenv("DISPLAY") || std::getenv("WAYLAND_DISPLAY"));
   const std::string sizeOpt = live ? "--view-size" : "--size";  // live: --size is the camera's
   const auto size = parseSize(a.get(sizeOpt, headless ? "640x360" : "1280x720"), sizeOpt);
   if (a.has("--duration")) {
@@ -331,7 +372,8 @@ int runStream(const Args& a, std::unique_ptr<FrameSource> source, bool live) {
     opt.maxFrames = opt.maxFrames < 0 ? n : std::min(opt.maxFrames, n);
   }
   // (live says so on its first line, with the camera's description)
-  const bool endless = !live && opt.maxFrames < 0 && (opt.loop || description.rfind("synthetic", 0) == 0);
+  const bool endless =
+      !live && opt.maxFrames < 0 && (opt.loop || description.rfind("synthetic", 0) == 0);
   opt.handoff = headless && !live ? Handoff::Every : Handoff::Latest;
   opt.realtime = !headless && !live;
 
@@ -347,7 +389,8 @@ int runStream(const Args& a, std::unique_ptr<FrameSource> source, bool live) {
     AtomicTextFile* file = out.coeffs.get();
     opt.onCaptured = [file](const ProcessedFrame& f) { file->line(coeffsLine(f, -1)); };
   }
-  if (out.record) {  // --record (live): the raw stream, finalised even when capture stops on a fault
+  if (out.record) {  // --record (live): the raw stream, finalised even when capture stops on a
+                     // fault
     VideoRecorder* rec = out.record.get();
     opt.onFrame = [rec](const Frame& f) { rec->write(f); };
   }
@@ -358,23 +401,29 @@ int runStream(const Args& a, std::unique_ptr<FrameSource> source, bool live) {
   loadModel(*view.renderer, mesh);
   if (opt.rotation) view.renderer->setEnvOrientation(*opt.rotation);
   const bool wantHud = view.ctx->isHeadless() ? a.has("--hud") : !a.has("--no-hud");
-  if (wantHud || !view.ctx->isHeadless()) {  // a window always has the HUD (H shows it, F1 the help)
+  if (wantHud ||
+      !view.ctx->isHeadless()) {  // a window always has the HUD (H shows it, F1 the help)
     view.hud = std::make_unique<Hud>(*view.ctx);
-    view.hud->setSource(description, std::string(layoutName(opt.layout.layout)), opt.smoothSeconds > 0);
+    view.hud->setSource(description, std::string(layoutName(opt.layout.layout)),
+                        opt.smoothSeconds > 0);
     view.state.hud = wantHud;
   }
   const bool quiet = a.has("--quiet");
   if (endless && view.ctx->isHeadless() && !quiet)
-    std::fprintf(stderr, "liveprobe: %s has no end: running until Ctrl-C (or give --frames N or --duration S)\n",
-                 description.c_str());
+    std::fprintf(
+        stderr,
+        "liveprobe: %s has no end: running until Ctrl-C (or give --frames N or --duration S)\n",
+        description.c_str());
   Progress progress(live ? "live" : "replay", opt.maxFrames, quiet || !view.ctx->isHeadless());
 
   CapturePipeline pipeline(std::move(source), opt);
   pipeline.start();
   StreamTally tally;
   try {
-    if (view.ctx->isHeadless() && !live) runOffline(pipeline, view, out, tally, progress);
-    else runInteractive(pipeline, view, tally, progress, live, description);
+    if (view.ctx->isHeadless() && !live)
+      runOffline(pipeline, view, out, tally, progress);
+    else
+      runInteractive(pipeline, view, tally, progress, live, description);
   } catch (const gl::ContextError& e) {
     pipeline.stop();
     throw Error(std::string("GL: ") + e.what());
@@ -384,9 +433,11 @@ int runStream(const Args& a, std::unique_ptr<FrameSource> source, bool live) {
   const PipelineStats st = pipeline.stats();
   if (out.record) {
     out.record->finish();
-    std::fprintf(stderr, "liveprobe: recorded %zu frames to %s\n", out.record->frames(), out.record->path().c_str());
+    std::fprintf(stderr, "liveprobe: recorded %zu frames to %s\n", out.record->frames(),
+                 out.record->path().c_str());
   }
-  if (out.coeffs && (st.error.empty() || live)) out.coeffs->commit();  // a camera's frames up to a fault are real data
+  if (out.coeffs && (st.error.empty() || live))
+    out.coeffs->commit();  // a camera's frames up to a fault are real data
   if (!st.error.empty()) throw Error(st.error);
   if (out.video) out.video->finish();
   printSummary(description, st, tally, opt.smoothSeconds, stopRequested());
@@ -403,7 +454,8 @@ int runReplay(const Args& a) {
   const std::string sourceName = a.positional().empty() ? defaultRecording() : a.positional()[0];
   SourceOptions so;
   so.fps = a.number("--fps", 30.0);
-  if (!(so.fps > 0 && so.fps <= 1000)) throw Error("--fps " + a.get("--fps") + ": expected a rate in (0, 1000]");
+  if (!(so.fps > 0 && so.fps <= 1000))
+    throw Error("--fps " + a.get("--fps") + ": expected a rate in (0, 1000]");
   if (a.has("--out-dir") || a.has("--out-video"))
     if (a.has("--loop") && !a.has("--frames") && !a.has("--duration"))
       throw Error("--loop with --out-dir or --out-video needs --frames N or --duration S");
@@ -422,9 +474,13 @@ const CommandSpec kRecordSpec{
     {{"--out", "FILE", "output video (.mkv, .avi or .mp4); required"},
      {"--frames", "N", "number of frames to record"},
      {"--duration", "SECONDS", "seconds of the source to record"},
-     {"--fps", "F", "frame rate of image sequences and of the recording, 0 to 1000 (default: the source's)"},
+     {"--fps", "F",
+      "frame rate of image sequences and of the recording, 0 to 1000 (default: the source's)"},
      {"--quiet", "", "no progress on stderr"}},
-    1, 1, "a video, an image sequence (a folder, or a pattern like frames/%04d.png), an image, a folder of six cube faces, or synthetic[:WxH[@FPS]]"};
+    1,
+    1,
+    "a video, an image sequence (a folder, or a pattern like frames/%04d.png), an image, a folder "
+    "of six cube faces, or synthetic[:WxH[@FPS]]"};
 
 int runRecord(const Args& a) {
   installStopHandlers();
@@ -436,21 +492,25 @@ int runRecord(const Args& a) {
   auto source = openSource(a.positional()[0], so);
   const double fps = a.has("--fps") ? so.fps : source->fps();
   if (a.has("--duration")) {
-    const std::int64_t n = std::max<std::int64_t>(1, std::llround(a.numberIn("--duration", 0, 1e-3, 1e7) * fps));
+    const std::int64_t n =
+        std::max<std::int64_t>(1, std::llround(a.numberIn("--duration", 0, 1e-3, 1e7) * fps));
     frames = frames < 0 ? n : std::min(frames, n);
   }
-  if (frames < 0 && a.positional()[0].rfind("synthetic", 0) == 0) frames = std::int64_t(std::lround(5 * fps));
+  if (frames < 0 && a.positional()[0].rfind("synthetic", 0) == 0)
+    frames = std::int64_t(std::lround(5 * fps));
   VideoRecorder rec(a.get("--out"), fps, source->describe(), source->radianceScale());
   Progress progress("record", frames, a.has("--quiet"));
   Frame f;
-  while ((frames < 0 || std::int64_t(rec.frames()) < frames) && !stopRequested() && source->next(f)) {
+  while ((frames < 0 || std::int64_t(rec.frames()) < frames) && !stopRequested() &&
+         source->next(f)) {
     rec.write(f);
     progress.update(std::int64_t(rec.frames()));
   }
   progress.finish();
   rec.finish();
-  std::fprintf(stderr, "liveprobe: %s: %zu frame%s at %.3g fps from %s%s\n", a.get("--out").c_str(), rec.frames(),
-               rec.frames() == 1 ? "" : "s", fps, source->describe().c_str(), stopRequested() ? "; stopped by a signal" : "");
+  std::fprintf(stderr, "liveprobe: %s: %zu frame%s at %.3g fps from %s%s\n", a.get("--out").c_str(),
+               rec.frames(), rec.frames() == 1 ? "" : "s", fps, source->describe().c_str(),
+               stopRequested() ? "; stopped by a signal" : "");
   return stopRequested() ? kExitInterrupted : 0;
 }
 

@@ -18,8 +18,9 @@ namespace lp::cli {
 
 namespace {
 
-const OptionSpec kWindowOpt{"--window", "none|auto|W",
-                            "Hann window of width W against ringing; auto = mildest keeping E >= 0"};
+const OptionSpec kWindowOpt{
+    "--window", "none|auto|W",
+    "Hann window of width W against ringing; auto = mildest keeping E >= 0"};
 
 std::vector<OptionSpec> withLayout(std::vector<OptionSpec> o) {
   const auto l = layoutOptions();
@@ -57,7 +58,9 @@ const CommandSpec kCoeffsSpec{
     "Prints the nine radiance coefficients L_lm (R&H convention, before the A_l factors) of an\n"
     "environment map (.hdr, .exr, or 8-bit PNG/JPEG decoded from sRGB).",
     withLayout({{"--format", "json|text|glsl", "output format (default json)"}, kWindowOpt}),
-    1, 1, "an environment map (.hdr, .exr, .png, .jpg), or a folder of six cube faces"};
+    1,
+    1,
+    "an environment map (.hdr, .exr, .png, .jpg), or a folder of six cube faces"};
 
 int runCoeffs(const Args& a) {
   const std::string format = a.get("--format", "json");
@@ -74,8 +77,8 @@ int runCoeffs(const Args& a) {
     j["coefficients"] = coefficientsJson(L);
     std::cout << j.dump() << "\n";
   } else if (format == "text") {
-    std::cout << a.positional()[0] << " (" << layoutName(env.layout.layout) << ", " << env.image.width
-              << "x" << env.image.height << ")\n"
+    std::cout << a.positional()[0] << " (" << layoutName(env.layout.layout) << ", "
+              << env.image.width << "x" << env.image.height << ")\n"
               << coefficientsText(L);
     const MinIrradiance mn = minIrradiance(L);
     std::printf("min irradiance over the sphere / L00-irradiance: %.4f %.4f %.4f\n",
@@ -94,17 +97,20 @@ const CommandSpec kIrradianceSpec{
     "from nine coefficients (sh) or by brute-force hemispherical integration (brute).\n"
     "PNG output is sRGB-encoded E/pi (the radiance of a white diffuse surface), clamped to 1.",
     withLayout({{"--out", "FILE", "output image (.hdr, .exr: linear irradiance; .png: 8-bit)"},
-     {"--size", "WxH", "output size, each side up to 8192 (default 256x128)"},
-     {"--method", "sh|brute", "how to compute E (default sh)"},
-     kWindowOpt}),
-    1, 1, "an environment map (.hdr, .exr, .png, .jpg), or a folder of six cube faces"};
+                {"--size", "WxH", "output size, each side up to 8192 (default 256x128)"},
+                {"--method", "sh|brute", "how to compute E (default sh)"},
+                kWindowOpt}),
+    1,
+    1,
+    "an environment map (.hdr, .exr, .png, .jpg), or a folder of six cube faces"};
 
 int runIrradiance(const Args& a) {
   if (!a.has("--out")) throw Error("--out FILE is required");
   requireExtension(a.get("--out"), "--out", {".hdr", ".exr", ".png"});
   const auto [w, h] = parseSize(a.get("--size", "256x128"), "--size", 8192);
   const std::string method = a.get("--method", "sh");
-  if (method != "sh" && method != "brute") throw Error("--method " + method + ": expected sh or brute");
+  if (method != "sh" && method != "brute")
+    throw Error("--method " + method + ": expected sh or brute");
   Environment env = loadEnvironment(a);
   const auto grid = equirectSamples(w, h);
   std::vector<glm::vec3> normals(grid.size());
@@ -136,11 +142,13 @@ const CommandSpec kCompareSpec{
     "(luminance, solid-angle weighted). Errors are given as a fraction of the total intensity\n"
     "(the paper's measure) and of the mean irradiance.",
     withLayout({{"--size", "WxH", "grid of normals, each side up to 4096 (default 64x32)"},
-     {"--out", "PNG", "figure: SH map, brute-force map and error, with a colour scale"},
-     {"--json", "", "print JSON instead of text"},
-     {"--quiet", "", "no progress on stderr"},
-     kWindowOpt}),
-    1, 1, "an environment map (.hdr, .exr, .png, .jpg), or a folder of six cube faces"};
+                {"--out", "PNG", "figure: SH map, brute-force map and error, with a colour scale"},
+                {"--json", "", "print JSON instead of text"},
+                {"--quiet", "", "no progress on stderr"},
+                kWindowOpt}),
+    1,
+    1,
+    "an environment map (.hdr, .exr, .png, .jpg), or a folder of six cube faces"};
 
 int runCompare(const Args& a) {
   const auto [w, h] = parseSize(a.get("--size", "64x32"), "--size", 4096);
@@ -148,11 +156,12 @@ int runCompare(const Args& a) {
   Environment env = loadEnvironment(a);
   installStopHandlers();
   Progress progress("compare: brute force", std::int64_t(w) * h, a.has("--quiet"), "normals");
-  const CompareResult r = compareIrradiance(env.image, env.layout, w, h, chooseWindow(a, env.radiance), 0,
-                                            env.orientation, [&](std::size_t done) {
-                                              progress.update(std::int64_t(done));
-                                              return !stopRequested();
-                                            });
+  const CompareResult r =
+      compareIrradiance(env.image, env.layout, w, h, chooseWindow(a, env.radiance), 0,
+                        env.orientation, [&](std::size_t done) {
+                          progress.update(std::int64_t(done));
+                          return !stopRequested();
+                        });
   progress.finish();
   if (stopRequested()) {
     std::fprintf(stderr, "liveprobe: compare stopped by a signal after %s\n", "part of the grid");
@@ -176,7 +185,8 @@ int runCompare(const Args& a) {
     std::cout << j.dump(2) << "\n";
   } else {
     std::printf("%s (%s, %dx%d), %dx%d normals\n", a.positional()[0].c_str(),
-                std::string(layoutName(env.layout.layout)).c_str(), env.image.width, env.image.height, w, h);
+                std::string(layoutName(env.layout.layout)).c_str(), env.image.width,
+                env.image.height, w, h);
     std::printf("  |E_sh - E| / total intensity: mean %.3f%%  max %.3f%%\n", 100 * r.meanFracTotal,
                 100 * r.maxFracTotal);
     std::printf("  |E_sh - E| / mean irradiance: mean %.3f%%  max %.3f%%\n", 100 * r.meanRelMean,

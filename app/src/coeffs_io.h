@@ -1,9 +1,8 @@
 #pragma once
 // Text forms of the nine radiance coefficients: JSON (the interchange format of every
 // liveprobe command), a readable table, and a GLSL snippet with the three R&H matrices.
-#include <string>
-
 #include <nlohmann/json.hpp>
+#include <string>
 
 #include "shading/sh.h"
 

@@ -34,6 +34,7 @@ std::vector<OptionSpec> streamOptions();
 /// recordings/sky.mkv in the source tree, or $LIVEPROBE_DEFAULT_RECORDING.
 std::string defaultRecording();
 
-extern const CommandSpec kCoeffsSpec, kIrradianceSpec, kCompareSpec, kRenderSpec, kViewSpec, kReplaySpec, kRecordSpec, kBenchSpec, kLiveSpec, kDevicesSpec;
+extern const CommandSpec kCoeffsSpec, kIrradianceSpec, kCompareSpec, kRenderSpec, kViewSpec,
+    kReplaySpec, kRecordSpec, kBenchSpec, kLiveSpec, kDevicesSpec;
 
 }  // namespace lp::cli

@@ -4,7 +4,6 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
-
 #include <glm/gtc/type_ptr.hpp>
 #include <opencv2/imgproc.hpp>
 
@@ -20,8 +19,8 @@ double msSince(std::chrono::steady_clock::time_point t0) {
 }  // namespace
 
 CompareResult compareIrradiance(const Image& img, const LayoutSpec& layout, int width, int height,
-                                const BandWindow& window, unsigned threads, const glm::mat3& orientation,
-                                const BruteProgress& progress) {
+                                const BandWindow& window, unsigned threads,
+                                const glm::mat3& orientation, const BruteProgress& progress) {
   const Projector projector(layout, img.width, img.height);
   auto samples = projector.samples();
   for (auto& s : samples) s.dir = orientation * s.dir;
@@ -43,12 +42,14 @@ CompareResult compareIrradiance(const Image& img, const LayoutSpec& layout, int 
   r.shMs = msSince(t0);
 
   t0 = std::chrono::steady_clock::now();
-  const auto brute = bruteIrradiance(img.rgb.data(), 3, samples.data(), samples.size(), normals, threads, progress);
+  const auto brute = bruteIrradiance(img.rgb.data(), 3, samples.data(), samples.size(), normals,
+                                     threads, progress);
   r.bruteMs = msSince(t0);
   for (std::size_t i = 0; i < grid.size(); ++i) r.yBrute[i] = luminance(brute[i]);
 
   for (std::size_t i = 0; i < samples.size(); ++i)
-    r.totalIntensity += double(luminance(glm::make_vec3(img.rgb.data() + 3 * i))) * samples[i].solidAngle;
+    r.totalIntensity +=
+        double(luminance(glm::make_vec3(img.rgb.data() + 3 * i))) * samples[i].solidAngle;
 
   double wsum = 0, esum = 0, errSum = 0, errMax = 0, shMin = INFINITY;
   for (std::size_t i = 0; i < grid.size(); ++i) {
@@ -97,7 +98,8 @@ void saveCompareFigure(const std::string& path, const CompareResult& r) {
   cv::Mat err(r.height, r.width, CV_8UC1);
   for (int i = 0; i < r.height; ++i)
     for (int j = 0; j < r.width; ++j) {
-      const double e = std::abs(double(r.ySh[i * r.width + j]) - r.yBrute[i * r.width + j]) / r.totalIntensity;
+      const double e =
+          std::abs(double(r.ySh[i * r.width + j]) - r.yBrute[i * r.width + j]) / r.totalIntensity;
       err.at<std::uint8_t>(i, j) = std::uint8_t(std::lround(255 * std::min(1.0, e / emax)));
     }
   cv::Mat errBig, errColour;
@@ -108,7 +110,8 @@ void saveCompareFigure(const std::string& path, const CompareResult& r) {
   // Colour bar with its range.
   const int bx = 3 * pw + 2 * gap + 10;
   cv::Mat ramp(ph, 1, CV_8UC1);
-  for (int i = 0; i < ph; ++i) ramp.at<std::uint8_t>(i) = std::uint8_t(255 - 255 * i / std::max(1, ph - 1));
+  for (int i = 0; i < ph; ++i)
+    ramp.at<std::uint8_t>(i) = std::uint8_t(255 - 255 * i / std::max(1, ph - 1));
   cv::Mat rampW, rampC;
   cv::resize(ramp, rampW, {16, ph}, 0, 0, cv::INTER_NEAREST);
   cv::applyColorMap(rampW, rampC, cv::COLORMAP_INFERNO);
@@ -120,7 +123,8 @@ void saveCompareFigure(const std::string& path, const CompareResult& r) {
   cv::putText(fig, "0%", {bx + 20, label + ph - 2}, cv::FONT_HERSHEY_SIMPLEX, 0.4, white);
   cv::putText(fig, "SH (9 coefficients)", {4, 19}, cv::FONT_HERSHEY_SIMPLEX, 0.5, white);
   cv::putText(fig, "brute force", {pw + gap + 4, 19}, cv::FONT_HERSHEY_SIMPLEX, 0.5, white);
-  cv::putText(fig, "|error| / total intensity", {2 * (pw + gap) + 4, 19}, cv::FONT_HERSHEY_SIMPLEX, 0.5, white);
+  cv::putText(fig, "|error| / total intensity", {2 * (pw + gap) + 4, 19}, cv::FONT_HERSHEY_SIMPLEX,
+              0.5, white);
   saveImage8(path, fig.cols, fig.rows, 3, fig.ptr<std::uint8_t>());
 }
 

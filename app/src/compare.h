@@ -26,7 +26,8 @@ struct CompareResult {
 /// `orientation` turns the environment (world from file) for both methods.
 CompareResult compareIrradiance(const Image& img, const LayoutSpec& layout, int width, int height,
                                 const BandWindow& window = {}, unsigned threads = 0,
-                                const glm::mat3& orientation = glm::mat3(1.0f), const BruteProgress& progress = {});
+                                const glm::mat3& orientation = glm::mat3(1.0f),
+                                const BruteProgress& progress = {});
 
 /// The SH map, the brute-force map (same exposure) and |error| / total intensity with a colour
 /// scale, side by side, as an 8-bit PNG.

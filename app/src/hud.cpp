@@ -17,14 +17,16 @@ namespace lp::cli {
 namespace {
 
 constexpr std::size_t kHistory = 300;  // frames kept for the plots
-const ImU32 kChannel[3] = {IM_COL32(235, 80, 70, 255), IM_COL32(90, 200, 90, 255), IM_COL32(80, 140, 240, 255)};
-const ImU32 kStageColour[5] = {IM_COL32(100, 180, 255, 255), IM_COL32(255, 160, 60, 255), IM_COL32(110, 220, 110, 255),
-                               IM_COL32(255, 110, 110, 255), IM_COL32(200, 150, 255, 255)};
+const ImU32 kChannel[3] = {IM_COL32(235, 80, 70, 255), IM_COL32(90, 200, 90, 255),
+                           IM_COL32(80, 140, 240, 255)};
+const ImU32 kStageColour[5] = {IM_COL32(100, 180, 255, 255), IM_COL32(255, 160, 60, 255),
+                               IM_COL32(110, 220, 110, 255), IM_COL32(255, 110, 110, 255),
+                               IM_COL32(200, 150, 255, 255)};
 const char* const kStageName[5] = {"grab", "convert", "project", "upload", "render"};
 
 /// Several series on one set of axes (ImGui's PlotLines draws one), scaled to [lo, hi].
-void plotSeries(const char* id, const std::vector<std::vector<float>>& series, const std::vector<ImU32>& colours,
-                ImVec2 size, float lo, float hi) {
+void plotSeries(const char* id, const std::vector<std::vector<float>>& series,
+                const std::vector<ImU32>& colours, ImVec2 size, float lo, float hi) {
   ImGui::PushID(id);
   const ImVec2 p0 = ImGui::GetCursorScreenPos(), p1(p0.x + size.x, p0.y + size.y);
   ImDrawList* dl = ImGui::GetWindowDrawList();
@@ -57,13 +59,26 @@ void applyKeys(const std::vector<gl::KeyAction>& keys, ViewState& s, bool canPau
       case gl::KeyAction::Step:
         if (canPause) s.paused = true, ++s.steps;
         break;
-      case gl::KeyAction::ResetView: s.camera = s.initialCamera; break;
-      case gl::KeyAction::ToggleBackground: s.shading.background = !s.shading.background; break;
-      case gl::KeyAction::ToggleHud: s.hud = !s.hud; break;
-      case gl::KeyAction::ExposureUp: s.shading.exposure *= std::sqrt(2.0f); break;  // half a stop
-      case gl::KeyAction::ExposureDown: s.shading.exposure /= std::sqrt(2.0f); break;
-      case gl::KeyAction::Help: s.help = !s.help; break;
-      case gl::KeyAction::Save: break;  // the coefficient editor's (view)
+      case gl::KeyAction::ResetView:
+        s.camera = s.initialCamera;
+        break;
+      case gl::KeyAction::ToggleBackground:
+        s.shading.background = !s.shading.background;
+        break;
+      case gl::KeyAction::ToggleHud:
+        s.hud = !s.hud;
+        break;
+      case gl::KeyAction::ExposureUp:
+        s.shading.exposure *= std::sqrt(2.0f);
+        break;  // half a stop
+      case gl::KeyAction::ExposureDown:
+        s.shading.exposure /= std::sqrt(2.0f);
+        break;
+      case gl::KeyAction::Help:
+        s.help = !s.help;
+        break;
+      case gl::KeyAction::Save:
+        break;  // the coefficient editor's (view)
     }
 }
 
@@ -157,13 +172,16 @@ void Hud::drawStatus(ViewState& state, double frameMs) {
   ImGui::SetNextWindowPos({8, 8}, ImGuiCond_Always);
   ImGui::SetNextWindowSize({330, 0}, ImGuiCond_Always);
   ImGui::SetNextWindowBgAlpha(0.6f);
-  ImGui::Begin("liveprobe", nullptr, ImGuiWindowFlags_NoMove | ImGuiWindowFlags_NoResize | ImGuiWindowFlags_NoSavedSettings |
-                                        ImGuiWindowFlags_NoFocusOnAppearing);
+  ImGui::Begin("liveprobe", nullptr,
+               ImGuiWindowFlags_NoMove | ImGuiWindowFlags_NoResize |
+                   ImGuiWindowFlags_NoSavedSettings | ImGuiWindowFlags_NoFocusOnAppearing);
   ImGui::TextWrapped("%s", source_.c_str());
   ImGui::Text("layout %s%s", layout_.c_str(), state.paused ? "   [PAUSED]" : "");
   if (!still_ && !history_.empty())
-    ImGui::Text("frame %llu   t = %.3f s", static_cast<unsigned long long>(history_.back().frame), history_.back().time);
-  ImGui::Text("%.1f frames/s   %.2f ms/frame", fpsSmoothed_ > 0 ? 1000.0 / fpsSmoothed_ : 0.0, frameMs);
+    ImGui::Text("frame %llu   t = %.3f s", static_cast<unsigned long long>(history_.back().frame),
+                history_.back().time);
+  ImGui::Text("%.1f frames/s   %.2f ms/frame", fpsSmoothed_ > 0 ? 1000.0 / fpsSmoothed_ : 0.0,
+              frameMs);
   if (!still_ && !history_.empty()) {
     std::vector<std::vector<float>> series(5);
     std::vector<float> all;
@@ -178,7 +196,8 @@ void Hud::drawStatus(ViewState& state, double frameMs) {
     std::nth_element(all.begin(), all.begin() + std::ptrdiff_t(all.size() * 95 / 100), all.end());
     const float top = std::max(1.0f, 1.3f * all[all.size() * 95 / 100]);
     ImGui::Text("stage times, last %zu frames (0 .. %.1f ms)", history_.size(), top);
-    plotSeries("stages", series, {std::begin(kStageColour), std::end(kStageColour)}, {310, 70}, 0, top);
+    plotSeries("stages", series, {std::begin(kStageColour), std::end(kStageColour)}, {310, 70}, 0,
+               top);
     const auto& b = history_.back();
     const double now[5] = {b.grabMs, b.convertMs, b.projectMs, b.uploadMs, b.renderMs};
     if (ImGui::BeginTable("stages", 3)) {
@@ -190,11 +209,14 @@ void Hud::drawStatus(ViewState& state, double frameMs) {
     }
   }
   if (!still_) {
-    ImGui::Text("captured %zu  drawn %zu  dropped %zu", counters_.captured, counters_.drawn, counters_.dropped);
-    ImGui::Text("skipped %zu  saturated %.1f/frame", counters_.skipped, counters_.saturatedPerFrame);
+    ImGui::Text("captured %zu  drawn %zu  dropped %zu", counters_.captured, counters_.drawn,
+                counters_.dropped);
+    ImGui::Text("skipped %zu  saturated %.1f/frame", counters_.skipped,
+                counters_.saturatedPerFrame);
   }
   float ev = std::log2(state.shading.exposure);
-  if (ImGui::SliderFloat("exposure (EV)", &ev, -16.0f, 16.0f, "%.2f")) state.shading.exposure = std::exp2(ev);
+  if (ImGui::SliderFloat("exposure (EV)", &ev, -16.0f, 16.0f, "%.2f"))
+    state.shading.exposure = std::exp2(ev);
   ImGui::Checkbox("background", &state.shading.background);
   ImGui::SameLine();
   ImGui::TextDisabled("F1: help");
@@ -206,13 +228,15 @@ void Hud::drawLight(gl::Renderer& renderer) {
   ImGui::SetNextWindowPos({io.DisplaySize.x - 8, 8}, ImGuiCond_Always, {1, 0});
   ImGui::SetNextWindowSize({290, 0}, ImGuiCond_Always);
   ImGui::SetNextWindowBgAlpha(0.6f);
-  ImGui::Begin("light", nullptr, ImGuiWindowFlags_NoMove | ImGuiWindowFlags_NoResize | ImGuiWindowFlags_NoSavedSettings |
-                                     ImGuiWindowFlags_NoFocusOnAppearing);
+  ImGui::Begin("light", nullptr,
+               ImGuiWindowFlags_NoMove | ImGuiWindowFlags_NoResize |
+                   ImGuiWindowFlags_NoSavedSettings | ImGuiWindowFlags_NoFocusOnAppearing);
   auto image = [&](gl::ProbeView v, float scale) {
     const glm::ivec2 s = renderer.probeSize(v);
     // The textures are rendered bottom-up (GL): flip v.
-    ImGui::Image(reinterpret_cast<ImTextureID>(static_cast<std::uintptr_t>(renderer.probeTexture(v))),
-                 {float(s.x) * scale, float(s.y) * scale}, {0, 1}, {1, 0});
+    ImGui::Image(
+        reinterpret_cast<ImTextureID>(static_cast<std::uintptr_t>(renderer.probeTexture(v))),
+        {float(s.x) * scale, float(s.y) * scale}, {0, 1}, {1, 0});
   };
   image(gl::ProbeView::Panorama, 1.05f);
   image(gl::ProbeView::DiffuseBall, 1.0f);
@@ -233,8 +257,8 @@ void Hud::drawLight(gl::Renderer& renderer) {
     dl->AddLine({mid, p.y}, {mid, p.y + 3 * h}, IM_COL32(120, 120, 120, 255));
     for (int ch = 0; ch < 3; ++ch) {
       const float v = L.c[std::size_t(k)][ch] / scale * (w / 2);
-      dl->AddRectFilled({std::min(mid, mid + v), p.y + float(ch) * h}, {std::max(mid, mid + v), p.y + float(ch + 1) * h - 1},
-                        kChannel[ch]);
+      dl->AddRectFilled({std::min(mid, mid + v), p.y + float(ch) * h},
+                        {std::max(mid, mid + v), p.y + float(ch + 1) * h - 1}, kChannel[ch]);
     }
     ImGui::Dummy({w, 3 * h});
     ImGui::SameLine();
@@ -246,7 +270,8 @@ void Hud::drawLight(gl::Renderer& renderer) {
     std::vector<std::vector<float>> series(2);
     float lo = 0, hi = 0;
     for (const auto& h : history_) {
-      const float a = luminance(h.unsmoothed.c[std::size_t(k)]), b = luminance(h.radiance.c[std::size_t(k)]);
+      const float a = luminance(h.unsmoothed.c[std::size_t(k)]),
+                  b = luminance(h.radiance.c[std::size_t(k)]);
       series[0].push_back(a);
       series[1].push_back(b);
       lo = std::min({lo, a, b});
@@ -255,9 +280,11 @@ void Hud::drawLight(gl::Renderer& renderer) {
     if (!smoothing_) series.erase(series.begin());
     if (k % 3) ImGui::SameLine();
     const float pad = 0.05f * std::max(1e-9f, hi - lo);
-    const std::vector<ImU32> colours = smoothing_ ? std::vector<ImU32>{IM_COL32(150, 150, 150, 255), IM_COL32(250, 210, 80, 255)}
-                                                  : std::vector<ImU32>{IM_COL32(250, 210, 80, 255)};
-    plotSeries(std::string(kShNames[std::size_t(k)]).c_str(), series, colours, {88, 26}, lo - pad, hi + pad);
+    const std::vector<ImU32> colours =
+        smoothing_ ? std::vector<ImU32>{IM_COL32(150, 150, 150, 255), IM_COL32(250, 210, 80, 255)}
+                   : std::vector<ImU32>{IM_COL32(250, 210, 80, 255)};
+    plotSeries(std::string(kShNames[std::size_t(k)]).c_str(), series, colours, {88, 26}, lo - pad,
+               hi + pad);
   }
   ImGui::End();
 }
@@ -267,12 +294,17 @@ void Hud::drawEditor() {
   ImGui::SetNextWindowPos({8, io.DisplaySize.y - 8}, ImGuiCond_Always, {0, 1});
   ImGui::SetNextWindowSize({330, 0}, ImGuiCond_Always);
   ImGui::SetNextWindowBgAlpha(0.6f);
-  ImGui::Begin("coefficients", nullptr, ImGuiWindowFlags_NoMove | ImGuiWindowFlags_NoResize | ImGuiWindowFlags_NoSavedSettings);
+  ImGui::Begin(
+      "coefficients", nullptr,
+      ImGuiWindowFlags_NoMove | ImGuiWindowFlags_NoResize | ImGuiWindowFlags_NoSavedSettings);
   float scale = 0.5f;
-  for (const auto& c : editing_->c) scale = std::max({scale, std::abs(c.x), std::abs(c.y), std::abs(c.z)});
+  for (const auto& c : editing_->c)
+    scale = std::max({scale, std::abs(c.x), std::abs(c.y), std::abs(c.z)});
   for (int k = 0; k < kShCount; ++k) {
-    float v[3] = {editing_->c[std::size_t(k)].x, editing_->c[std::size_t(k)].y, editing_->c[std::size_t(k)].z};
-    if (ImGui::SliderFloat3(std::string(kShNames[std::size_t(k)]).c_str(), v, -2 * scale, 2 * scale, "%.3f")) {
+    float v[3] = {editing_->c[std::size_t(k)].x, editing_->c[std::size_t(k)].y,
+                  editing_->c[std::size_t(k)].z};
+    if (ImGui::SliderFloat3(std::string(kShNames[std::size_t(k)]).c_str(), v, -2 * scale, 2 * scale,
+                            "%.3f")) {
       editing_->c[std::size_t(k)] = {v[0], v[1], v[2]};
       edited_ = true;
     }
@@ -289,16 +321,18 @@ void Hud::drawEditor() {
 
 void Hud::drawHelp(ViewState& state) {
   const ImGuiIO& io = ImGui::GetIO();
-  ImGui::SetNextWindowPos({io.DisplaySize.x / 2, io.DisplaySize.y / 2}, ImGuiCond_Always, {0.5f, 0.5f});
+  ImGui::SetNextWindowPos({io.DisplaySize.x / 2, io.DisplaySize.y / 2}, ImGuiCond_Always,
+                          {0.5f, 0.5f});
   ImGui::SetNextWindowBgAlpha(0.85f);
   bool open = true;
   ImGui::Begin("keys", &open, ImGuiWindowFlags_AlwaysAutoResize | ImGuiWindowFlags_NoSavedSettings);
-  const char* const rows[][2] = {{"left drag", "orbit"},       {"wheel", "zoom"},
-                                 {"Space", "pause / resume"},  {"Right", "one frame (paused)"},
-                                 {"R", "reset the view"},      {"B", "background on/off"},
-                                 {"H", "HUD on/off"},          {"+ / -", "exposure, half a stop"},
-                                 {"F1 or ?", "this help"},     {"Ctrl+S", "save the coefficients (view)"},
-                                 {"Esc or Q", "quit"}};
+  const char* const rows[][2] = {
+      {"left drag", "orbit"},      {"wheel", "zoom"},
+      {"Space", "pause / resume"}, {"Right", "one frame (paused)"},
+      {"R", "reset the view"},     {"B", "background on/off"},
+      {"H", "HUD on/off"},         {"+ / -", "exposure, half a stop"},
+      {"F1 or ?", "this help"},    {"Ctrl+S", "save the coefficients (view)"},
+      {"Esc or Q", "quit"}};
   for (const auto& r : rows) {
     ImGui::Text("%-10s", r[0]);
     ImGui::SameLine(90);

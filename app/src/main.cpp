@@ -3,10 +3,9 @@
 // command line (one line on stderr), 130 stopped by SIGINT or SIGTERM, 3 an internal error.
 #include <cstdio>
 #include <iostream>
+#include <opencv2/core/utils/logger.hpp>
 #include <string>
 #include <vector>
-
-#include <opencv2/core/utils/logger.hpp>
 
 #include "args.h"
 #include "capture/error.h"

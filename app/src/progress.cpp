@@ -3,8 +3,8 @@
 #include <unistd.h>
 
 #include <atomic>
-#include <csignal>
 #include <cmath>
+#include <csignal>
 #include <cstdio>
 #include <cstdlib>
 
@@ -23,9 +23,13 @@ extern "C" void onStopSignal(int sig) {
 
 std::string formatSeconds(double s) {
   char b[32];
-  if (s < 100) std::snprintf(b, sizeof b, "%.0f s", s);
-  else if (s < 6000) std::snprintf(b, sizeof b, "%.0f min %02.0f s", std::floor(s / 60), s - 60 * std::floor(s / 60));
-  else std::snprintf(b, sizeof b, "%.1f h", s / 3600);
+  if (s < 100)
+    std::snprintf(b, sizeof b, "%.0f s", s);
+  else if (s < 6000)
+    std::snprintf(b, sizeof b, "%.0f min %02.0f s", std::floor(s / 60),
+                  s - 60 * std::floor(s / 60));
+  else
+    std::snprintf(b, sizeof b, "%.1f h", s / 3600);
   return b;
 }
 
@@ -43,11 +47,18 @@ void installStopHandlers() {
 bool stopRequested() { return gStopSignal.load(std::memory_order_relaxed) != 0; }
 int stopSignal() { return gStopSignal.load(); }
 
-void warn(const std::string& text) { std::fprintf(stderr, "liveprobe: warning: %s\n", text.c_str()); }
+void warn(const std::string& text) {
+  std::fprintf(stderr, "liveprobe: warning: %s\n", text.c_str());
+}
 
 Progress::Progress(std::string what, std::int64_t total, bool quiet, std::string unit)
-    : what_(std::move(what)), unit_(std::move(unit)), total_(total), quiet_(quiet), tty_(::isatty(2) == 1),
-      start_(Clock::now()), last_(start_) {}
+    : what_(std::move(what)),
+      unit_(std::move(unit)),
+      total_(total),
+      quiet_(quiet),
+      tty_(::isatty(2) == 1),
+      start_(Clock::now()),
+      last_(start_) {}
 
 Progress::~Progress() { finish(); }
 
@@ -55,11 +66,12 @@ void Progress::update(std::int64_t done) {
   if (quiet_) return;
   const auto now = Clock::now();
   const double sinceLast = std::chrono::duration<double>(now - last_).count();
-  static const double lineEvery = [] {  // LIVEPROBE_PROGRESS_SECONDS: the interval between lines off a terminal
-    const char* e = std::getenv("LIVEPROBE_PROGRESS_SECONDS");
-    const double v = e ? std::atof(e) : 0.0;
-    return v > 0 ? v : 5.0;
-  }();
+  static const double lineEvery =
+      [] {  // LIVEPROBE_PROGRESS_SECONDS: the interval between lines off a terminal
+        const char* e = std::getenv("LIVEPROBE_PROGRESS_SECONDS");
+        const double v = e ? std::atof(e) : 0.0;
+        return v > 0 ? v : 5.0;
+      }();
   if (sinceLast < (tty_ ? 0.1 : lineEvery)) return;
   last_ = now;
   const double elapsed = std::chrono::duration<double>(now - start_).count();
@@ -69,13 +81,17 @@ void Progress::update(std::int64_t done) {
   char b[96];
   std::snprintf(b, sizeof b, " %s, %.1f/s", unit_.c_str(), rate);
   text += b;
-  if (total_ > 0 && rate > 0 && done <= total_) text += ", ETA " + formatSeconds(double(total_ - done) / rate);
-  else text += ", " + formatSeconds(elapsed);
+  if (total_ > 0 && rate > 0 && done <= total_)
+    text += ", ETA " + formatSeconds(double(total_ - done) / rate);
+  else
+    text += ", " + formatSeconds(elapsed);
   if (tty_) {
     std::string bar;
     if (total_ > 0) {
-      const int width = 24, filled = int(width * std::min<double>(1.0, double(done) / double(total_)));
-      bar = "[" + std::string(std::size_t(filled), '#') + std::string(std::size_t(width - filled), ' ') + "] ";
+      const int width = 24,
+                filled = int(width * std::min<double>(1.0, double(done) / double(total_)));
+      bar = "[" + std::string(std::size_t(filled), '#') +
+            std::string(std::size_t(width - filled), ' ') + "] ";
     }
     std::fprintf(stderr, "\r\033[K%s%s", bar.c_str(), text.c_str());
     open_ = true;

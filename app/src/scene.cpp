@@ -1,5 +1,9 @@
 #include "scene.h"
 
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <glm/gtc/matrix_transform.hpp>
 #include <sstream>
 
 #include "capture/error.h"
@@ -8,52 +12,67 @@
 #include "coeffs_io.h"
 #include "progress.h"
 
-#include <algorithm>
-#include <cmath>
-#include <filesystem>
-#include <glm/gtc/matrix_transform.hpp>
-
 namespace lp::cli {
 
 std::vector<OptionSpec> sceneOptions() {
   const std::string m = "Model and camera", l = "Look";
-  return {{"--model", "FILE|sphere", "model to light (OBJ, PLY, glTF, ...; default: a UV sphere)", false, false, m},
-          {"--model-rotate", "YAW,PITCH,ROLL", "turn the model (degrees, about its up, right and view axes)", false, false, m},
+  return {{"--model", "FILE|sphere", "model to light (OBJ, PLY, glTF, ...; default: a UV sphere)",
+           false, false, m},
+          {"--model-rotate", "YAW,PITCH,ROLL",
+           "turn the model (degrees, about its up, right and view axes)", false, false, m},
           {"--up", "y|z", "the model file's up axis (default y, as OBJ and glTF)", false, false, m},
-          {"--yaw", "DEG", "camera yaw around the vertical axis (default 0: front view)", false, false, m},
+          {"--yaw", "DEG", "camera yaw around the vertical axis (default 0: front view)", false,
+           false, m},
           {"--pitch", "DEG", "camera pitch, -89.9 to 89.9 (default 0)", false, false, m},
-          {"--distance", "D", "camera distance; the model fits the unit sphere (default 3.2)", false, false, m},
-          {"--exposure", "X|auto", "exposure multiplier; auto (default): mean radiance to 0.18, or from the irradiance without an environment", false, false, l},
+          {"--distance", "D", "camera distance; the model fits the unit sphere (default 3.2)",
+           false, false, m},
+          {"--exposure", "X|auto",
+           "exposure multiplier; auto (default): mean radiance to 0.18, or from the irradiance "
+           "without an environment",
+           false, false, l},
           {"--tonemap", "aces|reinhard|linear", "tone map (default aces)", false, false, l},
-          {"--tonemap-background", "", "expose and tone-map an 8-bit background like HDR (default: shown as the source looks)", false, false, l},
+          {"--tonemap-background", "",
+           "expose and tone-map an 8-bit background like HDR (default: shown as the source looks)",
+           false, false, l},
           {"--no-background", "", "do not draw the panorama behind the model", false, false, l},
-          {"--msaa", "1|2|4|8", "multisample anti-aliasing, samples per pixel (default 4)", false, false, l},
-          {"--headless", "", "render offscreen through OSMesa even when a display exists", false, false, l}};
+          {"--msaa", "1|2|4|8", "multisample anti-aliasing, samples per pixel (default 4)", false,
+           false, l},
+          {"--headless", "", "render offscreen through OSMesa even when a display exists", false,
+           false, l}};
 }
 
 std::vector<OptionSpec> layoutOptions() {
   const std::string g = "Panorama";
-  return {{"--layout", "equirect|angular|mirrorball|cube|fisheye", "panorama layout (default equirect)", false, false, g},
+  return {{"--layout", "equirect|angular|mirrorball|cube|fisheye",
+           "panorama layout (default equirect)", false, false, g},
           {"--circle", "CX,CY,R", "mirrorball: the ball's circle in pixels", false, false, g},
-          {"--fov", "DEG", "fisheye: field of view of each lens, 180 to 360 (default 190)", false, false, g},
-          {"--env-rotate,--rotate", "YAW,PITCH,ROLL", "turn the environment, lighting and background together (degrees, about +z, +y, +x)", false, false, g},
-          {"--env-flip", "", "the panorama is stored upside down: mirror it top to bottom (before --env-rotate)", false, false, g}};
+          {"--fov", "DEG", "fisheye: field of view of each lens, 180 to 360 (default 190)", false,
+           false, g},
+          {"--env-rotate,--rotate", "YAW,PITCH,ROLL",
+           "turn the environment, lighting and background together (degrees, about +z, +y, +x)",
+           false, false, g},
+          {"--env-flip", "",
+           "the panorama is stored upside down: mirror it top to bottom (before --env-rotate)",
+           false, false, g}};
 }
 
 glm::mat3 envOrientationFromArgs(const Args& a) {
   glm::mat3 o(1.0f);
   if (a.has("--env-rotate")) {
-    const auto v = parseNumberList(a.get("--env-rotate"), "--env-rotate", 3, "yaw,pitch,roll in degrees");
+    const auto v =
+        parseNumberList(a.get("--env-rotate"), "--env-rotate", 3, "yaw,pitch,roll in degrees");
     o = rotationYawPitchRoll(float(v[0]), float(v[1]), float(v[2]));
   }
-  if (a.has("--env-flip")) o = o * glm::mat3(glm::vec3(1, 0, 0), glm::vec3(0, 1, 0), glm::vec3(0, 0, -1));
+  if (a.has("--env-flip"))
+    o = o * glm::mat3(glm::vec3(1, 0, 0), glm::vec3(0, 1, 0), glm::vec3(0, 0, -1));
   return o;
 }
 
 LayoutSpec layoutFromArgs(const Args& a) {
   LayoutSpec spec(parseLayout(a.get("--layout", "equirect")));
   if (a.has("--circle")) {
-    if (spec.layout != Layout::MirrorBall) throw Error("--circle applies to --layout mirrorball only");
+    if (spec.layout != Layout::MirrorBall)
+      throw Error("--circle applies to --layout mirrorball only");
     const auto v = parseNumberList(a.get("--circle"), "--circle", 3, "cx,cy,r with r > 0");
     if (!(v[2] > 0)) throw Error("--circle " + a.get("--circle") + ": expected cx,cy,r with r > 0");
     spec.circle = {float(v[0]), float(v[1]), float(v[2])};
@@ -65,7 +84,8 @@ LayoutSpec layoutFromArgs(const Args& a) {
   return spec;
 }
 
-Environment loadEnvironment(const std::string& source, const LayoutSpec& layout, const glm::mat3& orientation) {
+Environment loadEnvironment(const std::string& source, const LayoutSpec& layout,
+                            const glm::mat3& orientation) {
   auto src = openSource(source);
   Frame frame;
   if (!src->next(frame)) throw Error(source + ": no frame to read");
@@ -79,15 +99,21 @@ Environment loadEnvironment(const std::string& source, const LayoutSpec& layout,
   if (auto why = layoutMismatch(layout, env.image.width, env.image.height); !why.empty())
     throw Error(source + ": " + why);
   warnIfLayoutLooksWrong(source, layout, env.image.width, env.image.height, env.image.rgb.data());
-  env.radiance = rotateSh(Projector(layout, env.image.width, env.image.height).project(env.image.rgb.data()), orientation);
+  env.radiance =
+      rotateSh(Projector(layout, env.image.width, env.image.height).project(env.image.rgb.data()),
+               orientation);
   return env;
 }
 
-void warnIfLayoutLooksWrong(const std::string& source, const LayoutSpec& layout, int w, int h, const float* rgb) {
+void warnIfLayoutLooksWrong(const std::string& source, const LayoutSpec& layout, int w, int h,
+                            const float* rgb) {
   if (layout.layout == Layout::Equirect && w == h) {
-    warn(source + ": a square image taken as equirect (an angular map or a mirror ball? give --layout)");
+    warn(source +
+         ": a square image taken as equirect (an angular map or a mirror ball? give --layout)");
   } else if (layout.layout == Layout::Equirect && std::abs(double(w) / h - 16.0 / 9.0) < 0.02) {
-    warn(source + ": a 16:9 frame taken as equirect (a 2:1 panorama stretched? results assume it covers the sphere)");
+    warn(source +
+         ": a 16:9 frame taken as equirect (a 2:1 panorama stretched? results assume it covers the "
+         "sphere)");
   } else if (layout.layout == Layout::Angular && rgb && w >= 8 && h >= 8) {
     // Outside the disc an angular map is black: look at the four corner pixels' neighbourhoods.
     double corner = 0, centre = 0;
@@ -99,11 +125,13 @@ void warnIfLayoutLooksWrong(const std::string& source, const LayoutSpec& layout,
     const float* c = rgb + 3 * (std::size_t(h / 2) * w + w / 2);
     centre = c[0] + c[1] + c[2];
     if (corner > 0.01 * std::max(centre, 1e-6) * 4)
-      warn(source + ": an angular map whose corners are not black (is it an equirect? give --layout)");
+      warn(source +
+           ": an angular map whose corners are not black (is it an equirect? give --layout)");
   }
 }
 
-void setBackground(gl::Renderer& r, const Image& frame, const LayoutSpec& layout, float displayScale) {
+void setBackground(gl::Renderer& r, const Image& frame, const LayoutSpec& layout,
+                   float displayScale) {
   if (layout.layout == Layout::Equirect || layout.layout == Layout::Angular) {
     r.setBackground(frame.rgb.data(), frame.width, frame.height,
                     layout.layout == Layout::Angular ? gl::BackgroundMapping::Angular
@@ -112,34 +140,39 @@ void setBackground(gl::Renderer& r, const Image& frame, const LayoutSpec& layout
     return;
   }
   const Image eq = resampleToEquirect(frame, layout, 1024, 512);
-  r.setBackground(eq.rgb.data(), eq.width, eq.height, gl::BackgroundMapping::Equirect, displayScale);
+  r.setBackground(eq.rgb.data(), eq.width, eq.height, gl::BackgroundMapping::Equirect,
+                  displayScale);
 }
 
 void setBackground(gl::Renderer& r, const Frame& frame, const LayoutSpec& layout, float scale) {
   r.setBackgroundSrgb8(frame.bgr8.data(), frame.width, frame.height,
-                       layout.layout == Layout::Angular ? gl::BackgroundMapping::Angular : gl::BackgroundMapping::Equirect,
+                       layout.layout == Layout::Angular ? gl::BackgroundMapping::Angular
+                                                        : gl::BackgroundMapping::Equirect,
                        scale);
 }
 
 std::vector<OptionSpec> lightingOptions() {
-  std::vector<OptionSpec> o = {{"--env", "FILE", "environment map that lights the model and is drawn behind it"}};
+  std::vector<OptionSpec> o = {
+      {"--env", "FILE", "environment map that lights the model and is drawn behind it"}};
   for (auto& l : layoutOptions()) o.push_back(l);
-  o.insert(o.end(), {
-          {"--coeffs", "FILE.json", "coefficients written by liveprobe coeffs"},
-          {"--coeff", "NAME=VALUE", "set one coefficient (VALUE or r,g,b), others zero; repeatable",
-           true}});
+  o.insert(o.end(), {{"--coeffs", "FILE.json", "coefficients written by liveprobe coeffs"},
+                     {"--coeff", "NAME=VALUE",
+                      "set one coefficient (VALUE or r,g,b), others zero; repeatable", true}});
   return o;
 }
 
 void applyCoeffAssignment(const std::string& text, Sh9& sh) {
   const auto eq = text.find('=');
-  if (eq == std::string::npos) throw Error("--coeff " + text + ": expected NAME=VALUE, e.g. L20=-0.2");
+  if (eq == std::string::npos)
+    throw Error("--coeff " + text + ": expected NAME=VALUE, e.g. L20=-0.2");
   const std::string name = text.substr(0, eq);
   const int k = shIndex(name);
-  if (k < 0) throw Error("--coeff " + text + ": unknown coefficient name " + name + " (L00 .. L22)");
+  if (k < 0)
+    throw Error("--coeff " + text + ": unknown coefficient name " + name + " (L00 .. L22)");
   std::vector<float> v;
   std::stringstream s(text.substr(eq + 1));
-  for (std::string part; std::getline(s, part, ',');) v.push_back(float(parseNumber(part, "--coeff " + name)));
+  for (std::string part; std::getline(s, part, ',');)
+    v.push_back(float(parseNumber(part, "--coeff " + name)));
   if (v.size() == 1) v = {v[0], v[0], v[0]};
   if (v.size() != 3) throw Error("--coeff " + text + ": expected one value or r,g,b");
   sh.c[k] = {v[0], v[1], v[2]};
@@ -192,17 +225,21 @@ Mesh meshFromArgs(const Args& a) {
   const std::string up = a.get("--up", "y");
   if (up != "y" && up != "z") throw Error("--up " + up + ": expected y or z");
   glm::mat3 turn(1.0f);
-  if (up == "z") turn = glm::mat3(glm::vec3(1, 0, 0), glm::vec3(0, 0, -1), glm::vec3(0, 1, 0));  // file z -> GL y
+  if (up == "z")
+    turn =
+        glm::mat3(glm::vec3(1, 0, 0), glm::vec3(0, 0, -1), glm::vec3(0, 1, 0));  // file z -> GL y
   // The bundled test models face the camera by default; spot.obj (Keenan Crane's cow) is stored
   // facing -z, away from the default camera on +z. --model-rotate replaces this default.
   const std::string file = std::filesystem::path(model).filename().string();
   const std::string defaultTurn = file == "spot.obj" ? "180,0,0" : "0,0,0";
   {
-    const auto v = parseNumberList(a.get("--model-rotate", defaultTurn), "--model-rotate", 3, "yaw,pitch,roll in degrees");
+    const auto v = parseNumberList(a.get("--model-rotate", defaultTurn), "--model-rotate", 3,
+                                   "yaw,pitch,roll in degrees");
     // About the model's own up (GL y), right (x) and view (z) axes, applied yaw first.
-    const glm::mat4 r = glm::rotate(glm::mat4(1.0f), glm::radians(float(v[2])), glm::vec3(0, 0, 1)) *
-                        glm::rotate(glm::mat4(1.0f), glm::radians(float(v[1])), glm::vec3(1, 0, 0)) *
-                        glm::rotate(glm::mat4(1.0f), glm::radians(float(v[0])), glm::vec3(0, 1, 0));
+    const glm::mat4 r =
+        glm::rotate(glm::mat4(1.0f), glm::radians(float(v[2])), glm::vec3(0, 0, 1)) *
+        glm::rotate(glm::mat4(1.0f), glm::radians(float(v[1])), glm::vec3(1, 0, 0)) *
+        glm::rotate(glm::mat4(1.0f), glm::radians(float(v[0])), glm::vec3(0, 1, 0));
     turn = glm::mat3(r) * turn;
   }
   for (auto& p : m.positions) p = turn * p;
@@ -217,7 +254,8 @@ gl::Camera cameraFromArgs(const Args& a) {
   c.pitchDeg = float(a.number("--pitch", c.pitchDeg));
   c.distance = float(a.number("--distance", c.distance));
   if (!(c.distance > 0.05f)) throw Error("--distance " + a.get("--distance") + ": must be > 0.05");
-  if (std::abs(c.pitchDeg) > 89.9f) throw Error("--pitch " + a.get("--pitch") + ": must be within +-89.9");
+  if (std::abs(c.pitchDeg) > 89.9f)
+    throw Error("--pitch " + a.get("--pitch") + ": must be within +-89.9");
   return c;
 }
 
@@ -233,7 +271,8 @@ float autoExposure(const Sh9& radiance, bool environment) {
   for (int i = 0; i < n; ++i) {
     const float z = 1 - (2 * float(i) + 1) / float(n), r = std::sqrt(std::max(0.0f, 1 - z * z));
     const float phi = float(i) * 2.39996323f;
-    peak = std::max(peak, luminance(evalIrradianceQuadratic(m, {r * std::cos(phi), r * std::sin(phi), z})));
+    peak = std::max(
+        peak, luminance(evalIrradianceQuadratic(m, {r * std::cos(phi), r * std::sin(phi), z})));
   }
   const float peakRadiance = peak / kA0;  // a white Lambertian surface shows E / pi
   return peakRadiance > 1e-12f ? 1.0f / peakRadiance : 1.0f;
@@ -242,13 +281,18 @@ float autoExposure(const Sh9& radiance, bool environment) {
 gl::ShadingSettings shadingFromArgs(const Args& a, const Sh9& radiance, bool environment) {
   gl::ShadingSettings s;
   const std::string e = a.get("--exposure", "auto");
-  s.exposure = e == "auto" ? autoExposure(radiance, environment) : float(parseNumber(e, "--exposure"));
+  s.exposure =
+      e == "auto" ? autoExposure(radiance, environment) : float(parseNumber(e, "--exposure"));
   if (!(s.exposure > 0)) throw Error("--exposure " + e + ": must be positive or auto");
   const std::string tm = a.get("--tonemap", "aces");
-  if (tm == "aces") s.toneMap = gl::ToneMap::Aces;
-  else if (tm == "reinhard") s.toneMap = gl::ToneMap::Reinhard;
-  else if (tm == "linear") s.toneMap = gl::ToneMap::Linear;
-  else throw Error("--tonemap " + tm + ": expected aces, reinhard or linear");
+  if (tm == "aces")
+    s.toneMap = gl::ToneMap::Aces;
+  else if (tm == "reinhard")
+    s.toneMap = gl::ToneMap::Reinhard;
+  else if (tm == "linear")
+    s.toneMap = gl::ToneMap::Linear;
+  else
+    throw Error("--tonemap " + tm + ": expected aces, reinhard or linear");
   s.background = !a.has("--no-background");
   s.displayReferredBackground = !a.has("--tonemap-background");
   s.samples = a.integer("--msaa", 4);
@@ -281,7 +325,8 @@ void loadScene(gl::Renderer& r, const Mesh& mesh, const Lighting& lighting) {
   loadModel(r, mesh);
   r.setLighting(lighting.radiance);
   r.setEnvOrientation(lighting.orientation);
-  if (lighting.background) setBackground(r, *lighting.background, lighting.layout, lighting.displayScale);
+  if (lighting.background)
+    setBackground(r, *lighting.background, lighting.layout, lighting.displayScale);
 }
 
 void applyInput(gl::Camera& camera, const gl::InputDelta& input) {

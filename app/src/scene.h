@@ -43,8 +43,8 @@ Environment loadEnvironment(const std::string& source, const LayoutSpec& layout,
 
 /// One warning line when the frame's shape suggests another layout than the one given: a square
 /// image or a 16:9 frame taken as equirect, or an angular map whose corners are not black.
-void warnIfLayoutLooksWrong(const std::string& source, const LayoutSpec& layout, int width, int height,
-                            const float* rgb = nullptr);
+void warnIfLayoutLooksWrong(const std::string& source, const LayoutSpec& layout, int width,
+                            int height, const float* rgb = nullptr);
 
 struct Lighting {
   Sh9 radiance;
@@ -57,7 +57,8 @@ struct Lighting {
 /// The background texture for a frame: equirect and angular frames are drawn directly; other
 /// layouts are resampled to a 1024x512 equirect on the CPU (bilinear).
 /// `displayScale`: see gl::Renderer::setBackground (0 for an HDR frame).
-void setBackground(gl::Renderer& r, const Image& frame, const LayoutSpec& layout, float displayScale = 0.0f);
+void setBackground(gl::Renderer& r, const Image& frame, const LayoutSpec& layout,
+                   float displayScale = 0.0f);
 /// The background from an 8-bit sRGB frame the display takes as it is
 /// (capture/pipeline.h, displayTakesFrameAsIs), its decoded values times `scale`.
 void setBackground(gl::Renderer& r, const Frame& frame, const LayoutSpec& layout, float scale);

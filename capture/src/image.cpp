@@ -1,15 +1,14 @@
 #include "capture/image.h"
 
+#include <fcntl.h>
+#include <unistd.h>
+
 #include <algorithm>
 #include <array>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
-
-#include <fcntl.h>
-#include <unistd.h>
-
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
@@ -85,16 +84,16 @@ void checkRadianceComplete(const std::string& path, int width, int height) {
   f.read(reinterpret_cast<char*>(data.data()), std::streamsize(payload));
   std::size_t pos = 0;
   for (int row = 0; row < height; ++row) {
-    if (pos + 4 > data.size()) throw Error(path + ": truncated Radiance file (row " +
-                                           std::to_string(row) + " of " +
-                                           std::to_string(height) + " missing)");
+    if (pos + 4 > data.size())
+      throw Error(path + ": truncated Radiance file (row " + std::to_string(row) + " of " +
+                  std::to_string(height) + " missing)");
     const bool rle = width >= 8 && width < 32768 && data[pos] == 2 && data[pos + 1] == 2 &&
                      ((data[pos + 2] << 8) | data[pos + 3]) == width;
     if (!rle) {
       pos += std::size_t(width) * 4;  // flat (or old-style RLE, which we size as flat)
-      if (pos > data.size()) throw Error(path + ": truncated Radiance file (row " +
-                                         std::to_string(row) + " of " +
-                                         std::to_string(height) + " incomplete)");
+      if (pos > data.size())
+        throw Error(path + ": truncated Radiance file (row " + std::to_string(row) + " of " +
+                    std::to_string(height) + " incomplete)");
       continue;
     }
     pos += 4;
@@ -138,9 +137,15 @@ void readImageFrame(const std::string& path, Frame& frame) {
 
   cv::Mat bgr;
   switch (m.channels()) {
-    case 1: cv::cvtColor(m, bgr, cv::COLOR_GRAY2BGR); break;
-    case 3: bgr = m; break;
-    case 4: cv::cvtColor(m, bgr, cv::COLOR_BGRA2BGR); break;
+    case 1:
+      cv::cvtColor(m, bgr, cv::COLOR_GRAY2BGR);
+      break;
+    case 3:
+      bgr = m;
+      break;
+    case 4:
+      cv::cvtColor(m, bgr, cv::COLOR_BGRA2BGR);
+      break;
     default:
       throw Error(path + ": unsupported channel count " + std::to_string(m.channels()));
   }
@@ -152,7 +157,8 @@ void readImageFrame(const std::string& path, Frame& frame) {
     frame.rgb.clear();
     frame.bgr8.resize(n);
     for (int y = 0; y < bgr.rows; ++y)
-      std::copy_n(bgr.ptr<std::uint8_t>(y), std::size_t(bgr.cols) * 3, frame.bgr8.data() + y * std::size_t(bgr.cols) * 3);
+      std::copy_n(bgr.ptr<std::uint8_t>(y), std::size_t(bgr.cols) * 3,
+                  frame.bgr8.data() + y * std::size_t(bgr.cols) * 3);
     return;
   }
   cv::Mat rgb, f;
@@ -162,7 +168,8 @@ void readImageFrame(const std::string& path, Frame& frame) {
   frame.bgr8.clear();
   frame.rgb.resize(n);
   for (int y = 0; y < f.rows; ++y)
-    std::copy_n(f.ptr<float>(y), std::size_t(f.cols) * 3, frame.rgb.data() + y * std::size_t(f.cols) * 3);
+    std::copy_n(f.ptr<float>(y), std::size_t(f.cols) * 3,
+                frame.rgb.data() + y * std::size_t(f.cols) * 3);
   if (bgr.depth() == CV_16U)
     for (float& v : frame.rgb) v = srgbToLinear(v);
   std::size_t bad = 0, firstBad = 0;
@@ -173,8 +180,8 @@ void readImageFrame(const std::string& path, Frame& frame) {
   }
   if (bad)
     throw Error(path + ": " + std::to_string(bad) + " pixel values are NaN or Inf (first at x=" +
-                std::to_string(firstBad % frame.width) + ", y=" +
-                std::to_string(firstBad / frame.width) + ")");
+                std::to_string(firstBad % frame.width) +
+                ", y=" + std::to_string(firstBad / frame.width) + ")");
 }
 
 Image loadImage(const std::string& path) {
@@ -203,8 +210,10 @@ void writeAtomically(const std::string& path, const cv::Mat& m) {
   if (ext.empty()) throw Error(path + ": output needs an extension (.png, .hdr, .exr, .jpg)");
   const fs::path dir = target.has_parent_path() ? target.parent_path() : fs::path(".");
   std::error_code ec;
-  if (!fs::is_directory(dir, ec)) throw Error(path + ": folder " + dir.string() + " does not exist");
-  const fs::path tmp = dir / ("." + target.stem().string() + ".tmp" + std::to_string(::getpid()) + ext);
+  if (!fs::is_directory(dir, ec))
+    throw Error(path + ": folder " + dir.string() + " does not exist");
+  const fs::path tmp =
+      dir / ("." + target.stem().string() + ".tmp" + std::to_string(::getpid()) + ext);
   bool ok = false;
   try {
     ok = cv::imwrite(tmp.string(), m);
@@ -238,7 +247,8 @@ void saveImage(const std::string& path, const Image& img) {
   for (int y = 0; y < bgr.rows; ++y) {
     const float* s = bgr.ptr<float>(y);
     auto* d = out.ptr<std::uint8_t>(y);
-    for (int x = 0; x < bgr.cols * 3; ++x) d[x] = std::uint8_t(std::lround(255.0f * linearToSrgb(s[x])));
+    for (int x = 0; x < bgr.cols * 3; ++x)
+      d[x] = std::uint8_t(std::lround(255.0f * linearToSrgb(s[x])));
   }
   writeAtomically(path, out);
 }

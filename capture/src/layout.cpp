@@ -16,11 +16,16 @@ constexpr double kPi = std::numbers::pi;
 
 std::string_view layoutName(Layout layout) {
   switch (layout) {
-    case Layout::Equirect: return "equirect";
-    case Layout::Angular: return "angular";
-    case Layout::MirrorBall: return "mirrorball";
-    case Layout::Cube: return "cube";
-    case Layout::DualFisheye: return "fisheye";
+    case Layout::Equirect:
+      return "equirect";
+    case Layout::Angular:
+      return "angular";
+    case Layout::MirrorBall:
+      return "mirrorball";
+    case Layout::Cube:
+      return "cube";
+    case Layout::DualFisheye:
+      return "fisheye";
   }
   return "?";
 }
@@ -39,7 +44,8 @@ std::string layoutMismatch(const LayoutSpec& spec, int width, int height) {
   const std::string size = std::to_string(width) + "x" + std::to_string(height);
   if (width <= 0 || height <= 0) return "empty frame";
   switch (spec.layout) {
-    case Layout::Equirect: return {};
+    case Layout::Equirect:
+      return {};
     case Layout::Angular:
       if (width != height) return "an angular map must be square, this frame is " + size;
       if (width < 2) return "an angular map needs at least 2x2 pixels";
@@ -47,14 +53,18 @@ std::string layoutMismatch(const LayoutSpec& spec, int width, int height) {
     case Layout::MirrorBall: {
       const auto c = spec.circle;
       if (!(c.z > 1.0f)) return "a mirror ball needs its circle: --circle cx,cy,r (pixels)";
-      if (c.x - c.z < -0.5f || c.y - c.z < -0.5f || c.x + c.z > width + 0.5f || c.y + c.z > height + 0.5f)
+      if (c.x - c.z < -0.5f || c.y - c.z < -0.5f || c.x + c.z > width + 0.5f ||
+          c.y + c.z > height + 0.5f)
         return "the mirror ball's circle does not fit in the " + size + " frame";
       return {};
     }
     case Layout::Cube:
-      if ((width * 3 == height * 4 && width % 4 == 0) || (width * 4 == height * 3 && width % 3 == 0))
+      if ((width * 3 == height * 4 && width % 4 == 0) ||
+          (width * 4 == height * 3 && width % 3 == 0))
         return {};
-      return "a cube cross must be 4:3 (horizontal) or 3:4 (vertical) with square faces, this frame is " + size;
+      return "a cube cross must be 4:3 (horizontal) or 3:4 (vertical) with square faces, this "
+             "frame is " +
+             size;
     case Layout::DualFisheye:
       if (width != 2 * height) return "a dual fisheye frame must be 2:1, this frame is " + size;
       if (!(spec.fisheyeFovDeg > 180.0f && spec.fisheyeFovDeg <= 270.0f))
@@ -88,12 +98,18 @@ enum Face { PX, NX, PY, NY, PZ, NZ };
 glm::vec3 cubeDirGl(int face, double s, double t) {
   const double sc = 2 * s - 1, tc = 2 * t - 1;
   switch (face) {
-    case PX: return glm::vec3(1, -tc, -sc);
-    case NX: return glm::vec3(-1, -tc, sc);
-    case PY: return glm::vec3(sc, 1, tc);
-    case NY: return glm::vec3(sc, -1, -tc);
-    case PZ: return glm::vec3(sc, -tc, 1);
-    default: return glm::vec3(-sc, -tc, -1);
+    case PX:
+      return glm::vec3(1, -tc, -sc);
+    case NX:
+      return glm::vec3(-1, -tc, sc);
+    case PY:
+      return glm::vec3(sc, 1, tc);
+    case NY:
+      return glm::vec3(sc, -1, -tc);
+    case PZ:
+      return glm::vec3(sc, -tc, 1);
+    default:
+      return glm::vec3(-sc, -tc, -1);
   }
 }
 
@@ -103,16 +119,22 @@ void cubeFaceOf(glm::vec3 r, int* face, double* s, double* t) {
   double sc, tc, ma;
   if (a.x >= a.y && a.x >= a.z) {
     ma = a.x;
-    if (r.x > 0) *face = PX, sc = -r.z, tc = -r.y;
-    else *face = NX, sc = r.z, tc = -r.y;
+    if (r.x > 0)
+      *face = PX, sc = -r.z, tc = -r.y;
+    else
+      *face = NX, sc = r.z, tc = -r.y;
   } else if (a.y >= a.z) {
     ma = a.y;
-    if (r.y > 0) *face = PY, sc = r.x, tc = r.z;
-    else *face = NY, sc = r.x, tc = -r.z;
+    if (r.y > 0)
+      *face = PY, sc = r.x, tc = r.z;
+    else
+      *face = NY, sc = r.x, tc = -r.z;
   } else {
     ma = a.z;
-    if (r.z > 0) *face = PZ, sc = r.x, tc = -r.y;
-    else *face = NZ, sc = -r.x, tc = -r.y;
+    if (r.z > 0)
+      *face = PZ, sc = r.x, tc = -r.y;
+    else
+      *face = NZ, sc = -r.x, tc = -r.y;
   }
   *s = (sc / ma + 1) / 2;
   *t = (tc / ma + 1) / 2;
@@ -125,8 +147,10 @@ struct CubeCell {
 
 // Cell of each face in the cross; vertical crosses hold -Z rotated by 180 degrees.
 CubeCell cubeCell(int face, bool vertical) {
-  static const CubeCell h[6] = {{2, 1, false}, {0, 1, false}, {1, 0, false}, {1, 2, false}, {1, 1, false}, {3, 1, false}};
-  static const CubeCell v[6] = {{2, 1, false}, {0, 1, false}, {1, 0, false}, {1, 2, false}, {1, 1, false}, {1, 3, true}};
+  static const CubeCell h[6] = {{2, 1, false}, {0, 1, false}, {1, 0, false},
+                                {1, 2, false}, {1, 1, false}, {3, 1, false}};
+  static const CubeCell v[6] = {{2, 1, false}, {0, 1, false}, {1, 0, false},
+                                {1, 2, false}, {1, 1, false}, {1, 3, true}};
   return vertical ? v[face] : h[face];
 }
 
@@ -145,7 +169,8 @@ std::vector<SphereSample> cubeSamples(int width, int height) {
         const int y = cell.row * n + (cell.rotated ? n - 1 - i : i);
         const double a0 = 2.0 * j / n - 1, a1 = 2.0 * (j + 1) / n - 1;
         const double b0 = 2.0 * i / n - 1, b1 = 2.0 * (i + 1) / n - 1;
-        const double dw = cubeAreaF(a1, b1) - cubeAreaF(a0, b1) - cubeAreaF(a1, b0) + cubeAreaF(a0, b0);
+        const double dw =
+            cubeAreaF(a1, b1) - cubeAreaF(a0, b1) - cubeAreaF(a1, b0) + cubeAreaF(a0, b0);
         const glm::vec3 g = glm::normalize(cubeDirGl(face, (j + 0.5) / n, (i + 0.5) / n));
         out[std::size_t(y) * width + x] = {axes::worldFromGl(g), float(dw)};
       }
@@ -292,11 +317,16 @@ std::vector<SphereSample> layoutSamples(const LayoutSpec& spec, int width, int h
   if (auto why = layoutMismatch(spec, width, height); !why.empty())
     throw Error(std::string(layoutName(spec.layout)) + " layout: " + why);
   switch (spec.layout) {
-    case Layout::Equirect: return equirectSamples(width, height);
-    case Layout::Angular: return angularSamples(width);
-    case Layout::MirrorBall: return mirrorBallSamples(spec, width, height);
-    case Layout::Cube: return cubeSamples(width, height);
-    case Layout::DualFisheye: return fisheyeSamples(spec, width, height);
+    case Layout::Equirect:
+      return equirectSamples(width, height);
+    case Layout::Angular:
+      return angularSamples(width);
+    case Layout::MirrorBall:
+      return mirrorBallSamples(spec, width, height);
+    case Layout::Cube:
+      return cubeSamples(width, height);
+    case Layout::DualFisheye:
+      return fisheyeSamples(spec, width, height);
   }
   return {};
 }
@@ -310,13 +340,15 @@ std::optional<glm::vec2> layoutPixel(const LayoutSpec& spec, int width, int heig
     case Layout::Equirect: {
       double p = std::atan2(d.y, d.x);
       if (p < 0) p += 2 * kPi;
-      return glm::vec2(float(p / (2 * kPi) * width), float(std::acos(std::clamp(d.z, -1.0, 1.0)) / kPi * height));
+      return glm::vec2(float(p / (2 * kPi) * width),
+                       float(std::acos(std::clamp(d.z, -1.0, 1.0)) / kPi * height));
     }
     case Layout::Angular:
     case Layout::MirrorBall: {
       const glm::dvec3 l(-d.y, d.z, -d.x);  // worldToAngular
       const double t = std::acos(std::clamp(l.z, -1.0, 1.0)), p = std::atan2(l.y, l.x);
-      if (spec.layout == Layout::Angular) return onDisc(width / 2.0, width / 2.0, width / 2.0, t / kPi, p);
+      if (spec.layout == Layout::Angular)
+        return onDisc(width / 2.0, width / 2.0, width / 2.0, t / kPi, p);
       return onDisc(spec.circle.x, spec.circle.y, spec.circle.z, std::sin(t / 2), p);
     }
     case Layout::Cube: {
@@ -355,15 +387,17 @@ Image resampleToEquirect(const Image& frame, const LayoutSpec& spec, int width, 
     const int x1 = std::min(x0 + 1, frame.width - 1), y1 = std::min(y0 + 1, frame.height - 1);
     const float ax = fx - x0, ay = fy - y0;
     for (int c = 0; c < 3; ++c)
-      out.rgb[3 * i + c] = (1 - ay) * ((1 - ax) * frame.pixel(x0, y0)[c] + ax * frame.pixel(x1, y0)[c]) +
-                           ay * ((1 - ax) * frame.pixel(x0, y1)[c] + ax * frame.pixel(x1, y1)[c]);
+      out.rgb[3 * i + c] =
+          (1 - ay) * ((1 - ax) * frame.pixel(x0, y0)[c] + ax * frame.pixel(x1, y0)[c]) +
+          ay * ((1 - ax) * frame.pixel(x0, y1)[c] + ax * frame.pixel(x1, y1)[c]);
   }
   return out;
 }
 
 Image reduceEquirect(const float* rgb, int width, int height, int f) {
   if (f < 1 || width % f || height % f)
-    throw Error("reduce: " + std::to_string(width) + "x" + std::to_string(height) + " is not a multiple of " + std::to_string(f));
+    throw Error("reduce: " + std::to_string(width) + "x" + std::to_string(height) +
+                " is not a multiple of " + std::to_string(f));
   const int w = width / f, h = height / f;
   Image out(w, h);
   std::vector<float> acc(std::size_t(w) * 3);
@@ -391,8 +425,10 @@ Image reduceEquirect(const float* rgb, int width, int height, int f) {
 
 Projector::Projector(const LayoutSpec& spec, int width, int height)
     : spec_(spec), width_(width), height_(height), samples_(layoutSamples(spec, width, height)) {
-  if (spec.layout == Layout::Equirect) equirect_.emplace(width, height);
-  else weighted_.emplace(samples_.data(), samples_.size());
+  if (spec.layout == Layout::Equirect)
+    equirect_.emplace(width, height);
+  else
+    weighted_.emplace(samples_.data(), samples_.size());
 }
 
 Sh9 Projector::project(const float* rgb, std::size_t rowStride, ThreadPool* pool) const {

@@ -16,13 +16,16 @@ double msBetween(Clock::time_point a, Clock::time_point b) {
 }
 }  // namespace
 
-bool displayTakesFrameAsIs(const Frame& frame, const Photometry& photometry, const LayoutSpec& layout) {
+bool displayTakesFrameAsIs(const Frame& frame, const Photometry& photometry,
+                           const LayoutSpec& layout) {
   return frame.format == PixelFormat::Bgr8 && photometry.gamma == 0.0f &&
          (layout.layout == Layout::Equirect || layout.layout == Layout::Angular);
 }
 
-Sh9 projectFrame(const Projector& projector, const Frame& frame, const Linearizer& linearizer, ThreadPool* pool) {
-  if (frame.format == PixelFormat::Bgr8) return projector.projectBgr8(frame.bgr8.data(), linearizer.table().data(), pool);
+Sh9 projectFrame(const Projector& projector, const Frame& frame, const Linearizer& linearizer,
+                 ThreadPool* pool) {
+  if (frame.format == PixelFormat::Bgr8)
+    return projector.projectBgr8(frame.bgr8.data(), linearizer.table().data(), pool);
   return projector.project(frame.rgb.data(), 0, pool) * linearizer.exposure();
 }
 
@@ -105,10 +108,13 @@ void CapturePipeline::run() {
       const double timestamp = frame.timestamp + loopOffset;
       lastTimestamp = timestamp;
       const int reduce = opt_.reduce;
-      if (!projector || projector->width() * reduce != frame.width || projector->height() * reduce != frame.height) {
+      if (!projector || projector->width() * reduce != frame.width ||
+          projector->height() * reduce != frame.height) {
         if (auto why = layoutMismatch(opt_.layout, frame.width, frame.height); !why.empty())
-          throw Error(source_->describe() + ": " + std::string(layoutName(opt_.layout.layout)) + " layout: " + why);
-        if (reduce > 1 && (opt_.layout.layout != Layout::Equirect || frame.width % reduce || frame.height % reduce))
+          throw Error(source_->describe() + ": " + std::string(layoutName(opt_.layout.layout)) +
+                      " layout: " + why);
+        if (reduce > 1 && (opt_.layout.layout != Layout::Equirect || frame.width % reduce ||
+                           frame.height % reduce))
           throw Error(source_->describe() + ": --reduce " + std::to_string(reduce) +
                       " needs an equirect frame whose size is a multiple of it");
         projector.emplace(opt_.layout, frame.width / reduce, frame.height / reduce);

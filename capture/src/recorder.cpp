@@ -6,7 +6,6 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
-
 #include <nlohmann/json.hpp>
 #include <opencv2/videoio.hpp>
 
@@ -23,19 +22,30 @@ struct VideoRecorder::Impl {
   cv::Mat bgr;
 };
 
-VideoRecorder::VideoRecorder(std::string path, double fps, std::string sourceDescription, double sourceScale)
-    : impl_(std::make_unique<Impl>()), path_(std::move(path)), source_(std::move(sourceDescription)),
-      fps_(fps > 0 ? fps : 30.0), sourceScale_(sourceScale) {
+VideoRecorder::VideoRecorder(std::string path, double fps, std::string sourceDescription,
+                             double sourceScale)
+    : impl_(std::make_unique<Impl>()),
+      path_(std::move(path)),
+      source_(std::move(sourceDescription)),
+      fps_(fps > 0 ? fps : 30.0),
+      sourceScale_(sourceScale) {
   const fs::path p(path_);
   std::string ext = p.extension().string();
   for (auto& c : ext) c = char(std::tolower(static_cast<unsigned char>(c)));
-  if (ext == ".mkv") impl_->fourcc = cv::VideoWriter::fourcc('F', 'F', 'V', '1');
-  else if (ext == ".avi") impl_->fourcc = cv::VideoWriter::fourcc('M', 'J', 'P', 'G');
-  else if (ext == ".mp4") impl_->fourcc = cv::VideoWriter::fourcc('a', 'v', 'c', '1');  // H.264
-  else throw Error(path_ + ": unsupported extension (expected .mkv: FFV1, lossless; .avi: MJPEG; .mp4: H.264)");
+  if (ext == ".mkv")
+    impl_->fourcc = cv::VideoWriter::fourcc('F', 'F', 'V', '1');
+  else if (ext == ".avi")
+    impl_->fourcc = cv::VideoWriter::fourcc('M', 'J', 'P', 'G');
+  else if (ext == ".mp4")
+    impl_->fourcc = cv::VideoWriter::fourcc('a', 'v', 'c', '1');  // H.264
+  else
+    throw Error(
+        path_ +
+        ": unsupported extension (expected .mkv: FFV1, lossless; .avi: MJPEG; .mp4: H.264)");
   const fs::path dir = p.has_parent_path() ? p.parent_path() : fs::path(".");
   std::error_code ec;
-  if (!fs::is_directory(dir, ec)) throw Error(path_ + ": folder " + dir.string() + " does not exist");
+  if (!fs::is_directory(dir, ec))
+    throw Error(path_ + ": folder " + dir.string() + " does not exist");
   tmp_ = (dir / ("." + p.stem().string() + ".tmp" + std::to_string(::getpid()) + ext)).string();
 }
 
@@ -64,13 +74,17 @@ void VideoRecorder::write(const Frame& f) {
       const float* s = f.rgb.data() + std::size_t(y) * f.width * 3;
       auto* d = bgr.ptr<std::uint8_t>(y);
       for (int x = 0; x < f.width; ++x, s += 3, d += 3)
-        for (int c = 0; c < 3; ++c) d[2 - c] = std::uint8_t(std::lround(255.0f * linearToSrgb(s[c] * k)));
+        for (int c = 0; c < 3; ++c)
+          d[2 - c] = std::uint8_t(std::lround(255.0f * linearToSrgb(s[c] * k)));
     }
   }
   if (!impl_->writer.isOpened()) {
-    if (!impl_->writer.open(tmp_, cv::CAP_FFMPEG, impl_->fourcc, fps_, cv::Size(f.width, f.height), true))
+    if (!impl_->writer.open(tmp_, cv::CAP_FFMPEG, impl_->fourcc, fps_, cv::Size(f.width, f.height),
+                            true))
       throw Error(path_ + ": cannot open a video writer (this FFmpeg has no " +
-                  (impl_->fourcc == cv::VideoWriter::fourcc('a', 'v', 'c', '1') ? std::string("H.264") : std::string("such")) +
+                  (impl_->fourcc == cv::VideoWriter::fourcc('a', 'v', 'c', '1')
+                       ? std::string("H.264")
+                       : std::string("such")) +
                   " encoder)");
   }
   impl_->writer.write(bgr);

@@ -3,10 +3,9 @@
 #include <algorithm>
 #include <array>
 #include <cstdio>
-#include <filesystem>
 #include <cstdlib>
+#include <filesystem>
 #include <fstream>
-
 #include <nlohmann/json.hpp>
 #include <opencv2/videoio.hpp>
 
@@ -21,7 +20,8 @@ namespace fs = std::filesystem;
 namespace {
 
 bool isImageFile(const fs::path& p) {
-  static const std::array<std::string, 9> exts = {".hdr", ".exr", ".png", ".jpg", ".jpeg", ".pic", ".tif", ".tiff", ".bmp"};
+  static const std::array<std::string, 9> exts = {".hdr", ".exr", ".png",  ".jpg", ".jpeg",
+                                                  ".pic", ".tif", ".tiff", ".bmp"};
   std::string e = p.extension().string();
   for (auto& c : e) c = char(std::tolower(static_cast<unsigned char>(c)));
   return std::find(exts.begin(), exts.end(), e) != exts.end();
@@ -36,8 +36,9 @@ class ListSource : public FrameSource {
     if (i_ >= files_.size()) return false;
     readImageFrame(files_[i_], f);
     if (i_ > 0 && (f.width != w_ || f.height != h_))
-      throw Error(files_[i_] + ": frame size " + std::to_string(f.width) + "x" + std::to_string(f.height) +
-                  " differs from the sequence's " + std::to_string(w_) + "x" + std::to_string(h_));
+      throw Error(files_[i_] + ": frame size " + std::to_string(f.width) + "x" +
+                  std::to_string(f.height) + " differs from the sequence's " + std::to_string(w_) +
+                  "x" + std::to_string(h_));
     w_ = f.width, h_ = f.height;
     f.sequence = i_;
     f.timestamp = double(i_) / fps_;
@@ -67,7 +68,8 @@ class CubeFacesSource final : public FrameSource {
   bool next(Frame& f) override {
     if (done_) return false;
     done_ = true;
-    static const int cells[6][2] = {{2, 1}, {0, 1}, {1, 0}, {1, 2}, {1, 1}, {3, 1}};  // px nx py ny pz nz
+    static const int cells[6][2] = {{2, 1}, {0, 1}, {1, 0},
+                                    {1, 2}, {1, 1}, {3, 1}};  // px nx py ny pz nz
     int n = 0;
     for (int k = 0; k < 6; ++k) {
       const Image face = loadImage(faces_[k]);
@@ -80,8 +82,10 @@ class CubeFacesSource final : public FrameSource {
         throw Error(faces_[k] + ": cube faces differ in size");
       }
       for (int y = 0; y < n; ++y)
-        std::copy_n(face.pixel(0, y), std::size_t(n) * 3,
-                    f.rgb.data() + ((std::size_t(cells[k][1]) * n + y) * f.width + std::size_t(cells[k][0]) * n) * 3);
+        std::copy_n(
+            face.pixel(0, y), std::size_t(n) * 3,
+            f.rgb.data() +
+                ((std::size_t(cells[k][1]) * n + y) * f.width + std::size_t(cells[k][0]) * n) * 3);
     }
     f.format = PixelFormat::RgbF32;
     f.bgr8.clear();
@@ -138,23 +142,26 @@ class VideoSource final : public FrameSource {
       if (++badRun >= kMaxBadRun) {
         const double count = cap_.get(cv::CAP_PROP_FRAME_COUNT);
         if (count > 0 && double(read_ + skipped_) + 1 < count)
-          endReason_ = "ended after " + std::to_string(read_) + " frames of " + std::to_string(long(count)) +
-                       ": the rest does not decode (truncated file?)";
+          endReason_ = "ended after " + std::to_string(read_) + " frames of " +
+                       std::to_string(long(count)) + ": the rest does not decode (truncated file?)";
         return false;
       }
     }
-    skipped_ += std::size_t(read_ > 0 ? badRun : 0);  // failures before a good frame: skipped damage
+    skipped_ +=
+        std::size_t(read_ > 0 ? badRun : 0);  // failures before a good frame: skipped damage
     if (m.type() != CV_8UC3) throw Error(path_ + ": unsupported decoded pixel type");
     f.format = PixelFormat::Bgr8;
     f.width = m.cols, f.height = m.rows;
     f.rgb.clear();
     f.bgr8.resize(std::size_t(m.cols) * m.rows * 3);
     for (int y = 0; y < m.rows; ++y)
-      std::copy_n(m.ptr<std::uint8_t>(y), std::size_t(m.cols) * 3, f.bgr8.data() + y * std::size_t(m.cols) * 3);
+      std::copy_n(m.ptr<std::uint8_t>(y), std::size_t(m.cols) * 3,
+                  f.bgr8.data() + y * std::size_t(m.cols) * 3);
     const auto index = std::uint64_t(std::max(0.0, cap_.get(cv::CAP_PROP_POS_FRAMES) - 1));
     f.sequence = index;
     const double ms = cap_.get(cv::CAP_PROP_POS_MSEC);
-    f.timestamp = index < stamps_.size() ? stamps_[index] : (ms > 0 ? ms / 1000.0 : double(index) / fps());
+    f.timestamp =
+        index < stamps_.size() ? stamps_[index] : (ms > 0 ? ms / 1000.0 : double(index) / fps());
     ++read_;
     return true;
   }
@@ -166,7 +173,8 @@ class VideoSource final : public FrameSource {
   }
   std::string describe() const override {
     return "video " + path_ + " (" + std::to_string(int(cap_.get(cv::CAP_PROP_FRAME_WIDTH))) + "x" +
-           std::to_string(int(cap_.get(cv::CAP_PROP_FRAME_HEIGHT))) + ", " + std::to_string(fps()) + " fps)";
+           std::to_string(int(cap_.get(cv::CAP_PROP_FRAME_HEIGHT))) + ", " + std::to_string(fps()) +
+           " fps)";
   }
   double fps() const override {
     const double f = cap_.get(cv::CAP_PROP_FPS);
@@ -224,8 +232,10 @@ std::unique_ptr<FrameSource> openSequence(const std::string& dirOrPattern, doubl
     for (int i = 0, misses = 0; misses < 2 && i < 10000000; ++i) {
       char buf[4096];
       std::snprintf(buf, sizeof buf, dirOrPattern.c_str(), i);
-      if (fs::exists(buf)) files.emplace_back(buf), misses = 0;
-      else if (!files.empty() || i > 1) ++misses;  // numbering may start at 0 or 1
+      if (fs::exists(buf))
+        files.emplace_back(buf), misses = 0;
+      else if (!files.empty() || i > 1)
+        ++misses;  // numbering may start at 0 or 1
     }
   } else {
     for (const auto& e : fs::directory_iterator(dirOrPattern))
@@ -233,19 +243,22 @@ std::unique_ptr<FrameSource> openSequence(const std::string& dirOrPattern, doubl
     std::sort(files.begin(), files.end());
   }
   if (files.empty()) throw Error(dirOrPattern + ": no image files in this sequence");
-  return std::make_unique<ListSource>(std::move(files), fps,
-                                      "image sequence " + dirOrPattern + " (" + std::to_string(files.size()) + " frames)");
+  return std::make_unique<ListSource>(
+      std::move(files), fps,
+      "image sequence " + dirOrPattern + " (" + std::to_string(files.size()) + " frames)");
 }
 
-std::unique_ptr<FrameSource> openVideo(const std::string& path) { return std::make_unique<VideoSource>(path); }
+std::unique_ptr<FrameSource> openVideo(const std::string& path) {
+  return std::make_unique<VideoSource>(path);
+}
 
 std::unique_ptr<FrameSource> openSource(const std::string& spec, const SourceOptions& options) {
   if (spec.rfind("synthetic", 0) == 0) {
     int w = 512, h = 256;
     double fps = 30;
     if (spec.size() > 9) {
-      if (spec[9] != ':' || std::sscanf(spec.c_str() + 10, "%dx%d@%lf", &w, &h, &fps) < 2 || w < 4 ||
-          h < 2 || w > 16384 || h > 16384 || !(fps > 0 && fps <= 1000))
+      if (spec[9] != ':' || std::sscanf(spec.c_str() + 10, "%dx%d@%lf", &w, &h, &fps) < 2 ||
+          w < 4 || h < 2 || w > 16384 || h > 16384 || !(fps > 0 && fps <= 1000))
         throw Error(spec + ": expected synthetic[:WxH[@FPS]]");
     }
     return openSynthetic(w, h, fps);

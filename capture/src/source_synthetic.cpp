@@ -1,7 +1,6 @@
 #include <cmath>
-#include <numbers>
-
 #include <glm/glm.hpp>
+#include <numbers>
 
 #include "capture/frame.h"
 #include "sources.h"
@@ -12,16 +11,25 @@ void renderSyntheticSky(int width, int height, double t, std::vector<float>& rgb
   constexpr double pi = std::numbers::pi;
   rgb.resize(std::size_t(width) * height * 3);
   // Sun: circles the sky every 20 s, bobbing in elevation every 10 s.
-  const double sunAz = 2 * pi * t / 20.0, sunEl = glm::radians(30.0 + 20.0 * std::sin(2 * pi * t / 10.0));
-  const glm::dvec3 sun(std::cos(sunEl) * std::cos(sunAz), std::cos(sunEl) * std::sin(sunAz), std::sin(sunEl));
+  const double sunAz = 2 * pi * t / 20.0,
+               sunEl = glm::radians(30.0 + 20.0 * std::sin(2 * pi * t / 10.0));
+  const glm::dvec3 sun(std::cos(sunEl) * std::cos(sunAz), std::cos(sunEl) * std::sin(sunAz),
+                       std::sin(sunEl));
   // Two coloured area lights near the horizon, turning the other way at other speeds.
   struct AreaLight {
     double az, el, halfWidth, halfHeight;
     glm::dvec3 colour;
   };
-  const AreaLight lights[2] = {
-      {-2 * pi * t / 7.0 + 1.0, glm::radians(8.0), glm::radians(18.0), glm::radians(9.0), {3.0, 0.4, 0.3}},
-      {-2 * pi * t / 13.0 + 3.5, glm::radians(15.0), glm::radians(10.0), glm::radians(12.0), {0.3, 1.6, 2.4}}};
+  const AreaLight lights[2] = {{-2 * pi * t / 7.0 + 1.0,
+                                glm::radians(8.0),
+                                glm::radians(18.0),
+                                glm::radians(9.0),
+                                {3.0, 0.4, 0.3}},
+                               {-2 * pi * t / 13.0 + 3.5,
+                                glm::radians(15.0),
+                                glm::radians(10.0),
+                                glm::radians(12.0),
+                                {0.3, 1.6, 2.4}}};
   for (int i = 0; i < height; ++i) {
     const double th = pi * (i + 0.5) / height, z = std::cos(th), el = pi / 2 - th;
     for (int j = 0; j < width; ++j) {
@@ -35,7 +43,7 @@ void renderSyntheticSky(int width, int height, double t, std::vector<float>& rgb
         L = glm::dvec3(0.22, 0.18, 0.14) * (0.6 + 0.4 * (1 + z));
       }
       const double cosSun = glm::dot(d, sun);
-      L += glm::dvec3(9.0, 8.0, 6.5) * std::exp((cosSun - 1.0) / 0.004);  // ~5 deg soft disc
+      L += glm::dvec3(9.0, 8.0, 6.5) * std::exp((cosSun - 1.0) / 0.004);      // ~5 deg soft disc
       L += glm::dvec3(0.4, 0.3, 0.2) * std::pow(std::max(0.0, cosSun), 8.0);  // glow
       for (const auto& a : lights) {
         double dAz = std::remainder(p - a.az, 2 * pi);

@@ -10,7 +10,6 @@
 #include <cerrno>
 #include <chrono>
 #include <cstring>
-
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
@@ -28,11 +27,16 @@ std::string fourccText(std::uint32_t f) {
 
 std::uint32_t fourccOf(CameraFormat f) {
   switch (f) {
-    case CameraFormat::Mjpeg: return V4L2_PIX_FMT_MJPEG;
-    case CameraFormat::Yuyv: return V4L2_PIX_FMT_YUYV;
-    case CameraFormat::Nv12: return V4L2_PIX_FMT_NV12;
-    case CameraFormat::Rgb24: return V4L2_PIX_FMT_RGB24;
-    case CameraFormat::Auto: return 0;
+    case CameraFormat::Mjpeg:
+      return V4L2_PIX_FMT_MJPEG;
+    case CameraFormat::Yuyv:
+      return V4L2_PIX_FMT_YUYV;
+    case CameraFormat::Nv12:
+      return V4L2_PIX_FMT_NV12;
+    case CameraFormat::Rgb24:
+      return V4L2_PIX_FMT_RGB24;
+    case CameraFormat::Auto:
+      return 0;
   }
   return 0;
 }
@@ -54,17 +58,23 @@ void UniqueFd::reset(int fd) {
 
 std::string_view cameraFormatName(CameraFormat f) {
   switch (f) {
-    case CameraFormat::Auto: return "auto";
-    case CameraFormat::Mjpeg: return "mjpeg";
-    case CameraFormat::Yuyv: return "yuyv";
-    case CameraFormat::Nv12: return "nv12";
-    case CameraFormat::Rgb24: return "rgb24";
+    case CameraFormat::Auto:
+      return "auto";
+    case CameraFormat::Mjpeg:
+      return "mjpeg";
+    case CameraFormat::Yuyv:
+      return "yuyv";
+    case CameraFormat::Nv12:
+      return "nv12";
+    case CameraFormat::Rgb24:
+      return "rgb24";
   }
   return "?";
 }
 
 CameraFormat parseCameraFormat(std::string_view name) {
-  for (CameraFormat f : {CameraFormat::Auto, CameraFormat::Mjpeg, CameraFormat::Yuyv, CameraFormat::Nv12, CameraFormat::Rgb24})
+  for (CameraFormat f : {CameraFormat::Auto, CameraFormat::Mjpeg, CameraFormat::Yuyv,
+                         CameraFormat::Nv12, CameraFormat::Rgb24})
     if (cameraFormatName(f) == name) return f;
   throw Error("--format " + std::string(name) + ": expected mjpeg, yuyv, nv12, rgb24 or auto");
 }
@@ -88,7 +98,9 @@ void V4l2Source::fail(const std::string& what, int err) const {
   throw Error("V4l2Source(" + settings_.device + "): " + what + ": " + why);
 }
 
-int V4l2Source::xioctl(unsigned long request, void* arg) { return retryIoctl(fd_.get(), request, arg); }
+int V4l2Source::xioctl(unsigned long request, void* arg) {
+  return retryIoctl(fd_.get(), request, arg);
+}
 
 void V4l2Source::open() {
   if (state_ != State::Closed) return;
@@ -104,13 +116,16 @@ void V4l2Source::open() {
     v4l2_capability cap{};
     if (xioctl(VIDIOC_QUERYCAP, &cap) < 0) {
       const int e = errno;
-      throw Error(settings_.device + ": not a V4L2 video device (VIDIOC_QUERYCAP: " + std::strerror(e) + ")");
+      throw Error(settings_.device +
+                  ": not a V4L2 video device (VIDIOC_QUERYCAP: " + std::strerror(e) + ")");
     }
     card_ = reinterpret_cast<const char*>(cap.card);
-    const std::uint32_t caps = (cap.capabilities & V4L2_CAP_DEVICE_CAPS) ? cap.device_caps : cap.capabilities;
+    const std::uint32_t caps =
+        (cap.capabilities & V4L2_CAP_DEVICE_CAPS) ? cap.device_caps : cap.capabilities;
     if (!(caps & V4L2_CAP_VIDEO_CAPTURE))
       throw Error(settings_.device + ": not a single-planar video capture device (" + card_ + ")");
-    if (!(caps & V4L2_CAP_STREAMING)) throw Error(settings_.device + ": the device has no streaming I/O");
+    if (!(caps & V4L2_CAP_STREAMING))
+      throw Error(settings_.device + ": the device has no streaming I/O");
     negotiate();
     requestBuffers();
     for (std::size_t i = 0; i < buffers_.size(); ++i) {
@@ -138,19 +153,25 @@ void V4l2Source::negotiate() {
     if (xioctl(VIDIOC_ENUM_FMT, &d) < 0) break;  // EINVAL ends the list
     offered.push_back(d.pixelformat);
   }
-  auto offers = [&](std::uint32_t f) { return std::find(offered.begin(), offered.end(), f) != offered.end(); };
+  auto offers = [&](std::uint32_t f) {
+    return std::find(offered.begin(), offered.end(), f) != offered.end();
+  };
   std::string list;
   for (auto f : offered) list += (list.empty() ? "" : ", ") + fourccText(f);
   std::uint32_t want = fourccOf(settings_.format);
   if (want == 0) {
-    for (CameraFormat f : {CameraFormat::Mjpeg, CameraFormat::Yuyv, CameraFormat::Nv12, CameraFormat::Rgb24})
+    for (CameraFormat f :
+         {CameraFormat::Mjpeg, CameraFormat::Yuyv, CameraFormat::Nv12, CameraFormat::Rgb24})
       if (offers(fourccOf(f))) {
         want = fourccOf(f);
         break;
       }
-    if (want == 0) throw Error(settings_.device + ": offers no format liveprobe converts (it offers " + list + ")");
+    if (want == 0)
+      throw Error(settings_.device + ": offers no format liveprobe converts (it offers " + list +
+                  ")");
   } else if (!offers(want)) {
-    throw Error(settings_.device + ": does not offer " + fourccText(want) + " (it offers " + list + ")");
+    throw Error(settings_.device + ": does not offer " + fourccText(want) + " (it offers " + list +
+                ")");
   }
   int w = settings_.width, h = settings_.height;
   if (w <= 0 || h <= 0) {  // the largest size of this format
@@ -160,7 +181,8 @@ void V4l2Source::negotiate() {
       s.pixel_format = want;
       if (xioctl(VIDIOC_ENUM_FRAMESIZES, &s) < 0) break;
       if (s.type == V4L2_FRMSIZE_TYPE_DISCRETE) {
-        if (int(s.discrete.width * s.discrete.height) > w * h) w = int(s.discrete.width), h = int(s.discrete.height);
+        if (int(s.discrete.width * s.discrete.height) > w * h)
+          w = int(s.discrete.width), h = int(s.discrete.height);
       } else {
         w = int(s.stepwise.max_width), h = int(s.stepwise.max_height);
         break;
@@ -176,24 +198,28 @@ void V4l2Source::negotiate() {
   if (xioctl(VIDIOC_S_FMT, &fmt) < 0) fail("VIDIOC_S_FMT " + fourccText(want), errno);
   // S_FMT adjusts what it cannot do: read back what the driver actually set.
   if (fmt.fmt.pix.pixelformat != want)
-    throw Error(settings_.device + ": asked for " + fourccText(want) + ", the driver set " + fourccText(fmt.fmt.pix.pixelformat));
+    throw Error(settings_.device + ": asked for " + fourccText(want) + ", the driver set " +
+                fourccText(fmt.fmt.pix.pixelformat));
   fourcc_ = fmt.fmt.pix.pixelformat;
   width_ = int(fmt.fmt.pix.width);
   height_ = int(fmt.fmt.pix.height);
   bytesPerLine_ = fmt.fmt.pix.bytesperline;
   sizeImage_ = fmt.fmt.pix.sizeimage;
-  if (width_ <= 0 || height_ <= 0) throw Error(settings_.device + ": the driver set an empty frame size");
+  if (width_ <= 0 || height_ <= 0)
+    throw Error(settings_.device + ": the driver set an empty frame size");
 
   v4l2_streamparm parm{};
   parm.type = V4L2_BUF_TYPE_VIDEO_CAPTURE;
-  if (settings_.fps > 0 && xioctl(VIDIOC_G_PARM, &parm) == 0 && (parm.parm.capture.capability & V4L2_CAP_TIMEPERFRAME)) {
+  if (settings_.fps > 0 && xioctl(VIDIOC_G_PARM, &parm) == 0 &&
+      (parm.parm.capture.capability & V4L2_CAP_TIMEPERFRAME)) {
     parm.parm.capture.timeperframe = {1000, std::uint32_t(std::lround(settings_.fps * 1000))};
     if (xioctl(VIDIOC_S_PARM, &parm) < 0) fail("VIDIOC_S_PARM", errno);
   }
   parm = {};
   parm.type = V4L2_BUF_TYPE_VIDEO_CAPTURE;
   if (xioctl(VIDIOC_G_PARM, &parm) == 0 && parm.parm.capture.timeperframe.numerator > 0)
-    fps_ = double(parm.parm.capture.timeperframe.denominator) / parm.parm.capture.timeperframe.numerator;
+    fps_ = double(parm.parm.capture.timeperframe.denominator) /
+           parm.parm.capture.timeperframe.numerator;
   else
     fps_ = settings_.fps > 0 ? settings_.fps : 30.0;
 }
@@ -206,7 +232,8 @@ void V4l2Source::requestBuffers() {
   req.memory = V4L2_MEMORY_MMAP;
   if (xioctl(VIDIOC_REQBUFS, &req) < 0) {
     const int e = errno;
-    if (e == EBUSY) throw Error(settings_.device + ": device busy (VIDIOC_REQBUFS: another program is using it)");
+    if (e == EBUSY)
+      throw Error(settings_.device + ": device busy (VIDIOC_REQBUFS: another program is using it)");
     fail("VIDIOC_REQBUFS", e);
   }
   if (req.count < kMinBuffers) {
@@ -228,7 +255,8 @@ void V4l2Source::requestBuffers() {
     }
     auto buf = std::make_unique<Buffer>();
     buf->length = b.length;
-    buf->start = ::mmap(nullptr, b.length, PROT_READ | PROT_WRITE, MAP_SHARED, fd_.get(), b.m.offset);
+    buf->start =
+        ::mmap(nullptr, b.length, PROT_READ | PROT_WRITE, MAP_SHARED, fd_.get(), b.m.offset);
     if (buf->start == MAP_FAILED) {
       const int e = errno;
       releaseBuffers();
@@ -268,7 +296,7 @@ void V4l2Source::convert(const std::uint8_t* data, std::size_t bytes, Frame& f) 
   switch (fourcc_) {
     case V4L2_PIX_FMT_MJPEG:
     case V4L2_PIX_FMT_JPEG: {
-      const int flags = settings_.mjpegReduce >= 8 ? cv::IMREAD_REDUCED_COLOR_8
+      const int flags = settings_.mjpegReduce >= 8   ? cv::IMREAD_REDUCED_COLOR_8
                         : settings_.mjpegReduce >= 4 ? cv::IMREAD_REDUCED_COLOR_4
                         : settings_.mjpegReduce >= 2 ? cv::IMREAD_REDUCED_COLOR_2
                                                      : cv::IMREAD_COLOR;
@@ -277,15 +305,19 @@ void V4l2Source::convert(const std::uint8_t* data, std::size_t bytes, Frame& f) 
     }
     case V4L2_PIX_FMT_YUYV:
       if (bytes >= std::size_t(height_) * stride)
-        cv::cvtColor(cv::Mat(height_, width_, CV_8UC2, const_cast<std::uint8_t*>(data), stride), bgr, cv::COLOR_YUV2BGR_YUYV);
+        cv::cvtColor(cv::Mat(height_, width_, CV_8UC2, const_cast<std::uint8_t*>(data), stride),
+                     bgr, cv::COLOR_YUV2BGR_YUYV);
       break;
     case V4L2_PIX_FMT_NV12:
       if (bytes >= std::size_t(height_) * stride * 3 / 2)
-        cv::cvtColor(cv::Mat(height_ * 3 / 2, width_, CV_8UC1, const_cast<std::uint8_t*>(data), stride), bgr, cv::COLOR_YUV2BGR_NV12);
+        cv::cvtColor(
+            cv::Mat(height_ * 3 / 2, width_, CV_8UC1, const_cast<std::uint8_t*>(data), stride), bgr,
+            cv::COLOR_YUV2BGR_NV12);
       break;
     case V4L2_PIX_FMT_RGB24:
       if (bytes >= std::size_t(height_) * stride)
-        cv::cvtColor(cv::Mat(height_, width_, CV_8UC3, const_cast<std::uint8_t*>(data), stride), bgr, cv::COLOR_RGB2BGR);
+        cv::cvtColor(cv::Mat(height_, width_, CV_8UC3, const_cast<std::uint8_t*>(data), stride),
+                     bgr, cv::COLOR_RGB2BGR);
       break;
   }
   f.format = PixelFormat::Bgr8;
@@ -298,7 +330,8 @@ void V4l2Source::convert(const std::uint8_t* data, std::size_t bytes, Frame& f) 
   f.width = bgr.cols, f.height = bgr.rows;
   f.bgr8.resize(std::size_t(bgr.cols) * bgr.rows * 3);
   for (int y = 0; y < bgr.rows; ++y)
-    std::memcpy(f.bgr8.data() + std::size_t(y) * bgr.cols * 3, bgr.ptr(y), std::size_t(bgr.cols) * 3);
+    std::memcpy(f.bgr8.data() + std::size_t(y) * bgr.cols * 3, bgr.ptr(y),
+                std::size_t(bgr.cols) * 3);
 }
 
 bool V4l2Source::next(Frame& frame) {
@@ -311,7 +344,8 @@ bool V4l2Source::next(Frame& frame) {
       fail("poll", errno);
     }
     if (r == 0)
-      throw Error(settings_.device + ": no frame for " + std::to_string(settings_.timeoutMs / 1000.0).substr(0, 4) +
+      throw Error(settings_.device + ": no frame for " +
+                  std::to_string(settings_.timeoutMs / 1000.0).substr(0, 4) +
                   " s: the camera stopped sending");
     v4l2_buffer b{};
     b.type = V4L2_BUF_TYPE_VIDEO_CAPTURE;
@@ -319,18 +353,24 @@ bool V4l2Source::next(Frame& frame) {
     if (xioctl(VIDIOC_DQBUF, &b) < 0) {
       const int e = errno;
       if (e == EAGAIN) continue;  // woken without a frame
-      if (e == ENODEV || e == EIO) throw Error(settings_.device + ": the camera was unplugged mid-stream (" + std::strerror(e) + ")");
+      if (e == ENODEV || e == EIO)
+        throw Error(settings_.device + ": the camera was unplugged mid-stream (" +
+                    std::strerror(e) + ")");
       fail("VIDIOC_DQBUF", e);
     }
-    if (b.index >= buffers_.size()) throw Error(settings_.device + ": driver returned buffer " + std::to_string(b.index));
+    if (b.index >= buffers_.size())
+      throw Error(settings_.device + ": driver returned buffer " + std::to_string(b.index));
     // Gaps in the driver's sequence numbers are frames lost before we saw them.
-    if (lastSequence_ && b.sequence > *lastSequence_ + 1) dropped_ += b.sequence - *lastSequence_ - 1;
+    if (lastSequence_ && b.sequence > *lastSequence_ + 1)
+      dropped_ += b.sequence - *lastSequence_ - 1;
     lastSequence_ = b.sequence;
     const bool corrupt = b.flags & V4L2_BUF_FLAG_ERROR;
-    if (!corrupt) convert(static_cast<const std::uint8_t*>(buffers_[b.index]->start), b.bytesused, frame);
+    if (!corrupt)
+      convert(static_cast<const std::uint8_t*>(buffers_[b.index]->start), b.bytesused, frame);
     if (xioctl(VIDIOC_QBUF, &b) < 0) {
       const int e = errno;
-      if (e == ENODEV) throw Error(settings_.device + ": the camera was unplugged mid-stream (ENODEV)");
+      if (e == ENODEV)
+        throw Error(settings_.device + ": the camera was unplugged mid-stream (ENODEV)");
       fail("VIDIOC_QBUF", e);
     }
     if (corrupt || frame.width == 0) {
@@ -386,13 +426,15 @@ LockedExposure V4l2Source::lockExposure(double seconds) {
 double V4l2Source::radianceScale() const {
   v4l2_control c{};
   c.id = V4L2_CID_EXPOSURE_ABSOLUTE;
-  if (fd_.isValid() && retryIoctl(fd_.get(), VIDIOC_G_CTRL, &c) == 0 && c.value > 0) return 1.0 / (c.value * 1e-4);
+  if (fd_.isValid() && retryIoctl(fd_.get(), VIDIOC_G_CTRL, &c) == 0 && c.value > 0)
+    return 1.0 / (c.value * 1e-4);
   return 1.0;
 }
 
 std::string V4l2Source::describe() const {
-  return "camera " + settings_.device + " (" + card_ + ", " + fourccText(fourcc_) + " " + std::to_string(width_) + "x" +
-         std::to_string(height_) + " @ " + std::to_string(fps_).substr(0, 5) + " fps)";
+  return "camera " + settings_.device + " (" + card_ + ", " + fourccText(fourcc_) + " " +
+         std::to_string(width_) + "x" + std::to_string(height_) + " @ " +
+         std::to_string(fps_).substr(0, 5) + " fps)";
 }
 
 CameraInfo queryCamera(const std::string& path) {
@@ -422,7 +464,8 @@ CameraInfo queryCamera(const std::string& path) {
       CameraFrameSize m;
       m.fourcc = d.pixelformat;
       m.width = int(s.type == V4L2_FRMSIZE_TYPE_DISCRETE ? s.discrete.width : s.stepwise.max_width);
-      m.height = int(s.type == V4L2_FRMSIZE_TYPE_DISCRETE ? s.discrete.height : s.stepwise.max_height);
+      m.height =
+          int(s.type == V4L2_FRMSIZE_TYPE_DISCRETE ? s.discrete.height : s.stepwise.max_height);
       for (std::uint32_t k = 0;; ++k) {
         v4l2_frmivalenum iv{};
         iv.index = k;
@@ -431,10 +474,13 @@ CameraInfo queryCamera(const std::string& path) {
         iv.height = std::uint32_t(m.height);
         if (retryIoctl(fd.get(), VIDIOC_ENUM_FRAMEINTERVALS, &iv) < 0) break;
         if (iv.type == V4L2_FRMIVAL_TYPE_DISCRETE) {
-          if (iv.discrete.numerator) m.fps.push_back(double(iv.discrete.denominator) / iv.discrete.numerator);
+          if (iv.discrete.numerator)
+            m.fps.push_back(double(iv.discrete.denominator) / iv.discrete.numerator);
         } else {
-          if (iv.stepwise.max.numerator) m.fps.push_back(double(iv.stepwise.max.denominator) / iv.stepwise.max.numerator);
-          if (iv.stepwise.min.numerator) m.fps.push_back(double(iv.stepwise.min.denominator) / iv.stepwise.min.numerator);
+          if (iv.stepwise.max.numerator)
+            m.fps.push_back(double(iv.stepwise.max.denominator) / iv.stepwise.max.numerator);
+          if (iv.stepwise.min.numerator)
+            m.fps.push_back(double(iv.stepwise.min.denominator) / iv.stepwise.min.numerator);
           break;
         }
       }
@@ -450,7 +496,8 @@ CameraInfo queryCamera(const std::string& path) {
       c.id = q.id;
       c.name = reinterpret_cast<const char*>(q.name);
       c.type = int(q.type);
-      c.minimum = q.minimum, c.maximum = q.maximum, c.step = q.step, c.defaultValue = q.default_value;
+      c.minimum = q.minimum, c.maximum = q.maximum, c.step = q.step,
+      c.defaultValue = q.default_value;
       v4l2_control v{};
       v.id = q.id;
       if (retryIoctl(fd.get(), VIDIOC_G_CTRL, &v) == 0) c.value = v.value;

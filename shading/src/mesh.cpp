@@ -1,12 +1,12 @@
 #include "shading/mesh.h"
 
-#include <algorithm>
-#include <cmath>
-#include <filesystem>
-
-#include <assimp/Importer.hpp>
 #include <assimp/postprocess.h>
 #include <assimp/scene.h>
+
+#include <algorithm>
+#include <assimp/Importer.hpp>
+#include <cmath>
+#include <filesystem>
 
 namespace lp {
 
@@ -44,7 +44,8 @@ Mesh loadMesh(const std::string& path) {
   if (!scene || (scene->mFlags & AI_SCENE_FLAGS_INCOMPLETE)) {
     const std::string why = importer.GetErrorString();
     // assimp's words for a file that parsed but holds no faces.
-    if (why.find("No output meshes") != std::string::npos || why.find("no meshes") != std::string::npos)
+    if (why.find("No output meshes") != std::string::npos ||
+        why.find("no meshes") != std::string::npos)
       throw MeshError(path + ": model has no triangles (assimp: " + why + ")");
     throw MeshError(path + ": cannot read model (" + why + ")");
   }

@@ -19,19 +19,23 @@ namespace {
 // The 256-entry table lives in 16 registers; each of 8 two-register permutes looks up 32 of its
 // entries by the low 5 bits of the code, and bits 5-7 pick among them with three blends. About
 // twice the speed of a gather here.
-__attribute__((target("avx512f"))) void lutAvx512(const std::uint8_t* src, const float* lut, float* dst, std::size_t n) {
+__attribute__((target("avx512f"))) void lutAvx512(const std::uint8_t* src, const float* lut,
+                                                  float* dst, std::size_t n) {
   __m512 t[16];
   for (int k = 0; k < 16; ++k) t[k] = _mm512_loadu_ps(lut + 16 * k);
   std::size_t i = 0;
   for (; i + 16 <= n; i += 16) {
-    const __m512i idx = _mm512_cvtepu8_epi32(_mm_loadu_si128(reinterpret_cast<const __m128i*>(src + i)));
+    const __m512i idx =
+        _mm512_cvtepu8_epi32(_mm_loadu_si128(reinterpret_cast<const __m128i*>(src + i)));
     __m512 r[8];
     for (int p = 0; p < 8; ++p) r[p] = _mm512_permutex2var_ps(t[2 * p], idx, t[2 * p + 1]);
     const __mmask16 b5 = _mm512_test_epi32_mask(idx, _mm512_set1_epi32(32));
     const __mmask16 b6 = _mm512_test_epi32_mask(idx, _mm512_set1_epi32(64));
     const __mmask16 b7 = _mm512_test_epi32_mask(idx, _mm512_set1_epi32(128));
-    const __m512 a0 = _mm512_mask_blend_ps(b5, r[0], r[1]), a1 = _mm512_mask_blend_ps(b5, r[2], r[3]);
-    const __m512 a2 = _mm512_mask_blend_ps(b5, r[4], r[5]), a3 = _mm512_mask_blend_ps(b5, r[6], r[7]);
+    const __m512 a0 = _mm512_mask_blend_ps(b5, r[0], r[1]),
+                 a1 = _mm512_mask_blend_ps(b5, r[2], r[3]);
+    const __m512 a2 = _mm512_mask_blend_ps(b5, r[4], r[5]),
+                 a3 = _mm512_mask_blend_ps(b5, r[6], r[7]);
     const __m512 c0 = _mm512_mask_blend_ps(b6, a0, a1), c1 = _mm512_mask_blend_ps(b6, a2, a3);
     _mm512_storeu_ps(dst + i, _mm512_mask_blend_ps(b7, c0, c1));
   }
@@ -82,8 +86,8 @@ void rowSumsGeneric(const float* row, RowOrder order, const EquirectTables& t, f
 }
 
 // 16 interleaved pixels (48 floats) to three planes.
-__attribute__((target("avx512f"))) inline void deinterleave(__m512 v0, __m512 v1, __m512 v2, __m512& a,
-                                                             __m512& b, __m512& c) {
+__attribute__((target("avx512f"))) inline void deinterleave(__m512 v0, __m512 v1, __m512 v2,
+                                                            __m512& a, __m512& b, __m512& c) {
   const __m512i a1 = _mm512_setr_epi32(0, 3, 6, 9, 12, 15, 18, 21, 24, 27, 30, 0, 0, 0, 0, 0);
   const __m512i a2 = _mm512_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 17, 20, 23, 26, 29);
   const __m512i b1 = _mm512_setr_epi32(1, 4, 7, 10, 13, 16, 19, 22, 25, 28, 31, 0, 0, 0, 0, 0);
@@ -96,20 +100,25 @@ __attribute__((target("avx512f"))) inline void deinterleave(__m512 v0, __m512 v1
 }
 
 // Loads 16 pixels, or the last n < 16 with zeros after them.
-__attribute__((target("avx512f"))) inline void loadPixels(const float* p, int n, __m512& a, __m512& b, __m512& c) {
+__attribute__((target("avx512f"))) inline void loadPixels(const float* p, int n, __m512& a,
+                                                          __m512& b, __m512& c) {
   if (n >= 16) {
     deinterleave(_mm512_loadu_ps(p), _mm512_loadu_ps(p + 16), _mm512_loadu_ps(p + 32), a, b, c);
     return;
   }
   const int f = 3 * n;
-  const auto mask = [](int bits) { return __mmask16(bits >= 16 ? 0xFFFF : bits <= 0 ? 0 : (1u << bits) - 1); };
+  const auto mask = [](int bits) {
+    return __mmask16(bits >= 16 ? 0xFFFF : bits <= 0 ? 0 : (1u << bits) - 1);
+  };
   deinterleave(_mm512_maskz_loadu_ps(mask(f), p), _mm512_maskz_loadu_ps(mask(f - 16), p + 16),
                _mm512_maskz_loadu_ps(mask(f - 32), p + 32), a, b, c);
 }
 
 // s[k][c] += col[k][j..j+15] * (x, y, z)[c].
-__attribute__((target("avx512f"), always_inline)) inline void accumulate(__m512 (&s)[5][3], const float* const* col,
-                                                                         int j, __m512 x, __m512 y, __m512 z) {
+__attribute__((target("avx512f"), always_inline)) inline void accumulate(__m512 (&s)[5][3],
+                                                                         const float* const* col,
+                                                                         int j, __m512 x, __m512 y,
+                                                                         __m512 z) {
   for (int k = 0; k < 5; ++k) {
     __m512 wk = _mm512_loadu_ps(col[k] + j);
     asm("" : "+v"(wk));  // keep the weight in a register: folding it into 3 FMAs triples loads
@@ -120,7 +129,8 @@ __attribute__((target("avx512f"), always_inline)) inline void accumulate(__m512 
 }
 
 // lane[c] += factor * (r, g, b)[c] for one coefficient's three channel accumulators.
-__attribute__((target("avx512f"), always_inline)) inline void addCoefficient(float* lane, float factor, __m512 r,
+__attribute__((target("avx512f"), always_inline)) inline void addCoefficient(float* lane,
+                                                                             float factor, __m512 r,
                                                                              __m512 g, __m512 b) {
   const __m512 f = _mm512_set1_ps(factor);
   _mm512_store_ps(lane, _mm512_fmadd_ps(f, r, _mm512_load_ps(lane)));
@@ -129,13 +139,15 @@ __attribute__((target("avx512f"), always_inline)) inline void addCoefficient(flo
 }
 
 // One row: 15 column sums as 16-lane vectors, then acc[k][c] += rowFactor[k] * s[col(k)][c].
-__attribute__((target("avx512f"))) void addRowAvx512(const float* row, RowOrder order, const EquirectTables& t,
-                                                      int i, float* accLanes) {
+__attribute__((target("avx512f"))) void addRowAvx512(const float* row, RowOrder order,
+                                                     const EquirectTables& t, int i,
+                                                     float* accLanes) {
   __m512 s[5][3];
   for (auto& a : s)
     for (auto& v : a) v = _mm512_setzero_ps();
   const int w = t.width;
-  const float* col[5] = {t.col[0].data(), t.col[1].data(), t.col[2].data(), t.col[3].data(), t.col[4].data()};
+  const float* col[5] = {t.col[0].data(), t.col[1].data(), t.col[2].data(), t.col[3].data(),
+                         t.col[4].data()};
   int j = 0;
   const int full = w & ~15;
   if (w >= 1024) {  // large rows stream from RAM: prefetch ahead
@@ -145,13 +157,15 @@ __attribute__((target("avx512f"))) void addRowAvx512(const float* row, RowOrder 
       _mm_prefetch(ahead + 64, _MM_HINT_T0);
       _mm_prefetch(ahead + 128, _MM_HINT_T0);
       __m512 x, y, z;
-      deinterleave(_mm512_loadu_ps(row + 3 * j), _mm512_loadu_ps(row + 3 * j + 16), _mm512_loadu_ps(row + 3 * j + 32), x, y, z);
+      deinterleave(_mm512_loadu_ps(row + 3 * j), _mm512_loadu_ps(row + 3 * j + 16),
+                   _mm512_loadu_ps(row + 3 * j + 32), x, y, z);
       accumulate(s, col, j, x, y, z);
     }
   } else {
     for (; j < full; j += 16) {
       __m512 x, y, z;
-      deinterleave(_mm512_loadu_ps(row + 3 * j), _mm512_loadu_ps(row + 3 * j + 16), _mm512_loadu_ps(row + 3 * j + 32), x, y, z);
+      deinterleave(_mm512_loadu_ps(row + 3 * j), _mm512_loadu_ps(row + 3 * j + 16),
+                   _mm512_loadu_ps(row + 3 * j + 32), x, y, z);
       accumulate(s, col, j, x, y, z);
     }
   }
@@ -163,7 +177,7 @@ __attribute__((target("avx512f"))) void addRowAvx512(const float* row, RowOrder 
   // acc[k][c] += rowFactor[row(k)] * s[col(k)][c], written out with constant indices: indexing
   // s by a table value would force the 15 row sums out of registers for the whole row loop.
   const bool bgr = order == RowOrder::Bgr;
-#define LP_ADD(k, r, col)                                                                      \
+#define LP_ADD(k, r, col)                                                                  \
   addCoefficient(accLanes + 48 * (k), t.row[r][i], bgr ? s[col][2] : s[col][0], s[col][1], \
                  bgr ? s[col][0] : s[col][2])
   LP_ADD(0, 0, 0);  // L00  = k0 R1 S1
@@ -186,8 +200,9 @@ __attribute__((target("avx512f"))) void addRowAvx512(const float* row, RowOrder 
 // coefficients 0-4 and 5-8 (the second sweep reads the pixels from L1).
 // acc[k][c] += w_k * (x, y, z)[c] for kN weights at w, 16 apart.
 template <int kN>
-__attribute__((target("avx512f"), always_inline)) inline void weightedStep(__m512 (&acc)[kN][3], const float* w,
-                                                                           __m512 x, __m512 y, __m512 z) {
+__attribute__((target("avx512f"), always_inline)) inline void weightedStep(__m512 (&acc)[kN][3],
+                                                                           const float* w, __m512 x,
+                                                                           __m512 y, __m512 z) {
   for (int k = 0; k < kN; ++k) {
     __m512 wk = _mm512_loadu_ps(w + 16 * k);
     asm("" : "+v"(wk));
@@ -198,8 +213,9 @@ __attribute__((target("avx512f"), always_inline)) inline void weightedStep(__m51
 }
 
 template <int K0, int K1>
-__attribute__((target("avx512f"))) inline void weightedSweep(const float* rgb, std::size_t b0, std::size_t b1,
-                                                             const float* blocked, double* out) {
+__attribute__((target("avx512f"))) inline void weightedSweep(const float* rgb, std::size_t b0,
+                                                             std::size_t b1, const float* blocked,
+                                                             double* out) {
   constexpr int kN = K1 - K0;
   __m512 acc[kN][3];
   for (auto& a : acc)
@@ -209,20 +225,23 @@ __attribute__((target("avx512f"))) inline void weightedSweep(const float* rgb, s
   std::size_t i = b0;
   for (; i + 16 <= b1; i += 16) {
     __m512 x, y, z;
-    deinterleave(_mm512_loadu_ps(rgb + 3 * i), _mm512_loadu_ps(rgb + 3 * i + 16), _mm512_loadu_ps(rgb + 3 * i + 32), x, y, z);
-    weightedStep<kN>(acc, blocked + (i / 16) * 9 * 16 + K0 * 16, x, y, z);  // zero-padded past the end
+    deinterleave(_mm512_loadu_ps(rgb + 3 * i), _mm512_loadu_ps(rgb + 3 * i + 16),
+                 _mm512_loadu_ps(rgb + 3 * i + 32), x, y, z);
+    weightedStep<kN>(acc, blocked + (i / 16) * 9 * 16 + K0 * 16, x, y,
+                     z);  // zero-padded past the end
   }
   if (i < b1) {
     __m512 x, y, z;
     loadPixels(rgb + 3 * i, int(b1 - i), x, y, z);
-    weightedStep<kN>(acc, blocked + (i / 16) * 9 * 16 + K0 * 16, x, y, z);  // zero-padded past the end
+    weightedStep<kN>(acc, blocked + (i / 16) * 9 * 16 + K0 * 16, x, y,
+                     z);  // zero-padded past the end
   }
   for (int k = 0; k < kN; ++k)
     for (int c = 0; c < 3; ++c) out[3 * (K0 + k) + c] += _mm512_reduce_add_ps(acc[k][c]);
 }
 
-__attribute__((target("avx512f"))) void weightedSumsAvx512(const float* rgb, std::size_t n, const float* blocked,
-                                                            double* out) {
+__attribute__((target("avx512f"))) void weightedSumsAvx512(const float* rgb, std::size_t n,
+                                                           const float* blocked, double* out) {
   constexpr std::size_t kRun = 1024;  // 12 KB of pixels: stays in L1 for the second sweep
   for (std::size_t b0 = 0; b0 < n; b0 += kRun) {
     const std::size_t b1 = std::min(n, b0 + kRun);
@@ -244,7 +263,8 @@ void EquirectAccumulator::addRow(const float* row, RowOrder order, int i) {
     float s[15];
     rowSumsGeneric(row, order, t_, s);
     for (int k = 0; k < 9; ++k)
-      for (int c = 0; c < 3; ++c) acc_[(3 * k + c) * 16] += t_.row[kRowOf[k]][i] * s[3 * kColOf[k] + c];
+      for (int c = 0; c < 3; ++c)
+        acc_[(3 * k + c) * 16] += t_.row[kRowOf[k]][i] * s[3 * kColOf[k] + c];
   }
   if (++pending_ == kFlushRows) flush(nullptr);  // float lanes -> double totals
 }
@@ -265,15 +285,18 @@ void EquirectAccumulator::flush(double* out) {
 
 namespace {
 
-__attribute__((target("f16c,avx"))) void halfToFloatF16c(const std::uint16_t* src, float* dst, std::size_t n) {
+__attribute__((target("f16c,avx"))) void halfToFloatF16c(const std::uint16_t* src, float* dst,
+                                                         std::size_t n) {
   std::size_t i = 0;
   for (; i + 8 <= n; i += 8)
-    _mm256_storeu_ps(dst + i, _mm256_cvtph_ps(_mm_loadu_si128(reinterpret_cast<const __m128i*>(src + i))));
+    _mm256_storeu_ps(dst + i,
+                     _mm256_cvtph_ps(_mm_loadu_si128(reinterpret_cast<const __m128i*>(src + i))));
   for (; i < n; ++i) dst[i] = _cvtsh_ss(src[i]);
 }
 
 float halfToFloatScalar(std::uint16_t h) {
-  const std::uint32_t sign = std::uint32_t(h & 0x8000) << 16, exp = (h >> 10) & 0x1F, man = h & 0x3FF;
+  const std::uint32_t sign = std::uint32_t(h & 0x8000) << 16, exp = (h >> 10) & 0x1F,
+                      man = h & 0x3FF;
   std::uint32_t bits;
   if (exp == 0) {
     if (man == 0) {

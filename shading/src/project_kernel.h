@@ -24,7 +24,8 @@ enum class RowOrder : std::uint8_t { Rgb, Bgr };
 /// Adds the 27 radiance sums of rows [row0, row1) to out (k-major, RGB). `rowAt(i)` returns a
 /// pointer to row i as 3 * width floats in `order`.
 template <class RowAt>
-void equirectRows(const EquirectTables& t, RowAt rowAt, RowOrder order, int row0, int row1, double* out);
+void equirectRows(const EquirectTables& t, RowAt rowAt, RowOrder order, int row0, int row1,
+                  double* out);
 
 /// Sum over n pixels of rgb[i] * w_k[i] for the nine weights; adds to out (k-major, RGB).
 /// `blocked` holds the weights in blocks of 16 pixels: w_k of pixel 16 b + l is at
@@ -57,7 +58,8 @@ struct EquirectAccumulator {
 };
 
 template <class RowAt>
-void equirectRows(const EquirectTables& t, RowAt rowAt, RowOrder order, int row0, int row1, double* out) {
+void equirectRows(const EquirectTables& t, RowAt rowAt, RowOrder order, int row0, int row1,
+                  double* out) {
   EquirectAccumulator acc(t);
   for (int i = row0; i < row1; ++i) acc.addRow(rowAt(i), order, i);
   acc.flush(out);

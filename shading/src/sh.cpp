@@ -1,11 +1,11 @@
 #include "shading/sh.h"
 
-#include "project_kernel.h"
-#include "shading/thread_pool.h"
-
 #include <algorithm>
 #include <cmath>
 #include <limits>
+
+#include "project_kernel.h"
+#include "shading/thread_pool.h"
 
 namespace lp {
 
@@ -75,8 +75,7 @@ std::array<glm::mat4, 3> irradianceMatrices(const Sh9& L) {
   // c3 = 3 * A2 * 0.315392, c4 = A0 * 0.282095, c5 = A2 * 0.315392, and c2 = A1 * 0.488603 / 2
   // (off-diagonal terms appear twice in n4^T M n4, so their entries carry half; likewise c1
   // for the xy, yz and xz terms, whose basis constant 1.092548 is twice 0.546274).
-  constexpr float c1 = 0.429043f, c2 = 0.511664f, c3 = 0.743125f, c4 = 0.886227f,
-                  c5 = 0.247708f;
+  constexpr float c1 = 0.429043f, c2 = 0.511664f, c3 = 0.743125f, c4 = 0.886227f, c5 = 0.247708f;
   std::array<glm::mat4, 3> out;
   for (int ch = 0; ch < 3; ++ch) {
     const float L00 = L.c[0][ch], L1m1 = L.c[1][ch], L10 = L.c[2][ch], L11 = L.c[3][ch],
@@ -252,17 +251,22 @@ EquirectProjector::EquirectProjector(int width, int height) : width_(width), hei
 template <class RowFill>
 Sh9 EquirectProjector::run(RowFill fill, bool bgr, ThreadPool* pool) const {
   // Row bands of at least 32 rows per task; each task sums into its own doubles.
-  const unsigned tasks = pool ? std::min<unsigned>(pool->size() * 4, unsigned(std::max(1, height_ / 32))) : 1;
+  const unsigned tasks =
+      pool ? std::min<unsigned>(pool->size() * 4, unsigned(std::max(1, height_ / 32))) : 1;
   std::vector<std::array<double, 27>> part(tasks);
   auto band = [&](unsigned b) {
     part[b].fill(0.0);
-    const int r0 = int(std::int64_t(height_) * b / tasks), r1 = int(std::int64_t(height_) * (b + 1) / tasks);
+    const int r0 = int(std::int64_t(height_) * b / tasks),
+              r1 = int(std::int64_t(height_) * (b + 1) / tasks);
     std::vector<float> buffer;
-    kernel::equirectRows(*tables_, [&](int i) { return fill(i, buffer); },
-                         bgr ? kernel::RowOrder::Bgr : kernel::RowOrder::Rgb, r0, r1, part[b].data());
+    kernel::equirectRows(
+        *tables_, [&](int i) { return fill(i, buffer); },
+        bgr ? kernel::RowOrder::Bgr : kernel::RowOrder::Rgb, r0, r1, part[b].data());
   };
-  if (pool) pool->run(tasks, band);
-  else band(0);
+  if (pool)
+    pool->run(tasks, band);
+  else
+    band(0);
   std::array<double, 27> acc{};
   for (const auto& p : part)
     for (int q = 0; q < 27; ++q) acc[q] += p[q];
@@ -273,7 +277,8 @@ Sh9 EquirectProjector::run(RowFill fill, bool bgr, ThreadPool* pool) const {
 }
 
 Sh9 EquirectProjector::project(const float* rgb, std::size_t rowStride, ThreadPool* pool) const {
-  return run([&](int i, std::vector<float>&) { return rgb + std::size_t(i) * rowStride; }, false, pool);
+  return run([&](int i, std::vector<float>&) { return rgb + std::size_t(i) * rowStride; }, false,
+             pool);
 }
 
 Sh9 EquirectProjector::projectBgr8(const std::uint8_t* bgr, std::size_t rowStride, const float* lut,
@@ -288,7 +293,8 @@ Sh9 EquirectProjector::projectBgr8(const std::uint8_t* bgr, std::size_t rowStrid
       true, pool);
 }
 
-Sh9 EquirectProjector::projectHalf(const std::uint16_t* rgb, std::size_t rowStride, ThreadPool* pool) const {
+Sh9 EquirectProjector::projectHalf(const std::uint16_t* rgb, std::size_t rowStride,
+                                   ThreadPool* pool) const {
   const std::size_t n = std::size_t(width_) * 3;
   return run(
       [&, n](int i, std::vector<float>& buf) {
@@ -304,7 +310,8 @@ SampleProjector::SampleProjector(const SphereSample* samples, std::size_t count)
   for (std::size_t i = 0; i < count; ++i) {
     if (samples[i].solidAngle == 0.0f) continue;
     const auto y = shBasis(samples[i].dir);
-    for (int k = 0; k < kShCount; ++k) w_[((i / 16) * kShCount + k) * 16 + i % 16] = y[k] * samples[i].solidAngle;
+    for (int k = 0; k < kShCount; ++k)
+      w_[((i / 16) * kShCount + k) * 16 + i % 16] = y[k] * samples[i].solidAngle;
   }
 }
 
@@ -319,8 +326,10 @@ Sh9 SampleProjector::run(BlockFill fill, bool bgr, ThreadPool* pool) const {
     std::vector<float> buf;
     kernel::weightedSums(fill(i0, n, buf), n, w_.data() + i0 * kShCount, part[c].data());
   };
-  if (pool) pool->run(chunks, task);
-  else for (unsigned c = 0; c < chunks; ++c) task(c);
+  if (pool)
+    pool->run(chunks, task);
+  else
+    for (unsigned c = 0; c < chunks; ++c) task(c);
   std::array<double, 27> acc{};
   for (const auto& p : part)
     for (int q = 0; q < 27; ++q) acc[q] += p[q];
@@ -332,10 +341,12 @@ Sh9 SampleProjector::run(BlockFill fill, bool bgr, ThreadPool* pool) const {
 }
 
 Sh9 SampleProjector::project(const float* rgb, ThreadPool* pool) const {
-  return run([&](std::size_t i0, std::size_t, std::vector<float>&) { return rgb + 3 * i0; }, false, pool);
+  return run([&](std::size_t i0, std::size_t, std::vector<float>&) { return rgb + 3 * i0; }, false,
+             pool);
 }
 
-Sh9 SampleProjector::projectBgr8(const std::uint8_t* bgr, const float* lut, ThreadPool* pool) const {
+Sh9 SampleProjector::projectBgr8(const std::uint8_t* bgr, const float* lut,
+                                 ThreadPool* pool) const {
   return run(
       [&](std::size_t i0, std::size_t n, std::vector<float>& buf) {
         buf.resize(3 * n);
@@ -355,8 +366,8 @@ namespace lp {
 
 glm::mat3 rotationYawPitchRoll(float yawDeg, float pitchDeg, float rollDeg) {
   const float y = glm::radians(yawDeg), p = glm::radians(pitchDeg), r = glm::radians(rollDeg);
-  const glm::mat3 rz(glm::vec3(std::cos(y), std::sin(y), 0), glm::vec3(-std::sin(y), std::cos(y), 0),
-                     glm::vec3(0, 0, 1));
+  const glm::mat3 rz(glm::vec3(std::cos(y), std::sin(y), 0),
+                     glm::vec3(-std::sin(y), std::cos(y), 0), glm::vec3(0, 0, 1));
   const glm::mat3 ry(glm::vec3(std::cos(p), 0, -std::sin(p)), glm::vec3(0, 1, 0),
                      glm::vec3(std::sin(p), 0, std::cos(p)));
   const glm::mat3 rx(glm::vec3(1, 0, 0), glm::vec3(0, std::cos(r), std::sin(r)),
@@ -372,11 +383,13 @@ Sh9 rotateSh(const Sh9& L, const glm::mat3& R) {
     const glm::vec3 v = R * glm::vec3(L.c[3][ch], L.c[1][ch], L.c[2][ch]);
     out.c[3][ch] = v.x, out.c[1][ch] = v.y, out.c[2][ch] = v.z;
   }
-  // Band 2: the rotated coefficients c' satisfy sum c'_m Y2m(w_i) = sum c_m Y2m(R^T w_i) at every w_i. Least squares
-  // over 12 icosahedron directions: (A^T A) c' = A^T B c, A_im = Y2m(w_i), B_im = Y2m(R^T w_i).
+  // Band 2: the rotated coefficients c' satisfy sum c'_m Y2m(w_i) = sum c_m Y2m(R^T w_i) at every
+  // w_i. Least squares over 12 icosahedron directions: (A^T A) c' = A^T B c, A_im = Y2m(w_i), B_im
+  // = Y2m(R^T w_i).
   const float g = 1.61803399f;
-  const glm::vec3 dirs[12] = {{-1, g, 0}, {1, g, 0}, {-1, -g, 0}, {1, -g, 0}, {0, -1, g}, {0, 1, g},
-                              {0, -1, -g}, {0, 1, -g}, {g, 0, -1}, {g, 0, 1}, {-g, 0, -1}, {-g, 0, 1}};
+  const glm::vec3 dirs[12] = {{-1, g, 0}, {1, g, 0}, {-1, -g, 0}, {1, -g, 0},
+                              {0, -1, g}, {0, 1, g}, {0, -1, -g}, {0, 1, -g},
+                              {g, 0, -1}, {g, 0, 1}, {-g, 0, -1}, {-g, 0, 1}};
   double A[12][5], B[12][5];
   const glm::mat3 Rt = glm::transpose(R);
   for (int i = 0; i < 12; ++i) {

@@ -5,8 +5,8 @@
 #include <benchmark/benchmark.h>
 
 #include <chrono>
-#include <map>
 #include <cmath>
+#include <map>
 #include <memory>
 #include <numbers>
 #include <random>
@@ -68,7 +68,9 @@ void projectBench(benchmark::State& state, lp::Layout layout, bool u8, Size s, i
                           : proj.project(skyF32(s).data(), 0, pool(threads));
     benchmark::DoNotOptimize(sh);
   }
-  state.counters["ns_per_pixel"] = benchmark::Counter(double(s.w) * s.h * 1e-9, benchmark::Counter::kIsIterationInvariantRate | benchmark::Counter::kInvert);
+  state.counters["ns_per_pixel"] =
+      benchmark::Counter(double(s.w) * s.h * 1e-9, benchmark::Counter::kIsIterationInvariantRate |
+                                                       benchmark::Counter::kInvert);
 }
 
 // The plain loop: per-pixel basis from precomputed directions and solid angles, 27 multiply-adds
@@ -83,12 +85,15 @@ void referenceLoop(benchmark::State& state, Size s) {
       const float dw = samples[i].solidAngle;
       for (int k = 0; k < 9; ++k) {
         const float w = y[k] * dw;
-        acc[3 * k] += w * rgb[3 * i], acc[3 * k + 1] += w * rgb[3 * i + 1], acc[3 * k + 2] += w * rgb[3 * i + 2];
+        acc[3 * k] += w * rgb[3 * i], acc[3 * k + 1] += w * rgb[3 * i + 1],
+            acc[3 * k + 2] += w * rgb[3 * i + 2];
       }
     }
     benchmark::DoNotOptimize(acc);
   }
-  state.counters["ns_per_pixel"] = benchmark::Counter(double(s.w) * s.h * 1e-9, benchmark::Counter::kIsIterationInvariantRate | benchmark::Counter::kInvert);
+  state.counters["ns_per_pixel"] =
+      benchmark::Counter(double(s.w) * s.h * 1e-9, benchmark::Counter::kIsIterationInvariantRate |
+                                                       benchmark::Counter::kInvert);
 }
 
 // Brute force at T = 64x64 output texels on the 300x300 map, with the SH time (projection plus
@@ -108,13 +113,15 @@ void bruteBench(benchmark::State& state, int threads) {
     glm::vec3 sum(0);
     for (const auto& n : normals) sum += lp::evalIrradianceQuadratic(m, n);
     benchmark::DoNotOptimize(sum);
-    shSeconds = std::min(shSeconds, std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
+    shSeconds = std::min(
+        shSeconds, std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
   }
   double bruteSeconds = 0;
   int n = 0;
   for (auto _ : state) {
     const auto t0 = std::chrono::steady_clock::now();
-    auto e = lp::bruteIrradiance(rgb.data(), 3, samples.data(), samples.size(), normals, unsigned(threads));
+    auto e = lp::bruteIrradiance(rgb.data(), 3, samples.data(), samples.size(), normals,
+                                 unsigned(threads));
     benchmark::DoNotOptimize(e);
     bruteSeconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     ++n;
@@ -177,25 +184,35 @@ void registerAll() {
       for (Size s : sizes)
         for (int threads : {1, 2}) {
           const bool u8 = std::string(type) == "u8";
-          const std::string name = "Project/" + std::string(lp::layoutName(layout)) + "/" + type + "/" + sizeName(s) +
-                                   "/threads:" + std::to_string(threads);
-          benchmark::RegisterBenchmark(name.c_str(), [=](benchmark::State& st) { projectBench(st, layout, u8, s, threads); })
-              ->UseRealTime()->Unit(benchmark::kMicrosecond);
+          const std::string name = "Project/" + std::string(lp::layoutName(layout)) + "/" + type +
+                                   "/" + sizeName(s) + "/threads:" + std::to_string(threads);
+          benchmark::RegisterBenchmark(
+              name.c_str(), [=](benchmark::State& st) { projectBench(st, layout, u8, s, threads); })
+              ->UseRealTime()
+              ->Unit(benchmark::kMicrosecond);
         }
   for (Size s : {Size{300, 300}, Size{3840, 1920}})
     benchmark::RegisterBenchmark(("Reference/equirect/f32/" + sizeName(s) + "/threads:1").c_str(),
                                  [=](benchmark::State& st) { referenceLoop(st, s); })
-        ->UseRealTime()->Unit(benchmark::kMicrosecond);
+        ->UseRealTime()
+        ->Unit(benchmark::kMicrosecond);
   for (int threads : {1, 2})
-    benchmark::RegisterBenchmark(("Brute/equirect/f32/300x300/T:64x64/threads:" + std::to_string(threads)).c_str(),
-                                 [=](benchmark::State& st) { bruteBench(st, threads); })
-        ->UseRealTime()->Unit(benchmark::kMillisecond)->Iterations(3);
-  benchmark::RegisterBenchmark("Render/bunny/1280x720/osmesa", renderBench)->UseRealTime()->Unit(benchmark::kMillisecond);
+    benchmark::RegisterBenchmark(
+        ("Brute/equirect/f32/300x300/T:64x64/threads:" + std::to_string(threads)).c_str(),
+        [=](benchmark::State& st) { bruteBench(st, threads); })
+        ->UseRealTime()
+        ->Unit(benchmark::kMillisecond)
+        ->Iterations(3);
+  benchmark::RegisterBenchmark("Render/bunny/1280x720/osmesa", renderBench)
+      ->UseRealTime()
+      ->Unit(benchmark::kMillisecond);
   const char* stages[] = {"grab", "convert", "project"};
   for (int i = 0; i < 3; ++i)
-    benchmark::RegisterBenchmark(("Pipeline/pano.mp4/u8/1920x1080/" + std::string(stages[i])).c_str(),
-                                 [=](benchmark::State& st) { pipelineBench(st, i); })
-        ->UseRealTime()->Unit(benchmark::kMillisecond);
+    benchmark::RegisterBenchmark(
+        ("Pipeline/pano.mp4/u8/1920x1080/" + std::string(stages[i])).c_str(),
+        [=](benchmark::State& st) { pipelineBench(st, i); })
+        ->UseRealTime()
+        ->Unit(benchmark::kMillisecond);
 }
 
 }  // namespace

@@ -35,13 +35,12 @@
 #include <fstream>
 #include <map>
 #include <mutex>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
 #include <sstream>
 #include <string>
 #include <thread>
 #include <vector>
-
-#include <opencv2/imgcodecs.hpp>
-#include <opencv2/imgproc.hpp>
 
 namespace fs = std::filesystem;
 
@@ -88,11 +87,14 @@ struct Emu {
   std::chrono::steady_clock::time_point nextFrame;
   std::vector<Control> controls = {
       {V4L2_CID_EXPOSURE_AUTO, "Auto Exposure", V4L2_CTRL_TYPE_MENU, 0, 3, 1, 3, 3},
-      {V4L2_CID_EXPOSURE_ABSOLUTE, "Exposure Time, Absolute", V4L2_CTRL_TYPE_INTEGER, 1, 10000, 1, 156, 156},
+      {V4L2_CID_EXPOSURE_ABSOLUTE, "Exposure Time, Absolute", V4L2_CTRL_TYPE_INTEGER, 1, 10000, 1,
+       156, 156},
       {V4L2_CID_AUTOGAIN, "Gain, Automatic", V4L2_CTRL_TYPE_BOOLEAN, 0, 1, 1, 1, 1},
       {V4L2_CID_GAIN, "Gain", V4L2_CTRL_TYPE_INTEGER, 0, 255, 1, 64, 64},
-      {V4L2_CID_AUTO_WHITE_BALANCE, "White Balance, Automatic", V4L2_CTRL_TYPE_BOOLEAN, 0, 1, 1, 1, 1},
-      {V4L2_CID_WHITE_BALANCE_TEMPERATURE, "White Balance Temperature", V4L2_CTRL_TYPE_INTEGER, 2800, 6500, 10, 4600, 4600}};
+      {V4L2_CID_AUTO_WHITE_BALANCE, "White Balance, Automatic", V4L2_CTRL_TYPE_BOOLEAN, 0, 1, 1, 1,
+       1},
+      {V4L2_CID_WHITE_BALANCE_TEMPERATURE, "White Balance Temperature", V4L2_CTRL_TYPE_INTEGER,
+       2800, 6500, 10, 4600, 4600}};
   std::ofstream log;
 
   Emu() {
@@ -110,7 +112,8 @@ struct Emu {
         char cc[5] = {};
         if (!d.is_directory() || std::sscanf(n.c_str(), "%4c_%dx%d", cc, &w, &h) != 3) continue;
         Mode md{v4l2_fourcc(cc[0], cc[1], cc[2], cc[3]), w, h, {}};
-        for (const auto& f : fs::directory_iterator(d.path())) md.files.push_back(f.path().string());
+        for (const auto& f : fs::directory_iterator(d.path()))
+          md.files.push_back(f.path().string());
         std::sort(md.files.begin(), md.files.end());
         if (!md.files.empty()) modes.push_back(md);
       }
@@ -144,7 +147,8 @@ struct Emu {
       return std::vector<std::uint8_t>((std::istreambuf_iterator<char>(in)), {});
     }
     cv::Mat bgr = cv::imread(file, cv::IMREAD_COLOR);
-    if (bgr.cols != md.w || bgr.rows != md.h) cv::resize(bgr, bgr, {md.w, md.h}, 0, 0, cv::INTER_AREA);
+    if (bgr.cols != md.w || bgr.rows != md.h)
+      cv::resize(bgr, bgr, {md.w, md.h}, 0, 0, cv::INTER_AREA);
     std::vector<std::uint8_t> out;
     if (md.fourcc == V4L2_PIX_FMT_MJPEG) {
       cv::imencode(".jpg", bgr, out, {cv::IMWRITE_JPEG_QUALITY, 95});
@@ -157,14 +161,18 @@ struct Emu {
       cv::cvtColor(bgr, i420, cv::COLOR_BGR2YUV_I420);
       const std::size_t ysz = std::size_t(md.w) * md.h, csz = ysz / 4;
       out.assign(i420.data, i420.data + ysz);
-      for (std::size_t i = 0; i < csz; ++i) out.push_back(i420.data[ysz + i]), out.push_back(i420.data[ysz + csz + i]);
+      for (std::size_t i = 0; i < csz; ++i)
+        out.push_back(i420.data[ysz + i]), out.push_back(i420.data[ysz + csz + i]);
     } else {  // YUYV, BT.601 limited range (what OpenCV's YUV2BGR_YUYV inverts)
       out.resize(std::size_t(md.w) * md.h * 2);
       for (int y = 0; y < md.h; ++y)
         for (int x = 0; x < md.w; x += 2) {
           const auto* p = bgr.ptr<cv::Vec3b>(y) + x;
-          auto Y = [](const cv::Vec3b& c) { return std::clamp(16.0 + 0.257 * c[2] + 0.504 * c[1] + 0.098 * c[0], 0.0, 255.0); };
-          const double r = (p[0][2] + p[1][2]) / 2.0, g = (p[0][1] + p[1][1]) / 2.0, b = (p[0][0] + p[1][0]) / 2.0;
+          auto Y = [](const cv::Vec3b& c) {
+            return std::clamp(16.0 + 0.257 * c[2] + 0.504 * c[1] + 0.098 * c[0], 0.0, 255.0);
+          };
+          const double r = (p[0][2] + p[1][2]) / 2.0, g = (p[0][1] + p[1][1]) / 2.0,
+                       b = (p[0][0] + p[1][0]) / 2.0;
           const double u = std::clamp(128.0 - 0.148 * r - 0.291 * g + 0.439 * b, 0.0, 255.0);
           const double v = std::clamp(128.0 + 0.439 * r - 0.368 * g - 0.071 * b, 0.0, 255.0);
           std::uint8_t* o = out.data() + (std::size_t(y) * md.w + x) * 2;
@@ -210,7 +218,8 @@ int Emu::handle(unsigned long req, void* arg) {
       if (d->type != V4L2_BUF_TYPE_VIDEO_CAPTURE || d->index >= fcc.size()) return fail(EINVAL);
       d->pixelformat = fcc[d->index];
       d->flags = d->pixelformat == V4L2_PIX_FMT_MJPEG ? V4L2_FMT_FLAG_COMPRESSED : 0;
-      std::snprintf(reinterpret_cast<char*>(d->description), sizeof d->description, "%.4s", reinterpret_cast<char*>(&d->pixelformat));
+      std::snprintf(reinterpret_cast<char*>(d->description), sizeof d->description, "%.4s",
+                    reinterpret_cast<char*>(&d->pixelformat));
       return 0;
     }
     case VIDIOC_ENUM_FRAMESIZES: {
@@ -244,20 +253,25 @@ int Emu::handle(unsigned long req, void* arg) {
         long best = -1;
         for (std::size_t i = 0; i < modes.size(); ++i) {
           if (modes[i].fourcc != f->fmt.pix.pixelformat) continue;
-          const long d = std::labs(long(modes[i].w) - long(f->fmt.pix.width)) + std::labs(long(modes[i].h) - long(f->fmt.pix.height));
+          const long d = std::labs(long(modes[i].w) - long(f->fmt.pix.width)) +
+                         std::labs(long(modes[i].h) - long(f->fmt.pix.height));
           if (best < 0 || d < best) best = d, pick = int(i);
         }
         if (fault("einval_fmt") && req == VIDIOC_S_FMT) return fail(EINVAL);  // some drivers do
         if (req == VIDIOC_S_FMT) mode = pick, frameIndex = 0;
-        say("S_FMT " + std::string(reinterpret_cast<char*>(&modes[std::size_t(pick)].fourcc), 4) + " " +
-            std::to_string(modes[std::size_t(pick)].w) + "x" + std::to_string(modes[std::size_t(pick)].h));
+        say("S_FMT " + std::string(reinterpret_cast<char*>(&modes[std::size_t(pick)].fourcc), 4) +
+            " " + std::to_string(modes[std::size_t(pick)].w) + "x" +
+            std::to_string(modes[std::size_t(pick)].h));
       }
       const Mode& md = modes[std::size_t(pick)];
       f->fmt.pix.pixelformat = md.fourcc;
       f->fmt.pix.width = std::uint32_t(md.w);
       f->fmt.pix.height = std::uint32_t(md.h);
       f->fmt.pix.field = V4L2_FIELD_NONE;
-      f->fmt.pix.bytesperline = md.fourcc == V4L2_PIX_FMT_YUYV ? md.w * 2 : md.fourcc == V4L2_PIX_FMT_RGB24 ? md.w * 3 : md.fourcc == V4L2_PIX_FMT_NV12 ? md.w : 0;
+      f->fmt.pix.bytesperline = md.fourcc == V4L2_PIX_FMT_YUYV    ? md.w * 2
+                                : md.fourcc == V4L2_PIX_FMT_RGB24 ? md.w * 3
+                                : md.fourcc == V4L2_PIX_FMT_NV12  ? md.w
+                                                                  : 0;
       f->fmt.pix.sizeimage = frameBytes(md);
       f->fmt.pix.colorspace = V4L2_COLORSPACE_SRGB;
       return 0;
@@ -266,14 +280,17 @@ int Emu::handle(unsigned long req, void* arg) {
     case VIDIOC_S_PARM: {
       auto* p = static_cast<v4l2_streamparm*>(arg);
       if (req == VIDIOC_S_PARM && p->parm.capture.timeperframe.numerator)
-        fps = double(p->parm.capture.timeperframe.denominator) / p->parm.capture.timeperframe.numerator, say("S_PARM " + std::to_string(fps));
+        fps = double(p->parm.capture.timeperframe.denominator) /
+              p->parm.capture.timeperframe.numerator,
+        say("S_PARM " + std::to_string(fps));
       p->parm.capture.capability = V4L2_CAP_TIMEPERFRAME;
       p->parm.capture.timeperframe = {1000, std::uint32_t(fps * 1000)};
       return 0;
     }
     case VIDIOC_REQBUFS: {
       auto* r = static_cast<v4l2_requestbuffers*>(arg);
-      if (r->memory != V4L2_MEMORY_MMAP || r->type != V4L2_BUF_TYPE_VIDEO_CAPTURE) return fail(EINVAL);
+      if (r->memory != V4L2_MEMORY_MMAP || r->type != V4L2_BUF_TYPE_VIDEO_CAPTURE)
+        return fail(EINVAL);
       say("REQBUFS " + std::to_string(r->count));
       if (r->count == 0) {
         if (streaming) return fail(EBUSY);
@@ -293,7 +310,8 @@ int Emu::handle(unsigned long req, void* arg) {
     case VIDIOC_QBUF:
     case VIDIOC_DQBUF: {
       auto* b = static_cast<v4l2_buffer*>(arg);
-      if (b->type != V4L2_BUF_TYPE_VIDEO_CAPTURE || b->memory != V4L2_MEMORY_MMAP) return fail(EINVAL);
+      if (b->type != V4L2_BUF_TYPE_VIDEO_CAPTURE || b->memory != V4L2_MEMORY_MMAP)
+        return fail(EINVAL);
       if (req == VIDIOC_DQBUF) {
         if (fault("eintr") && eintrDq++ % 7 == 3) return fail(EINTR);
         std::size_t i = 0;
@@ -305,7 +323,8 @@ int Emu::handle(unsigned long req, void* arg) {
         b->sequence = sequence++;
         const auto now = std::chrono::system_clock::now().time_since_epoch();
         b->timestamp.tv_sec = long(std::chrono::duration_cast<std::chrono::seconds>(now).count());
-        b->timestamp.tv_usec = long(std::chrono::duration_cast<std::chrono::microseconds>(now).count() % 1000000);
+        b->timestamp.tv_usec =
+            long(std::chrono::duration_cast<std::chrono::microseconds>(now).count() % 1000000);
         b->flags = V4L2_BUF_FLAG_MAPPED | V4L2_BUF_FLAG_TIMESTAMP_MONOTONIC;
         b->length = std::uint32_t(store[i].size());
         return 0;
@@ -360,10 +379,13 @@ int Emu::handle(unsigned long req, void* arg) {
       }
       if (v->value < c->min || v->value > c->max) return fail(ERANGE);
       // Manual values are refused while the matching automatic mode is on (as UVC does).
-      const bool blocked = (c->id == V4L2_CID_EXPOSURE_ABSOLUTE && control(V4L2_CID_EXPOSURE_AUTO)->value != V4L2_EXPOSURE_MANUAL) ||
+      const bool blocked = (c->id == V4L2_CID_EXPOSURE_ABSOLUTE &&
+                            control(V4L2_CID_EXPOSURE_AUTO)->value != V4L2_EXPOSURE_MANUAL) ||
                            (c->id == V4L2_CID_GAIN && control(V4L2_CID_AUTOGAIN)->value) ||
-                           (c->id == V4L2_CID_WHITE_BALANCE_TEMPERATURE && control(V4L2_CID_AUTO_WHITE_BALANCE)->value);
-      say(std::string("S_CTRL ") + c->name + " " + std::to_string(v->value) + (blocked ? " refused" : ""));
+                           (c->id == V4L2_CID_WHITE_BALANCE_TEMPERATURE &&
+                            control(V4L2_CID_AUTO_WHITE_BALANCE)->value);
+      say(std::string("S_CTRL ") + c->name + " " + std::to_string(v->value) +
+          (blocked ? " refused" : ""));
       if (blocked) return fail(EACCES);
       c->value = v->value;
       return 0;
@@ -375,9 +397,11 @@ int Emu::handle(unsigned long req, void* arg) {
 
 // Auto modes "converge" while frames flow: the values they settle on.
 void settle(Emu& e) {
-  if (e.control(V4L2_CID_EXPOSURE_AUTO)->value != V4L2_EXPOSURE_MANUAL) e.control(V4L2_CID_EXPOSURE_ABSOLUTE)->value = 333;
+  if (e.control(V4L2_CID_EXPOSURE_AUTO)->value != V4L2_EXPOSURE_MANUAL)
+    e.control(V4L2_CID_EXPOSURE_ABSOLUTE)->value = 333;
   if (e.control(V4L2_CID_AUTOGAIN)->value) e.control(V4L2_CID_GAIN)->value = 96;
-  if (e.control(V4L2_CID_AUTO_WHITE_BALANCE)->value) e.control(V4L2_CID_WHITE_BALANCE_TEMPERATURE)->value = 5200;
+  if (e.control(V4L2_CID_AUTO_WHITE_BALANCE)->value)
+    e.control(V4L2_CID_WHITE_BALANCE_TEMPERATURE)->value = 5200;
 }
 
 int emuOpen(const char* path) {
@@ -457,7 +481,9 @@ int ioctl(int fd, unsigned long req, ...) {
 }
 
 void* mmap(void* addr, size_t len, int prot, int flags, int fd, off_t off) {
-  if (!isFake(fd)) return real<void* (*)(void*, size_t, int, int, int, off_t)>("mmap")(addr, len, prot, flags, fd, off);
+  if (!isFake(fd))
+    return real<void* (*)(void*, size_t, int, int, int, off_t)>("mmap")(addr, len, prot, flags, fd,
+                                                                        off);
   Emu& e = emu();
   std::lock_guard lock(e.m);
   const std::size_t i = std::size_t(off) / 0x100000u;
@@ -465,13 +491,15 @@ void* mmap(void* addr, size_t len, int prot, int flags, int fd, off_t off) {
     errno = EINVAL;
     return MAP_FAILED;
   }
-  void* p = real<void* (*)(void*, size_t, int, int, int, off_t)>("mmap")(nullptr, len, PROT_READ | PROT_WRITE,
-                                                                         MAP_SHARED | MAP_ANONYMOUS, -1, 0);
+  void* p = real<void* (*)(void*, size_t, int, int, int, off_t)>("mmap")(
+      nullptr, len, PROT_READ | PROT_WRITE, MAP_SHARED | MAP_ANONYMOUS, -1, 0);
   e.maps[i] = p;
   e.say("mmap " + std::to_string(i));
   return p;
 }
-void* mmap64(void* addr, size_t len, int prot, int flags, int fd, off_t off) { return mmap(addr, len, prot, flags, fd, off); }
+void* mmap64(void* addr, size_t len, int prot, int flags, int fd, off_t off) {
+  return mmap(addr, len, prot, flags, fd, off);
+}
 
 int munmap(void* addr, size_t len) {
   {
@@ -487,7 +515,8 @@ int munmap(void* addr, size_t len) {
 }
 
 int poll(struct pollfd* fds, nfds_t n, int timeout) {
-  if (n != 1 || !isFake(fds[0].fd)) return real<int (*)(struct pollfd*, nfds_t, int)>("poll")(fds, n, timeout);
+  if (n != 1 || !isFake(fds[0].fd))
+    return real<int (*)(struct pollfd*, nfds_t, int)>("poll")(fds, n, timeout);
   Emu& e = emu();
   std::unique_lock lock(e.m);
   fds[0].revents = 0;

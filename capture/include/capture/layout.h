@@ -64,7 +64,7 @@ Layout parseLayout(std::string_view name);
 /// A layout with its parameters.
 struct LayoutSpec {
   Layout layout = Layout::Equirect;
-  glm::vec3 circle{0.0f};      ///< mirrorball: centre x, centre y, radius, in pixels (r = 0: unset)
+  glm::vec3 circle{0.0f};  ///< mirrorball: centre x, centre y, radius, in pixels (r = 0: unset)
   float fisheyeFovDeg = 190.0f;  ///< fisheye: field of view of each lens
 
   LayoutSpec() = default;

@@ -29,11 +29,11 @@ struct StageTimes {
 };
 
 struct ProcessedFrame {
-  std::uint64_t index = 0;     ///< position in this pipeline's output, from 0
-  std::uint64_t sequence = 0;  ///< the source's frame number
-  double timestamp = 0;        ///< the source's timestamp, seconds
-  Sh9 radiance;                ///< after orientation and smoothing
-  Sh9 unsmoothed;              ///< after orientation, before smoothing
+  std::uint64_t index = 0;             ///< position in this pipeline's output, from 0
+  std::uint64_t sequence = 0;          ///< the source's frame number
+  double timestamp = 0;                ///< the source's timestamp, seconds
+  Sh9 radiance;                        ///< after orientation and smoothing
+  Sh9 unsmoothed;                      ///< after orientation, before smoothing
   std::shared_ptr<const Image> image;  ///< the linear frame (when PipelineOptions::keepImages)
   /// Instead of `image`, for sRGB 8-bit frames: the frame as captured, with the linear scale
   /// (exposure) that applies to its decoded values. The GPU decodes sRGB for display.
@@ -54,14 +54,14 @@ struct PipelineOptions {
   /// The environment's orientation (world from file; orthogonal, a reflection allowed), applied
   /// to the coefficients by lp::rotateSh. The display turns the background by the same matrix.
   std::optional<glm::mat3> rotation;
-  double smoothSeconds = 0;           ///< EMA time constant on the 27 numbers; 0 = off
-  bool loop = false;                  ///< rewind at the end of the source
-  std::int64_t maxFrames = -1;        ///< stop after this many frames; -1 = the whole source
+  double smoothSeconds = 0;     ///< EMA time constant on the 27 numbers; 0 = off
+  bool loop = false;            ///< rewind at the end of the source
+  std::int64_t maxFrames = -1;  ///< stop after this many frames; -1 = the whole source
   Handoff handoff = Handoff::Latest;
-  bool realtime = false;              ///< pace capture by the source's timestamps
-  bool keepImages = true;             ///< hand the linear frame over too (for the background)
-  unsigned threads = 2;               ///< threads for one frame's projection
-  int reduce = 1;                     ///< equirect: project an f x f area average (reduceEquirect)
+  bool realtime = false;   ///< pace capture by the source's timestamps
+  bool keepImages = true;  ///< hand the linear frame over too (for the background)
+  unsigned threads = 2;    ///< threads for one frame's projection
+  int reduce = 1;          ///< equirect: project an f x f area average (reduceEquirect)
   /// Called on the capture thread for every processed frame, before the handoff.
   std::function<void(const ProcessedFrame&)> onCaptured;
   /// Called on the capture thread with every raw frame as the source gave it (for recording).
@@ -93,7 +93,8 @@ class ShSmoother {
 
 /// Whether the display takes this frame as it is: 8-bit sRGB in a layout the background shader
 /// draws directly (equirect, angular). Then no linear copy is made for it; the GPU decodes sRGB.
-bool displayTakesFrameAsIs(const Frame& frame, const Photometry& photometry, const LayoutSpec& layout);
+bool displayTakesFrameAsIs(const Frame& frame, const Photometry& photometry,
+                           const LayoutSpec& layout);
 
 /// The radiance coefficients of one frame, as every stage of liveprobe computes them: 8-bit frames
 /// through the linearizer's table inside the projection, float frames scaled after (projection

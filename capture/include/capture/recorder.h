@@ -17,7 +17,8 @@ class VideoRecorder {
  public:
   /// Throws lp::Error on an unsupported extension or an unwritable folder. `sourceScale` is the
   /// source's radianceScale() (8-bit frames keep it: exposure = 1 / sourceScale).
-  VideoRecorder(std::string path, double fps, std::string sourceDescription, double sourceScale = 1.0);
+  VideoRecorder(std::string path, double fps, std::string sourceDescription,
+                double sourceScale = 1.0);
   ~VideoRecorder();
   VideoRecorder(const VideoRecorder&) = delete;
   VideoRecorder& operator=(const VideoRecorder&) = delete;

@@ -49,13 +49,13 @@ std::string_view cameraFormatName(CameraFormat f);
 CameraFormat parseCameraFormat(std::string_view name);
 
 struct CameraSettings {
-  std::string device;           ///< /dev/videoN
+  std::string device;                        ///< /dev/videoN
   CameraFormat format = CameraFormat::Auto;  ///< Auto: MJPEG, then YUYV, NV12, RGB24
-  int width = 0, height = 0;    ///< 0: the largest the format offers
-  double fps = 0;               ///< 0: the driver's default
-  int buffers = 4;              ///< asked for; at least 3 must be granted
-  int timeoutMs = 2000;         ///< no frame for this long: the camera stopped sending
-  int mjpegReduce = 1;          ///< decode MJPEG at 1/2, 1/4 or 1/8 scale (libjpeg's DCT scaling)
+  int width = 0, height = 0;                 ///< 0: the largest the format offers
+  double fps = 0;                            ///< 0: the driver's default
+  int buffers = 4;                           ///< asked for; at least 3 must be granted
+  int timeoutMs = 2000;                      ///< no frame for this long: the camera stopped sending
+  int mjpegReduce = 1;  ///< decode MJPEG at 1/2, 1/4 or 1/8 scale (libjpeg's DCT scaling)
 };
 
 struct CameraControl {

@@ -24,9 +24,9 @@ inline glm::vec3 worldFromGl(glm::vec3 g) { return {g.z, -g.x, g.y}; }
 
 /// worldFromGl as a matrix (column-major, for a GLSL uniform): world = M * gl.
 inline glm::mat3 worldFromGlMatrix() {
-  return glm::mat3(glm::vec3(0, -1, 0),   // image of GL X
-                   glm::vec3(0, 0, 1),    // image of GL Y
-                   glm::vec3(1, 0, 0));   // image of GL Z
+  return glm::mat3(glm::vec3(0, -1, 0),  // image of GL X
+                   glm::vec3(0, 0, 1),   // image of GL Y
+                   glm::vec3(1, 0, 0));  // image of GL Z
 }
 
 }  // namespace lp::axes

@@ -2,21 +2,20 @@
 // Triangle meshes on the CPU: loading through assimp (OBJ, PLY, glTF 2.0, and whatever else it
 // reads), a built-in UV sphere, and fitting a model to the view. No GL here.
 #include <cstdint>
+#include <glm/glm.hpp>
 #include <stdexcept>
 #include <string>
 #include <vector>
-
-#include <glm/glm.hpp>
 
 namespace lp {
 
 struct Mesh {
   std::vector<glm::vec3> positions;
-  std::vector<glm::vec3> normals;  ///< unit, one per position
-  std::vector<glm::vec2> uvs;      ///< empty, or one per position
+  std::vector<glm::vec3> normals;      ///< unit, one per position
+  std::vector<glm::vec2> uvs;          ///< empty, or one per position
   std::vector<std::uint32_t> indices;  ///< triangles
-  std::string albedoTexture;       ///< path of the material's base-colour texture, if any
-  glm::vec3 albedo{0.8f};          ///< material base colour (multiplies the texture)
+  std::string albedoTexture;           ///< path of the material's base-colour texture, if any
+  glm::vec3 albedo{0.8f};              ///< material base colour (multiplies the texture)
 
   std::size_t triangleCount() const { return indices.size() / 3; }
 };

@@ -40,11 +40,10 @@
 #include <array>
 #include <cstddef>
 #include <cstdint>
+#include <glm/glm.hpp>
 #include <memory>
 #include <string_view>
 #include <vector>
-
-#include <glm/glm.hpp>
 
 namespace lp {
 
@@ -125,7 +124,8 @@ class EquirectProjector {
   Sh9 projectBgr8(const std::uint8_t* bgr, std::size_t rowStride, const float* lut,
                   ThreadPool* pool = nullptr) const;
   /// Half-float (IEEE binary16) linear RGB, rows `rowStride` halves apart.
-  Sh9 projectHalf(const std::uint16_t* rgb, std::size_t rowStride, ThreadPool* pool = nullptr) const;
+  Sh9 projectHalf(const std::uint16_t* rgb, std::size_t rowStride,
+                  ThreadPool* pool = nullptr) const;
 
  private:
   template <class RowFill>

@@ -1,6 +1,8 @@
 // The GL context backends and the factory that picks one. The only file that includes GLFW or
 // OSMesa (as Filament's PlatformFactory.cpp holds all platform #ifs).
-#include "shading/gl/gl.h"  // before osmesa.h: glad's header stands in for <GL/gl.h>
+// clang-format off: glad's header must come first, standing in for <GL/gl.h>.
+#include "shading/gl/gl.h"
+// clang-format on
 
 #include <GL/osmesa.h>
 #include <GLFW/glfw3.h>
@@ -59,23 +61,45 @@ class GlfwContext final : public GlContext {
       }
       auto& keys = self->input_.keys;
       switch (key) {
-        case GLFW_KEY_SPACE: if (action == GLFW_PRESS) keys.push_back(KeyAction::Pause); break;
-        case GLFW_KEY_RIGHT: keys.push_back(KeyAction::Step); break;
-        case GLFW_KEY_R: keys.push_back(KeyAction::ResetView); break;
-        case GLFW_KEY_S: if (mods & GLFW_MOD_CONTROL) keys.push_back(KeyAction::Save); break;
-        case GLFW_KEY_B: keys.push_back(KeyAction::ToggleBackground); break;
-        case GLFW_KEY_H: keys.push_back(KeyAction::ToggleHud); break;
-        case GLFW_KEY_EQUAL: case GLFW_KEY_KP_ADD: keys.push_back(KeyAction::ExposureUp); break;
-        case GLFW_KEY_MINUS: case GLFW_KEY_KP_SUBTRACT: keys.push_back(KeyAction::ExposureDown); break;
-        case GLFW_KEY_F1: keys.push_back(KeyAction::Help); break;
-        default: break;
+        case GLFW_KEY_SPACE:
+          if (action == GLFW_PRESS) keys.push_back(KeyAction::Pause);
+          break;
+        case GLFW_KEY_RIGHT:
+          keys.push_back(KeyAction::Step);
+          break;
+        case GLFW_KEY_R:
+          keys.push_back(KeyAction::ResetView);
+          break;
+        case GLFW_KEY_S:
+          if (mods & GLFW_MOD_CONTROL) keys.push_back(KeyAction::Save);
+          break;
+        case GLFW_KEY_B:
+          keys.push_back(KeyAction::ToggleBackground);
+          break;
+        case GLFW_KEY_H:
+          keys.push_back(KeyAction::ToggleHud);
+          break;
+        case GLFW_KEY_EQUAL:
+        case GLFW_KEY_KP_ADD:
+          keys.push_back(KeyAction::ExposureUp);
+          break;
+        case GLFW_KEY_MINUS:
+        case GLFW_KEY_KP_SUBTRACT:
+          keys.push_back(KeyAction::ExposureDown);
+          break;
+        case GLFW_KEY_F1:
+          keys.push_back(KeyAction::Help);
+          break;
+        default:
+          break;
       }
     });
-    glfwSetCharCallback(window_, [](GLFWwindow* w, unsigned codepoint) {  // layout-independent '?' and '+'
-      auto& keys = static_cast<GlfwContext*>(glfwGetWindowUserPointer(w))->input_.keys;
-      if (codepoint == '?') keys.push_back(KeyAction::Help);
-      if (codepoint == '+') keys.push_back(KeyAction::ExposureUp);
-    });
+    glfwSetCharCallback(
+        window_, [](GLFWwindow* w, unsigned codepoint) {  // layout-independent '?' and '+'
+          auto& keys = static_cast<GlfwContext*>(glfwGetWindowUserPointer(w))->input_.keys;
+          if (codepoint == '?') keys.push_back(KeyAction::Help);
+          if (codepoint == '+') keys.push_back(KeyAction::ExposureUp);
+        });
     glfwGetCursorPos(window_, &lastX_, &lastY_);
   }
   ~GlfwContext() override {
@@ -114,10 +138,22 @@ class GlfwContext final : public GlContext {
 class OsMesaContext final : public GlContext {
  public:
   explicit OsMesaContext(const ContextSpec& spec)
-      : width_(spec.width), height_(spec.height), buffer_(std::size_t(spec.width) * spec.height * 4) {
-    const int attribs[] = {OSMESA_FORMAT, OSMESA_RGBA, OSMESA_DEPTH_BITS, 24,
-                           OSMESA_STENCIL_BITS, 0, OSMESA_PROFILE, OSMESA_CORE_PROFILE,
-                           OSMESA_CONTEXT_MAJOR_VERSION, 3, OSMESA_CONTEXT_MINOR_VERSION, 3, 0};
+      : width_(spec.width),
+        height_(spec.height),
+        buffer_(std::size_t(spec.width) * spec.height * 4) {
+    const int attribs[] = {OSMESA_FORMAT,
+                           OSMESA_RGBA,
+                           OSMESA_DEPTH_BITS,
+                           24,
+                           OSMESA_STENCIL_BITS,
+                           0,
+                           OSMESA_PROFILE,
+                           OSMESA_CORE_PROFILE,
+                           OSMESA_CONTEXT_MAJOR_VERSION,
+                           3,
+                           OSMESA_CONTEXT_MINOR_VERSION,
+                           3,
+                           0};
     ctx_ = OSMesaCreateContextAttribs(attribs, nullptr);
     if (!ctx_) throw ContextError("OSMesa: cannot create a GL 3.3 core context");
     makeCurrent();
@@ -159,8 +195,9 @@ std::unique_ptr<GlContext> createGlContext(const ContextSpec& spec) {
     const bool haveDisplay = std::getenv("DISPLAY") || std::getenv("WAYLAND_DISPLAY");
     if (haveDisplay && glfwInit()) return std::make_unique<GlfwContext>(spec);
     if (spec.backend == Backend::Window)
-      throw ContextError("cannot open a window (no display: " +
-                         (glfwLastError().empty() ? std::string("DISPLAY is not set") : glfwLastError()) + ")");
+      throw ContextError(
+          "cannot open a window (no display: " +
+          (glfwLastError().empty() ? std::string("DISPLAY is not set") : glfwLastError()) + ")");
   }
   return std::make_unique<OsMesaContext>(spec);
 }

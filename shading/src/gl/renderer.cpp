@@ -1,10 +1,9 @@
 #include "shading/gl/renderer.h"
 
 #include <algorithm>
-#include <string>
-
 #include <glm/gtc/matrix_transform.hpp>
 #include <glm/gtc/type_ptr.hpp>
+#include <string>
 
 #include "shaders.h"
 #include "shading/axes.h"
@@ -14,20 +13,19 @@ namespace lp::gl {
 
 void checkGl(const char* where) {
   const GLenum e = glGetError();
-  if (e != GL_NO_ERROR) throw ContextError(std::string(where) + ": GL error 0x" + [e] {
-    char b[16];
-    std::snprintf(b, sizeof b, "%04x", e);
-    return std::string(b);
-  }());
+  if (e != GL_NO_ERROR)
+    throw ContextError(std::string(where) + ": GL error 0x" + [e] {
+      char b[16];
+      std::snprintf(b, sizeof b, "%04x", e);
+      return std::string(b);
+    }());
 }
 
 glm::vec3 Camera::eye() const {
   const float y = glm::radians(yawDeg), p = glm::radians(pitchDeg);
   return distance * glm::vec3(std::cos(p) * std::sin(y), std::sin(p), std::cos(p) * std::cos(y));
 }
-glm::mat4 Camera::view() const {
-  return glm::lookAt(eye(), glm::vec3(0.0f), glm::vec3(0, 1, 0));
-}
+glm::mat4 Camera::view() const { return glm::lookAt(eye(), glm::vec3(0.0f), glm::vec3(0, 1, 0)); }
 glm::mat4 Camera::projection(float aspect) const {
   return glm::perspective(glm::radians(fovYDeg), aspect, 0.05f, 100.0f);
 }
@@ -77,8 +75,8 @@ Buffer upload(GLenum target, const std::vector<T>& data) {
 }
 
 // A bound, linearly filtered 2D texture: internal format, client format and type as given.
-Texture makeTexture(GLint internal, int width, int height, GLenum format, GLenum type, const void* data,
-                    GLint wrapS) {
+Texture makeTexture(GLint internal, int width, int height, GLenum format, GLenum type,
+                    const void* data, GLint wrapS) {
   GLuint id = 0;
   glGenTextures(1, &id);
   Texture t(id);
@@ -131,7 +129,8 @@ std::vector<float> FloatTarget::readRgba() const {
   // GL rows start at the bottom.
   const std::size_t row = std::size_t(width_) * 4;
   for (int y = 0; y < height_ / 2; ++y)
-    std::swap_ranges(px.begin() + y * row, px.begin() + (y + 1) * row, px.begin() + (height_ - 1 - y) * row);
+    std::swap_ranges(px.begin() + y * row, px.begin() + (y + 1) * row,
+                     px.begin() + (height_ - 1 - y) * row);
   return px;
 }
 
@@ -178,21 +177,24 @@ void Renderer::setAlbedoTexture(const float* rgb, int width, int height) {
 
 void Renderer::setLighting(const Sh9& radiance) { sh_ = irradianceMatrices(radiance); }
 
-void Renderer::setBackground(const float* rgb, int width, int height, BackgroundMapping mapping, float displayScale) {
-  backgroundTex_ = makeFloatTexture(rgb, width, height,
-                                    mapping == BackgroundMapping::Equirect ? GL_REPEAT : GL_CLAMP_TO_EDGE);
+void Renderer::setBackground(const float* rgb, int width, int height, BackgroundMapping mapping,
+                             float displayScale) {
+  backgroundTex_ = makeFloatTexture(
+      rgb, width, height, mapping == BackgroundMapping::Equirect ? GL_REPEAT : GL_CLAMP_TO_EDGE);
   backgroundMapping_ = mapping;
   backgroundScale_ = 1.0f;
   backgroundDisplayScale_ = displayScale;
   backgroundSrgb_ = false;
 }
 
-void Renderer::setBackgroundSrgb8(const std::uint8_t* bgr, int width, int height, BackgroundMapping mapping,
-                                  float scale) {
+void Renderer::setBackgroundSrgb8(const std::uint8_t* bgr, int width, int height,
+                                  BackgroundMapping mapping, float scale) {
   // Re-specify only when the size changes; otherwise update the texels in place.
-  if (!backgroundTex_.isValid() || !backgroundSrgb_ || width != backgroundW_ || height != backgroundH_) {
-    backgroundTex_ = makeTexture(GL_SRGB8, width, height, GL_BGR, GL_UNSIGNED_BYTE, nullptr,
-                                 mapping == BackgroundMapping::Equirect ? GL_REPEAT : GL_CLAMP_TO_EDGE);
+  if (!backgroundTex_.isValid() || !backgroundSrgb_ || width != backgroundW_ ||
+      height != backgroundH_) {
+    backgroundTex_ =
+        makeTexture(GL_SRGB8, width, height, GL_BGR, GL_UNSIGNED_BYTE, nullptr,
+                    mapping == BackgroundMapping::Equirect ? GL_REPEAT : GL_CLAMP_TO_EDGE);
     backgroundW_ = width, backgroundH_ = height, backgroundSrgb_ = true;
   }
   glBindTexture(GL_TEXTURE_2D, backgroundTex_.get());
@@ -203,7 +205,9 @@ void Renderer::setBackgroundSrgb8(const std::uint8_t* bgr, int width, int height
   backgroundScale_ = scale;
 }
 
-void Renderer::setEnvOrientation(const glm::mat3& worldFromFile) { fileFromWorld_ = glm::transpose(worldFromFile); }
+void Renderer::setEnvOrientation(const glm::mat3& worldFromFile) {
+  fileFromWorld_ = glm::transpose(worldFromFile);
+}
 
 void Renderer::bindPanorama(const Program& p, const ShadingSettings& s) const {
   glUniformMatrix3fv(loc(p, "uFileFromWorld"), 1, GL_FALSE, glm::value_ptr(fileFromWorld_));
@@ -212,7 +216,8 @@ void Renderer::bindPanorama(const Program& p, const ShadingSettings& s) const {
   glUniform1f(loc(p, "uPanoramaScale"), backgroundScale_);
   const bool from8bit = backgroundSrgb_ || backgroundDisplayScale_ > 0;
   glUniform1i(loc(p, "uDisplayReferred"), from8bit && s.displayReferredBackground);
-  glUniform1f(loc(p, "uDisplayDivide"), backgroundSrgb_ ? 1.0f : std::max(backgroundDisplayScale_, 1e-30f));
+  glUniform1f(loc(p, "uDisplayDivide"),
+              backgroundSrgb_ ? 1.0f : std::max(backgroundDisplayScale_, 1e-30f));
   glUniform1i(loc(p, "uMapping"), int(backgroundMapping_));
   glActiveTexture(GL_TEXTURE0);
   glBindTexture(GL_TEXTURE_2D, backgroundTex_.get());
@@ -234,10 +239,13 @@ void Renderer::ensureMultisample(glm::ivec2 size, int samples) {
   glBindRenderbuffer(GL_RENDERBUFFER, id);
   glRenderbufferStorageMultisample(GL_RENDERBUFFER, samples, GL_DEPTH_COMPONENT24, size.x, size.y);
   glBindFramebuffer(GL_FRAMEBUFFER, msaa_.fbo.get());
-  glFramebufferRenderbuffer(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_RENDERBUFFER, msaa_.colourMs.get());
-  glFramebufferRenderbuffer(GL_FRAMEBUFFER, GL_DEPTH_ATTACHMENT, GL_RENDERBUFFER, msaa_.depth.get());
+  glFramebufferRenderbuffer(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_RENDERBUFFER,
+                            msaa_.colourMs.get());
+  glFramebufferRenderbuffer(GL_FRAMEBUFFER, GL_DEPTH_ATTACHMENT, GL_RENDERBUFFER,
+                            msaa_.depth.get());
   if (glCheckFramebufferStatus(GL_FRAMEBUFFER) != GL_FRAMEBUFFER_COMPLETE)
-    throw ContextError("multisample framebuffer (" + std::to_string(samples) + " samples) is incomplete");
+    throw ContextError("multisample framebuffer (" + std::to_string(samples) +
+                       " samples) is incomplete");
   msaa_.size = size;
   msaa_.samples = samples;
   checkGl("Renderer: multisample target");
@@ -254,7 +262,8 @@ void Renderer::draw(glm::ivec2 size, const Camera& camera, const ShadingSettings
   glViewport(0, 0, size.x, size.y);
   glClearColor(0.0f, 0.0f, 0.0f, 1.0f);
   glClear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
-  const glm::mat4 viewProj = camera.projection(float(size.x) / float(std::max(1, size.y))) * camera.view();
+  const glm::mat4 viewProj =
+      camera.projection(float(size.x) / float(std::max(1, size.y))) * camera.view();
   const glm::mat3 worldFromGl = axes::worldFromGlMatrix();
 
   if (s.background && backgroundTex_.isValid() && s.output == OutputMode::Display) {
@@ -262,7 +271,8 @@ void Renderer::draw(glm::ivec2 size, const Camera& camera, const ShadingSettings
     glUseProgram(backgroundProgram_.get());
     glUniformMatrix4fv(loc(backgroundProgram_, "uInvViewProj"), 1, GL_FALSE,
                        glm::value_ptr(glm::inverse(viewProj)));
-    glUniformMatrix3fv(loc(backgroundProgram_, "uWorldFromGl"), 1, GL_FALSE, glm::value_ptr(worldFromGl));
+    glUniformMatrix3fv(loc(backgroundProgram_, "uWorldFromGl"), 1, GL_FALSE,
+                       glm::value_ptr(worldFromGl));
     bindPanorama(backgroundProgram_, s);
     glBindVertexArray(emptyVao_.get());
     glDrawArrays(GL_TRIANGLES, 0, 3);
@@ -275,7 +285,8 @@ void Renderer::draw(glm::ivec2 size, const Camera& camera, const ShadingSettings
     glUniformMatrix4fv(loc(modelProgram_, "uShR"), 1, GL_FALSE, glm::value_ptr(sh_[0]));
     glUniformMatrix4fv(loc(modelProgram_, "uShG"), 1, GL_FALSE, glm::value_ptr(sh_[1]));
     glUniformMatrix4fv(loc(modelProgram_, "uShB"), 1, GL_FALSE, glm::value_ptr(sh_[2]));
-    glUniformMatrix3fv(loc(modelProgram_, "uWorldFromGl"), 1, GL_FALSE, glm::value_ptr(worldFromGl));
+    glUniformMatrix3fv(loc(modelProgram_, "uWorldFromGl"), 1, GL_FALSE,
+                       glm::value_ptr(worldFromGl));
     glUniform3fv(loc(modelProgram_, "uAlbedo"), 1, glm::value_ptr(albedo_));
     glUniform1i(loc(modelProgram_, "uHasTexture"), albedoTex_.isValid() && hasUv_);
     glUniform1f(loc(modelProgram_, "uExposure"), s.exposure);
@@ -302,12 +313,14 @@ void Renderer::drawProbeViews(const Camera& camera, const ShadingSettings& s) {
   glGetIntegerv(GL_DRAW_FRAMEBUFFER_BINDING, &target);
   glGetIntegerv(GL_VIEWPORT, viewport);
   const glm::ivec2 sizes[3] = {{256, 128}, {128, 128}, {128, 128}};
-  const glm::mat3 worldFromView = axes::worldFromGlMatrix() * glm::transpose(glm::mat3(camera.view()));
+  const glm::mat3 worldFromView =
+      axes::worldFromGlMatrix() * glm::transpose(glm::mat3(camera.view()));
   glDisable(GL_DEPTH_TEST);
   glUseProgram(probeProgram_.get());
   bindPanorama(probeProgram_, s);
   glUniform1i(loc(probeProgram_, "uHavePanorama"), backgroundTex_.isValid());
-  glUniformMatrix3fv(loc(probeProgram_, "uWorldFromView"), 1, GL_FALSE, glm::value_ptr(worldFromView));
+  glUniformMatrix3fv(loc(probeProgram_, "uWorldFromView"), 1, GL_FALSE,
+                     glm::value_ptr(worldFromView));
   glUniformMatrix4fv(loc(probeProgram_, "uShR"), 1, GL_FALSE, glm::value_ptr(sh_[0]));
   glUniformMatrix4fv(loc(probeProgram_, "uShG"), 1, GL_FALSE, glm::value_ptr(sh_[1]));
   glUniformMatrix4fv(loc(probeProgram_, "uShB"), 1, GL_FALSE, glm::value_ptr(sh_[2]));
@@ -318,9 +331,11 @@ void Renderer::drawProbeViews(const Camera& camera, const ShadingSettings& s) {
       GLuint id = 0;
       glGenFramebuffers(1, &id);
       t.fbo.reset(id);
-      t.colour = makeTexture(GL_RGBA8, sizes[v].x, sizes[v].y, GL_RGBA, GL_UNSIGNED_BYTE, nullptr, GL_CLAMP_TO_EDGE);
+      t.colour = makeTexture(GL_RGBA8, sizes[v].x, sizes[v].y, GL_RGBA, GL_UNSIGNED_BYTE, nullptr,
+                             GL_CLAMP_TO_EDGE);
       glBindFramebuffer(GL_FRAMEBUFFER, t.fbo.get());
-      glFramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_TEXTURE_2D, t.colour.get(), 0);
+      glFramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_TEXTURE_2D, t.colour.get(),
+                             0);
       t.size = sizes[v];
       glActiveTexture(GL_TEXTURE0);
       glBindTexture(GL_TEXTURE_2D, backgroundTex_.get());
@@ -338,9 +353,10 @@ void Renderer::drawProbeViews(const Camera& camera, const ShadingSettings& s) {
   checkGl("Renderer::drawProbeViews");
 }
 
-unsigned Renderer::probeTexture(ProbeView view) const { return probes_[std::size_t(view)].colour.get(); }
+unsigned Renderer::probeTexture(ProbeView view) const {
+  return probes_[std::size_t(view)].colour.get();
+}
 glm::ivec2 Renderer::probeSize(ProbeView view) const { return probes_[std::size_t(view)].size; }
-
 
 void Renderer::finish() { glFinish(); }
 
@@ -350,7 +366,8 @@ std::vector<std::uint8_t> Renderer::readRgb8(glm::ivec2 size) {
   glReadPixels(0, 0, size.x, size.y, GL_RGB, GL_UNSIGNED_BYTE, px.data());
   const std::size_t row = std::size_t(size.x) * 3;
   for (int y = 0; y < size.y / 2; ++y)
-    std::swap_ranges(px.begin() + y * row, px.begin() + (y + 1) * row, px.begin() + (size.y - 1 - y) * row);
+    std::swap_ranges(px.begin() + y * row, px.begin() + (y + 1) * row,
+                     px.begin() + (size.y - 1 - y) * row);
   return px;
 }
 

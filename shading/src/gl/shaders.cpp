@@ -3,17 +3,18 @@
 namespace lp::gl::shaders {
 
 // Shared by both fragment shaders: exposure, tone map, sRGB encoding.
-#define LP_DISPLAY_GLSL                                                                  \
-  "uniform float uExposure;\n"                                                           \
-  "uniform int uToneMap; // 0 ACES (Narkowicz fit), 1 Reinhard, 2 linear clamp\n"        \
-  "vec3 toneMap(vec3 c) {\n"                                                             \
-  "  c = max(c * uExposure, vec3(0.0));\n"                                               \
-  "  if (uToneMap == 0) c = clamp((c * (2.51 * c + 0.03)) / (c * (2.43 * c + 0.59) + 0.14), 0.0, 1.0);\n" \
-  "  else if (uToneMap == 1) c = c / (1.0 + c);\n"                                       \
-  "  return clamp(c, 0.0, 1.0);\n"                                                       \
-  "}\n"                                                                                  \
-  "vec3 srgbEncode(vec3 c) {\n"                                                          \
-  "  return mix(c * 12.92, 1.055 * pow(c, vec3(1.0 / 2.4)) - 0.055, step(vec3(0.0031308), c));\n" \
+#define LP_DISPLAY_GLSL                                                                            \
+  "uniform float uExposure;\n"                                                                     \
+  "uniform int uToneMap; // 0 ACES (Narkowicz fit), 1 Reinhard, 2 linear clamp\n"                  \
+  "vec3 toneMap(vec3 c) {\n"                                                                       \
+  "  c = max(c * uExposure, vec3(0.0));\n"                                                         \
+  "  if (uToneMap == 0) c = clamp((c * (2.51 * c + 0.03)) / (c * (2.43 * c + 0.59) + 0.14), 0.0, " \
+  "1.0);\n"                                                                                        \
+  "  else if (uToneMap == 1) c = c / (1.0 + c);\n"                                                 \
+  "  return clamp(c, 0.0, 1.0);\n"                                                                 \
+  "}\n"                                                                                            \
+  "vec3 srgbEncode(vec3 c) {\n"                                                                    \
+  "  return mix(c * 12.92, 1.055 * pow(c, vec3(1.0 / 2.4)) - 0.055, step(vec3(0.0031308), c));\n"  \
   "}\n"
 
 const char* const kModelVs = R"(#version 330 core
@@ -74,31 +75,33 @@ void main() {
 
 // The panorama seen in world direction w (R&H frame): the environment's orientation, the
 // layout's mapping and the background look. Shared by the background and the probe views.
-#define LP_PANORAMA_GLSL                                                                 \
-  "uniform sampler2D uPanorama;\n"                                                       \
-  "uniform int uMapping;          // 0 equirect, 1 angular (capture/layout.h)\n"         \
-  "uniform mat3 uFileFromWorld;   // inverse of the environment's orientation\n"         \
-  "uniform float uPanoramaScale;  // the input exposure of an 8-bit frame, else 1\n"     \
-  "uniform bool uDisplayReferred; // show the texels as the source looks: no exposure, no tone map\n" \
-  "uniform float uDisplayDivide;  // undoes the input exposure of a decoded 8-bit float panorama\n" \
-  "const float PI = 3.14159265358979;\n"                                                 \
-  "vec2 panoramaUv(vec3 w) {\n"                                                          \
-  "  w = uFileFromWorld * w;\n"                                                          \
-  "  if (uMapping == 0) {\n"                                                             \
-  "    float t = acos(clamp(w.z, -1.0, 1.0));\n"                                         \
-  "    float p = atan(w.y, w.x);\n"                                                      \
-  "    if (p < 0.0) p += 2.0 * PI;\n"                                                    \
-  "    return vec2(p / (2.0 * PI), t / PI);\n"                                           \
-  "  }\n"                                                                                \
-  "  vec3 l = vec3(-w.y, w.z, -w.x);  // worldToAngular\n"                               \
-  "  float r = acos(clamp(l.z, -1.0, 1.0)) / PI;\n"                                      \
-  "  float p = atan(l.y, l.x);\n"                                                        \
-  "  return vec2(0.5 + 0.5 * r * cos(p), 0.5 - 0.5 * r * sin(p));\n"                     \
-  "}\n"                                                                                  \
-  "vec3 panoramaDisplay(vec3 w) {\n"                                                     \
-  "  vec3 c = textureLod(uPanorama, panoramaUv(w), 0.0).rgb;\n"                          \
-  "  if (uDisplayReferred) return srgbEncode(clamp(c / uDisplayDivide, 0.0, 1.0));\n"    \
-  "  return srgbEncode(toneMap(c * uPanoramaScale));\n"                                  \
+#define LP_PANORAMA_GLSL                                                                         \
+  "uniform sampler2D uPanorama;\n"                                                               \
+  "uniform int uMapping;          // 0 equirect, 1 angular (capture/layout.h)\n"                 \
+  "uniform mat3 uFileFromWorld;   // inverse of the environment's orientation\n"                 \
+  "uniform float uPanoramaScale;  // the input exposure of an 8-bit frame, else 1\n"             \
+  "uniform bool uDisplayReferred; // show the texels as the source looks: no exposure, no tone " \
+  "map\n"                                                                                        \
+  "uniform float uDisplayDivide;  // undoes the input exposure of a decoded 8-bit float "        \
+  "panorama\n"                                                                                   \
+  "const float PI = 3.14159265358979;\n"                                                         \
+  "vec2 panoramaUv(vec3 w) {\n"                                                                  \
+  "  w = uFileFromWorld * w;\n"                                                                  \
+  "  if (uMapping == 0) {\n"                                                                     \
+  "    float t = acos(clamp(w.z, -1.0, 1.0));\n"                                                 \
+  "    float p = atan(w.y, w.x);\n"                                                              \
+  "    if (p < 0.0) p += 2.0 * PI;\n"                                                            \
+  "    return vec2(p / (2.0 * PI), t / PI);\n"                                                   \
+  "  }\n"                                                                                        \
+  "  vec3 l = vec3(-w.y, w.z, -w.x);  // worldToAngular\n"                                       \
+  "  float r = acos(clamp(l.z, -1.0, 1.0)) / PI;\n"                                              \
+  "  float p = atan(l.y, l.x);\n"                                                                \
+  "  return vec2(0.5 + 0.5 * r * cos(p), 0.5 - 0.5 * r * sin(p));\n"                             \
+  "}\n"                                                                                          \
+  "vec3 panoramaDisplay(vec3 w) {\n"                                                             \
+  "  vec3 c = textureLod(uPanorama, panoramaUv(w), 0.0).rgb;\n"                                  \
+  "  if (uDisplayReferred) return srgbEncode(clamp(c / uDisplayDivide, 0.0, 1.0));\n"            \
+  "  return srgbEncode(toneMap(c * uPanoramaScale));\n"                                          \
   "}\n"
 
 const char* const kBackgroundFs = "#version 330 core\n" LP_DISPLAY_GLSL LP_PANORAMA_GLSL R"(

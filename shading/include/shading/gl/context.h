@@ -3,12 +3,11 @@
 // offscreen (Mesa llvmpipe). All backend #ifs live in src/gl/context_factory.cpp; the renderer
 // never sees GLFW or OSMesa. createGlContext() loads GL 3.3 core through glad for either.
 #include <cstdint>
+#include <glm/glm.hpp>
 #include <memory>
 #include <stdexcept>
 #include <string>
 #include <vector>
-
-#include <glm/glm.hpp>
 
 namespace lp::gl {
 
@@ -29,21 +28,21 @@ struct ContextSpec {
 /// What a key press asks for. Keys arrive through GLFW's callbacks, so a tap shorter than a frame
 /// is never lost; Esc and Q close the window from the callback itself.
 enum class KeyAction : std::uint8_t {
-  Pause,           ///< Space
-  Step,            ///< Right arrow
-  ResetView,       ///< R
-  ToggleBackground,///< B
-  ToggleHud,       ///< H
-  ExposureUp,      ///< + or = (keypad +)
-  ExposureDown,    ///< - (keypad -)
-  Help,            ///< F1 or ?
-  Save,            ///< Ctrl+S
+  Pause,             ///< Space
+  Step,              ///< Right arrow
+  ResetView,         ///< R
+  ToggleBackground,  ///< B
+  ToggleHud,         ///< H
+  ExposureUp,        ///< + or = (keypad +)
+  ExposureDown,      ///< - (keypad -)
+  Help,              ///< F1 or ?
+  Save,              ///< Ctrl+S
 };
 
 /// Input gathered since the last pollEvents().
 struct InputDelta {
-  glm::vec2 drag{0.0f};  ///< cursor movement with the left button held, in pixels
-  float scroll = 0.0f;   ///< wheel steps
+  glm::vec2 drag{0.0f};         ///< cursor movement with the left button held, in pixels
+  float scroll = 0.0f;          ///< wheel steps
   std::vector<KeyAction> keys;  ///< in the order pressed
 };
 

@@ -4,9 +4,8 @@
 // panorama is drawn behind it in the same orientation. Needs a current GL 3.3 core context;
 // knows nothing of GLFW or OSMesa.
 #include <cstdint>
-#include <vector>
-
 #include <glm/glm.hpp>
+#include <vector>
 
 #include "shading/gl/handles.h"
 #include "shading/mesh.h"
@@ -80,11 +79,13 @@ class Renderer {
   /// decoded from an 8-bit (sRGB) source and multiplied by that scale: shown display-referred
   /// (ShadingSettings::displayReferredBackground), it is divided by it and encoded back, so it
   /// looks as the source does. 0: a scene-referred (HDR) panorama, exposed and tone-mapped.
-  void setBackground(const float* rgb, int width, int height, BackgroundMapping mapping, float displayScale = 0.0f);
+  void setBackground(const float* rgb, int width, int height, BackgroundMapping mapping,
+                     float displayScale = 0.0f);
 
   /// 8-bit sRGB BGR panorama (rows top to bottom): the texture unit decodes sRGB to linear, and
   /// the shader multiplies by `scale` (the input exposure). Saves a per-frame CPU conversion.
-  void setBackgroundSrgb8(const std::uint8_t* bgr, int width, int height, BackgroundMapping mapping, float scale);
+  void setBackgroundSrgb8(const std::uint8_t* bgr, int width, int height, BackgroundMapping mapping,
+                          float scale);
 
   /// Orientation of the environment: a light at file direction d lies in world direction O d.
   /// O is orthogonal (a rotation, or a rotation times a reflection for a flipped panorama). The
