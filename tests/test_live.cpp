@@ -9,6 +9,7 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/videoio.hpp>
 #include <regex>
+#include <set>
 
 #include "capture/frame.h"
 #include "capture/image.h"
@@ -115,6 +116,37 @@ TEST(Live, FullSessionInEveryFormat) {
     std::cout << fmt << " " << size << ": worst |live - replay| / L00 = " << worst << "\n";
   }
   emu.expectNoLeak();
+}
+
+// Per-frame metadata: with auto exposure running (the emulator's exposure_walk changes the
+// exposure every frame), each frame is scaled by its own exposure time, the recording keeps every
+// frame's exposure, and replaying it gives the live coefficients frame by frame.
+TEST(LiveMetadata, EveryFrameKeepsItsOwnExposure) {
+  Emulator emu({"MJPG_320x160"}, "exposure_walk");
+  const std::string live = emu.tmp / "live.jsonl", rep = emu.tmp / "replay.jsonl",
+                    rec = emu.tmp / "rec.mkv";
+  auto r = emu.run("live /dev/video7 --frames 12" + kCommon + "--record " + rec + " --coeffs-out " +
+                   live);
+  ASSERT_EQ(r.exitCode, 0) << r.output;
+  nlohmann::json side = nlohmann::json::parse(std::ifstream(rec + ".json"));
+  std::set<long> seen;
+  for (const auto& e : side["exposures"]) {
+    const long units = std::lround(e.get<double>() * 1e4);  // seconds -> the control's 100 us
+    EXPECT_TRUE(units >= 200 && units <= 440 && units % 40 == 0)
+        << "not an exposure the camera had: " << e;
+    seen.insert(units);
+  }
+  EXPECT_GE(seen.size(), 3u) << "the exposure did not change from frame to frame: " << side.dump();
+  r = lpt::runLiveprobe("replay " + rec + kReplay + "--coeffs-out " + rep);
+  ASSERT_EQ(r.exitCode, 0) << r.output;
+  const auto a = readJsonl(live), b = readJsonl(rep);
+  ASSERT_EQ(a.size(), 12u);
+  ASSERT_EQ(b.size(), a.size());
+  for (std::size_t i = 0; i < a.size(); ++i)
+    for (int c = 0; c < 3; ++c) {
+      const double x = a[i]["coefficients"]["L00"][c], y = b[i]["coefficients"]["L00"][c];
+      EXPECT_NEAR(y, x, 1e-4 * x) << "frame " << i;  // FFV1 keeps the decoded frames exactly
+    }
 }
 
 void expectFault(const Emulator& emu, const std::string& args, const std::string& says,

@@ -182,10 +182,10 @@ TEST(Recording, RoundTripThroughFfv1) {
   ASSERT_TRUE(std::filesystem::exists(file + ".json"));
   auto replay = lp::openSource(file);
   const lp::Projector proj(lp::Layout::Equirect, 128, 64);
-  const lp::Linearizer lin({0.0f, float(replay->radianceScale())});
   lp::Frame f;
   int n = 0;
   while (replay->next(f)) {
+    const lp::Linearizer lin({0.0f, float(f.radianceScale)});
     lp::Image img;
     lin.convert(f, img);
     std::vector<float> truth;

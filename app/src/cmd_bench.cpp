@@ -289,8 +289,8 @@ int runBench(const Args& a) {
     calibrations.push_back(calibrationMs());
     auto source = openSource(sourceName);
     description = source->describe();
-    Photometry photometry;
-    photometry.exposure = float(source->radianceScale());
+    // As the pipeline does: one lookup table; each frame's own exposure scales its result.
+    const Photometry photometry;
     const Linearizer lin(photometry);
     std::optional<Projector> projector;
     std::vector<std::array<double, kStageCount>> times;
@@ -310,7 +310,12 @@ int runBench(const Args& a) {
       // As the replay pipeline does: only frames the display cannot take as they are get a
       // linear copy.
       const bool asIs = displayTakesFrameAsIs(frame, photometry, layout);
-      if (!asIs) lin.convert(frame, image);
+      const float scale = float(frame.radianceScale);
+      if (!asIs) {
+        lin.convert(frame, image);
+        if (scale != 1.0f)
+          for (float& v : image.rgb) v *= scale;
+      }
       spin(inject[1]);
       t[1] = msSince(t0);
       t0 = Clock::now();
@@ -319,17 +324,17 @@ int runBench(const Args& a) {
           throw Error(sourceName + ": " + why);
         projector.emplace(layout, frame.width, frame.height);
       }
-      const Sh9 sh = rotateSh(projectFrame(*projector, frame, lin, &pool), orientation);
+      const Sh9 sh = rotateSh(projectFrame(*projector, frame, lin, &pool) * scale, orientation);
       spin(inject[2]);
       t[2] = msSince(t0);
       t0 = Clock::now();
       if (i == 0) exposure = autoExposure(sh);
       renderer.setLighting(sh);
       if (asIs)
-        setBackground(renderer, frame, layout, lin.exposure());
+        setBackground(renderer, frame, layout, lin.exposure() * scale);
       else
         setBackground(renderer, image, layout,
-                      frame.format == PixelFormat::Bgr8 ? lin.exposure() : 0.0f);
+                      frame.format == PixelFormat::Bgr8 ? lin.exposure() * scale : 0.0f);
       gl::Renderer::finish();
       spin(inject[3]);
       t[3] = msSince(t0);

@@ -175,8 +175,7 @@ struct StreamOutputs {
   }
 };
 
-StreamOutputs openOutputs(const Args& a, double fps, const std::string& description,
-                          double radianceScale) {
+StreamOutputs openOutputs(const Args& a, double fps, const std::string& description) {
   StreamOutputs o;
   if (a.has("--out-dir") && a.has("--out-video"))
     throw Error("give --out-dir or --out-video, not both");
@@ -195,7 +194,7 @@ StreamOutputs openOutputs(const Args& a, double fps, const std::string& descript
   }
   if (a.has("--record")) {
     requireExtension(a.get("--record"), "--record", {".mkv", ".avi", ".mp4"});
-    o.record = std::make_unique<VideoRecorder>(a.get("--record"), fps, description, radianceScale);
+    o.record = std::make_unique<VideoRecorder>(a.get("--record"), fps, description);
   }
   return o;
 }
@@ -384,7 +383,7 @@ int runStream(const Args& a, std::unique_ptr<FrameSource> source, bool live) {
   view.source = description;
   opt.keepImages = true;  // the background can be switched on at any time (B), and the HUD shows it
 
-  StreamOutputs out = openOutputs(a, fps, description, source->radianceScale());
+  StreamOutputs out = openOutputs(a, fps, description);
   if ((!headless || live) && out.coeffs) {
     AtomicTextFile* file = out.coeffs.get();
     opt.onCaptured = [file](const ProcessedFrame& f) { file->line(coeffsLine(f, -1)); };
@@ -498,7 +497,7 @@ int runRecord(const Args& a) {
   }
   if (frames < 0 && a.positional()[0].rfind("synthetic", 0) == 0)
     frames = std::int64_t(std::lround(5 * fps));
-  VideoRecorder rec(a.get("--out"), fps, source->describe(), source->radianceScale());
+  VideoRecorder rec(a.get("--out"), fps, source->describe());
   Progress progress("record", frames, a.has("--quiet"));
   Frame f;
   while ((frames < 0 || std::int64_t(rec.frames()) < frames) && !stopRequested() &&

@@ -93,7 +93,7 @@ Environment loadEnvironment(const std::string& source, const LayoutSpec& layout,
   env.layout = layout;
   env.orientation = orientation;
   Photometry photometry;
-  photometry.exposure = float(src->radianceScale());
+  photometry.exposure = float(frame.radianceScale);
   Linearizer(photometry).convert(frame, env.image);
   if (frame.format == PixelFormat::Bgr8) env.displayScale = photometry.exposure;
   if (auto why = layoutMismatch(layout, env.image.width, env.image.height); !why.empty())

@@ -145,7 +145,7 @@ void CapturePipeline::run() {
       } else {
         sh = projectFrame(*projector, frame, linearizer, pool.get());
       }
-      const double scale = source_->radianceScale();
+      const double scale = frame.radianceScale;  // the exposure in force for this frame
       if (scale != 1.0) {
         sh *= float(scale);
         if (image)

@@ -22,13 +22,11 @@ struct VideoRecorder::Impl {
   cv::Mat bgr;
 };
 
-VideoRecorder::VideoRecorder(std::string path, double fps, std::string sourceDescription,
-                             double sourceScale)
+VideoRecorder::VideoRecorder(std::string path, double fps, std::string sourceDescription)
     : impl_(std::make_unique<Impl>()),
       path_(std::move(path)),
       source_(std::move(sourceDescription)),
-      fps_(fps > 0 ? fps : 30.0),
-      sourceScale_(sourceScale) {
+      fps_(fps > 0 ? fps : 30.0) {
   const fs::path p(path_);
   std::string ext = p.extension().string();
   for (auto& c : ext) c = char(std::tolower(static_cast<unsigned char>(c)));
@@ -59,8 +57,9 @@ VideoRecorder::~VideoRecorder() {
 void VideoRecorder::write(const Frame& f) {
   if (finished_) throw Error(path_ + ": recording already finished");
   cv::Mat& bgr = impl_->bgr;
+  double exposure = 0;
   if (f.format == PixelFormat::Bgr8) {
-    if (exposure_ == 0) exposure_ = 1.0 / sourceScale_;
+    exposure = 1.0 / f.radianceScale;  // the frame's own: a camera's may change every frame
     bgr = cv::Mat(f.height, f.width, CV_8UC3, const_cast<std::uint8_t*>(f.bgr8.data()));
   } else {
     if (exposure_ == 0) {
@@ -77,6 +76,7 @@ void VideoRecorder::write(const Frame& f) {
         for (int c = 0; c < 3; ++c)
           d[2 - c] = std::uint8_t(std::lround(255.0f * linearToSrgb(s[c] * k)));
     }
+    exposure = exposure_;
   }
   if (!impl_->writer.isOpened()) {
     if (!impl_->writer.open(tmp_, cv::CAP_FFMPEG, impl_->fourcc, fps_, cv::Size(f.width, f.height),
@@ -89,6 +89,7 @@ void VideoRecorder::write(const Frame& f) {
   }
   impl_->writer.write(bgr);
   stamps_.push_back(f.timestamp);
+  exposures_.push_back(exposure);
 }
 
 void VideoRecorder::finish() {
@@ -104,9 +105,10 @@ void VideoRecorder::finish() {
   j["source"] = source_;
   j["fps"] = fps_;
   j["encoding"] = "srgb8";
-  j["exposure"] = exposure_;
+  j["exposure"] = exposures_.empty() ? 1.0 : exposures_.front();  // older readers: one for all
   j["frames"] = stamps_.size();
   j["timestamps"] = stamps_;
+  j["exposures"] = exposures_;
   const std::string sideTmp = tmp_ + ".json";
   {
     std::ofstream out(sideTmp);

@@ -121,6 +121,9 @@ class VideoSource final : public FrameSource {
         side >> j;
         scale_ = 1.0 / j.at("exposure").get<double>();
         for (const auto& t : j.at("timestamps")) stamps_.push_back(t.get<double>());
+        // Recordings since the per-frame metadata keep every frame's exposure.
+        if (j.contains("exposures"))
+          for (const auto& e : j.at("exposures")) scales_.push_back(1.0 / e.get<double>());
       } catch (const std::exception& e) {
         throw Error(path_ + ".json: bad recording sidecar (" + e.what() + ")");
       }
@@ -162,6 +165,7 @@ class VideoSource final : public FrameSource {
     const double ms = cap_.get(cv::CAP_PROP_POS_MSEC);
     f.timestamp =
         index < stamps_.size() ? stamps_[index] : (ms > 0 ? ms / 1000.0 : double(index) / fps());
+    f.radianceScale = index < scales_.size() ? scales_[index] : scale_;
     ++read_;
     return true;
   }
@@ -182,7 +186,6 @@ class VideoSource final : public FrameSource {
   }
   std::size_t skippedFrames() const override { return skipped_; }
   std::string endReason() const override { return endReason_; }
-  double radianceScale() const override { return scale_; }
 
  private:
   static constexpr int kMaxBadRun = 32;
@@ -198,7 +201,7 @@ class VideoSource final : public FrameSource {
   std::size_t skipped_ = 0, read_ = 0;
   std::string endReason_;
   double scale_ = 1.0;
-  std::vector<double> stamps_;
+  std::vector<double> stamps_, scales_;
 };
 
 bool hasVideoExtension(const std::string& path) {

@@ -381,6 +381,17 @@ bool V4l2Source::next(Frame& frame) {
     if (firstTimestamp_ < 0) firstTimestamp_ = t;
     frame.sequence = b.sequence;
     frame.timestamp = t - firstTimestamp_;
+    // The driver's timestamp is CLOCK_MONOTONIC when it says so (the kernel's default for UVC).
+    const bool monotonic =
+        (b.flags & V4L2_BUF_FLAG_TIMESTAMP_MASK) == V4L2_BUF_FLAG_TIMESTAMP_MONOTONIC;
+    frame.captureTime = monotonic ? t : -1.0;
+    // The exposure and gain in force: read per frame while the automatic modes may change them.
+    frame.exposure100us = locked_ ? lockedExposure_ : getControl(V4L2_CID_EXPOSURE_ABSOLUTE);
+    frame.gain = locked_ ? lockedGain_ : getControl(V4L2_CID_GAIN);
+    // 1 / exposure time in seconds: radiance in "per second" units, comparable between frames
+    // and runs with different exposures.
+    frame.radianceScale =
+        frame.exposure100us && *frame.exposure100us > 0 ? 1.0 / (*frame.exposure100us * 1e-4) : 1.0;
     return true;
   }
 }
@@ -420,15 +431,10 @@ LockedExposure V4l2Source::lockExposure(double seconds) {
   if (locked.gain) setControl(V4L2_CID_GAIN, *locked.gain);
   setControl(V4L2_CID_AUTO_WHITE_BALANCE, 0);
   if (locked.whiteBalanceK) setControl(V4L2_CID_WHITE_BALANCE_TEMPERATURE, *locked.whiteBalanceK);
+  locked_ = true;
+  lockedExposure_ = locked.exposure100us;
+  lockedGain_ = locked.gain;
   return locked;
-}
-
-double V4l2Source::radianceScale() const {
-  v4l2_control c{};
-  c.id = V4L2_CID_EXPOSURE_ABSOLUTE;
-  if (fd_.isValid() && retryIoctl(fd_.get(), VIDIOC_G_CTRL, &c) == 0 && c.value > 0)
-    return 1.0 / (c.value * 1e-4);
-  return 1.0;
 }
 
 std::string V4l2Source::describe() const {

@@ -13,7 +13,7 @@
 //                  converted to the mode's format)
 //   LPEMU_FPS      frame rate (default 30)
 //   LPEMU_FAULTS   comma list: busy_open, busy_reqbufs, grant=N, einval_fmt, stop_after=N,
-//                  eintr, unplug_after=N
+//                  eintr, unplug_after=N, exposure_walk (auto exposure changes every frame)
 //   LPEMU_LOG      file to which each call is appended as one line (for assertions)
 // What it cannot prove about real drivers: README, "Testing without a camera".
 #include <dlfcn.h>
@@ -321,10 +321,11 @@ int Emu::handle(unsigned long req, void* arg) {
         b->index = std::uint32_t(i);
         b->bytesused = bytesused[i];
         b->sequence = sequence++;
-        const auto now = std::chrono::system_clock::now().time_since_epoch();
-        b->timestamp.tv_sec = long(std::chrono::duration_cast<std::chrono::seconds>(now).count());
-        b->timestamp.tv_usec =
-            long(std::chrono::duration_cast<std::chrono::microseconds>(now).count() % 1000000);
+        // CLOCK_MONOTONIC, as the flag says (the kernel's contract for UVC).
+        timespec now{};
+        clock_gettime(CLOCK_MONOTONIC, &now);
+        b->timestamp.tv_sec = now.tv_sec;
+        b->timestamp.tv_usec = now.tv_nsec / 1000;
         b->flags = V4L2_BUF_FLAG_MAPPED | V4L2_BUF_FLAG_TIMESTAMP_MONOTONIC;
         b->length = std::uint32_t(store[i].size());
         return 0;
@@ -397,8 +398,10 @@ int Emu::handle(unsigned long req, void* arg) {
 
 // Auto modes "converge" while frames flow: the values they settle on.
 void settle(Emu& e) {
+  // exposure_walk: auto exposure keeps adjusting, frame after frame (200..440 x 100 us).
   if (e.control(V4L2_CID_EXPOSURE_AUTO)->value != V4L2_EXPOSURE_MANUAL)
-    e.control(V4L2_CID_EXPOSURE_ABSOLUTE)->value = 333;
+    e.control(V4L2_CID_EXPOSURE_ABSOLUTE)->value =
+        e.fault("exposure_walk") ? 200 + 40 * int(e.served % 7) : 333;
   if (e.control(V4L2_CID_AUTOGAIN)->value) e.control(V4L2_CID_GAIN)->value = 96;
   if (e.control(V4L2_CID_AUTO_WHITE_BALANCE)->value)
     e.control(V4L2_CID_WHITE_BALANCE_TEMPERATURE)->value = 5200;

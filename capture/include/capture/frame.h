@@ -4,6 +4,7 @@
 // interface; one factory, openSource().
 #include <cstdint>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -22,6 +23,15 @@ struct Frame {
   PixelFormat format = PixelFormat::RgbF32;
   std::vector<std::uint8_t> bgr8;  ///< width * height * 3 (Bgr8)
   std::vector<float> rgb;          ///< width * height * 3 (RgbF32)
+  // Per-frame metadata, as in force for this frame (after libcamera's per-request metadata):
+  /// Linear radiance = decoded 8-bit value * this: a camera's 1 / exposure time, a recording's
+  /// stored 1 / exposure. 1 for float frames and for sources without an exposure.
+  double radianceScale = 1.0;
+  /// The driver's capture time, CLOCK_MONOTONIC seconds (a camera's buffer timestamp); < 0 when
+  /// the source has none. Comparable with clock_gettime(CLOCK_MONOTONIC), so latency is measurable.
+  double captureTime = -1.0;
+  /// A camera's exposure time (in 100 us, V4L2_CID_EXPOSURE_ABSOLUTE) and gain for this frame.
+  std::optional<std::int32_t> exposure100us, gain;
 };
 
 class FrameSource {
@@ -38,8 +48,6 @@ class FrameSource {
   virtual std::size_t skippedFrames() const { return 0; }
   /// Why the stream ended, when it ended early (a truncated file); empty otherwise.
   virtual std::string endReason() const { return {}; }
-  /// Linear radiance = decoded 8-bit value * this (recordings store their exposure).
-  virtual double radianceScale() const { return 1.0; }
 };
 
 struct SourceOptions {

@@ -15,10 +15,9 @@ namespace lp {
 
 class VideoRecorder {
  public:
-  /// Throws lp::Error on an unsupported extension or an unwritable folder. `sourceScale` is the
-  /// source's radianceScale() (8-bit frames keep it: exposure = 1 / sourceScale).
-  VideoRecorder(std::string path, double fps, std::string sourceDescription,
-                double sourceScale = 1.0);
+  /// Throws lp::Error on an unsupported extension or an unwritable folder. 8-bit frames are
+  /// stored as they came, each with its own exposure (1 / Frame::radianceScale) in the sidecar.
+  VideoRecorder(std::string path, double fps, std::string sourceDescription);
   ~VideoRecorder();
   VideoRecorder(const VideoRecorder&) = delete;
   VideoRecorder& operator=(const VideoRecorder&) = delete;
@@ -34,8 +33,8 @@ class VideoRecorder {
   struct Impl;
   std::unique_ptr<Impl> impl_;
   std::string path_, tmp_, source_;
-  double fps_, exposure_ = 0, sourceScale_;
-  std::vector<double> stamps_;
+  double fps_, exposure_ = 0;               ///< float frames: the one exposure chosen on the first
+  std::vector<double> stamps_, exposures_;  ///< per frame
   bool finished_ = false;
 };
 

@@ -108,9 +108,6 @@ class V4l2Source final : public FrameSource {
   std::string describe() const override;
   double fps() const override { return fps_; }
   std::size_t skippedFrames() const override { return dropped_; }
-  /// 1 / exposure time in seconds when the camera reports it: radiance in "per second" units,
-  /// comparable between frames and runs with different exposures.
-  double radianceScale() const override;
 
   /// What the driver actually set.
   std::uint32_t fourcc() const { return fourcc_; }
@@ -140,6 +137,9 @@ class V4l2Source final : public FrameSource {
   std::optional<std::uint32_t> lastSequence_;
   std::size_t dropped_ = 0;
   double firstTimestamp_ = -1;
+  /// After lockExposure() the exposure and gain no longer change: no per-frame control reads.
+  std::optional<std::int32_t> lockedExposure_, lockedGain_;
+  bool locked_ = false;
   std::string card_;
 };
 
