@@ -71,6 +71,51 @@ TEST(ShRotation, BasicAxes) {
   for (int k = 0; k < 9; ++k) EXPECT_NEAR(r.c[k].x, want[k], 1e-5) << lp::kShNames[k];
 }
 
+// What the constant band-2 rotation rests on: the icosahedron's vertices integrate the products
+// of band-2 basis functions exactly, sum_i Y2a Y2b = (12 / 4 pi) delta_ab (here to the six digits
+// of the basis constants).
+TEST(ShRotation, IcosahedronIsABand2Design) {
+  const auto& d = lp::band2Design();
+  for (int a = 0; a < 5; ++a)
+    for (int b = 0; b < 5; ++b) {
+      double sum = 0;
+      for (int i = 0; i < 12; ++i) sum += d.basis[i][a] * d.basis[i][b];
+      EXPECT_NEAR(sum, a == b ? 12 / (4 * M_PI) : 0.0, 1e-5) << a << " " << b;
+    }
+}
+
+// Rotations compose (R2 after R1 is R2 R1), keep each band's norm, and undo each other; a
+// reflection applied twice is the identity. Random coefficients, random rotations.
+TEST(ShRotation, ComposesAndKeepsBandNorms) {
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<float> u(-1, 1), deg(-180, 180);
+  auto bandNorm = [](const lp::Sh9& L, int lo, int hi, int ch) {
+    double s = 0;
+    for (int k = lo; k < hi; ++k) s += double(L.c[k][ch]) * L.c[k][ch];
+    return std::sqrt(s);
+  };
+  for (int trial = 0; trial < 20; ++trial) {
+    lp::Sh9 L;
+    for (auto& c : L.c) c = {u(rng), u(rng), u(rng)};
+    const glm::mat3 r1 = lp::rotationYawPitchRoll(deg(rng), deg(rng), deg(rng)),
+                    r2 = lp::rotationYawPitchRoll(deg(rng), deg(rng), deg(rng));
+    const lp::Sh9 a = lp::rotateSh(lp::rotateSh(L, r1), r2), b = lp::rotateSh(L, r2 * r1);
+    const lp::Sh9 back = lp::rotateSh(lp::rotateSh(L, r1), glm::transpose(r1));
+    const glm::mat3 flip(glm::vec3(1, 0, 0), glm::vec3(0, 1, 0), glm::vec3(0, 0, -1));
+    const lp::Sh9 twice = lp::rotateSh(lp::rotateSh(L, flip), flip);
+    for (int k = 0; k < 9; ++k)
+      for (int ch = 0; ch < 3; ++ch) {
+        EXPECT_NEAR(a.c[k][ch], b.c[k][ch], 1e-5);
+        EXPECT_NEAR(back.c[k][ch], L.c[k][ch], 1e-5);
+        EXPECT_NEAR(twice.c[k][ch], L.c[k][ch], 1e-6);
+      }
+    for (int ch = 0; ch < 3; ++ch) {
+      EXPECT_NEAR(bandNorm(b, 1, 4, ch), bandNorm(L, 1, 4, ch), 1e-5);
+      EXPECT_NEAR(bandNorm(b, 4, 9, ch), bandNorm(L, 4, 9, ch), 1e-5);
+    }
+  }
+}
+
 // The EMA of coefficients equals the projection of the EMA of frames (SH is linear), and a step
 // reaches 63% after tau.
 TEST(Smoothing, ExactAndLatency) {

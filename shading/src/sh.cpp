@@ -375,6 +375,47 @@ glm::mat3 rotationYawPitchRoll(float yawDeg, float pitchDeg, float rollDeg) {
   return rz * ry * rx;
 }
 
+const Band2Design& band2Design() {
+  static const Band2Design d = [] {
+    Band2Design r;
+    const float g = 1.6180339887498949f;  // the golden ratio: (0, +-1, +-g) and its cyclic turns
+    const glm::vec3 v[12] = {{-1, g, 0}, {1, g, 0}, {-1, -g, 0}, {1, -g, 0},
+                             {0, -1, g}, {0, 1, g}, {0, -1, -g}, {0, 1, -g},
+                             {g, 0, -1}, {g, 0, 1}, {-g, 0, -1}, {-g, 0, 1}};
+    for (int i = 0; i < 12; ++i) {
+      r.dirs[std::size_t(i)] = glm::normalize(v[i]);
+      const auto y = shBasis(r.dirs[std::size_t(i)]);
+      for (int m = 0; m < 5; ++m) r.basis[std::size_t(i)][std::size_t(m)] = y[std::size_t(4 + m)];
+    }
+    // projection = G^-1 A^T with G = A^T A, which is (12 / 4 pi) I up to the basis constants'
+    // six digits; inverting the actual G keeps rotation exact to float precision.
+    double gm[5][5] = {}, inv[5][5] = {};
+    for (int a = 0; a < 5; ++a) {
+      inv[a][a] = 1;
+      for (int b = 0; b < 5; ++b)
+        for (int i = 0; i < 12; ++i)
+          gm[a][b] +=
+              r.basis[std::size_t(i)][std::size_t(a)] * r.basis[std::size_t(i)][std::size_t(b)];
+    }
+    for (int col = 0; col < 5; ++col) {  // Gauss-Jordan; G is well conditioned (nearly diagonal)
+      for (int row = 0; row < 5; ++row) {
+        if (row == col) continue;
+        const double f = gm[row][col] / gm[col][col];
+        for (int k = 0; k < 5; ++k) gm[row][k] -= f * gm[col][k], inv[row][k] -= f * inv[col][k];
+      }
+    }
+    for (int m = 0; m < 5; ++m)
+      for (int i = 0; i < 12; ++i) {
+        double v2 = 0;
+        for (int k = 0; k < 5; ++k)
+          v2 += inv[m][k] / gm[m][m] * r.basis[std::size_t(i)][std::size_t(k)];
+        r.projection[std::size_t(m)][std::size_t(i)] = v2;
+      }
+    return r;
+  }();
+  return d;
+}
+
 Sh9 rotateSh(const Sh9& L, const glm::mat3& R) {
   Sh9 out;
   out.c[0] = L.c[0];
@@ -383,42 +424,24 @@ Sh9 rotateSh(const Sh9& L, const glm::mat3& R) {
     const glm::vec3 v = R * glm::vec3(L.c[3][ch], L.c[1][ch], L.c[2][ch]);
     out.c[3][ch] = v.x, out.c[1][ch] = v.y, out.c[2][ch] = v.z;
   }
-  // Band 2: the rotated coefficients c' satisfy sum c'_m Y2m(w_i) = sum c_m Y2m(R^T w_i) at every
-  // w_i. Least squares over 12 icosahedron directions: (A^T A) c' = A^T B c, A_im = Y2m(w_i), B_im
-  // = Y2m(R^T w_i).
-  const float g = 1.61803399f;
-  const glm::vec3 dirs[12] = {{-1, g, 0}, {1, g, 0}, {-1, -g, 0}, {1, -g, 0},
-                              {0, -1, g}, {0, 1, g}, {0, -1, -g}, {0, 1, -g},
-                              {g, 0, -1}, {g, 0, 1}, {-g, 0, -1}, {-g, 0, 1}};
-  double A[12][5], B[12][5];
+  // Band 2: the rotated coefficients satisfy sum c'_m Y2m(w) = sum c_k Y2k(R^T w) for every w.
+  // Sampled at the 12 icosahedron vertices (a spherical 5-design), the projection back onto
+  // band 2 is a constant 5x12 matrix (Band2Design::projection); per call only the basis at the
+  // 12 turned directions is evaluated: no system is solved.
+  const auto& d = band2Design();
   const glm::mat3 Rt = glm::transpose(R);
+  double rot[5][5] = {};  // rot[m][k] = sum_i projection[m][i] Y2k(R^T w_i)
   for (int i = 0; i < 12; ++i) {
-    const glm::vec3 w = glm::normalize(dirs[i]);
-    const auto ya = shBasis(w), yb = shBasis(Rt * w);
-    for (int m = 0; m < 5; ++m) A[i][m] = ya[4 + m], B[i][m] = yb[4 + m];
-  }
-  double ata[5][5] = {}, atb[5][5] = {};
-  for (int i = 0; i < 12; ++i)
-    for (int a = 0; a < 5; ++a)
-      for (int b = 0; b < 5; ++b) ata[a][b] += A[i][a] * A[i][b], atb[a][b] += A[i][a] * B[i][b];
-  // Solve ata X = atb (Gauss-Jordan with partial pivoting; ata is well conditioned).
-  for (int col = 0; col < 5; ++col) {
-    int piv = col;
-    for (int r = col + 1; r < 5; ++r)
-      if (std::abs(ata[r][col]) > std::abs(ata[piv][col])) piv = r;
-    std::swap(ata[col], ata[piv]);
-    std::swap(atb[col], atb[piv]);
-    for (int r = 0; r < 5; ++r) {
-      if (r == col) continue;
-      const double f = ata[r][col] / ata[col][col];
-      for (int k = 0; k < 5; ++k) ata[r][k] -= f * ata[col][k], atb[r][k] -= f * atb[col][k];
-    }
+    const auto yb = shBasis(Rt * d.dirs[std::size_t(i)]);
+    for (int m = 0; m < 5; ++m)
+      for (int k = 0; k < 5; ++k)
+        rot[m][k] += d.projection[std::size_t(m)][std::size_t(i)] * yb[std::size_t(4 + k)];
   }
   for (int ch = 0; ch < 3; ++ch)
     for (int m = 0; m < 5; ++m) {
       double v = 0;
-      for (int k = 0; k < 5; ++k) v += atb[m][k] / ata[m][m] * L.c[4 + k][ch];
-      out.c[4 + m][ch] = float(v);
+      for (int k = 0; k < 5; ++k) v += rot[m][k] * L.c[std::size_t(4 + k)][ch];
+      out.c[std::size_t(4 + m)][ch] = float(v);
     }
   return out;
 }

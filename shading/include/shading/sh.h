@@ -173,9 +173,22 @@ glm::vec3 evalIrradianceQuadratic(const std::array<glm::mat4, 3>& m, glm::vec3 n
 
 /// Coefficients of the environment turned by the rotation R (R&H frame): a light that was in
 /// direction d is in direction R d afterwards, L'(w) = L(R^T w). Band 1 turns as the vector
-/// (L11, L1-1, L10) = (x, y, z); band 2 by the 5x5 matrix that maps the band-2 basis through R
-/// (found by least squares on 12 fixed directions; exact, since band 2 is closed under rotation).
+/// (L11, L1-1, L10) = (x, y, z); band 2 by the 5x5 matrix that maps the band-2 basis through R,
+/// formed by a constant quadrature on the 12 icosahedron vertices (Band2Design; exact, since band
+/// 2 is closed under rotation and the vertices integrate degree-4 products exactly).
+/// R may be any orthogonal matrix, a reflection included (band 2 is even, band 1 linear): an
+/// environment flipped top to bottom is rotateSh(L, diag(1, 1, -1)).
 Sh9 rotateSh(const Sh9& radiance, const glm::mat3& rotation);
+
+/// The constant matrices behind band-2 rotation: the 12 icosahedron vertices (a spherical
+/// 5-design), the band-2 basis at each, Y2m(w_i), m = -2..2, and the projection back onto band 2,
+/// (A^T A)^-1 A^T with A = basis, which is (4 pi / 12) A^T up to the basis constants' precision.
+struct Band2Design {
+  std::array<glm::vec3, 12> dirs;
+  std::array<std::array<double, 5>, 12> basis;
+  std::array<std::array<double, 12>, 5> projection;
+};
+const Band2Design& band2Design();
 
 /// R = Rz(yaw) * Ry(pitch) * Rx(roll), angles in degrees, about the world axes (+z up): yaw
 /// turns the environment about the vertical, pitch tilts it about +y, roll about +x.
