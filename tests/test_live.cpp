@@ -1,6 +1,7 @@
 // liveprobe live against the emulated camera (tests/v4l2emu, LD_PRELOAD): the real V4L2 code
 // path through open/ioctl/mmap/poll, in every format, and every fault. Always runs; no skip.
 #include <gtest/gtest.h>
+#include <linux/videodev2.h>
 
 #include <chrono>
 #include <cmath>
@@ -221,6 +222,18 @@ TEST(LiveFaults, UnpluggedMidStreamWithRecording) {
   const auto r = lpt::runLiveprobe("replay " + rec + kReplay);
   EXPECT_EQ(r.exitCode, 0) << r.output;
   emu.expectNoLeak(true);
+}
+
+// A camera that refuses a control: --lock-exposure fails with one line naming the control and
+// the value, and never reports a lock it did not get.
+TEST(LiveFaults, RefusedControlIsAnError) {
+  Emulator emu({"MJPG_320x160"}, "refuse=" + std::to_string(V4L2_CID_GAIN));
+  expectFault(emu, "--lock-exposure 0.3 --frames 3",
+              "VIDIOC_S_CTRL Gain = 96: Device or resource busy");
+  const auto r = emu.run("live /dev/video7 --lock-exposure 0.3 --frames 3" + kCommon);
+  EXPECT_EQ(r.output.find("locked"), std::string::npos)
+      << "reported a lock it did not get: " << r.output;
+  emu.expectNoLeak();
 }
 
 // --lock-exposure: auto modes on, settle, read, auto modes off, manual values written back; the

@@ -95,7 +95,7 @@ V4l2Source::~V4l2Source() { close(); }
 void V4l2Source::fail(const std::string& what, int err) const {
   std::string why = std::strerror(err);
   if (err == ENODEV) why = "the camera was unplugged or has gone (ENODEV)";
-  throw Error("V4l2Source(" + settings_.device + "): " + what + ": " + why);
+  throw Error(settings_.device + ": " + what + ": " + why);
 }
 
 int V4l2Source::xioctl(unsigned long request, void* arg) {
@@ -403,15 +403,36 @@ std::optional<std::int32_t> V4l2Source::getControl(std::uint32_t id) {
   return c.value;
 }
 
-void V4l2Source::setControl(std::uint32_t id, std::int32_t value) {
+std::string V4l2Source::controlName(std::uint32_t id) {
+  v4l2_queryctrl q{};
+  q.id = id;
+  if (xioctl(VIDIOC_QUERYCTRL, &q) == 0) return reinterpret_cast<const char*>(q.name);
+  char hex[16];
+  std::snprintf(hex, sizeof hex, "0x%08x", id);
+  return hex;
+}
+
+bool V4l2Source::setControl(std::uint32_t id, std::int32_t value) {
+  v4l2_queryctrl q{};
+  q.id = id;
+  if (xioctl(VIDIOC_QUERYCTRL, &q) < 0 || (q.flags & V4L2_CTRL_FLAG_DISABLED))
+    return false;  // the camera has no such control: nothing to set
   v4l2_control c{};
   c.id = id;
   c.value = value;
-  xioctl(VIDIOC_S_CTRL, &c);  // a camera without this control keeps going
+  const std::string what = std::string("VIDIOC_S_CTRL ") + reinterpret_cast<const char*>(q.name) +
+                           " = " + std::to_string(value);
+  if (xioctl(VIDIOC_S_CTRL, &c) < 0) fail(what, errno);
+  const auto back = getControl(id);
+  if (back && *back != value)
+    throw Error(settings_.device + ": " + what + ": the camera reads back " +
+                std::to_string(*back));
+  return true;
 }
 
 LockedExposure V4l2Source::lockExposure(double seconds) {
   // 1. Automatic modes on (UVC cameras call auto exposure "aperture priority").
+  // Aperture priority, or full auto where the menu lacks it.
   v4l2_control c{V4L2_CID_EXPOSURE_AUTO, V4L2_EXPOSURE_APERTURE_PRIORITY};
   if (xioctl(VIDIOC_S_CTRL, &c) < 0) setControl(V4L2_CID_EXPOSURE_AUTO, V4L2_EXPOSURE_AUTO);
   setControl(V4L2_CID_AUTOGAIN, 1);

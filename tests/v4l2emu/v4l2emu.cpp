@@ -13,7 +13,8 @@
 //                  converted to the mode's format)
 //   LPEMU_FPS      frame rate (default 30)
 //   LPEMU_FAULTS   comma list: busy_open, busy_reqbufs, grant=N, einval_fmt, stop_after=N,
-//                  eintr, unplug_after=N, exposure_walk (auto exposure changes every frame)
+//                  eintr, unplug_after=N, exposure_walk (auto exposure changes every frame),
+//                  refuse=ID (S_CTRL of that control id fails with EBUSY)
 //   LPEMU_LOG      file to which each call is appended as one line (for assertions)
 // What it cannot prove about real drivers: README, "Testing without a camera".
 #include <dlfcn.h>
@@ -385,9 +386,12 @@ int Emu::handle(unsigned long req, void* arg) {
                            (c->id == V4L2_CID_GAIN && control(V4L2_CID_AUTOGAIN)->value) ||
                            (c->id == V4L2_CID_WHITE_BALANCE_TEMPERATURE &&
                             control(V4L2_CID_AUTO_WHITE_BALANCE)->value);
+      // refuse=ID: the camera refuses manual values of that control (EBUSY), as some firmware does.
+      const bool refused = fault("refuse") && std::uint32_t(faults.at("refuse")) == c->id;
       say(std::string("S_CTRL ") + c->name + " " + std::to_string(v->value) +
-          (blocked ? " refused" : ""));
+          (blocked || refused ? " refused" : ""));
       if (blocked) return fail(EACCES);
+      if (refused) return fail(EBUSY);
       c->value = v->value;
       return 0;
     }

@@ -124,7 +124,12 @@ class V4l2Source final : public FrameSource {
   void releaseBuffers();
   void convert(const std::uint8_t* data, std::size_t bytes, Frame& frame);
   std::optional<std::int32_t> getControl(std::uint32_t id);
-  void setControl(std::uint32_t id, std::int32_t value);
+  /// Writes a control and reads it back. Returns false when the camera has no such control
+  /// (VIDIOC_QUERYCTRL: EINVAL); a refused write, or a value that does not read back, is an
+  /// lp::Error naming the control and the value.
+  bool setControl(std::uint32_t id, std::int32_t value);
+  /// The driver's name of a control ("Gain"), or its id in hex.
+  std::string controlName(std::uint32_t id);
 
   CameraSettings settings_;
   UniqueFd fd_;
