@@ -49,7 +49,7 @@ struct Emulator {
     const std::string env =
         "LD_PRELOAD=" + std::string(LIVEPROBE_EMU) +
         " LPEMU_DEVICE=/dev/video7 LPEMU_SOURCE=" + (tmp.path / "modes").string() +
-        " LPEMU_LOG=" + log() + " LPEMU_FAULTS=" + faults + " ";
+        " LPEMU_META_DEVICE=/dev/video8 LPEMU_LOG=" + log() + " LPEMU_FAULTS=" + faults + " ";
     return lpt::runCommand(env + LIVEPROBE_BIN + " " + args);
   }
   std::string logText() const {
@@ -276,6 +276,26 @@ TEST(Live, DevicesListsFormatsSizesRatesControls) {
        {"liveprobe emulated camera", "MJPG 640x320 @ 30 fps", "YUYV 320x160 @ 30 fps",
         "control Exposure Time, Absolute", "control White Balance Temperature"})
     EXPECT_NE(r.output.find(s), std::string::npos) << s << "\n" << r.output;
+}
+
+// A UVC camera has a second node for metadata: it answers QUERYCAP but is not a camera, so
+// devices lists the camera and skips the metadata node (saying so when it was named).
+TEST(Live, DevicesListsOnlyVideoCaptureNodes) {
+  Emulator emu({"MJPG_640x320"});
+  const auto r = emu.run("devices /dev/video7 /dev/video8");
+  ASSERT_EQ(r.exitCode, 0) << r.output;
+  EXPECT_NE(r.output.find("/dev/video7: liveprobe emulated camera"), std::string::npos) << r.output;
+  EXPECT_EQ(r.output.find("/dev/video8: liveprobe emulated camera ("), std::string::npos)
+      << "the metadata node was listed as a camera: " << r.output;
+  EXPECT_NE(r.output.find(
+                "/dev/video8: liveprobe emulated camera: a metadata node, not a camera; skipped"),
+            std::string::npos)
+      << r.output;
+  // live refuses it with one line, as before (QUERYCAP has no video capture).
+  const auto l = emu.run("live /dev/video8 --frames 1 --headless");
+  EXPECT_EQ(l.exitCode, 1) << l.output;
+  EXPECT_EQ(lpt::lineCount(l.output), 1) << l.output;
+  EXPECT_NE(l.output.find("/dev/video8"), std::string::npos) << l.output;
 }
 
 TEST(LiveFaults, MissingDevicesFailFast) {

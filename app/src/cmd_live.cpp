@@ -93,7 +93,7 @@ const CommandSpec kDevicesSpec{
     "devices",
     "[DEVICE...]",
     "Lists V4L2 cameras (default: every /dev/video*) with their formats, sizes, frame rates and\n"
-    "controls.",
+    "controls. Only video-capture nodes are cameras: a UVC camera's metadata node is skipped.",
     {},
     0,
     64,
@@ -119,6 +119,12 @@ int runDevices(const Args& a) {
     } catch (const Error& e) {
       std::cerr << "liveprobe devices: " << e.what() << "\n";
       ++failures;
+      continue;
+    }
+    if (!info.videoCapture) {  // a UVC camera's metadata node, an output device, ...
+      if (!a.positional().empty())
+        std::cerr << "liveprobe: " << p << ": " << info.card << ": a " << info.kind
+                  << " node, not a camera; skipped\n";
       continue;
     }
     std::cout << p << ": " << info.card << " (" << info.driver << ", " << info.bus << ")\n";

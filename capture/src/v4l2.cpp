@@ -478,6 +478,16 @@ CameraInfo queryCamera(const std::string& path) {
   info.card = reinterpret_cast<const char*>(cap.card);
   info.driver = reinterpret_cast<const char*>(cap.driver);
   info.bus = reinterpret_cast<const char*>(cap.bus_info);
+  const std::uint32_t caps =
+      (cap.capabilities & V4L2_CAP_DEVICE_CAPS) ? cap.device_caps : cap.capabilities;
+  if (!(caps & V4L2_CAP_VIDEO_CAPTURE)) {
+    info.videoCapture = false;
+    info.kind = (caps & V4L2_CAP_META_CAPTURE)           ? "metadata"
+                : (caps & V4L2_CAP_VIDEO_OUTPUT)         ? "video output"
+                : (caps & V4L2_CAP_VIDEO_CAPTURE_MPLANE) ? "multiplanar capture (not supported)"
+                                                         : "not video capture";
+    return info;
+  }
   for (std::uint32_t i = 0;; ++i) {
     v4l2_fmtdesc d{};
     d.index = i;

@@ -11,6 +11,7 @@
 //   LPEMU_SOURCE   a folder of modes: subfolders FOURCC_WxH (MJPG_640x320, YUYV_320x160, ...)
 //                  holding the frames in name order (.jpg served verbatim for MJPG; other images
 //                  converted to the mode's format)
+//   LPEMU_META_DEVICE  a second path that answers as the camera's UVC metadata node
 //   LPEMU_FPS      frame rate (default 30)
 //   LPEMU_FAULTS   comma list: busy_open, busy_reqbufs, grant=N, einval_fmt, stop_after=N,
 //                  eintr, unplug_after=N, exposure_walk (auto exposure changes every frame),
@@ -73,6 +74,7 @@ struct Control {
 struct Emu {
   std::mutex m;
   int fd = -1;
+  bool meta = false;  ///< the open node is the metadata node (LPEMU_META_DEVICE)
   std::vector<Mode> modes;
   int mode = 0;
   double fps = 30;
@@ -207,12 +209,14 @@ int Emu::handle(unsigned long req, void* arg) {
       std::strcpy(reinterpret_cast<char*>(c->card), "liveprobe emulated camera");
       std::strcpy(reinterpret_cast<char*>(c->bus_info), "platform:lpemu");
       c->version = 0x060100;
-      c->device_caps = V4L2_CAP_VIDEO_CAPTURE | V4L2_CAP_STREAMING;
+      // A UVC camera's second node carries metadata, not video.
+      c->device_caps = (meta ? V4L2_CAP_META_CAPTURE : V4L2_CAP_VIDEO_CAPTURE) | V4L2_CAP_STREAMING;
       c->capabilities = c->device_caps | V4L2_CAP_DEVICE_CAPS;
       return 0;
     }
     case VIDIOC_ENUM_FMT: {
       auto* d = static_cast<v4l2_fmtdesc*>(arg);
+      if (meta && d->type == V4L2_BUF_TYPE_VIDEO_CAPTURE) return fail(EINVAL);
       std::vector<std::uint32_t> fcc;
       for (const auto& md : modes)
         if (std::find(fcc.begin(), fcc.end(), md.fourcc) == fcc.end()) fcc.push_back(md.fourcc);
@@ -419,10 +423,14 @@ int emuOpen(const char* path) {
   if (e.fd >= 0) return e.fail(EBUSY);
   if (e.modes.empty()) return e.fail(ENODEV);
   e.fd = eventfd(0, EFD_CLOEXEC | EFD_NONBLOCK);
+  e.meta = env("LPEMU_META_DEVICE") == path;
   return e.fd;
 }
 
-bool isDevice(const char* path) { return path && env("LPEMU_DEVICE", "/dev/video7") == path; }
+bool isDevice(const char* path) {
+  return path && (env("LPEMU_DEVICE", "/dev/video7") == path ||
+                  (!env("LPEMU_META_DEVICE").empty() && env("LPEMU_META_DEVICE") == path));
+}
 bool isFake(int fd) { return fd >= 0 && fd == emu().fd; }
 
 }  // namespace

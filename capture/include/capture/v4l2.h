@@ -73,6 +73,10 @@ struct CameraFrameSize {
 
 struct CameraInfo {
   std::string path, card, driver, bus;
+  /// A video-capture node. UVC cameras also expose a metadata node (V4L2_CAP_META_CAPTURE):
+  /// it answers QUERYCAP but carries no video; queryCamera() then lists nothing else.
+  bool videoCapture = true;
+  std::string kind;  ///< what it is when not video capture ("metadata", "output", ...)
   std::vector<CameraFrameSize> modes;
   std::vector<CameraControl> controls;
 };
