@@ -129,9 +129,7 @@ int runDevices(const Args& a) {
     }
     std::cout << p << ": " << info.card << " (" << info.driver << ", " << info.bus << ")\n";
     for (const auto& m : info.modes) {
-      std::string fcc;
-      for (int i = 0; i < 4; ++i) fcc += char((m.fourcc >> (8 * i)) & 0xFF);
-      std::cout << "  " << fcc << " " << m.width << "x" << m.height << " @";
+      std::cout << "  " << fourccText(m.fourcc) << " " << m.width << "x" << m.height << " @";
       for (double f : m.fps) std::cout << " " << f;
       std::cout << " fps\n";
     }

@@ -17,13 +17,13 @@
 
 namespace lp {
 
-namespace {
-
 std::string fourccText(std::uint32_t f) {
   std::string s;
   for (int i = 0; i < 4; ++i) s += char((f >> (8 * i)) & 0xFF);
   return s;
 }
+
+namespace {
 
 std::uint32_t fourccOf(CameraFormat f) {
   switch (f) {

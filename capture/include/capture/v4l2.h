@@ -81,6 +81,9 @@ struct CameraInfo {
   std::vector<CameraControl> controls;
 };
 
+/// A V4L2 pixel format code as its four characters ("MJPG").
+std::string fourccText(std::uint32_t fourcc);
+
 /// Queries a device without streaming (formats, sizes, rates, controls). Throws lp::Error.
 CameraInfo queryCamera(const std::string& path);
 

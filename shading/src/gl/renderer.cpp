@@ -64,6 +64,15 @@ Program link(const char* vs, const char* fs, const char* name) {
 
 GLint loc(const Program& p, const char* name) { return glGetUniformLocation(p.get(), name); }
 
+// GL's rows start at the bottom; images here start at the top.
+template <class T>
+void flipRows(std::vector<T>& px, std::size_t row, int rows) {
+  for (int y = 0; y < rows / 2; ++y)
+    std::swap_ranges(px.begin() + std::ptrdiff_t(y * row),
+                     px.begin() + std::ptrdiff_t((y + 1) * row),
+                     px.begin() + std::ptrdiff_t((rows - 1 - y) * row));
+}
+
 template <class T>
 Buffer upload(GLenum target, const std::vector<T>& data) {
   GLuint id = 0;
@@ -126,11 +135,7 @@ std::vector<float> FloatTarget::readRgba() const {
   std::vector<float> px(std::size_t(width_) * height_ * 4);
   glPixelStorei(GL_PACK_ALIGNMENT, 4);
   glReadPixels(0, 0, width_, height_, GL_RGBA, GL_FLOAT, px.data());
-  // GL rows start at the bottom.
-  const std::size_t row = std::size_t(width_) * 4;
-  for (int y = 0; y < height_ / 2; ++y)
-    std::swap_ranges(px.begin() + y * row, px.begin() + (y + 1) * row,
-                     px.begin() + (height_ - 1 - y) * row);
+  flipRows(px, std::size_t(width_) * 4, height_);
   return px;
 }
 
@@ -364,10 +369,7 @@ std::vector<std::uint8_t> Renderer::readRgb8(glm::ivec2 size) {
   std::vector<std::uint8_t> px(std::size_t(size.x) * size.y * 3);
   glPixelStorei(GL_PACK_ALIGNMENT, 1);
   glReadPixels(0, 0, size.x, size.y, GL_RGB, GL_UNSIGNED_BYTE, px.data());
-  const std::size_t row = std::size_t(size.x) * 3;
-  for (int y = 0; y < size.y / 2; ++y)
-    std::swap_ranges(px.begin() + y * row, px.begin() + (y + 1) * row,
-                     px.begin() + (size.y - 1 - y) * row);
+  flipRows(px, std::size_t(size.x) * 3, size.y);
   return px;
 }
 
