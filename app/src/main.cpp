@@ -2,6 +2,7 @@
 // The one place that prints errors and chooses the exit code: 0 success, 1 a bad input or
 // command line (one line on stderr), 130 stopped by SIGINT or SIGTERM, 3 an internal error.
 #include <cstdio>
+#include <cstdlib>
 #include <iostream>
 #include <opencv2/core/utils/logger.hpp>
 #include <string>
@@ -31,7 +32,9 @@ void printOverview() {
 }  // namespace
 
 int main(int argc, char** argv) {
-  // OpenCV's own log lines would break the one-line error promise; errors are reported by us.
+  // OpenCV's and FFmpeg's own log lines would break the one-line error promise; errors are
+  // reported by us. Set once, here, before any decoding (library code sets no environment).
+  ::setenv("OPENCV_FFMPEG_LOGLEVEL", "-8", 0);
   cv::utils::logging::setLogLevel(cv::utils::logging::LOG_LEVEL_SILENT);
   std::vector<std::string> args(argv + 1, argv + argc);
   if (args.empty() || args[0] == "--help" || args[0] == "-h" || args[0] == "help") {

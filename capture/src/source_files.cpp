@@ -190,7 +190,6 @@ class VideoSource final : public FrameSource {
  private:
   static constexpr int kMaxBadRun = 32;
   void open() {
-    ::setenv("OPENCV_FFMPEG_LOGLEVEL", "-8", 0);  // FFmpeg's own warnings: we report in one line
     std::error_code ec;
     if (!fs::exists(path_, ec)) throw Error(path_ + ": no such file");
     if (!cap_.open(path_, cv::CAP_FFMPEG) || !cap_.isOpened())
