@@ -149,12 +149,9 @@ int runView(const Args& a) {
     double lastMs = 0;
     for (int frame = 0; !ctx->shouldClose() && !stopRequested(); ++frame) {
       const auto start = std::chrono::steady_clock::now();
-      gl::InputDelta input = ctx->pollEvents();
-      if (hud && hud->wantsMouse()) input.drag = {}, input.scroll = 0;
-      if (!(hud && hud->wantsKeyboard())) applyKeys(input.keys, state, false);
-      if (hud && std::count(input.keys.begin(), input.keys.end(), gl::KeyAction::Save))
+      const auto keys = handleInput(*ctx, hud.get(), state, false);
+      if (hud && std::count(keys.begin(), keys.end(), gl::KeyAction::Save))
         std::fprintf(stderr, "liveprobe: %s\n", hud->saveCoefficients().c_str());
-      applyInput(state.camera, input);
       const glm::ivec2 fb = ctx->framebufferSize();
       renderer.draw(fb, state.camera, state.shading);
       if (hud && (state.hud || state.help)) {

@@ -233,7 +233,8 @@ struct StreamView {
     renderer->setLighting(f.radiance);
     if (f.image) setBackground(*renderer, *f.image, layout, f.displayScale);
     if (f.raw) setBackground(*renderer, *f.raw, layout, f.rawScale);
-    gl::Renderer::finish();
+    // The time to hand the data to GL, not waiting for it (no glFinish stalling every frame);
+    // `liveprobe bench` times the upload to completion.
     return std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
   }
   void draw(double lastFrameMs) {
@@ -244,7 +245,7 @@ struct StreamView {
 };
 
 void recordSample(StreamTally& t, const ProcessedFrame& f, double uploadMs, double renderMs,
-                  Hud* hud, const CapturePipeline& pipeline) {
+                  Hud* hud, const PipelineStats& st) {
   t.grab.push_back(f.times.grabMs);
   t.convert.push_back(f.times.convertMs);
   t.project.push_back(f.times.projectMs);
@@ -260,7 +261,6 @@ void recordSample(StreamTally& t, const ProcessedFrame& f, double uploadMs, doub
   s.radiance = f.radiance;
   s.unsmoothed = f.unsmoothed;
   hud->push(s);
-  const PipelineStats st = pipeline.stats();
   hud->setCounters({st.captured, t.drawn, st.dropped, st.skipped,
                     t.grab.empty() ? 0.0 : double(t.saturated) / double(t.grab.size())});
 }
@@ -277,7 +277,7 @@ void runOffline(CapturePipeline& pipeline, StreamView& view, const StreamOutputs
     const auto px = gl::Renderer::readRgb8(fb);
     const double ms = std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
     ++tally.drawn;
-    recordSample(tally, *f, uploadMs, ms, view.hud.get(), pipeline);
+    recordSample(tally, *f, uploadMs, ms, view.hud.get(), pipeline.stats());
     if (out.coeffs) out.coeffs->line(coeffsLine(*f, ms));
     out.writeFrame(*f, fb, px);
     lastMs = ms;
@@ -295,10 +295,7 @@ void runInteractive(CapturePipeline& pipeline, StreamView& view, StreamTally& ta
   bool wasPaused = false;
   const bool headless = view.ctx->isHeadless();
   while (!view.ctx->shouldClose() && !stopRequested()) {
-    gl::InputDelta input = view.ctx->pollEvents();
-    if (view.hud && view.hud->wantsMouse()) input.drag = {}, input.scroll = 0;
-    if (!(view.hud && view.hud->wantsKeyboard())) applyKeys(input.keys, view.state, !live);
-    applyInput(view.state.camera, input);
+    handleInput(*view.ctx, view.hud.get(), view.state, !live);
     if (view.state.paused != wasPaused) pipeline.setPaused(wasPaused = view.state.paused);
     for (; view.state.steps > 0; --view.state.steps) pipeline.step();
     double uploadMs = 0;
@@ -315,18 +312,18 @@ void runInteractive(CapturePipeline& pipeline, StreamView& view, StreamTally& ta
     view.draw(lastMs);
     view.ctx->present();
     lastMs = std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
+    const PipelineStats st = pipeline.stats();  // once a frame, for the HUD, progress and title
     if (f) {
       ++tally.drawn;
-      recordSample(tally, *f, uploadMs, lastMs, view.hud.get(), pipeline);
-      progress.update(std::int64_t(pipeline.stats().captured));
+      recordSample(tally, *f, uploadMs, lastMs, view.hud.get(), st);
+      progress.update(std::int64_t(st.captured));
     }
     ++fpsFrames;
     const double s = std::chrono::duration<double>(Clock::now() - fpsT0).count();
     if (s >= 1.0 && !headless) {
       char t[256];
       std::snprintf(t, sizeof t, "liveprobe - %s - frame %zu - %.1f frames/s%s", title.c_str(),
-                    pipeline.stats().captured, double(fpsFrames) / s,
-                    view.state.paused ? " - paused" : "");
+                    st.captured, double(fpsFrames) / s, view.state.paused ? " - paused" : "");
       view.ctx->setTitle(t);
       fpsT0 = Clock::now(), fpsFrames = 0;
     }

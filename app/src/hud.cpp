@@ -49,8 +49,6 @@ void plotSeries(const char* id, const std::vector<std::vector<float>>& series,
   ImGui::PopID();
 }
 
-}  // namespace
-
 void applyKeys(const std::vector<gl::KeyAction>& keys, ViewState& s, bool canPause) {
   for (const auto k : keys) switch (k) {
       case gl::KeyAction::Pause:
@@ -80,6 +78,21 @@ void applyKeys(const std::vector<gl::KeyAction>& keys, ViewState& s, bool canPau
       case gl::KeyAction::Save:
         break;  // the coefficient editor's (view)
     }
+}
+
+}  // namespace
+
+std::vector<gl::KeyAction> handleInput(gl::GlContext& ctx, const Hud* hud, ViewState& state,
+                                       bool canPause) {
+  gl::InputDelta input = ctx.pollEvents();
+  if (!(hud && hud->wantsKeyboard())) applyKeys(input.keys, state, canPause);
+  if (!(hud && hud->wantsMouse())) {
+    gl::Camera& c = state.camera;
+    c.yawDeg -= 0.3f * input.drag.x;
+    c.pitchDeg = std::clamp(c.pitchDeg + 0.3f * input.drag.y, -89.0f, 89.0f);
+    c.distance = std::clamp(c.distance * std::pow(0.9f, input.scroll), 1.1f, 50.0f);
+  }
+  return std::move(input.keys);
 }
 
 Hud::Hud(gl::GlContext& ctx) : window_(ctx.nativeWindow() != nullptr) {

@@ -39,9 +39,14 @@ struct ViewState {
   int steps = 0;  ///< single-frame steps asked for while paused
 };
 
-/// Applies key presses to the state (a window's Esc/Q close it in the context itself; Save is
-/// the coefficient editor's, Hud::saveCoefficients).
-void applyKeys(const std::vector<gl::KeyAction>& keys, ViewState& state, bool canPause);
+class Hud;
+
+/// Polls the window's input and applies it to `state`: keys, orbit (left drag) and zoom (wheel),
+/// except what the HUD has (ImGui wants the mouse or the keyboard). A window's Esc/Q close it in
+/// the context itself. Returns the key presses, for the caller's own (Save: the coefficient
+/// editor's, Hud::saveCoefficients). `canPause`: Space and Right mean something (replay).
+std::vector<gl::KeyAction> handleInput(gl::GlContext& ctx, const Hud* hud, ViewState& state,
+                                       bool canPause);
 
 class Hud {
  public:

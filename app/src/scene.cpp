@@ -264,16 +264,12 @@ float autoExposure(const Sh9& radiance, bool environment) {
     const float meanRadiance = luminance(radiance.c[0]) * 0.282095f;
     return meanRadiance > 1e-12f ? 0.18f / meanRadiance : 1.0f;
   }
-  // Fibonacci sphere: 2048 normals find the peak of a quadratic form to well under 1%.
-  const auto m = irradianceMatrices(radiance);
-  float peak = 0;
-  const int n = 2048;
-  for (int i = 0; i < n; ++i) {
-    const float z = 1 - (2 * float(i) + 1) / float(n), r = std::sqrt(std::max(0.0f, 1 - z * z));
-    const float phi = float(i) * 2.39996323f;
-    peak = std::max(
-        peak, luminance(evalIrradianceQuadratic(m, {r * std::cos(phi), r * std::sin(phi), z})));
-  }
+  // Luminance is linear, so Y(E(n)) is the irradiance of the luminance coefficients, and its
+  // peak is minus the minimum of their negation: the core's minimum finder does the search.
+  Sh9 negY;
+  for (int k = 0; k < kShCount; ++k)
+    negY.c[std::size_t(k)] = glm::vec3(-luminance(radiance.c[std::size_t(k)]));
+  const float peak = -minIrradiance(negY).value.x;
   const float peakRadiance = peak / kA0;  // a white Lambertian surface shows E / pi
   return peakRadiance > 1e-12f ? 1.0f / peakRadiance : 1.0f;
 }
@@ -327,12 +323,6 @@ void loadScene(gl::Renderer& r, const Mesh& mesh, const Lighting& lighting) {
   r.setEnvOrientation(lighting.orientation);
   if (lighting.background)
     setBackground(r, *lighting.background, lighting.layout, lighting.displayScale);
-}
-
-void applyInput(gl::Camera& camera, const gl::InputDelta& input) {
-  camera.yawDeg -= 0.3f * input.drag.x;
-  camera.pitchDeg = std::clamp(camera.pitchDeg + 0.3f * input.drag.y, -89.0f, 89.0f);
-  camera.distance = std::clamp(camera.distance * std::pow(0.9f, input.scroll), 1.1f, 50.0f);
 }
 
 }  // namespace lp::cli

@@ -92,7 +92,4 @@ void loadModel(gl::Renderer& r, const Mesh& mesh);
 /// Uploads mesh (and its albedo texture), lighting and background into `r`.
 void loadScene(gl::Renderer& r, const Mesh& mesh, const Lighting& lighting);
 
-/// Orbit and zoom from mouse input.
-void applyInput(gl::Camera& camera, const gl::InputDelta& input);
-
 }  // namespace lp::cli

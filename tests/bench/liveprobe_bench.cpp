@@ -6,6 +6,7 @@
 
 #include <chrono>
 #include <cmath>
+#include <functional>
 #include <map>
 #include <memory>
 #include <numbers>
@@ -235,6 +236,19 @@ LP_FLOOR_TARGET float fmaRun(std::size_t fmas) {
 #endif
 }
 
+// Times `task(0..tasks-1)` split across the pool (or on this thread), after one untimed run.
+void timeOnThreads(benchmark::State& state, lp::ThreadPool* workers, unsigned tasks,
+                   const std::function<void(unsigned)>& task) {
+  auto run = [&] {
+    if (workers)
+      workers->run(tasks, task);
+    else
+      task(0);
+  };
+  run();
+  for (auto _ : state) run();
+}
+
 void readFloor(benchmark::State& state, bool u8, Size s, int threads) {
   const void* data = u8 ? static_cast<const void*>(skyU8(s).data()) : skyF32(s).data();
   const std::size_t bytes = std::size_t(s.w) * s.h * 3 * (u8 ? 1 : 4);
@@ -246,15 +260,8 @@ void readFloor(benchmark::State& state, bool u8, Size s, int threads) {
     const std::size_t row = bytes / rows;
     partial[t] = readSum(static_cast<const std::uint8_t*>(data) + a * row, (b - a) * row, u8);
   };
-  auto run = [&] {
-    if (workers)
-      workers->run(tasks, band);
-    else
-      band(0);
-    return partial[0];
-  };
-  benchmark::DoNotOptimize(run());
-  for (auto _ : state) benchmark::DoNotOptimize(run());
+  timeOnThreads(state, workers, tasks, band);
+  benchmark::DoNotOptimize(partial);
   state.counters["GB_per_s"] =
       benchmark::Counter(double(bytes) * 1e-9, benchmark::Counter::kIsIterationInvariantRate);
 }
@@ -267,15 +274,8 @@ void fmaFloor(benchmark::State& state, Size s, int threads) {
   const unsigned tasks = unsigned(threads);
   std::vector<float> out(tasks);
   auto work = [&](unsigned t) { out[t] = fmaRun(fmas / tasks); };
-  auto run = [&] {
-    if (workers)
-      workers->run(tasks, work);
-    else
-      work(0);
-    return out[0];
-  };
-  benchmark::DoNotOptimize(run());
-  for (auto _ : state) benchmark::DoNotOptimize(run());
+  timeOnThreads(state, workers, tasks, work);
+  benchmark::DoNotOptimize(out);
   state.counters["GFMA_per_s"] =
       benchmark::Counter(double(fmas) * 1e-9, benchmark::Counter::kIsIterationInvariantRate);
 }
