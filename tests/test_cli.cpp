@@ -7,7 +7,7 @@
 #include <numbers>
 #include <opencv2/imgcodecs.hpp>
 
-#include "capture/image.h"
+#include "liveprobe/capture/image.h"
 #include "test_util.h"
 
 namespace {

@@ -7,12 +7,13 @@
 #include <numbers>
 #include <random>
 
-#include "capture/image.h"
+#include "liveprobe/capture/image.h"
+#include "liveprobe/gl/context.h"
+#include "liveprobe/gl/mesh.h"
+#include "liveprobe/gl/renderer.h"
+#include "liveprobe/sh/axes.h"
+#include "liveprobe/sh/projector.h"
 #include "scene.h"
-#include "shading/axes.h"
-#include "shading/gl/context.h"
-#include "shading/gl/renderer.h"
-#include "shading/mesh.h"
 #include "test_util.h"
 
 namespace {
@@ -212,7 +213,8 @@ TEST_F(GlTest, LightComesFromTheSpotInTheBackground) {
   const lp::Image env = spotEnvironment(spot);
   lp::gl::Renderer r;
   r.setMesh(lp::makeUvSphere(256, 128));
-  r.setLighting(lp::Projector(lp::Layout::Equirect, env.width, env.height).project(env.rgb.data()));
+  r.setLighting(lp::project(
+      lp::PanoramaView::rgbF32(env.rgb.data(), env.width, env.height, lp::Layout::Equirect)));
   r.setBackground(env.rgb.data(), env.width, env.height, lp::gl::BackgroundMapping::Equirect);
 
   // 1. Find the spot in the background from a camera looking its way past the sphere.

@@ -4,9 +4,9 @@
 #include <cmath>
 #include <numbers>
 
-#include "capture/error.h"
-#include "capture/image.h"
-#include "capture/layout.h"
+#include "liveprobe/sh/error.h"
+#include "liveprobe/sh/image.h"
+#include "liveprobe/sh/layout.h"
 
 namespace {
 

@@ -5,9 +5,10 @@
 #include <cmath>
 #include <numbers>
 
-#include "capture/frame.h"
-#include "capture/image.h"
-#include "capture/layout.h"
+#include "liveprobe/capture/frame.h"
+#include "liveprobe/capture/image.h"
+#include "liveprobe/sh/layout.h"
+#include "liveprobe/sh/projector.h"
 #include "test_util.h"
 
 namespace {
@@ -56,7 +57,7 @@ lp::Image resample(const lp::Image& eq, int w, int h, DirFn dirAt) {
 }
 
 lp::Sh9 project(const lp::Image& img, const lp::LayoutSpec& spec) {
-  return lp::Projector(spec, img.width, img.height).project(img.rgb.data());
+  return lp::project(lp::PanoramaView::rgbF32(img.rgb.data(), img.width, img.height, spec));
 }
 
 std::array<double, 3> bandNorms(const lp::Sh9& L, int ch) {
@@ -77,7 +78,7 @@ void expectSameLighting(const lp::Sh9& ref, const lp::Sh9& got, const std::strin
   }
 }
 
-// Directions from the conventions in capture/layout.h, written out again.
+// Directions from the conventions in liveprobe/sh/layout.h, written out again.
 dvec3 lensLocal(double t, double p) {
   return {std::sin(t) * std::cos(p), std::sin(t) * std::sin(p), std::cos(t)};
 }
@@ -117,7 +118,7 @@ TEST_F(EveryLayout, MirrorBall) {
   expectSameLighting(ref_, project(img, spec), "mirror ball");
 }
 
-// OpenGL's face table, and the world = (Z, -X, Y) map of shading/axes.h.
+// OpenGL's face table, and the world = (Z, -X, Y) map of liveprobe/sh/axes.h.
 dvec3 glFace(int face, double s, double t) {
   const double sc = 2 * s - 1, tc = 2 * t - 1;
   const dvec3 g[6] = {{1, -tc, -sc}, {-1, -tc, sc}, {sc, 1, tc},

@@ -12,9 +12,9 @@
 #include <regex>
 #include <set>
 
-#include "capture/frame.h"
-#include "capture/image.h"
-#include "shading/sh.h"
+#include "liveprobe/capture/frame.h"
+#include "liveprobe/capture/image.h"
+#include "liveprobe/sh/sh.h"
 #include "sky_frames.h"
 #include "test_util.h"
 
@@ -23,26 +23,12 @@ namespace {
 namespace fs = std::filesystem;
 constexpr int kFrames = 10;
 
-// Writes the emulator's modes: FOURCC_WxH folders of sky frames (JPEG for MJPG, PNG otherwise).
-void makeModes(const fs::path& dir, const std::vector<std::string>& modes) {
-  for (const auto& m : modes) {
-    int w = 0, h = 0;
-    std::sscanf(m.c_str() + 5, "%dx%d", &w, &h);
-    fs::create_directories(dir / m);
-    for (int i = 0; i < kFrames; ++i) {
-      char name[32];
-      std::snprintf(name, sizeof name, "%04d.%s", i, m.rfind("MJPG", 0) == 0 ? "jpg" : "png");
-      ASSERT_TRUE(cv::imwrite((dir / m / name).string(), lpt::skyFrame8(w, h, i * 0.4)));
-    }
-  }
-}
-
 struct Emulator {
   lpt::TempDir tmp;
   std::string faults;
   explicit Emulator(const std::vector<std::string>& modes, std::string f = "")
       : faults(std::move(f)) {
-    makeModes(tmp.path / "modes", modes);
+    lpt::makeModes(tmp.path / "modes", modes);
   }
   std::string log() const { return tmp / "emu.log"; }
   lpt::RunResult run(const std::string& args) const {

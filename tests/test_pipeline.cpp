@@ -8,12 +8,14 @@
 #include <random>
 #include <thread>
 
-#include "capture/error.h"
-#include "capture/frame.h"
-#include "capture/image.h"
-#include "capture/pipeline.h"
-#include "capture/recorder.h"
-#include "shading/thread_pool.h"
+#include "liveprobe/capture/frame.h"
+#include "liveprobe/capture/image.h"
+#include "liveprobe/capture/pipeline.h"
+#include "liveprobe/capture/recorder.h"
+#include "liveprobe/capture/resample.h"
+#include "liveprobe/sh/error.h"
+#include "liveprobe/sh/executor.h"
+#include "liveprobe/sh/projector.h"
 #include "test_util.h"
 
 namespace {
@@ -24,7 +26,7 @@ constexpr double kPi = std::numbers::pi;
 // 0.5% of L00.
 TEST(ShRotation, EqualsProjectingTheRotatedPanorama) {
   const lp::Image eq = lp::loadImage(lpt::dataPath("probes/latlong_full/grace_latlong.exr"));
-  const lp::Sh9 L = lp::projectEquirect(eq.rgb.data(), eq.width, eq.height);
+  const lp::Sh9 L = lp::project(lp::PanoramaView::rgbF32(eq.rgb.data(), eq.width, eq.height));
   for (auto [y, p, r] : {std::tuple{30.0f, 0.0f, 0.0f}, std::tuple{-70.0f, 25.0f, 10.0f},
                          std::tuple{120.0f, -40.0f, 75.0f}}) {
     const glm::mat3 R = lp::rotationYawPitchRoll(y, p, r);
@@ -53,7 +55,7 @@ TEST(ShRotation, EqualsProjectingTheRotatedPanorama) {
         float* o = rot.pixel(j, i);
         o[0] = float(acc.x), o[1] = float(acc.y), o[2] = float(acc.z);
       }
-    const lp::Sh9 a = lp::projectEquirect(rot.rgb.data(), rot.width, rot.height);
+    const lp::Sh9 a = lp::project(lp::PanoramaView::rgbF32(rot.rgb.data(), rot.width, rot.height));
     const lp::Sh9 b = lp::rotateSh(L, R);
     for (int k = 0; k < 9; ++k)
       for (int ch = 0; ch < 3; ++ch)
@@ -236,7 +238,8 @@ TEST(Recording, RoundTripThroughFfv1) {
     std::vector<float> truth;
     lp::renderSyntheticSky(128, 64, n / 30.0, truth);
     EXPECT_NEAR(f.timestamp, n / 30.0, 1e-6);
-    const lp::Sh9 a = proj.project(img.rgb.data()), b = proj.project(truth.data());
+    const lp::Sh9 a = proj.project(lp::PanoramaView::rgbF32(img.rgb.data(), 128, 64)),
+                  b = proj.project(lp::PanoramaView::rgbF32(truth.data(), 128, 64));
     for (int k = 0; k < 9; ++k) EXPECT_NEAR(a.c[k].y, b.c[k].y, 0.01 * b.c[0].y) << lp::kShNames[k];
     ++n;
   }
@@ -267,8 +270,9 @@ TEST(Accuracy, FourKFrameAgainstFloat64) {
   }
   lp::ThreadPool two(2);
   const lp::Projector proj(lp::Layout::Equirect, w, h);
-  for (lp::ThreadPool* pool : {static_cast<lp::ThreadPool*>(nullptr), &two}) {
-    const lp::Sh9 L = proj.project(sky.data(), 0, pool);
+  for (lp::Executor* pool :
+       {static_cast<lp::Executor*>(nullptr), static_cast<lp::Executor*>(&two)}) {
+    const lp::Sh9 L = proj.project(lp::PanoramaView::rgbF32(sky.data(), w, h), pool);
     for (int k = 0; k < 9; ++k)
       for (int c = 0; c < 3; ++c)
         EXPECT_NEAR(L.c[k][c], ref[3 * k + c], 1e-4 * ref[c])
@@ -293,8 +297,9 @@ TEST(Accuracy, EightBitAndHalfInputs) {
   lin.convert(f, img);
   for (lp::Layout layout : {lp::Layout::Equirect, lp::Layout::DualFisheye}) {
     const lp::Projector proj(layout, w, h);
-    const lp::Sh9 a = proj.project(img.rgb.data()),
-                  b = proj.projectBgr8(bgr.data(), lin.table().data());
+    const lp::Sh9 a = proj.project(lp::PanoramaView::rgbF32(img.rgb.data(), w, h, layout)),
+                  b = proj.project(
+                      lp::PanoramaView::bgrU8(bgr.data(), w, h, lin.table().data(), layout));
     for (int k = 0; k < 9; ++k) EXPECT_NEAR(a.c[k].x, b.c[k].x, 1e-5 * a.c[0].x) << lp::kShNames[k];
   }
   // Half floats: values exactly representable in binary16.
@@ -305,9 +310,8 @@ TEST(Accuracy, EightBitAndHalfInputs) {
     half[i] = std::uint16_t(0x3C00 | q);  // 1 + q/1024
     back[i] = 1.0f + q / 1024.0f;
   }
-  const lp::EquirectProjector ep(w, h);
-  const lp::Sh9 a = ep.project(back.data(), std::size_t(w) * 3),
-                b = ep.projectHalf(half.data(), std::size_t(w) * 3);
+  const lp::Sh9 a = lp::project(lp::PanoramaView::rgbF32(back.data(), w, h)),
+                b = lp::project(lp::PanoramaView::rgbF16(half.data(), w, h));
   for (int k = 0; k < 9; ++k) EXPECT_NEAR(a.c[k].y, b.c[k].y, 1e-6 * a.c[0].y) << lp::kShNames[k];
 }
 
@@ -319,12 +323,14 @@ TEST(Accuracy, ReducedResolutionErrorIsBounded) {
   for (const char* file : {"equirect/pedestrian_overpass_1k.hdr", "equirect/royal_esplanade_1k.hdr",
                            "probes/latlong_full/grace_latlong.exr"}) {
     const lp::Image img = lp::loadImage(lpt::dataPath(file));
-    const lp::Sh9 full = lp::projectEquirect(img.rgb.data(), img.width, img.height);
+    const lp::Sh9 full =
+        lp::project(lp::PanoramaView::rgbF32(img.rgb.data(), img.width, img.height));
     const bool sun = std::string(file).find("pedestrian") != std::string::npos;
     double previous = 0;
     for (int f : {2, 4, 8}) {
       const lp::Image small = lp::reduceEquirect(img.rgb.data(), img.width, img.height, f);
-      const lp::Sh9 r = lp::projectEquirect(small.rgb.data(), small.width, small.height);
+      const lp::Sh9 r =
+          lp::project(lp::PanoramaView::rgbF32(small.rgb.data(), small.width, small.height));
       double worst = 0;
       for (int k = 0; k < 9; ++k)
         for (int c = 0; c < 3; ++c)

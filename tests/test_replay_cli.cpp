@@ -11,7 +11,7 @@
 #include <regex>
 #include <thread>
 
-#include "shading/sh.h"
+#include "liveprobe/sh/sh.h"
 #include "test_util.h"
 
 namespace {

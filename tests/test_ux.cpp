@@ -12,7 +12,7 @@
 #include <regex>
 
 #include "commands.h"
-#include "shading/sh.h"
+#include "liveprobe/sh/sh.h"
 #include "test_util.h"
 
 namespace {
@@ -103,8 +103,8 @@ TEST(Look, EightBitBackgroundIsShownAsTheSourceLooks) {
           cv::Vec3b(std::uint8_t(40 + y * 150 / h), 90, std::uint8_t(30 + x * 200 / w));
   ASSERT_TRUE(cv::imwrite(tmp / "pano.png", src));
   const int W = 480, H = 270;
-  // A screen pixel right of the model, on the horizon row: its world direction (shading/axes.h),
-  // then its equirect pixel (shading/sh.h).
+  // A screen pixel right of the model, on the horizon row: its world direction
+  // (liveprobe/sh/axes.h), then its equirect pixel (liveprobe/sh/sh.h).
   const int sx = 440, sy = 135;
   const float tanHalf = std::tan(glm::radians(20.0f)), aspect = float(W) / H;
   const glm::vec3 g = glm::normalize(glm::vec3((2 * (sx + 0.5f) / W - 1) * tanHalf * aspect,
@@ -138,7 +138,7 @@ TEST(Look, EightBitBackgroundIsShownAsTheSourceLooks) {
 
 // An HDR equirect, dim everywhere but for a small bright spot at file direction f.
 // The spot is a Gaussian of 0.6 degrees around f, evaluated at each pixel centre (the equirect
-// convention of shading/sh.h), so its centroid is f to well under a pixel.
+// convention of liveprobe/sh/sh.h), so its centroid is f to well under a pixel.
 void writeSpotMap(const std::string& path, glm::vec3 f) {
   const int w = 1024, h = 512;
   cv::Mat m(h, w, CV_32FC3, cv::Scalar(0.05, 0.05, 0.05));
@@ -176,7 +176,7 @@ TEST(Orientation, EnvRotateTurnsLightingAndBackgroundTogether) {
   const int W = 480, H = 270;
   const glm::vec3 gl = glm::normalize(
       glm::vec3(0.45f, 0.25f, -1.0f));  // right of and above straight ahead, clear of the sphere
-  const glm::vec3 world(gl.z, -gl.x, gl.y);  // shading/axes.h
+  const glm::vec3 world(gl.z, -gl.x, gl.y);  // liveprobe/sh/axes.h
   const float tanHalf = std::tan(glm::radians(20.0f)), aspect = float(W) / H;
   const cv::Point2d expected(W / 2.0 * (1 + gl.x / -gl.z / (tanHalf * aspect)),
                              H / 2.0 * (1 - gl.y / -gl.z / tanHalf));

@@ -8,7 +8,7 @@
 #include <opencv2/imgcodecs.hpp>
 #include <regex>
 
-#include "shading/sh.h"
+#include "liveprobe/sh/sh.h"
 #include "test_util.h"
 
 namespace {

@@ -6,7 +6,7 @@
 #include <map>
 #include <sstream>
 
-#include "capture/error.h"
+#include "liveprobe/sh/error.h"
 
 namespace lp::cli {
 

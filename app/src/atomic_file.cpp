@@ -6,7 +6,7 @@
 #include <cstring>
 #include <filesystem>
 
-#include "capture/error.h"
+#include "liveprobe/sh/error.h"
 
 namespace lp::cli {
 

@@ -13,16 +13,17 @@
 #include <thread>
 
 #include "atomic_file.h"
-#include "capture/error.h"
-#include "capture/frame.h"
-#include "capture/layout.h"
-#include "capture/photometry.h"
-#include "capture/pipeline.h"
 #include "coeffs_io.h"
 #include "commands.h"
+#include "liveprobe/capture/frame.h"
+#include "liveprobe/capture/photometry.h"
+#include "liveprobe/capture/pipeline.h"
+#include "liveprobe/sh/error.h"
+#include "liveprobe/sh/executor.h"
+#include "liveprobe/sh/layout.h"
+#include "liveprobe/sh/projector.h"
 #include "progress.h"
 #include "scene.h"
-#include "shading/thread_pool.h"
 
 namespace lp::cli {
 
@@ -59,12 +60,12 @@ void spin(double ms) {
 double calibrationMs() {
   static std::vector<float> sky;
   if (sky.empty()) renderSyntheticSky(512, 256, 0.5, sky);
-  const EquirectProjector proj(512, 256);
+  const Projector proj(Layout::Equirect, 512, 256);
   std::vector<double> t;
   for (int i = 0; i < 21; ++i) {
     const auto t0 = Clock::now();
     Sh9 s;
-    for (int r = 0; r < 10; ++r) s += proj.project(sky.data(), 512 * 3);
+    for (int r = 0; r < 10; ++r) s += proj.project(PanoramaView::rgbF32(sky.data(), 512, 256));
     volatile float sink = s.c[0].x;
     (void)sink;
     t.push_back(msSince(t0));

@@ -8,9 +8,9 @@
 #include <iostream>
 #include <tuple>
 
-#include "capture/error.h"
-#include "capture/v4l2.h"
 #include "commands.h"
+#include "liveprobe/capture/v4l2.h"
+#include "liveprobe/sh/error.h"
 #include "scene.h"
 
 namespace lp::cli {
@@ -69,7 +69,7 @@ int runLive(const Args& a) {
   cs.timeoutMs = int(1000 * a.number("--timeout", 2.0));
   if (cs.timeoutMs < 10) throw Error("--timeout " + a.get("--timeout") + ": too short");
   auto camera = std::make_unique<V4l2Source>(cs);
-  camera->open();
+  camera->start();
   const bool headless =
       a.has("--headless") || !(std::getenv("DISPLAY") || std::getenv("WAYLAND_DISPLAY"));
   std::fprintf(

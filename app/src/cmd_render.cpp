@@ -4,9 +4,9 @@
 #include <cstdio>
 #include <iostream>
 
-#include "capture/error.h"
 #include "commands.h"
 #include "hud.h"
+#include "liveprobe/sh/error.h"
 #include "progress.h"
 #include "scene.h"
 

@@ -9,12 +9,12 @@
 #include <sstream>
 
 #include "atomic_file.h"
-#include "capture/error.h"
-#include "capture/pipeline.h"
-#include "capture/recorder.h"
 #include "coeffs_io.h"
 #include "commands.h"
 #include "hud.h"
+#include "liveprobe/capture/pipeline.h"
+#include "liveprobe/capture/recorder.h"
+#include "liveprobe/sh/error.h"
 #include "progress.h"
 #include "scene.h"
 

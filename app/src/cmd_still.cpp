@@ -4,15 +4,15 @@
 #include <iostream>
 #include <limits>
 
-#include "capture/error.h"
-#include "capture/image.h"
-#include "capture/layout.h"
 #include "coeffs_io.h"
 #include "commands.h"
 #include "compare.h"
+#include "liveprobe/capture/image.h"
+#include "liveprobe/sh/brute.h"
+#include "liveprobe/sh/error.h"
+#include "liveprobe/sh/layout.h"
 #include "progress.h"
 #include "scene.h"
-#include "shading/brute.h"
 
 namespace lp::cli {
 
@@ -123,7 +123,8 @@ int runIrradiance(const Args& a) {
     if (a.has("--window")) throw Error("--window applies to --method sh only");
     auto samples = layoutSamples(env.layout, env.image.width, env.image.height);
     for (auto& smp : samples) smp.dir = env.orientation * smp.dir;
-    e = bruteIrradiance(env.image.rgb.data(), 3, samples.data(), samples.size(), normals);
+    ThreadPool pool(0);
+    e = bruteIrradiance(env.image.rgb.data(), 3, samples.data(), samples.size(), normals, &pool);
   }
   Image out(w, h);
   for (std::size_t i = 0; i < e.size(); ++i) std::copy_n(&e[i].x, 3, out.rgb.data() + 3 * i);

@@ -5,7 +5,7 @@
 #include <fstream>
 #include <sstream>
 
-#include "capture/error.h"
+#include "liveprobe/sh/error.h"
 
 namespace lp::cli {
 

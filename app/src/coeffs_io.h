@@ -4,7 +4,7 @@
 #include <nlohmann/json.hpp>
 #include <string>
 
-#include "shading/sh.h"
+#include "liveprobe/sh/sh.h"
 
 namespace lp::cli {
 

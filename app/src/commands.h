@@ -6,7 +6,7 @@
 #include <vector>
 
 #include "args.h"
-#include "capture/frame.h"
+#include "liveprobe/capture/frame.h"
 
 namespace lp::cli {
 

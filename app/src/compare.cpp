@@ -7,8 +7,9 @@
 #include <glm/gtc/type_ptr.hpp>
 #include <opencv2/imgproc.hpp>
 
-#include "capture/image.h"
-#include "shading/brute.h"
+#include "liveprobe/capture/image.h"
+#include "liveprobe/sh/brute.h"
+#include "liveprobe/sh/projector.h"
 
 namespace lp::cli {
 
@@ -35,15 +36,19 @@ CompareResult compareIrradiance(const Image& img, const LayoutSpec& layout, int 
   r.yBrute.resize(grid.size());
 
   auto t0 = std::chrono::steady_clock::now();
-  const Sh9 L = applyWindow(rotateSh(projector.project(img.rgb.data()), orientation), window);
+  const Sh9 L = applyWindow(rotateSh(projector.project(PanoramaView::rgbF32(
+                                         img.rgb.data(), img.width, img.height, layout)),
+                                     orientation),
+                            window);
   const auto m = irradianceMatrices(L);
   for (std::size_t i = 0; i < grid.size(); ++i)
     r.ySh[i] = luminance(evalIrradianceQuadratic(m, normals[i]));
   r.shMs = msSince(t0);
 
   t0 = std::chrono::steady_clock::now();
-  const auto brute = bruteIrradiance(img.rgb.data(), 3, samples.data(), samples.size(), normals,
-                                     threads, progress);
+  ThreadPool pool(threads);
+  const auto brute =
+      bruteIrradiance(img.rgb.data(), 3, samples.data(), samples.size(), normals, &pool, progress);
   r.bruteMs = msSince(t0);
   for (std::size_t i = 0; i < grid.size(); ++i) r.yBrute[i] = luminance(brute[i]);
 

@@ -3,10 +3,10 @@
 #include <string>
 #include <vector>
 
-#include "capture/image.h"
-#include "capture/layout.h"
-#include "shading/brute.h"
-#include "shading/sh.h"
+#include "liveprobe/capture/image.h"
+#include "liveprobe/sh/brute.h"
+#include "liveprobe/sh/layout.h"
+#include "liveprobe/sh/sh.h"
 
 namespace lp::cli {
 

@@ -9,8 +9,8 @@
 #include <cstdio>
 
 #include "atomic_file.h"
-#include "capture/error.h"
 #include "coeffs_io.h"
+#include "liveprobe/sh/error.h"
 
 namespace lp::cli {
 

@@ -9,9 +9,9 @@
 #include <string>
 #include <vector>
 
-#include "shading/gl/context.h"
-#include "shading/gl/renderer.h"
-#include "shading/sh.h"
+#include "liveprobe/gl/context.h"
+#include "liveprobe/gl/renderer.h"
+#include "liveprobe/sh/sh.h"
 
 namespace lp::cli {
 

@@ -6,10 +6,12 @@
 #include <glm/gtc/matrix_transform.hpp>
 #include <sstream>
 
-#include "capture/error.h"
-#include "capture/frame.h"
-#include "capture/photometry.h"
 #include "coeffs_io.h"
+#include "liveprobe/capture/frame.h"
+#include "liveprobe/capture/photometry.h"
+#include "liveprobe/capture/resample.h"
+#include "liveprobe/sh/error.h"
+#include "liveprobe/sh/projector.h"
 #include "progress.h"
 
 namespace lp::cli {
@@ -99,9 +101,9 @@ Environment loadEnvironment(const std::string& source, const LayoutSpec& layout,
   if (auto why = layoutMismatch(layout, env.image.width, env.image.height); !why.empty())
     throw Error(source + ": " + why);
   warnIfLayoutLooksWrong(source, layout, env.image.width, env.image.height, env.image.rgb.data());
-  env.radiance =
-      rotateSh(Projector(layout, env.image.width, env.image.height).project(env.image.rgb.data()),
-               orientation);
+  env.radiance = rotateSh(project(PanoramaView::rgbF32(env.image.rgb.data(), env.image.width,
+                                                       env.image.height, layout)),
+                          orientation);
   return env;
 }
 

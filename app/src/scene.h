@@ -5,12 +5,12 @@
 #include <vector>
 
 #include "args.h"
-#include "capture/image.h"
-#include "capture/layout.h"
-#include "shading/gl/context.h"
-#include "shading/gl/renderer.h"
-#include "shading/mesh.h"
-#include "shading/sh.h"
+#include "liveprobe/capture/image.h"
+#include "liveprobe/gl/context.h"
+#include "liveprobe/gl/mesh.h"
+#include "liveprobe/gl/renderer.h"
+#include "liveprobe/sh/layout.h"
+#include "liveprobe/sh/sh.h"
 
 namespace lp::cli {
 

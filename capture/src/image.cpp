@@ -1,4 +1,4 @@
-#include "capture/image.h"
+#include "liveprobe/capture/image.h"
 
 #include <fcntl.h>
 #include <unistd.h>
@@ -12,8 +12,8 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
-#include "capture/error.h"
-#include "capture/frame.h"
+#include "liveprobe/capture/frame.h"
+#include "liveprobe/sh/error.h"
 
 namespace lp {
 

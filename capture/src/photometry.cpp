@@ -1,4 +1,4 @@
-#include "capture/photometry.h"
+#include "liveprobe/capture/photometry.h"
 
 #include <cmath>
 

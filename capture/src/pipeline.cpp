@@ -1,11 +1,12 @@
-#include "capture/pipeline.h"
+#include "liveprobe/capture/pipeline.h"
 
 #include <chrono>
 #include <cmath>
 #include <utility>
 
-#include "capture/error.h"
-#include "shading/thread_pool.h"
+#include "liveprobe/capture/resample.h"
+#include "liveprobe/sh/error.h"
+#include "liveprobe/sh/executor.h"
 
 namespace lp {
 
@@ -23,10 +24,15 @@ bool displayTakesFrameAsIs(const Frame& frame, const Photometry& photometry,
 }
 
 Sh9 projectFrame(const Projector& projector, const Frame& frame, const Linearizer& linearizer,
-                 ThreadPool* pool) {
+                 Executor* executor) {
   if (frame.format == PixelFormat::Bgr8)
-    return projector.projectBgr8(frame.bgr8.data(), linearizer.table().data(), pool);
-  return projector.project(frame.rgb.data(), 0, pool) * linearizer.exposure();
+    return projector.project(PanoramaView::bgrU8(frame.bgr8.data(), frame.width, frame.height,
+                                                 linearizer.table().data(), projector.spec()),
+                             executor);
+  return projector.project(
+             PanoramaView::rgbF32(frame.rgb.data(), frame.width, frame.height, projector.spec()),
+             executor) *
+         linearizer.exposure();
 }
 
 Sh9 ShSmoother::update(const Sh9& x, double timestamp) {
@@ -141,7 +147,8 @@ void CapturePipeline::run() {
           linearizer.convert(frame, *image);
         }
         const Image small = reduceEquirect(image->rgb.data(), image->width, image->height, reduce);
-        sh = projector->project(small.rgb.data(), 0, pool.get());
+        sh = projector->project(PanoramaView::rgbF32(small.rgb.data(), small.width, small.height),
+                                pool.get());
       } else {
         sh = projectFrame(*projector, frame, linearizer, pool.get());
       }

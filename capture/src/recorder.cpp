@@ -1,4 +1,4 @@
-#include "capture/recorder.h"
+#include "liveprobe/capture/recorder.h"
 
 #include <unistd.h>
 
@@ -9,8 +9,8 @@
 #include <nlohmann/json.hpp>
 #include <opencv2/videoio.hpp>
 
-#include "capture/error.h"
-#include "capture/image.h"
+#include "liveprobe/capture/image.h"
+#include "liveprobe/sh/error.h"
 
 namespace lp {
 

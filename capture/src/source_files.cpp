@@ -9,8 +9,8 @@
 #include <nlohmann/json.hpp>
 #include <opencv2/videoio.hpp>
 
-#include "capture/error.h"
-#include "capture/image.h"
+#include "liveprobe/capture/image.h"
+#include "liveprobe/sh/error.h"
 #include "sources.h"
 
 namespace lp {
@@ -60,7 +60,7 @@ class ListSource : public FrameSource {
   int w_ = 0, h_ = 0;
 };
 
-// Six face files assembled into a horizontal cross (capture/layout.h, cube).
+// Six face files assembled into a horizontal cross (liveprobe/sh/layout.h, cube).
 class CubeFacesSource final : public FrameSource {
  public:
   CubeFacesSource(std::array<std::string, 6> faces, std::string dir, double fps)

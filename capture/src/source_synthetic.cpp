@@ -2,7 +2,7 @@
 #include <glm/glm.hpp>
 #include <numbers>
 
-#include "capture/frame.h"
+#include "liveprobe/capture/frame.h"
 #include "sources.h"
 
 namespace lp {

@@ -3,7 +3,7 @@
 #include <memory>
 #include <string>
 
-#include "capture/frame.h"
+#include "liveprobe/capture/frame.h"
 
 namespace lp {
 

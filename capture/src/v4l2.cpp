@@ -1,4 +1,4 @@
-#include "capture/v4l2.h"
+#include "liveprobe/capture/v4l2.h"
 
 #include <fcntl.h>
 #include <linux/videodev2.h>
@@ -13,7 +13,7 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
-#include "capture/error.h"
+#include "liveprobe/sh/error.h"
 
 namespace lp {
 
@@ -102,49 +102,96 @@ int V4l2Source::xioctl(unsigned long request, void* arg) {
   return retryIoctl(fd_.get(), request, arg);
 }
 
-void V4l2Source::open() {
-  if (state_ != State::Closed) return;
-  const int fd = ::open(settings_.device.c_str(), O_RDWR | O_NONBLOCK | O_CLOEXEC);
-  if (fd < 0) {
-    const int e = errno;
-    if (e == ENOENT) throw Error(settings_.device + ": no such device");
-    fail("open", e);
+std::string_view V4l2Source::stateName(State s) {
+  switch (s) {
+    case State::Closed:
+      return "closed";
+    case State::Open:
+      return "open";
+    case State::Configured:
+      return "configured";
+    case State::Ready:
+      return "ready (buffers allocated)";
+    case State::Streaming:
+      return "streaming";
   }
-  fd_.reset(fd);
-  state_ = State::Open;
+  return "?";
+}
+
+void V4l2Source::require(State needed, const char* verb) const {
+  if (state_ != needed)
+    throw Error(settings_.device + ": " + verb + ": needs the source " +
+                std::string(stateName(needed)) + ", it is " + std::string(stateName(state_)));
+}
+
+void V4l2Source::start() {
   try {
-    v4l2_capability cap{};
-    if (xioctl(VIDIOC_QUERYCAP, &cap) < 0) {
-      const int e = errno;
-      throw Error(settings_.device +
-                  ": not a V4L2 video device (VIDIOC_QUERYCAP: " + std::strerror(e) + ")");
-    }
-    card_ = reinterpret_cast<const char*>(cap.card);
-    const std::uint32_t caps =
-        (cap.capabilities & V4L2_CAP_DEVICE_CAPS) ? cap.device_caps : cap.capabilities;
-    if (!(caps & V4L2_CAP_VIDEO_CAPTURE))
-      throw Error(settings_.device + ": not a single-planar video capture device (" + card_ + ")");
-    if (!(caps & V4L2_CAP_STREAMING))
-      throw Error(settings_.device + ": the device has no streaming I/O");
-    negotiate();
-    requestBuffers();
-    for (std::size_t i = 0; i < buffers_.size(); ++i) {
-      v4l2_buffer b{};
-      b.type = V4L2_BUF_TYPE_VIDEO_CAPTURE;
-      b.memory = V4L2_MEMORY_MMAP;
-      b.index = std::uint32_t(i);
-      if (xioctl(VIDIOC_QBUF, &b) < 0) fail("VIDIOC_QBUF", errno);
-    }
-    int type = V4L2_BUF_TYPE_VIDEO_CAPTURE;
-    if (xioctl(VIDIOC_STREAMON, &type) < 0) fail("VIDIOC_STREAMON", errno);
-    state_ = State::Streaming;
+    open();
+    setFormat();
+    allocateBuffers();
+    streamOn();
   } catch (...) {
     close();
     throw;
   }
 }
 
-void V4l2Source::negotiate() {
+void V4l2Source::open() {
+  require(State::Closed, "open");
+  const int fd = ::open(settings_.device.c_str(), O_RDWR | O_NONBLOCK | O_CLOEXEC);
+  if (fd < 0) {
+    const int e = errno;
+    if (e == ENOENT) throw Error(settings_.device + ": open: no such device");
+    fail("open", e);
+  }
+  fd_.reset(fd);
+  v4l2_capability cap{};
+  if (xioctl(VIDIOC_QUERYCAP, &cap) < 0) {
+    const int e = errno;
+    fd_.reset();
+    throw Error(settings_.device + ": VIDIOC_QUERYCAP: " + std::strerror(e) +
+                " (not a V4L2 video device)");
+  }
+  card_ = reinterpret_cast<const char*>(cap.card);
+  const std::uint32_t caps =
+      (cap.capabilities & V4L2_CAP_DEVICE_CAPS) ? cap.device_caps : cap.capabilities;
+  std::string missing;
+  if (!(caps & V4L2_CAP_VIDEO_CAPTURE))
+    missing = "not a single-planar video capture device (" + card_ + ")";
+  else if (!(caps & V4L2_CAP_STREAMING))
+    missing = "the device has no streaming I/O";
+  if (!missing.empty()) {
+    fd_.reset();
+    throw Error(settings_.device + ": VIDIOC_QUERYCAP: " + missing);
+  }
+  state_ = State::Open;
+}
+
+void V4l2Source::streamOn() {
+  require(State::Ready, "streamOn");
+  for (std::size_t i = 0; i < buffers_.size(); ++i) {
+    v4l2_buffer b{};
+    b.type = V4L2_BUF_TYPE_VIDEO_CAPTURE;
+    b.memory = V4L2_MEMORY_MMAP;
+    b.index = std::uint32_t(i);
+    if (xioctl(VIDIOC_QBUF, &b) < 0) {
+      const int e = errno;
+      streamOffIoctl();
+      fail("VIDIOC_QBUF", e);
+    }
+  }
+  int type = V4L2_BUF_TYPE_VIDEO_CAPTURE;
+  if (xioctl(VIDIOC_STREAMON, &type) < 0) {
+    const int e = errno;
+    streamOffIoctl();
+    fail("VIDIOC_STREAMON", e);
+  }
+  lastSequence_.reset();  // a restart's sequence gap is not lost frames
+  state_ = State::Streaming;
+}
+
+void V4l2Source::setFormat() {
+  require(State::Open, "setFormat");
   std::vector<std::uint32_t> offered;
   for (std::uint32_t i = 0;; ++i) {
     v4l2_fmtdesc d{};
@@ -222,9 +269,11 @@ void V4l2Source::negotiate() {
            parm.parm.capture.timeperframe.numerator;
   else
     fps_ = settings_.fps > 0 ? settings_.fps : 30.0;
+  state_ = State::Configured;
 }
 
-void V4l2Source::requestBuffers() {
+void V4l2Source::allocateBuffers() {
+  require(State::Configured, "allocateBuffers");
   constexpr std::uint32_t kMinBuffers = 3;
   v4l2_requestbuffers req{};
   req.count = std::uint32_t(std::max(settings_.buffers, int(kMinBuffers)));
@@ -264,6 +313,7 @@ void V4l2Source::requestBuffers() {
     }
     buffers_.push_back(std::move(buf));
   }
+  state_ = State::Ready;
 }
 
 void V4l2Source::releaseBuffers() {
@@ -276,16 +326,20 @@ void V4l2Source::releaseBuffers() {
   xioctl(VIDIOC_REQBUFS, &req);  // frees the driver's buffers; fails harmlessly on ENODEV
 }
 
+void V4l2Source::streamOffIoctl() {
+  int type = V4L2_BUF_TYPE_VIDEO_CAPTURE;
+  xioctl(VIDIOC_STREAMOFF, &type);  // returns every queued buffer; harmless when not streaming
+}
+
 void V4l2Source::streamOff() {
   if (state_ != State::Streaming) return;
-  int type = V4L2_BUF_TYPE_VIDEO_CAPTURE;
-  xioctl(VIDIOC_STREAMOFF, &type);  // returns every queued buffer to the application
-  state_ = State::Open;
+  streamOffIoctl();
+  state_ = State::Ready;
 }
 
 void V4l2Source::close() {
   streamOff();
-  releaseBuffers();
+  if (state_ == State::Ready) releaseBuffers();
   fd_.reset();
   state_ = State::Closed;
 }
@@ -335,7 +389,7 @@ void V4l2Source::convert(const std::uint8_t* data, std::size_t bytes, Frame& f) 
 }
 
 bool V4l2Source::next(Frame& frame) {
-  if (state_ != State::Streaming) throw Error(settings_.device + ": not streaming");
+  require(State::Streaming, "next");
   for (;;) {
     pollfd p{fd_.get(), POLLIN, 0};
     const int r = ::poll(&p, 1, settings_.timeoutMs);
@@ -364,7 +418,14 @@ bool V4l2Source::next(Frame& frame) {
     if (lastSequence_ && b.sequence > *lastSequence_ + 1)
       dropped_ += b.sequence - *lastSequence_ - 1;
     lastSequence_ = b.sequence;
+    // What the driver says about this frame, read before QBUF hands the buffer back (the
+    // driver rewrites the struct then).
     const bool corrupt = b.flags & V4L2_BUF_FLAG_ERROR;
+    const double t = double(b.timestamp.tv_sec) + double(b.timestamp.tv_usec) * 1e-6;
+    // The timestamp is CLOCK_MONOTONIC when the driver says so (the kernel's default for UVC).
+    const bool monotonic =
+        (b.flags & V4L2_BUF_FLAG_TIMESTAMP_MASK) == V4L2_BUF_FLAG_TIMESTAMP_MONOTONIC;
+    const std::uint32_t sequence = b.sequence;
     if (!corrupt)
       convert(static_cast<const std::uint8_t*>(buffers_[b.index]->start), b.bytesused, frame);
     if (xioctl(VIDIOC_QBUF, &b) < 0) {
@@ -377,13 +438,9 @@ bool V4l2Source::next(Frame& frame) {
       ++dropped_;
       continue;
     }
-    const double t = double(b.timestamp.tv_sec) + double(b.timestamp.tv_usec) * 1e-6;
     if (firstTimestamp_ < 0) firstTimestamp_ = t;
-    frame.sequence = b.sequence;
+    frame.sequence = sequence;
     frame.timestamp = t - firstTimestamp_;
-    // The driver's timestamp is CLOCK_MONOTONIC when it says so (the kernel's default for UVC).
-    const bool monotonic =
-        (b.flags & V4L2_BUF_FLAG_TIMESTAMP_MASK) == V4L2_BUF_FLAG_TIMESTAMP_MONOTONIC;
     frame.captureTime = monotonic ? t : -1.0;
     // The exposure and gain in force: read per frame while the automatic modes may change them.
     frame.exposure100us = locked_ ? lockedExposure_ : getControl(V4L2_CID_EXPOSURE_ABSOLUTE);

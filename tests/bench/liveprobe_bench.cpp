@@ -16,16 +16,18 @@
 #include <immintrin.h>
 #endif
 
-#include "capture/frame.h"
-#include "capture/image.h"
-#include "capture/layout.h"
-#include "capture/photometry.h"
-#include "shading/brute.h"
-#include "shading/gl/context.h"
-#include "shading/gl/renderer.h"
-#include "shading/mesh.h"
-#include "shading/sh.h"
-#include "shading/thread_pool.h"
+#include "liveprobe/capture/frame.h"
+#include "liveprobe/capture/image.h"
+#include "liveprobe/capture/photometry.h"
+#include "liveprobe/gl/context.h"
+#include "liveprobe/gl/mesh.h"
+#include "liveprobe/gl/renderer.h"
+#include "liveprobe/sh/brute.h"
+#include "liveprobe/sh/executor.h"
+#include "liveprobe/sh/layout.h"
+#include "liveprobe/sh/projector.h"
+#include "liveprobe/sh/sh.h"
+#include "liveprobe/sh/simd.h"
 
 namespace {
 
@@ -65,7 +67,12 @@ lp::ThreadPool* pool(int threads) {
   return threads > 1 ? p.get() : nullptr;
 }
 
-void projectBench(benchmark::State& state, lp::Layout layout, bool u8, Size s, int threads) {
+void projectBench(benchmark::State& state, lp::Layout layout, bool u8, Size s, int threads,
+                  const std::string& simd) {
+  lp::simd::select(simd);
+  struct Restore {  // the other benchmarks run on the best path
+    ~Restore() { lp::simd::select("native"); }
+  } restore;
   // Everything the projection reads is made before the timed loop (the sky's rendering would
   // otherwise land in the first iteration, which sets the iteration count), and one untimed
   // projection warms the caches and the thread pool.
@@ -74,9 +81,10 @@ void projectBench(benchmark::State& state, lp::Layout layout, bool u8, Size s, i
   const std::uint8_t* bgr = u8 ? skyU8(s).data() : nullptr;
   const float* rgb = u8 ? nullptr : skyF32(s).data();
   lp::ThreadPool* workers = pool(threads);
-  auto run = [&] {
-    return u8 ? proj.projectBgr8(bgr, lin.table().data(), workers) : proj.project(rgb, 0, workers);
-  };
+  const lp::PanoramaView view =
+      u8 ? lp::PanoramaView::bgrU8(bgr, s.w, s.h, lin.table().data(), layout)
+         : lp::PanoramaView::rgbF32(rgb, s.w, s.h, layout);
+  auto run = [&] { return proj.project(view, workers); };
   benchmark::DoNotOptimize(run());
   for (auto _ : state) {
     const lp::Sh9 sh = run();
@@ -123,7 +131,8 @@ void bruteBench(benchmark::State& state, int threads) {
   double shSeconds = 1e30;
   for (int rep = 0; rep < 50; ++rep) {
     const auto t0 = std::chrono::steady_clock::now();
-    const auto m = lp::irradianceMatrices(proj.project(rgb.data()));
+    const auto m =
+        lp::irradianceMatrices(proj.project(lp::PanoramaView::rgbF32(rgb.data(), s.w, s.h)));
     glm::vec3 sum(0);
     for (const auto& n : normals) sum += lp::evalIrradianceQuadratic(m, n);
     benchmark::DoNotOptimize(sum);
@@ -132,10 +141,10 @@ void bruteBench(benchmark::State& state, int threads) {
   }
   double bruteSeconds = 0;
   int n = 0;
+  lp::ThreadPool workers{unsigned(threads)};
   for (auto _ : state) {
     const auto t0 = std::chrono::steady_clock::now();
-    auto e = lp::bruteIrradiance(rgb.data(), 3, samples.data(), samples.size(), normals,
-                                 unsigned(threads));
+    auto e = lp::bruteIrradiance(rgb.data(), 3, samples.data(), samples.size(), normals, &workers);
     benchmark::DoNotOptimize(e);
     bruteSeconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     ++n;
@@ -153,7 +162,7 @@ void renderBench(benchmark::State& state) {
   lp::fitToUnitSphere(mesh);
   r.setMesh(mesh);
   const Size s{512, 256};
-  r.setLighting(lp::projectEquirect(skyF32(s).data(), s.w, s.h));
+  r.setLighting(lp::project(lp::PanoramaView::rgbF32(skyF32(s).data(), s.w, s.h)));
   r.setBackground(skyF32(s).data(), s.w, s.h, lp::gl::BackgroundMapping::Equirect);
   for (auto _ : state) {
     r.draw({1280, 720}, lp::gl::Camera{}, lp::gl::ShadingSettings{});
@@ -300,7 +309,8 @@ void pipelineBench(benchmark::State& state, int stage) {
         benchmark::DoNotOptimize(lin.convert(frame, image));
         break;
       case 2:  // project: fused lookup table + projection, 2 threads
-        benchmark::DoNotOptimize(proj.projectBgr8(frame.bgr8.data(), lin.table().data(), pool(2)));
+        benchmark::DoNotOptimize(proj.project(
+            lp::PanoramaView::bgrU8(frame.bgr8.data(), 1920, 1080, lin.table().data()), pool(2)));
         break;
     }
   }
@@ -314,15 +324,18 @@ void registerAll() {
   for (const auto& [layout, sizes] : layouts)
     for (const char* type : {"f32", "u8"})
       for (Size s : sizes)
-        for (int threads : {1, 2}) {
-          const bool u8 = std::string(type) == "u8";
-          const std::string name = "Project/" + std::string(lp::layoutName(layout)) + "/" + type +
-                                   "/" + sizeName(s) + "/threads:" + std::to_string(threads);
-          benchmark::RegisterBenchmark(
-              name.c_str(), [=](benchmark::State& st) { projectBench(st, layout, u8, s, threads); })
-              ->UseRealTime()
-              ->Unit(benchmark::kMicrosecond);
-        }
+        for (int threads : {1, 2})
+          for (const std::string& simd : lp::simd::available()) {  // every path this CPU runs
+            const bool u8 = std::string(type) == "u8";
+            const std::string name = "Project/" + std::string(lp::layoutName(layout)) + "/" + type +
+                                     "/" + sizeName(s) + "/threads:" + std::to_string(threads) +
+                                     "/simd:" + simd;
+            benchmark::RegisterBenchmark(
+                name.c_str(),
+                [=](benchmark::State& st) { projectBench(st, layout, u8, s, threads, simd); })
+                ->UseRealTime()
+                ->Unit(benchmark::kMicrosecond);
+          }
   // The floors, for the equirect sizes: reading the frame, and 15 FMAs per pixel.
   for (Size s : layouts[0].second)
     for (int threads : {1, 2}) {

@@ -3,7 +3,8 @@
 // contract for what liveprobe uses (and what it must survive): QUERYCAP, ENUM_FMT,
 // ENUM_FRAMESIZES, ENUM_FRAMEINTERVALS, G/S/TRY_FMT (S_FMT adjusts to the nearest offered mode),
 // G/S_PARM, REQBUFS (count 0 frees; may grant fewer), QUERYBUF, QBUF, DQBUF (EAGAIN when empty),
-// STREAMON, STREAMOFF (returns every buffer), QUERYCTRL (NEXT_CTRL), G/S_CTRL.
+// STREAMON, STREAMOFF (returns every buffer; streaming can start again), QUERYCTRL (NEXT_CTRL),
+// G/S_CTRL. S_FMT and REQBUFS are EBUSY while buffers are allocated or mapped, as in vb2.
 // The fd is a real eventfd, so the descriptor is genuine for close() and friends.
 //
 // Configuration (environment):
@@ -252,7 +253,8 @@ int Emu::handle(unsigned long req, void* arg) {
       if (f->type != V4L2_BUF_TYPE_VIDEO_CAPTURE) return fail(EINVAL);
       int pick = mode;
       if (req != VIDIOC_G_FMT) {
-        if (streaming && req == VIDIOC_S_FMT) return fail(EBUSY);
+        // vb2_is_busy(): no format change while buffers are allocated (or streaming).
+        if ((streaming || !store.empty()) && req == VIDIOC_S_FMT) return fail(EBUSY);
         // The nearest offered mode of the requested format; another format if it is not offered
         // (drivers adjust rather than fail) unless the einval_fmt fault is set.
         long best = -1;
@@ -303,6 +305,9 @@ int Emu::handle(unsigned long req, void* arg) {
         return 0;
       }
       if (fault("busy_reqbufs")) return fail(EBUSY);
+      // vb2_core_reqbufs(): not while streaming, nor while the old buffers are still mapped.
+      if (streaming || std::any_of(maps.begin(), maps.end(), [](void* p) { return p; }))
+        return fail(EBUSY);
       std::uint32_t n = std::min<std::uint32_t>(r->count, 8);
       if (fault("grant")) n = std::min<std::uint32_t>(n, std::uint32_t(faults["grant"]));
       r->count = n;

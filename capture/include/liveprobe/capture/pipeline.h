@@ -1,0 +1,147 @@
+#pragma once
+// The capture pipeline: a thread grabs, converts (photometry) and projects each frame, then
+// hands the newest coefficients to the render loop through a latest-value slot. With
+// Handoff::Latest capture never waits for rendering: a frame not taken before the next one is
+// ready is dropped and counted. With Handoff::Every (offline output) capture waits until each
+// frame is taken, so every frame is rendered.
+#include <atomic>
+#include <condition_variable>
+#include <functional>
+#include <memory>
+#include <mutex>
+#include <optional>
+#include <string>
+#include <thread>
+
+#include "liveprobe/capture/frame.h"
+#include "liveprobe/capture/image.h"
+#include "liveprobe/capture/photometry.h"
+#include "liveprobe/sh/executor.h"
+#include "liveprobe/sh/layout.h"
+#include "liveprobe/sh/projector.h"
+#include "liveprobe/sh/sh.h"
+
+namespace lp {
+
+/// Where one frame's capture time went. 8-bit frames are linearised inside the projection
+/// (its lookup table fused in), so `convertMs` is only the linear copy kept for display.
+struct StageTimes {
+  double grabMs = 0, convertMs = 0, projectMs = 0;
+};
+
+struct ProcessedFrame {
+  std::uint64_t index = 0;             ///< position in this pipeline's output, from 0
+  std::uint64_t sequence = 0;          ///< the source's frame number
+  double timestamp = 0;                ///< the source's timestamp, seconds
+  Sh9 radiance;                        ///< after orientation and smoothing
+  Sh9 unsmoothed;                      ///< after orientation, before smoothing
+  std::shared_ptr<const Image> image;  ///< the linear frame (when PipelineOptions::keepImages)
+  /// Instead of `image`, for sRGB 8-bit frames: the frame as captured, with the linear scale
+  /// (exposure) that applies to its decoded values. The GPU decodes sRGB for display.
+  std::shared_ptr<const Frame> raw;
+  float rawScale = 1.0f;
+  /// For `image` made from an 8-bit frame: the scale its decoded values carry (0 for HDR frames),
+  /// so the display can show it as the source looks (gl::Renderer::setBackground).
+  float displayScale = 0.0f;
+  StageTimes times;
+  std::size_t saturated = 0;
+};
+
+enum class Handoff : std::uint8_t { Latest, Every };
+
+struct PipelineOptions {
+  LayoutSpec layout;
+  Photometry photometry;
+  /// The environment's orientation (world from file; orthogonal, a reflection allowed), applied
+  /// to the coefficients by lp::rotateSh. The display turns the background by the same matrix.
+  std::optional<glm::mat3> rotation;
+  double smoothSeconds = 0;     ///< EMA time constant on the 27 numbers; 0 = off
+  bool loop = false;            ///< rewind at the end of the source
+  std::int64_t maxFrames = -1;  ///< stop after this many frames; -1 = the whole source
+  Handoff handoff = Handoff::Latest;
+  bool realtime = false;   ///< pace capture by the source's timestamps
+  bool keepImages = true;  ///< hand the linear frame over too (for the background)
+  unsigned threads = 2;    ///< threads for one frame's projection
+  int reduce = 1;          ///< equirect: project an f x f area average (reduceEquirect)
+  /// Called on the capture thread for every processed frame, before the handoff.
+  std::function<void(const ProcessedFrame&)> onCaptured;
+  /// Called on the capture thread with every raw frame as the source gave it (for recording).
+  std::function<void(const Frame&)> onFrame;
+};
+
+struct PipelineStats {
+  std::size_t captured = 0;  ///< frames processed
+  std::size_t taken = 0;     ///< frames the consumer took
+  std::size_t dropped = 0;   ///< frames replaced in the slot before anyone took them
+  std::size_t skipped = 0;   ///< frames the source could not decode
+  std::string endReason;     ///< why the source ended early, if it did
+  std::string error;         ///< the fatal error that stopped capture, if any
+};
+
+/// Exponential moving average of coefficients: alpha = 1 - exp(-dt / tau). Exact on SH because
+/// projection is linear (the average of projections is the projection of the average frame).
+/// For a step change it reaches 63% after tau seconds: that is the latency it adds.
+class ShSmoother {
+ public:
+  explicit ShSmoother(double tauSeconds) : tau_(tauSeconds) {}
+  Sh9 update(const Sh9& x, double timestamp);
+
+ private:
+  double tau_;
+  std::optional<Sh9> state_;
+  double last_ = 0;
+};
+
+/// Whether the display takes this frame as it is: 8-bit sRGB in a layout the background shader
+/// draws directly (equirect, angular). Then no linear copy is made for it; the GPU decodes sRGB.
+bool displayTakesFrameAsIs(const Frame& frame, const Photometry& photometry,
+                           const LayoutSpec& layout);
+
+/// The radiance coefficients of one frame, as every stage of liveprobe computes them: 8-bit frames
+/// through the linearizer's table inside the projection, float frames scaled after (projection
+/// is linear). The projector must have the frame's size.
+Sh9 projectFrame(const Projector& projector, const Frame& frame, const Linearizer& linearizer,
+                 Executor* executor);
+
+class CapturePipeline {
+ public:
+  CapturePipeline(std::unique_ptr<FrameSource> source, PipelineOptions options);
+  ~CapturePipeline();
+  CapturePipeline(const CapturePipeline&) = delete;
+  CapturePipeline& operator=(const CapturePipeline&) = delete;
+
+  void start();
+  /// Stops the capture thread (idempotent).
+  void stop();
+  /// The newest frame not yet taken, without waiting.
+  std::optional<ProcessedFrame> takeLatest();
+  /// Waits for the next frame; nullopt when capture has ended and nothing is left.
+  std::optional<ProcessedFrame> waitNext();
+  /// Pauses capture before its next frame (a replay's Space key); resuming restarts the pacing
+  /// clock, so a paused replay does not rush to catch up.
+  void setPaused(bool paused);
+  /// While paused: capture exactly one more frame.
+  void step();
+  /// Capture has ended (end of source, frame limit, error or stop).
+  bool finished() const { return finished_; }
+  PipelineStats stats() const;
+  const FrameSource& source() const { return *source_; }
+
+ private:
+  void run();
+  void publish(ProcessedFrame&& f);
+  std::optional<ProcessedFrame> takeFromSlot(std::unique_lock<std::mutex>& lock);
+
+  std::unique_ptr<FrameSource> source_;
+  PipelineOptions opt_;
+  std::thread thread_;
+  std::atomic<bool> stop_{false}, finished_{false};
+  mutable std::mutex mutex_;
+  std::condition_variable cv_;
+  std::optional<ProcessedFrame> slot_;
+  PipelineStats stats_;
+  bool paused_ = false, resync_ = false;
+  int steps_ = 0;
+};
+
+}  // namespace lp

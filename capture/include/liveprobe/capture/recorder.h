@@ -1,0 +1,41 @@
+#pragma once
+// Recording a stream for later replay: FFV1 in .mkv (lossless) or MJPEG in .avi (near-lossless),
+// through OpenCV videoio with FFmpeg, plus a JSON sidecar (FILE.json) with the exposure and every
+// frame's timestamp. 8-bit frames are stored as they came; float (HDR) frames are stored as sRGB
+// of radiance * exposure, the exposure chosen on the first frame so its brightest pixel is at 95%.
+// The video is written under a temporary name and renamed, with its sidecar, by finish() (or the
+// destructor): a stream that stops, even by a fault, leaves a playable file up to its last frame.
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "liveprobe/capture/frame.h"
+
+namespace lp {
+
+class VideoRecorder {
+ public:
+  /// Throws lp::Error on an unsupported extension or an unwritable folder. 8-bit frames are
+  /// stored as they came, each with its own exposure (1 / Frame::radianceScale) in the sidecar.
+  VideoRecorder(std::string path, double fps, std::string sourceDescription);
+  ~VideoRecorder();
+  VideoRecorder(const VideoRecorder&) = delete;
+  VideoRecorder& operator=(const VideoRecorder&) = delete;
+
+  /// Appends a frame (its timestamp goes to the sidecar). Throws lp::Error on a write failure.
+  void write(const Frame& frame);
+  /// Closes the video, writes the sidecar, renames both into place. Idempotent.
+  void finish();
+  std::size_t frames() const { return stamps_.size(); }
+  const std::string& path() const { return path_; }
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+  std::string path_, tmp_, source_;
+  double fps_, exposure_ = 0;               ///< float frames: the one exposure chosen on the first
+  std::vector<double> stamps_, exposures_;  ///< per frame
+  bool finished_ = false;
+};
+
+}  // namespace lp

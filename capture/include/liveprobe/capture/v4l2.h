@@ -1,0 +1,181 @@
+#pragma once
+// A V4L2 capture source written against linux/videodev2.h and the kernel's V4L2 documentation
+// (https://docs.kernel.org/userspace-api/media/v4l/): memory-mapped streaming I/O with poll(),
+// MJPEG / YUYV / NV12 / RGB24 conversion to 8-bit BGR, and the camera controls a light probe needs
+// (exposure, gain, white balance), with locking after auto-exposure settles.
+// Structure after libcamera's V4L2VideoDevice: the constructor cannot fail; explicit verbs with
+// states (open, setFormat, allocateBuffers, streamOn, streamOff, close) that can; the fd and the
+// mappings have RAII owners; buffers are requested and released as a pair with a rollback;
+// streamOff() is idempotent and returns every buffer, and a stopped source can start again.
+#include <cstdint>
+#include <memory>
+#include <optional>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "liveprobe/capture/frame.h"
+
+namespace lp {
+
+/// Move-only owner of a file descriptor.
+class UniqueFd {
+ public:
+  UniqueFd() = default;
+  explicit UniqueFd(int fd) : fd_(fd) {}
+  UniqueFd(UniqueFd&& o) noexcept : fd_(o.release()) {}
+  UniqueFd& operator=(UniqueFd&& o) noexcept {
+    reset(o.release());
+    return *this;
+  }
+  UniqueFd(const UniqueFd&) = delete;
+  UniqueFd& operator=(const UniqueFd&) = delete;
+  ~UniqueFd() { reset(); }
+  int get() const { return fd_; }
+  bool isValid() const { return fd_ >= 0; }
+  int release() {
+    const int f = fd_;
+    fd_ = -1;
+    return f;
+  }
+  void reset(int fd = -1);
+
+ private:
+  int fd_ = -1;
+};
+
+/// The pixel formats liveprobe converts, as V4L2 fourcc codes.
+enum class CameraFormat : std::uint8_t { Auto, Mjpeg, Yuyv, Nv12, Rgb24 };
+std::string_view cameraFormatName(CameraFormat f);
+/// "mjpeg", "yuyv", "nv12", "rgb24" or "auto"; throws lp::Error.
+CameraFormat parseCameraFormat(std::string_view name);
+
+struct CameraSettings {
+  std::string device;                        ///< /dev/videoN
+  CameraFormat format = CameraFormat::Auto;  ///< Auto: MJPEG, then YUYV, NV12, RGB24
+  int width = 0, height = 0;                 ///< 0: the largest the format offers
+  double fps = 0;                            ///< 0: the driver's default
+  int buffers = 4;                           ///< asked for; at least 3 must be granted
+  int timeoutMs = 2000;                      ///< no frame for this long: the camera stopped sending
+  int mjpegReduce = 1;  ///< decode MJPEG at 1/2, 1/4 or 1/8 scale (libjpeg's DCT scaling)
+};
+
+struct CameraControl {
+  std::uint32_t id = 0;
+  std::string name;
+  int type = 0;
+  std::int32_t minimum = 0, maximum = 0, step = 0, defaultValue = 0, value = 0;
+};
+
+struct CameraFrameSize {
+  std::uint32_t fourcc = 0;
+  int width = 0, height = 0;
+  std::vector<double> fps;  ///< discrete rates, or {min, max} of a stepwise range
+};
+
+struct CameraInfo {
+  std::string path, card, driver, bus;
+  /// A video-capture node. UVC cameras also expose a metadata node (V4L2_CAP_META_CAPTURE):
+  /// it answers QUERYCAP but carries no video; queryCamera() then lists nothing else.
+  bool videoCapture = true;
+  std::string kind;  ///< what it is when not video capture ("metadata", "output", ...)
+  std::vector<CameraFrameSize> modes;
+  std::vector<CameraControl> controls;
+};
+
+/// A V4L2 pixel format code as its four characters ("MJPG").
+std::string fourccText(std::uint32_t fourcc);
+
+/// Queries a device without streaming (formats, sizes, rates, controls). Throws lp::Error.
+CameraInfo queryCamera(const std::string& path);
+
+/// The values --lock-exposure read and fixed.
+struct LockedExposure {
+  std::optional<std::int32_t> exposure100us, gain, whiteBalanceK;
+};
+
+class V4l2Source final : public FrameSource {
+ public:
+  explicit V4l2Source(CameraSettings settings) noexcept;
+  ~V4l2Source() override;
+
+  /// The source's states, in the order of the kernel's calls (after libcamera's
+  /// V4L2VideoDevice): each verb below moves one step and needs the state before it.
+  enum class State : std::uint8_t {
+    Closed,      ///< no device
+    Open,        ///< the device is open and is a streaming video-capture node
+    Configured,  ///< format, size and rate are set (VIDIOC_S_FMT, VIDIOC_S_PARM)
+    Ready,       ///< buffers are allocated and mapped (VIDIOC_REQBUFS, mmap)
+    Streaming,   ///< every buffer was queued and VIDIOC_STREAMON succeeded
+  };
+  static std::string_view stateName(State s);
+  State state() const { return state_; }
+
+  /// Closed -> Open: opens the device and checks its capabilities.
+  void open();
+  /// Open -> Configured: negotiates format, size and rate from the settings.
+  void setFormat();
+  /// Configured -> Ready: requests at least 3 buffers and maps them (rolled back on failure).
+  void allocateBuffers();
+  /// Ready -> Streaming: queues every buffer and starts streaming. After streamOff() a source
+  /// can stream again; the sequence gap across the stop is not counted as dropped frames.
+  void streamOn();
+  /// Streaming -> Ready: stops streaming; the driver returns every buffer (idempotent).
+  void streamOff();
+  /// Any state -> Closed: stops, frees the buffers, unmaps them and closes (idempotent).
+  void close();
+  /// open(), setFormat(), allocateBuffers(), streamOn(); closes again if one fails.
+  /// Each verb throws lp::Error "DEVICE: OPERATION: why", and one called in the wrong state
+  /// says which state it needs.
+  void start();
+
+  /// Lets auto-exposure and auto white balance settle for `seconds` of streaming, then turns the
+  /// automatic modes off and writes back the values they reached (exposure, gain, white
+  /// balance), in that order: a driver ignores manual values while its auto mode is on.
+  LockedExposure lockExposure(double seconds);
+
+  bool next(Frame& frame) override;
+  bool rewind() override { return false; }
+  std::string describe() const override;
+  double fps() const override { return fps_; }
+  std::size_t skippedFrames() const override { return dropped_; }
+
+  /// What the driver actually set.
+  std::uint32_t fourcc() const { return fourcc_; }
+  int width() const { return width_; }
+  int height() const { return height_; }
+
+ private:
+  struct Buffer;
+  [[noreturn]] void fail(const std::string& what, int err) const;
+  void require(State needed, const char* verb) const;
+  int xioctl(unsigned long request, void* arg);
+  void releaseBuffers();
+  void streamOffIoctl();
+  void convert(const std::uint8_t* data, std::size_t bytes, Frame& frame);
+  std::optional<std::int32_t> getControl(std::uint32_t id);
+  /// Writes a control and reads it back. Returns false when the camera has no such control
+  /// (VIDIOC_QUERYCTRL: EINVAL); a refused write, or a value that does not read back, is an
+  /// lp::Error naming the control and the value.
+  bool setControl(std::uint32_t id, std::int32_t value);
+  /// The driver's name of a control ("Gain"), or its id in hex.
+  std::string controlName(std::uint32_t id);
+
+  CameraSettings settings_;
+  UniqueFd fd_;
+  State state_ = State::Closed;
+  std::vector<std::unique_ptr<Buffer>> buffers_;
+  std::uint32_t fourcc_ = 0;
+  int width_ = 0, height_ = 0;
+  std::size_t bytesPerLine_ = 0, sizeImage_ = 0;
+  double fps_ = 0;
+  std::optional<std::uint32_t> lastSequence_;
+  std::size_t dropped_ = 0;
+  double firstTimestamp_ = -1;
+  /// After lockExposure() the exposure and gain no longer change: no per-frame control reads.
+  std::optional<std::int32_t> lockedExposure_, lockedGain_;
+  bool locked_ = false;
+  std::string card_;
+};
+
+}  // namespace lp

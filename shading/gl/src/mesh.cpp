@@ -1,0 +1,103 @@
+#include "liveprobe/gl/mesh.h"
+
+#include <assimp/postprocess.h>
+#include <assimp/scene.h>
+
+#include <algorithm>
+#include <assimp/Importer.hpp>
+#include <cmath>
+#include <filesystem>
+
+namespace lp {
+
+Mesh makeUvSphere(int segments, int rings) {
+  Mesh m;
+  const float pi = 3.14159265358979f;
+  for (int r = 0; r <= rings; ++r) {
+    const float t = pi * float(r) / float(rings);  // from +y down
+    for (int s = 0; s <= segments; ++s) {
+      const float p = 2.0f * pi * float(s) / float(segments);
+      const glm::vec3 n(std::sin(t) * std::sin(p), std::cos(t), std::sin(t) * std::cos(p));
+      m.positions.push_back(n);
+      m.normals.push_back(n);
+      m.uvs.emplace_back(float(s) / float(segments), 1.0f - float(r) / float(rings));
+    }
+  }
+  const auto row = std::uint32_t(segments + 1);
+  for (int r = 0; r < rings; ++r)
+    for (int s = 0; s < segments; ++s) {
+      const std::uint32_t a = r * row + s, b = a + row;
+      if (r != 0) m.indices.insert(m.indices.end(), {a, b, a + 1});
+      if (r != rings - 1) m.indices.insert(m.indices.end(), {a + 1, b, b + 1});
+    }
+  return m;
+}
+
+Mesh loadMesh(const std::string& path) {
+  std::error_code ec;
+  if (!std::filesystem::exists(path, ec)) throw MeshError(path + ": no such file");
+  Assimp::Importer importer;
+  // Smooth normals are generated only where the file has none (assimp skips meshes with normals).
+  const aiScene* scene = importer.ReadFile(
+      path, aiProcess_Triangulate | aiProcess_JoinIdenticalVertices | aiProcess_GenSmoothNormals |
+                aiProcess_PreTransformVertices | aiProcess_SortByPType);
+  if (!scene || (scene->mFlags & AI_SCENE_FLAGS_INCOMPLETE)) {
+    const std::string why = importer.GetErrorString();
+    // assimp's words for a file that parsed but holds no faces.
+    if (why.find("No output meshes") != std::string::npos ||
+        why.find("no meshes") != std::string::npos)
+      throw MeshError(path + ": model has no triangles (assimp: " + why + ")");
+    throw MeshError(path + ": cannot read model (" + why + ")");
+  }
+  Mesh out;
+  for (unsigned mi = 0; mi < scene->mNumMeshes; ++mi) {
+    const aiMesh* am = scene->mMeshes[mi];
+    if (!(am->mPrimitiveTypes & aiPrimitiveType_TRIANGLE) || !am->HasNormals()) continue;
+    const auto base = std::uint32_t(out.positions.size());
+    const bool uv = am->HasTextureCoords(0);
+    for (unsigned v = 0; v < am->mNumVertices; ++v) {
+      out.positions.emplace_back(am->mVertices[v].x, am->mVertices[v].y, am->mVertices[v].z);
+      glm::vec3 n(am->mNormals[v].x, am->mNormals[v].y, am->mNormals[v].z);
+      const float len = glm::length(n);
+      out.normals.push_back(len > 0 && std::isfinite(len) ? n / len : glm::vec3(0, 1, 0));
+      if (uv) out.uvs.emplace_back(am->mTextureCoords[0][v].x, am->mTextureCoords[0][v].y);
+    }
+    if (!uv && !out.uvs.empty()) out.uvs.resize(out.positions.size(), glm::vec2(0));
+    for (unsigned f = 0; f < am->mNumFaces; ++f) {
+      const aiFace& face = am->mFaces[f];
+      if (face.mNumIndices != 3) continue;
+      for (int k = 0; k < 3; ++k) out.indices.push_back(base + face.mIndices[k]);
+    }
+    if (out.albedoTexture.empty() && am->mMaterialIndex < scene->mNumMaterials) {
+      const aiMaterial* mat = scene->mMaterials[am->mMaterialIndex];
+      aiString tex;
+      if (mat->GetTexture(aiTextureType_BASE_COLOR, 0, &tex) == AI_SUCCESS ||
+          mat->GetTexture(aiTextureType_DIFFUSE, 0, &tex) == AI_SUCCESS) {
+        const std::string t = tex.C_Str();
+        if (!t.empty() && t[0] != '*')  // '*n' is an embedded texture: not supported
+          out.albedoTexture = (std::filesystem::path(path).parent_path() / t).string();
+      }
+      aiColor4D c;
+      if (mat->Get(AI_MATKEY_COLOR_DIFFUSE, c) == AI_SUCCESS && (c.r + c.g + c.b) > 0)
+        out.albedo = {c.r, c.g, c.b};
+    }
+  }
+  // Meshes without uvs after one with uvs were padded above; uvs shorter than positions means
+  // a uv-less mesh came first: drop uvs entirely then.
+  if (out.uvs.size() != out.positions.size()) out.uvs.clear();
+  if (out.indices.empty()) throw MeshError(path + ": model has no triangles");
+  return out;
+}
+
+void fitToUnitSphere(Mesh& mesh) {
+  if (mesh.positions.empty()) return;
+  glm::vec3 lo(INFINITY), hi(-INFINITY);
+  for (const auto& p : mesh.positions) lo = glm::min(lo, p), hi = glm::max(hi, p);
+  const glm::vec3 centre = 0.5f * (lo + hi);
+  float radius = 0;
+  for (const auto& p : mesh.positions) radius = std::max(radius, glm::length(p - centre));
+  const float s = radius > 0 ? 1.0f / radius : 1.0f;
+  for (auto& p : mesh.positions) p = (p - centre) * s;
+}
+
+}  // namespace lp

@@ -1,0 +1,376 @@
+#include "liveprobe/gl/renderer.h"
+
+#include <algorithm>
+#include <glm/gtc/matrix_transform.hpp>
+#include <glm/gtc/type_ptr.hpp>
+#include <string>
+
+#include "liveprobe/gl/context.h"
+#include "liveprobe/sh/axes.h"
+#include "shaders.h"
+
+namespace lp::gl {
+
+void checkGl(const char* where) {
+  const GLenum e = glGetError();
+  if (e != GL_NO_ERROR)
+    throw ContextError(std::string(where) + ": GL error 0x" + [e] {
+      char b[16];
+      std::snprintf(b, sizeof b, "%04x", e);
+      return std::string(b);
+    }());
+}
+
+glm::vec3 Camera::eye() const {
+  const float y = glm::radians(yawDeg), p = glm::radians(pitchDeg);
+  return distance * glm::vec3(std::cos(p) * std::sin(y), std::sin(p), std::cos(p) * std::cos(y));
+}
+glm::mat4 Camera::view() const { return glm::lookAt(eye(), glm::vec3(0.0f), glm::vec3(0, 1, 0)); }
+glm::mat4 Camera::projection(float aspect) const {
+  return glm::perspective(glm::radians(fovYDeg), aspect, 0.05f, 100.0f);
+}
+
+namespace {
+
+Shader compile(GLenum type, const char* src, const char* name) {
+  Shader s(glCreateShader(type));
+  glShaderSource(s.get(), 1, &src, nullptr);
+  glCompileShader(s.get());
+  GLint ok = 0;
+  glGetShaderiv(s.get(), GL_COMPILE_STATUS, &ok);
+  if (!ok) {
+    char log[2048];
+    glGetShaderInfoLog(s.get(), sizeof log, nullptr, log);
+    throw ContextError(std::string("compiling ") + name + ": " + log);
+  }
+  return s;
+}
+
+Program link(const char* vs, const char* fs, const char* name) {
+  const Shader v = compile(GL_VERTEX_SHADER, vs, name), f = compile(GL_FRAGMENT_SHADER, fs, name);
+  Program p(glCreateProgram());
+  glAttachShader(p.get(), v.get());
+  glAttachShader(p.get(), f.get());
+  glLinkProgram(p.get());
+  GLint ok = 0;
+  glGetProgramiv(p.get(), GL_LINK_STATUS, &ok);
+  if (!ok) {
+    char log[2048];
+    glGetProgramInfoLog(p.get(), sizeof log, nullptr, log);
+    throw ContextError(std::string("linking ") + name + ": " + log);
+  }
+  return p;
+}
+
+GLint loc(const Program& p, const char* name) { return glGetUniformLocation(p.get(), name); }
+
+// GL's rows start at the bottom; images here start at the top.
+template <class T>
+void flipRows(std::vector<T>& px, std::size_t row, int rows) {
+  for (int y = 0; y < rows / 2; ++y)
+    std::swap_ranges(px.begin() + std::ptrdiff_t(y * row),
+                     px.begin() + std::ptrdiff_t((y + 1) * row),
+                     px.begin() + std::ptrdiff_t((rows - 1 - y) * row));
+}
+
+template <class T>
+Buffer upload(GLenum target, const std::vector<T>& data) {
+  GLuint id = 0;
+  glGenBuffers(1, &id);
+  Buffer b(id);
+  glBindBuffer(target, id);
+  glBufferData(target, GLsizeiptr(data.size() * sizeof(T)), data.data(), GL_STATIC_DRAW);
+  return b;
+}
+
+// A bound, linearly filtered 2D texture: internal format, client format and type as given.
+Texture makeTexture(GLint internal, int width, int height, GLenum format, GLenum type,
+                    const void* data, GLint wrapS) {
+  GLuint id = 0;
+  glGenTextures(1, &id);
+  Texture t(id);
+  glBindTexture(GL_TEXTURE_2D, id);
+  glPixelStorei(GL_UNPACK_ALIGNMENT, 1);
+  glTexImage2D(GL_TEXTURE_2D, 0, internal, width, height, 0, format, type, data);
+  glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_LINEAR);
+  glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
+  glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_S, wrapS);
+  glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
+  checkGl("uploading a texture");
+  return t;
+}
+
+Texture makeFloatTexture(const float* rgb, int width, int height, GLint wrapS) {
+  return makeTexture(GL_RGB32F, width, height, GL_RGB, GL_FLOAT, rgb, wrapS);
+}
+
+}  // namespace
+
+FloatTarget::FloatTarget(int width, int height) : width_(width), height_(height) {
+  GLuint id = 0;
+  glGenFramebuffers(1, &id);
+  fbo_.reset(id);
+  glGenTextures(1, &id);
+  colour_.reset(id);
+  glBindTexture(GL_TEXTURE_2D, id);
+  glTexImage2D(GL_TEXTURE_2D, 0, GL_RGBA32F, width, height, 0, GL_RGBA, GL_FLOAT, nullptr);
+  glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
+  glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
+  glGenRenderbuffers(1, &id);
+  depth_.reset(id);
+  glBindRenderbuffer(GL_RENDERBUFFER, id);
+  glRenderbufferStorage(GL_RENDERBUFFER, GL_DEPTH_COMPONENT24, width, height);
+  glBindFramebuffer(GL_FRAMEBUFFER, fbo_.get());
+  glFramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_TEXTURE_2D, colour_.get(), 0);
+  glFramebufferRenderbuffer(GL_FRAMEBUFFER, GL_DEPTH_ATTACHMENT, GL_RENDERBUFFER, depth_.get());
+  if (glCheckFramebufferStatus(GL_FRAMEBUFFER) != GL_FRAMEBUFFER_COMPLETE)
+    throw ContextError("float framebuffer is incomplete");
+  glBindFramebuffer(GL_FRAMEBUFFER, 0);
+}
+
+void FloatTarget::bind() const { glBindFramebuffer(GL_FRAMEBUFFER, fbo_.get()); }
+
+std::vector<float> FloatTarget::readRgba() const {
+  bind();
+  std::vector<float> px(std::size_t(width_) * height_ * 4);
+  glPixelStorei(GL_PACK_ALIGNMENT, 4);
+  glReadPixels(0, 0, width_, height_, GL_RGBA, GL_FLOAT, px.data());
+  flipRows(px, std::size_t(width_) * 4, height_);
+  return px;
+}
+
+Renderer::Renderer()
+    : modelProgram_(link(shaders::kModelVs, shaders::kModelFs, "model shader")),
+      backgroundProgram_(link(shaders::kBackgroundVs, shaders::kBackgroundFs, "background shader")),
+      probeProgram_(link(shaders::kBackgroundVs, shaders::kProbeFs, "probe view shader")) {
+  GLuint id = 0;
+  glGenVertexArrays(1, &id);
+  emptyVao_.reset(id);
+  glGenVertexArrays(1, &id);
+  meshVao_.reset(id);
+  checkGl("Renderer()");
+}
+
+void Renderer::setMesh(const Mesh& mesh) {
+  glBindVertexArray(meshVao_.get());
+  positions_ = upload(GL_ARRAY_BUFFER, mesh.positions);
+  glEnableVertexAttribArray(0);
+  glVertexAttribPointer(0, 3, GL_FLOAT, GL_FALSE, 0, nullptr);
+  normals_ = upload(GL_ARRAY_BUFFER, mesh.normals);
+  glEnableVertexAttribArray(1);
+  glVertexAttribPointer(1, 3, GL_FLOAT, GL_FALSE, 0, nullptr);
+  hasUv_ = mesh.uvs.size() == mesh.positions.size();
+  if (hasUv_) {
+    uvs_ = upload(GL_ARRAY_BUFFER, mesh.uvs);
+    glEnableVertexAttribArray(2);
+    glVertexAttribPointer(2, 2, GL_FLOAT, GL_FALSE, 0, nullptr);
+  } else {
+    uvs_.reset();
+    glDisableVertexAttribArray(2);
+    glVertexAttrib2f(2, 0.0f, 0.0f);
+  }
+  indices_ = upload(GL_ELEMENT_ARRAY_BUFFER, mesh.indices);
+  indexCount_ = GLsizei(mesh.indices.size());
+  albedo_ = mesh.albedo;
+  glBindVertexArray(0);
+  checkGl("Renderer::setMesh");
+}
+
+void Renderer::setAlbedoTexture(const float* rgb, int width, int height) {
+  albedoTex_ = makeFloatTexture(rgb, width, height, GL_REPEAT);
+}
+
+void Renderer::setLighting(const Sh9& radiance) { sh_ = irradianceMatrices(radiance); }
+
+void Renderer::setBackground(const float* rgb, int width, int height, BackgroundMapping mapping,
+                             float displayScale) {
+  backgroundTex_ = makeFloatTexture(
+      rgb, width, height, mapping == BackgroundMapping::Equirect ? GL_REPEAT : GL_CLAMP_TO_EDGE);
+  backgroundMapping_ = mapping;
+  backgroundScale_ = 1.0f;
+  backgroundDisplayScale_ = displayScale;
+  backgroundSrgb_ = false;
+}
+
+void Renderer::setBackgroundSrgb8(const std::uint8_t* bgr, int width, int height,
+                                  BackgroundMapping mapping, float scale) {
+  // Re-specify only when the size changes; otherwise update the texels in place.
+  if (!backgroundTex_.isValid() || !backgroundSrgb_ || width != backgroundW_ ||
+      height != backgroundH_) {
+    backgroundTex_ =
+        makeTexture(GL_SRGB8, width, height, GL_BGR, GL_UNSIGNED_BYTE, nullptr,
+                    mapping == BackgroundMapping::Equirect ? GL_REPEAT : GL_CLAMP_TO_EDGE);
+    backgroundW_ = width, backgroundH_ = height, backgroundSrgb_ = true;
+  }
+  glBindTexture(GL_TEXTURE_2D, backgroundTex_.get());
+  glPixelStorei(GL_UNPACK_ALIGNMENT, 1);
+  glTexSubImage2D(GL_TEXTURE_2D, 0, 0, 0, width, height, GL_BGR, GL_UNSIGNED_BYTE, bgr);
+  checkGl("Renderer::setBackgroundSrgb8");
+  backgroundMapping_ = mapping;
+  backgroundScale_ = scale;
+}
+
+void Renderer::setEnvOrientation(const glm::mat3& worldFromFile) {
+  fileFromWorld_ = glm::transpose(worldFromFile);
+}
+
+void Renderer::bindPanorama(const Program& p, const ShadingSettings& s) const {
+  glUniformMatrix3fv(loc(p, "uFileFromWorld"), 1, GL_FALSE, glm::value_ptr(fileFromWorld_));
+  glUniform1f(loc(p, "uExposure"), s.exposure);
+  glUniform1i(loc(p, "uToneMap"), int(s.toneMap));
+  glUniform1f(loc(p, "uPanoramaScale"), backgroundScale_);
+  const bool from8bit = backgroundSrgb_ || backgroundDisplayScale_ > 0;
+  glUniform1i(loc(p, "uDisplayReferred"), from8bit && s.displayReferredBackground);
+  glUniform1f(loc(p, "uDisplayDivide"),
+              backgroundSrgb_ ? 1.0f : std::max(backgroundDisplayScale_, 1e-30f));
+  glUniform1i(loc(p, "uMapping"), int(backgroundMapping_));
+  glActiveTexture(GL_TEXTURE0);
+  glBindTexture(GL_TEXTURE_2D, backgroundTex_.get());
+  glUniform1i(loc(p, "uPanorama"), 0);
+}
+
+void Renderer::ensureMultisample(glm::ivec2 size, int samples) {
+  if (msaa_.fbo.isValid() && msaa_.size == size && msaa_.samples == samples) return;
+  msaa_ = Target{};
+  GLuint id = 0;
+  glGenFramebuffers(1, &id);
+  msaa_.fbo.reset(id);
+  glGenRenderbuffers(1, &id);
+  msaa_.colourMs.reset(id);
+  glBindRenderbuffer(GL_RENDERBUFFER, id);
+  glRenderbufferStorageMultisample(GL_RENDERBUFFER, samples, GL_RGBA8, size.x, size.y);
+  glGenRenderbuffers(1, &id);
+  msaa_.depth.reset(id);
+  glBindRenderbuffer(GL_RENDERBUFFER, id);
+  glRenderbufferStorageMultisample(GL_RENDERBUFFER, samples, GL_DEPTH_COMPONENT24, size.x, size.y);
+  glBindFramebuffer(GL_FRAMEBUFFER, msaa_.fbo.get());
+  glFramebufferRenderbuffer(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_RENDERBUFFER,
+                            msaa_.colourMs.get());
+  glFramebufferRenderbuffer(GL_FRAMEBUFFER, GL_DEPTH_ATTACHMENT, GL_RENDERBUFFER,
+                            msaa_.depth.get());
+  if (glCheckFramebufferStatus(GL_FRAMEBUFFER) != GL_FRAMEBUFFER_COMPLETE)
+    throw ContextError("multisample framebuffer (" + std::to_string(samples) +
+                       " samples) is incomplete");
+  msaa_.size = size;
+  msaa_.samples = samples;
+  checkGl("Renderer: multisample target");
+}
+
+void Renderer::draw(glm::ivec2 size, const Camera& camera, const ShadingSettings& s) {
+  GLint target = 0;
+  const bool multisample = s.samples > 1 && s.output == OutputMode::Display;
+  if (multisample) {
+    glGetIntegerv(GL_DRAW_FRAMEBUFFER_BINDING, &target);
+    ensureMultisample(size, s.samples);
+    glBindFramebuffer(GL_FRAMEBUFFER, msaa_.fbo.get());
+  }
+  glViewport(0, 0, size.x, size.y);
+  glClearColor(0.0f, 0.0f, 0.0f, 1.0f);
+  glClear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
+  const glm::mat4 viewProj =
+      camera.projection(float(size.x) / float(std::max(1, size.y))) * camera.view();
+  const glm::mat3 worldFromGl = axes::worldFromGlMatrix();
+
+  if (s.background && backgroundTex_.isValid() && s.output == OutputMode::Display) {
+    glDisable(GL_DEPTH_TEST);
+    glUseProgram(backgroundProgram_.get());
+    glUniformMatrix4fv(loc(backgroundProgram_, "uInvViewProj"), 1, GL_FALSE,
+                       glm::value_ptr(glm::inverse(viewProj)));
+    glUniformMatrix3fv(loc(backgroundProgram_, "uWorldFromGl"), 1, GL_FALSE,
+                       glm::value_ptr(worldFromGl));
+    bindPanorama(backgroundProgram_, s);
+    glBindVertexArray(emptyVao_.get());
+    glDrawArrays(GL_TRIANGLES, 0, 3);
+  }
+  if (indexCount_ > 0) {
+    glEnable(GL_DEPTH_TEST);
+    glDepthFunc(GL_LESS);
+    glUseProgram(modelProgram_.get());
+    glUniformMatrix4fv(loc(modelProgram_, "uViewProj"), 1, GL_FALSE, glm::value_ptr(viewProj));
+    glUniformMatrix4fv(loc(modelProgram_, "uShR"), 1, GL_FALSE, glm::value_ptr(sh_[0]));
+    glUniformMatrix4fv(loc(modelProgram_, "uShG"), 1, GL_FALSE, glm::value_ptr(sh_[1]));
+    glUniformMatrix4fv(loc(modelProgram_, "uShB"), 1, GL_FALSE, glm::value_ptr(sh_[2]));
+    glUniformMatrix3fv(loc(modelProgram_, "uWorldFromGl"), 1, GL_FALSE,
+                       glm::value_ptr(worldFromGl));
+    glUniform3fv(loc(modelProgram_, "uAlbedo"), 1, glm::value_ptr(albedo_));
+    glUniform1i(loc(modelProgram_, "uHasTexture"), albedoTex_.isValid() && hasUv_);
+    glUniform1f(loc(modelProgram_, "uExposure"), s.exposure);
+    glUniform1i(loc(modelProgram_, "uToneMap"), int(s.toneMap));
+    glUniform1i(loc(modelProgram_, "uOutput"), int(s.output));
+    glActiveTexture(GL_TEXTURE1);
+    glBindTexture(GL_TEXTURE_2D, albedoTex_.get());
+    glUniform1i(loc(modelProgram_, "uAlbedoTex"), 1);
+    glBindVertexArray(meshVao_.get());
+    glDrawElements(GL_TRIANGLES, indexCount_, GL_UNSIGNED_INT, nullptr);
+  }
+  glBindVertexArray(0);
+  if (multisample) {
+    glBindFramebuffer(GL_READ_FRAMEBUFFER, msaa_.fbo.get());
+    glBindFramebuffer(GL_DRAW_FRAMEBUFFER, GLuint(target));
+    glBlitFramebuffer(0, 0, size.x, size.y, 0, 0, size.x, size.y, GL_COLOR_BUFFER_BIT, GL_NEAREST);
+    glBindFramebuffer(GL_FRAMEBUFFER, GLuint(target));
+  }
+  checkGl("Renderer::draw");
+}
+
+void Renderer::drawProbeViews(const Camera& camera, const ShadingSettings& s) {
+  GLint target = 0, viewport[4];
+  glGetIntegerv(GL_DRAW_FRAMEBUFFER_BINDING, &target);
+  glGetIntegerv(GL_VIEWPORT, viewport);
+  const glm::ivec2 sizes[3] = {{256, 128}, {128, 128}, {128, 128}};
+  const glm::mat3 worldFromView =
+      axes::worldFromGlMatrix() * glm::transpose(glm::mat3(camera.view()));
+  glDisable(GL_DEPTH_TEST);
+  glUseProgram(probeProgram_.get());
+  bindPanorama(probeProgram_, s);
+  glUniform1i(loc(probeProgram_, "uHavePanorama"), backgroundTex_.isValid());
+  glUniformMatrix3fv(loc(probeProgram_, "uWorldFromView"), 1, GL_FALSE,
+                     glm::value_ptr(worldFromView));
+  glUniformMatrix4fv(loc(probeProgram_, "uShR"), 1, GL_FALSE, glm::value_ptr(sh_[0]));
+  glUniformMatrix4fv(loc(probeProgram_, "uShG"), 1, GL_FALSE, glm::value_ptr(sh_[1]));
+  glUniformMatrix4fv(loc(probeProgram_, "uShB"), 1, GL_FALSE, glm::value_ptr(sh_[2]));
+  glBindVertexArray(emptyVao_.get());
+  for (int v = 0; v < 3; ++v) {
+    Target& t = probes_[std::size_t(v)];
+    if (!t.fbo.isValid()) {
+      GLuint id = 0;
+      glGenFramebuffers(1, &id);
+      t.fbo.reset(id);
+      t.colour = makeTexture(GL_RGBA8, sizes[v].x, sizes[v].y, GL_RGBA, GL_UNSIGNED_BYTE, nullptr,
+                             GL_CLAMP_TO_EDGE);
+      glBindFramebuffer(GL_FRAMEBUFFER, t.fbo.get());
+      glFramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_TEXTURE_2D, t.colour.get(),
+                             0);
+      t.size = sizes[v];
+      glActiveTexture(GL_TEXTURE0);
+      glBindTexture(GL_TEXTURE_2D, backgroundTex_.get());
+    }
+    glBindFramebuffer(GL_FRAMEBUFFER, t.fbo.get());
+    glViewport(0, 0, t.size.x, t.size.y);
+    glClearColor(0, 0, 0, 0);
+    glClear(GL_COLOR_BUFFER_BIT);
+    glUniform1i(loc(probeProgram_, "uMode"), v);
+    glDrawArrays(GL_TRIANGLES, 0, 3);
+  }
+  glBindVertexArray(0);
+  glBindFramebuffer(GL_FRAMEBUFFER, GLuint(target));
+  glViewport(viewport[0], viewport[1], viewport[2], viewport[3]);
+  checkGl("Renderer::drawProbeViews");
+}
+
+unsigned Renderer::probeTexture(ProbeView view) const {
+  return probes_[std::size_t(view)].colour.get();
+}
+glm::ivec2 Renderer::probeSize(ProbeView view) const { return probes_[std::size_t(view)].size; }
+
+void Renderer::finish() { glFinish(); }
+
+std::vector<std::uint8_t> Renderer::readRgb8(glm::ivec2 size) {
+  std::vector<std::uint8_t> px(std::size_t(size.x) * size.y * 3);
+  glPixelStorei(GL_PACK_ALIGNMENT, 1);
+  glReadPixels(0, 0, size.x, size.y, GL_RGB, GL_UNSIGNED_BYTE, px.data());
+  flipRows(px, std::size_t(size.x) * 3, size.y);
+  return px;
+}
+
+}  // namespace lp::gl

@@ -1,0 +1,160 @@
+#include "shaders.h"
+
+namespace lp::gl::shaders {
+
+// Shared by both fragment shaders: exposure, tone map, sRGB encoding.
+#define LP_DISPLAY_GLSL                                                                            \
+  "uniform float uExposure;\n"                                                                     \
+  "uniform int uToneMap; // 0 ACES (Narkowicz fit), 1 Reinhard, 2 linear clamp\n"                  \
+  "vec3 toneMap(vec3 c) {\n"                                                                       \
+  "  c = max(c * uExposure, vec3(0.0));\n"                                                         \
+  "  if (uToneMap == 0) c = clamp((c * (2.51 * c + 0.03)) / (c * (2.43 * c + 0.59) + 0.14), 0.0, " \
+  "1.0);\n"                                                                                        \
+  "  else if (uToneMap == 1) c = c / (1.0 + c);\n"                                                 \
+  "  return clamp(c, 0.0, 1.0);\n"                                                                 \
+  "}\n"                                                                                            \
+  "vec3 srgbEncode(vec3 c) {\n"                                                                    \
+  "  return mix(c * 12.92, 1.055 * pow(c, vec3(1.0 / 2.4)) - 0.055, step(vec3(0.0031308), c));\n"  \
+  "}\n"
+
+const char* const kModelVs = R"(#version 330 core
+layout(location = 0) in vec3 aPos;
+layout(location = 1) in vec3 aNormal;
+layout(location = 2) in vec2 aUv;
+uniform mat4 uViewProj;
+out vec3 vNormal;
+out vec2 vUv;
+void main() {
+  vNormal = aNormal;  // the model matrix is the identity: meshes are fitted on the CPU
+  vUv = aUv;
+  gl_Position = uViewProj * vec4(aPos, 1.0);
+}
+)";
+
+const char* const kModelFs = "#version 330 core\n" LP_DISPLAY_GLSL R"(
+in vec3 vNormal;
+in vec2 vUv;
+out vec4 fragColor;
+uniform mat4 uShR, uShG, uShB;
+uniform mat3 uWorldFromGl;  // liveprobe/sh/axes.h
+uniform vec3 uAlbedo;
+uniform bool uHasTexture;
+uniform sampler2D uAlbedoTex;
+uniform int uOutput;        // 0 display, 1 raw irradiance, 2 world normal
+
+// Irradiance (Ramamoorthi & Hanrahan 2001, eq. 12): E(n) = n4^T M n4, n4 = (n, 1), n in the
+// R&H world frame. Term for term the CPU lp::evalIrradianceQuadratic() in shading/sh/src/sh.cpp.
+vec3 shIrradiance(vec3 n) {
+  vec4 n4 = vec4(n, 1.0);
+  return vec3(dot(n4, uShR * n4), dot(n4, uShG * n4), dot(n4, uShB * n4));
+}
+
+void main() {
+  vec3 n = normalize(uWorldFromGl * normalize(vNormal));
+  vec3 E = shIrradiance(n);
+  if (uOutput != 0) {
+    fragColor = vec4(uOutput == 1 ? E : n, 1.0);
+    return;
+  }
+  vec3 albedo = uAlbedo;
+  if (uHasTexture) albedo *= texture(uAlbedoTex, vUv).rgb;
+  vec3 radiance = albedo * E / 3.14159265;  // Lambertian: B = rho E / pi
+  fragColor = vec4(srgbEncode(toneMap(radiance)), 1.0);
+}
+)";
+
+// A full-screen triangle from gl_VertexID; no vertex buffer.
+const char* const kBackgroundVs = R"(#version 330 core
+out vec2 vNdc;
+void main() {
+  vec2 p = vec2((gl_VertexID << 1) & 2, gl_VertexID & 2) * 2.0 - 1.0;
+  vNdc = p;
+  gl_Position = vec4(p, 1.0, 1.0);
+}
+)";
+
+// The panorama seen in world direction w (R&H frame): the environment's orientation, the
+// layout's mapping and the background look. Shared by the background and the probe views.
+#define LP_PANORAMA_GLSL                                                                         \
+  "uniform sampler2D uPanorama;\n"                                                               \
+  "uniform int uMapping;          // 0 equirect, 1 angular (liveprobe/sh/layout.h)\n"            \
+  "uniform mat3 uFileFromWorld;   // inverse of the environment's orientation\n"                 \
+  "uniform float uPanoramaScale;  // the input exposure of an 8-bit frame, else 1\n"             \
+  "uniform bool uDisplayReferred; // show the texels as the source looks: no exposure, no tone " \
+  "map\n"                                                                                        \
+  "uniform float uDisplayDivide;  // undoes the input exposure of a decoded 8-bit float "        \
+  "panorama\n"                                                                                   \
+  "const float PI = 3.14159265358979;\n"                                                         \
+  "vec2 panoramaUv(vec3 w) {\n"                                                                  \
+  "  w = uFileFromWorld * w;\n"                                                                  \
+  "  if (uMapping == 0) {\n"                                                                     \
+  "    float t = acos(clamp(w.z, -1.0, 1.0));\n"                                                 \
+  "    float p = atan(w.y, w.x);\n"                                                              \
+  "    if (p < 0.0) p += 2.0 * PI;\n"                                                            \
+  "    return vec2(p / (2.0 * PI), t / PI);\n"                                                   \
+  "  }\n"                                                                                        \
+  "  vec3 l = vec3(-w.y, w.z, -w.x);  // worldToAngular\n"                                       \
+  "  float r = acos(clamp(l.z, -1.0, 1.0)) / PI;\n"                                              \
+  "  float p = atan(l.y, l.x);\n"                                                                \
+  "  return vec2(0.5 + 0.5 * r * cos(p), 0.5 - 0.5 * r * sin(p));\n"                             \
+  "}\n"                                                                                          \
+  "vec3 panoramaDisplay(vec3 w) {\n"                                                             \
+  "  vec3 c = textureLod(uPanorama, panoramaUv(w), 0.0).rgb;\n"                                  \
+  "  if (uDisplayReferred) return srgbEncode(clamp(c / uDisplayDivide, 0.0, 1.0));\n"            \
+  "  return srgbEncode(toneMap(c * uPanoramaScale));\n"                                          \
+  "}\n"
+
+const char* const kBackgroundFs = "#version 330 core\n" LP_DISPLAY_GLSL LP_PANORAMA_GLSL R"(
+in vec2 vNdc;
+out vec4 fragColor;
+uniform mat4 uInvViewProj;
+uniform mat3 uWorldFromGl;
+
+void main() {
+  vec4 a = uInvViewProj * vec4(vNdc, -1.0, 1.0), b = uInvViewProj * vec4(vNdc, 1.0, 1.0);
+  vec3 w = normalize(uWorldFromGl * (b.xyz / b.w - a.xyz / a.w));
+  fragColor = vec4(panoramaDisplay(w), 1.0);
+}
+)";
+
+// The probe views of the HUD, each drawn into a small texture by a full-screen triangle:
+// 0: the whole panorama unwrapped as an equirect (the world's, after orientation);
+// 1: a grey (50%) diffuse ball lit by the coefficients; 2: a chrome ball reflecting the
+// environment. The balls are seen orthographically from the camera's direction.
+const char* const kProbeFs = "#version 330 core\n" LP_DISPLAY_GLSL LP_PANORAMA_GLSL R"(
+in vec2 vNdc;
+out vec4 fragColor;
+uniform int uMode;
+uniform mat3 uWorldFromView;   // camera space -> R&H world
+uniform mat4 uShR, uShG, uShB;
+uniform bool uHavePanorama;
+
+vec3 shIrradiance(vec3 n) {
+  vec4 n4 = vec4(n, 1.0);
+  return vec3(dot(n4, uShR * n4), dot(n4, uShG * n4), dot(n4, uShB * n4));
+}
+
+void main() {
+  if (uMode == 0) {
+    float p = (vNdc.x * 0.5 + 0.5) * 2.0 * PI, t = (0.5 - 0.5 * vNdc.y) * PI;
+    vec3 w = vec3(sin(t) * cos(p), sin(t) * sin(p), cos(t));
+    fragColor = vec4(uHavePanorama ? panoramaDisplay(w) : vec3(0.0), 1.0);
+    return;
+  }
+  float r2 = dot(vNdc, vNdc);
+  if (r2 > 1.0) {
+    fragColor = vec4(0.0);
+    return;
+  }
+  vec3 nView = vec3(vNdc, sqrt(1.0 - r2));
+  if (uMode == 1) {
+    vec3 E = shIrradiance(normalize(uWorldFromView * nView));
+    fragColor = vec4(srgbEncode(toneMap(0.5 * E / PI)), 1.0);
+  } else {
+    vec3 r = reflect(vec3(0.0, 0.0, -1.0), nView);
+    fragColor = vec4(uHavePanorama ? panoramaDisplay(normalize(uWorldFromView * r)) : vec3(0.0), 1.0);
+  }
+}
+)";
+
+}  // namespace lp::gl::shaders

@@ -1,0 +1,88 @@
+#pragma once
+// Projection of whole panoramas to radiance coefficients: a non-owning view of a frame in any
+// pixel format and layout, and a Projector that precomputes what one (layout, size) needs.
+#include <cstddef>
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "liveprobe/sh/executor.h"
+#include "liveprobe/sh/layout.h"
+#include "liveprobe/sh/sh.h"
+
+namespace lp {
+
+/// How a panorama's pixels are stored: three channels per pixel, rows top to bottom.
+enum class PanoramaFormat : std::uint8_t {
+  RgbF32,  ///< linear radiance, float
+  RgbF16,  ///< linear radiance, IEEE binary16
+  BgrU8,   ///< 8-bit code values in OpenCV's order, decoded through a 256-entry table
+  RgbU8,   ///< 8-bit code values, decoded through a 256-entry table
+};
+
+/// A panorama in memory, not owned: the data, its pixel format, row stride, size and layout.
+struct PanoramaView {
+  const void* data = nullptr;
+  PanoramaFormat format = PanoramaFormat::RgbF32;
+  int width = 0, height = 0;
+  std::size_t rowStride = 0;  ///< bytes from one row to the next; 0 = packed
+  LayoutSpec layout;
+  /// 8-bit formats: code value -> linear radiance (256 floats, the exposure folded in).
+  const float* decode = nullptr;
+
+  static PanoramaView rgbF32(const float* rgb, int w, int h, LayoutSpec layout = {}) {
+    return {rgb, PanoramaFormat::RgbF32, w, h, 0, layout, nullptr};
+  }
+  static PanoramaView rgbF16(const std::uint16_t* rgb, int w, int h, LayoutSpec layout = {}) {
+    return {rgb, PanoramaFormat::RgbF16, w, h, 0, layout, nullptr};
+  }
+  static PanoramaView bgrU8(const std::uint8_t* bgr, int w, int h, const float* decode,
+                            LayoutSpec layout = {}) {
+    return {bgr, PanoramaFormat::BgrU8, w, h, 0, layout, decode};
+  }
+  std::size_t bytesPerPixel() const;
+  /// rowStride, or the packed row size when it is 0.
+  std::size_t strideBytes() const { return rowStride ? rowStride : bytesPerPixel() * width; }
+};
+
+/// Projects frames of one (layout, size) to radiance coefficients L_lm (liveprobe/sh/sh.h). The
+/// per-pixel directions and solid angles (for equirect, the exact separable row and column
+/// integrals of the basis) are computed once here and reused for every frame.
+///   - equirect: 15 multiply-adds per pixel (five column-weighted sums per channel, combined
+///     with the row integrals once per row); exact for radiance constant over each pixel.
+///   - other layouts: nine precomputed weights Y_lm(dir) dw per pixel, 27 multiply-adds.
+/// Sums run in float over at most a row (or 4096 pixels) and in double beyond, so a 4K frame
+/// keeps ~1e-7 of L00. The kernels are SIMD (liveprobe/sh/simd.h picks the instruction set).
+class Projector {
+ public:
+  /// Throws lp::Error if the frame size does not fit the layout.
+  Projector(const LayoutSpec& spec, int width, int height);
+  ~Projector();
+  Projector(Projector&&) noexcept;
+  Projector& operator=(Projector&&) noexcept;
+
+  const LayoutSpec& spec() const { return spec_; }
+  int width() const { return width_; }
+  int height() const { return height_; }
+  /// The per-pixel samples (directions and solid angles), row-major.
+  const std::vector<SphereSample>& samples() const { return samples_; }
+
+  /// Radiance coefficients of `frame`, which must have this projector's size and layout (throws
+  /// lp::Error otherwise, and for an 8-bit view without its decode table). With an executor the
+  /// frame is split across its threads.
+  Sh9 project(const PanoramaView& frame, Executor* executor = nullptr) const;
+
+ private:
+  struct Tables;
+  LayoutSpec spec_;
+  int width_, height_;
+  std::vector<SphereSample> samples_;
+  std::unique_ptr<const Tables> tables_;
+};
+
+/// One-off projection: Projector(frame.layout, frame.width, frame.height).project(frame).
+Sh9 project(const PanoramaView& frame, Executor* executor = nullptr);
+
+}  // namespace lp

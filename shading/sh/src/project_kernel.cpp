@@ -1,0 +1,277 @@
+// Projection kernels, written once with Highway and compiled for each SIMD path (foreach_target
+// re-includes this file once per target, each time inside hwy::HWY_NAMESPACE). The paths are
+// picked by our own table below rather than HWY_DYNAMIC_DISPATCH, so LIVEPROBE_SIMD can force one
+// and the core needs Highway's headers only, not its library.
+
+// Scalar (EMU128), AVX2, AVX-512 and NEON. SVE is left out: its vectors are sizeless and cannot
+// sit in the accumulator arrays below, and no machine here runs it. AVX3_DL adds nothing we use.
+#ifndef HWY_DISABLED_TARGETS
+#define HWY_DISABLED_TARGETS \
+  (HWY_SSSE3 | HWY_SSE4 | HWY_AVX3_DL | HWY_SVE | HWY_SVE2 | HWY_SVE_256 | HWY_SVE2_128)
+#endif
+#define HWY_COMPILE_ALL_ATTAINABLE  // keep the scalar path beside the best one
+
+#undef HWY_TARGET_INCLUDE
+#define HWY_TARGET_INCLUDE "project_kernel.cpp"
+#include <hwy/foreach_target.h>  // IWYU pragma: keep
+//
+#include <hwy/highway.h>
+
+#include <algorithm>
+#include <cstring>
+
+#include "project_kernel.h"
+
+HWY_BEFORE_NAMESPACE();
+namespace lp::kernel {
+namespace HWY_NAMESPACE {
+namespace hn = hwy::HWY_NAMESPACE;
+
+using DF = hn::ScalableTag<float>;
+using VF = hn::Vec<DF>;
+
+// acc lanes of coefficient k, channel c.
+inline float* laneOf(LaneSums& acc, int k, int c) { return acc.v + (3 * k + c) * kMaxLanes; }
+
+void EquirectRow(const EquirectTables& t, const float* HWY_RESTRICT row, bool bgr, int i,
+                 LaneSums& acc) {
+  const DF d;
+  const int n = int(hn::Lanes(d));
+  const float* HWY_RESTRICT c0 = t.col[0].data();
+  const float* HWY_RESTRICT c1 = t.col[1].data();
+  const float* HWY_RESTRICT c2 = t.col[2].data();
+  const float* HWY_RESTRICT c3 = t.col[3].data();
+  const float* HWY_RESTRICT c4 = t.col[4].data();
+  // s[k][c]: column sum k of channel c (in the row's channel order).
+  VF s00 = hn::Zero(d), s01 = s00, s02 = s00, s10 = s00, s11 = s00, s12 = s00, s20 = s00, s21 = s00,
+     s22 = s00, s30 = s00, s31 = s00, s32 = s00, s40 = s00, s41 = s00, s42 = s00;
+  auto step = [&](const float* px, int j) HWY_ATTR {
+    VF x, y, z;
+    hn::LoadInterleaved3(d, px, x, y, z);
+    const VF w0 = hn::LoadU(d, c0 + j), w1 = hn::LoadU(d, c1 + j), w2 = hn::LoadU(d, c2 + j),
+             w3 = hn::LoadU(d, c3 + j), w4 = hn::LoadU(d, c4 + j);
+    s00 = hn::MulAdd(w0, x, s00), s01 = hn::MulAdd(w0, y, s01), s02 = hn::MulAdd(w0, z, s02);
+    s10 = hn::MulAdd(w1, x, s10), s11 = hn::MulAdd(w1, y, s11), s12 = hn::MulAdd(w1, z, s12);
+    s20 = hn::MulAdd(w2, x, s20), s21 = hn::MulAdd(w2, y, s21), s22 = hn::MulAdd(w2, z, s22);
+    s30 = hn::MulAdd(w3, x, s30), s31 = hn::MulAdd(w3, y, s31), s32 = hn::MulAdd(w3, z, s32);
+    s40 = hn::MulAdd(w4, x, s40), s41 = hn::MulAdd(w4, y, s41), s42 = hn::MulAdd(w4, z, s42);
+  };
+  const int w = t.width;
+  int j = 0;
+  for (; j + n <= w; j += n) step(row + 3 * j, j);
+  if (j < w) {  // the last pixels, zero-padded (the column tables are zero past the width)
+    alignas(64) float tail[3 * kMaxLanes] = {};
+    std::memcpy(tail, row + 3 * j, sizeof(float) * 3 * std::size_t(w - j));
+    step(tail, j);
+  }
+  // acc[k][c] += rowFactor(k) * s[col(k)][c], written out with constant indices so the sums stay
+  // in registers.
+  const auto add = [&](int k, float f, VF r, VF g, VF b) HWY_ATTR {
+    const VF fv = hn::Set(d, f);
+    if (bgr) std::swap(r, b);
+    float* a = laneOf(acc, k, 0);
+    hn::Store(hn::MulAdd(fv, r, hn::Load(d, a)), d, a);
+    hn::Store(hn::MulAdd(fv, g, hn::Load(d, a + kMaxLanes)), d, a + kMaxLanes);
+    hn::Store(hn::MulAdd(fv, b, hn::Load(d, a + 2 * kMaxLanes)), d, a + 2 * kMaxLanes);
+  };
+  const auto& R = t.row;
+  add(0, R[0][i], s00, s01, s02);  // L00  = k0 R1 S1
+  add(1, R[2][i], s20, s21, s22);  // L1-1 = k1 Rs Ssin
+  add(2, R[1][i], s00, s01, s02);  // L10  = k1 Rc S1
+  add(3, R[2][i], s10, s11, s12);  // L11  = k1 Rs Scos
+  add(4, R[4][i], s40, s41, s42);  // L2-2 = k4 Rs2 Ssin2
+  add(5, R[3][i], s20, s21, s22);  // L2-1 = k2 Rsc Ssin
+  add(6, R[5][i], s00, s01, s02);  // L20  = k3 R3 S1
+  add(7, R[3][i], s10, s11, s12);  // L21  = k2 Rsc Scos
+  add(8, R[4][i], s30, s31, s32);  // L22  = k4 Rs2 Scos2
+}
+
+// Nine weights times three channels is 27 accumulators, more than 16 registers hold (32 on
+// AVX-512): each run of pixels is swept once per group of coefficients [K0, K1), and the later
+// sweeps read the run from L1.
+template <int K0, int K1>
+void WeightedSweep(const float* HWY_RESTRICT rgb, std::size_t b0, std::size_t b1,
+                   const float* HWY_RESTRICT blocked, double* out) {
+  constexpr int kN = K1 - K0;
+  const DF d;
+  const std::size_t n = hn::Lanes(d);
+  VF acc[kN][3];
+  for (auto& a : acc)
+    for (auto& v : a) v = hn::Zero(d);
+  auto step = [&](const float* px, const float* w) HWY_ATTR {
+    VF x, y, z;
+    hn::LoadInterleaved3(d, px, x, y, z);
+    for (int k = 0; k < kN; ++k) {
+      const VF wk = hn::LoadU(d, w + 16 * k);
+      acc[k][0] = hn::MulAdd(wk, x, acc[k][0]);
+      acc[k][1] = hn::MulAdd(wk, y, acc[k][1]);
+      acc[k][2] = hn::MulAdd(wk, z, acc[k][2]);
+    }
+  };
+  std::size_t i = b0;  // b0 is a multiple of 16
+  for (; i + 16 <= b1; i += 16) {
+    const float* w = blocked + (i / 16) * 9 * 16 + K0 * 16;
+    for (std::size_t l = 0; l < 16; l += n) step(rgb + 3 * (i + l), w + l);
+  }
+  if (i < b1) {  // the last pixels, zero-padded (as are the weights)
+    alignas(64) float tail[3 * 16] = {};
+    std::memcpy(tail, rgb + 3 * i, sizeof(float) * 3 * (b1 - i));
+    const float* w = blocked + (i / 16) * 9 * 16 + K0 * 16;
+    for (std::size_t l = 0; l < 16; l += n) step(tail + 3 * l, w + l);
+  }
+  for (int k = 0; k < kN; ++k)
+    for (int c = 0; c < 3; ++c)
+      out[3 * (K0 + k) + c] += double(hn::GetLane(hn::SumOfLanes(d, acc[k][c])));
+}
+
+void WeightedSums(const float* rgb, std::size_t n, const float* blocked, double* out) {
+  constexpr std::size_t kRun = 1024;  // 12 KB of pixels: stays in L1 for the later sweeps
+  for (std::size_t b0 = 0; b0 < n; b0 += kRun) {
+    const std::size_t b1 = std::min(n, b0 + kRun);
+#if HWY_TARGET == HWY_AVX3
+    WeightedSweep<0, 5>(rgb, b0, b1, blocked, out);
+    WeightedSweep<5, 9>(rgb, b0, b1, blocked, out);
+#else
+    WeightedSweep<0, 3>(rgb, b0, b1, blocked, out);
+    WeightedSweep<3, 6>(rgb, b0, b1, blocked, out);
+    WeightedSweep<6, 9>(rgb, b0, b1, blocked, out);
+#endif
+  }
+}
+
+void DecodeU8(const std::uint8_t* HWY_RESTRICT src, const float* HWY_RESTRICT lut,
+              float* HWY_RESTRICT dst, std::size_t n) {
+  for (std::size_t i = 0; i < n; ++i) dst[i] = lut[src[i]];
+}
+
+void DecodeF16(const std::uint16_t* HWY_RESTRICT src, float* HWY_RESTRICT dst, std::size_t n) {
+  const DF d;
+  const hn::Rebind<hwy::float16_t, DF> dh;
+  const std::size_t lanes = hn::Lanes(d);
+  const auto* h = reinterpret_cast<const hwy::float16_t*>(src);
+  std::size_t i = 0;
+  for (; i + lanes <= n; i += lanes) hn::StoreU(hn::PromoteTo(d, hn::LoadU(dh, h + i)), d, dst + i);
+  if (i < n) {
+    alignas(64) hwy::float16_t in[kMaxLanes] = {};
+    alignas(64) float outTail[kMaxLanes];
+    std::memcpy(in, h + i, 2 * (n - i));
+    hn::Store(hn::PromoteTo(d, hn::Load(dh, in)), d, outTail);
+    std::memcpy(dst + i, outTail, 4 * (n - i));
+  }
+}
+
+// NOLINTNEXTLINE(cert-err58-cpp): a constant table, no allocation
+const Kernels kKernels = {&EquirectRow, &WeightedSums, &DecodeU8, &DecodeF16};
+
+}  // namespace HWY_NAMESPACE
+}  // namespace lp::kernel
+HWY_AFTER_NAMESPACE();
+
+#if HWY_ONCE
+#include <atomic>
+#include <cstdlib>
+#include <mutex>
+#include <string>
+
+#include "liveprobe/sh/error.h"
+#include "liveprobe/sh/simd.h"
+
+namespace lp::kernel {
+namespace {
+
+struct Path {
+  const char* name;
+  std::int64_t target;
+  const Kernels* kernels;
+};
+
+// Compiled paths, worst first.
+std::vector<Path> compiledPaths() {
+  std::vector<Path> p;
+#if HWY_TARGETS & HWY_EMU128
+  p.push_back({"scalar", HWY_EMU128, &N_EMU128::kKernels});
+#elif HWY_TARGETS & HWY_SCALAR
+  p.push_back({"scalar", HWY_SCALAR, &N_SCALAR::kKernels});
+#endif
+#if HWY_TARGETS & HWY_NEON
+  p.push_back({"neon", HWY_NEON, &N_NEON::kKernels});
+#endif
+#if HWY_TARGETS & HWY_AVX2
+  p.push_back({"avx2", HWY_AVX2, &N_AVX2::kKernels});
+#endif
+#if HWY_TARGETS & HWY_AVX3
+  p.push_back({"avx512", HWY_AVX3, &N_AVX3::kKernels});
+#endif
+  return p;
+}
+
+// What Highway's targets require of the CPU (hwy/targets.cc), asked of the compiler's runtime.
+bool cpuRuns(std::int64_t target) {
+#if HWY_ARCH_X86
+  if (target == HWY_AVX2)
+    return __builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma") &&
+           __builtin_cpu_supports("bmi2") && __builtin_cpu_supports("f16c");
+  if (target == HWY_AVX3)
+    return __builtin_cpu_supports("avx512f") && __builtin_cpu_supports("avx512vl") &&
+           __builtin_cpu_supports("avx512dq") && __builtin_cpu_supports("avx512bw") &&
+           __builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma");
+#endif
+  (void)target;
+  return true;  // scalar everywhere; NEON is the aarch64 baseline
+}
+
+std::vector<Path> runnablePaths() {
+  std::vector<Path> out;
+  for (const Path& p : compiledPaths())
+    if (cpuRuns(p.target)) out.push_back(p);
+  return out;
+}
+
+const Path& pick(std::string_view name) {
+  static const std::vector<Path> paths = runnablePaths();
+  if (name.empty() || name == "native") return paths.back();
+  for (const Path& p : paths)
+    if (name == p.name) return p;
+  std::string have;
+  for (const Path& p : paths) have += std::string(have.empty() ? "" : ", ") + p.name;
+  bool known = name == "scalar" || name == "avx2" || name == "avx512" || name == "neon";
+  throw Error("LIVEPROBE_SIMD=" + std::string(name) +
+              (known ? ": this CPU or build cannot run it (it has " + have + ")"
+                     : ": unknown path (expected scalar, avx2, avx512, neon or native)"));
+}
+
+std::atomic<const Path*> gActive{nullptr};
+std::once_flag gFromEnv;
+
+const Path& activePath() {
+  std::call_once(gFromEnv, [] {
+    const char* env = std::getenv("LIVEPROBE_SIMD");
+    const Path* none = nullptr;
+    gActive.compare_exchange_strong(none, &pick(env ? env : ""));
+  });
+  return *gActive.load();
+}
+
+}  // namespace
+
+const Kernels& active() { return *activePath().kernels; }
+
+}  // namespace lp::kernel
+
+namespace lp::simd {
+
+std::vector<std::string> available() {
+  std::vector<std::string> out;
+  for (const auto& p : kernel::runnablePaths()) out.emplace_back(p.name);
+  return out;
+}
+
+std::string current() { return kernel::activePath().name; }
+
+void select(std::string_view path) {
+  kernel::activePath();  // an invalid LIVEPROBE_SIMD still reports itself first
+  kernel::gActive.store(&kernel::pick(path));
+}
+
+}  // namespace lp::simd
+#endif  // HWY_ONCE

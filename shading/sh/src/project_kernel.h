@@ -1,0 +1,52 @@
+#pragma once
+// The projection kernels (private to liveprobe::sh). One Highway source compiled for every SIMD
+// path of liveprobe/sh/simd.h; active() is the path in use. Sums run in float over at most one
+// row (or 1024 pixels) and in double beyond, so a 4K frame stays within ~1e-7 of L00 of a
+// float64 sum.
+#include <array>
+#include <cstddef>
+#include <cstdint>
+#include <vector>
+
+namespace lp::kernel {
+
+/// The widest vector of any path, in floats (AVX-512).
+inline constexpr int kMaxLanes = 16;
+
+/// Per-column integrals of 1, cos p, sin p, cos 2p, sin 2p, zero-padded to a multiple of 16, and
+/// per-row integrals of the six t-factors with the basis constants folded in (projector.cpp
+/// derives them).
+struct EquirectTables {
+  int width = 0, height = 0;
+  std::array<std::vector<float>, 5> col;
+  std::array<std::vector<float>, 6> row;
+};
+
+/// Coefficient k of an equirect takes row factor kRowOf[k] times column sum kColOf[k].
+inline constexpr int kRowOf[9] = {0, 2, 1, 2, 4, 3, 5, 3, 4};
+inline constexpr int kColOf[9] = {0, 2, 0, 1, 4, 2, 0, 1, 3};
+
+/// Float lanes of the 27 sums (coefficient-major, then R, G, B), kMaxLanes each; a path uses as
+/// many lanes as its vectors have and leaves the rest zero.
+struct alignas(64) LaneSums {
+  float v[27 * kMaxLanes];
+};
+
+struct Kernels {
+  /// acc += row factors of row i times the 15 column-weighted sums of `row` (3 * width floats in
+  /// RGB order, or BGR with `bgr`).
+  void (*equirectRow)(const EquirectTables& t, const float* row, bool bgr, int i, LaneSums& acc);
+  /// out[3k + c] += sum over n pixels of rgb[3i + c] * w_k[i]. `blocked` holds the weights in
+  /// blocks of 16 pixels: w_k of pixel 16 b + l at blocked[(9 b + k) * 16 + l], zero-padded to a
+  /// whole block (one sequential stream, which the prefetchers follow).
+  void (*weightedSums)(const float* rgb, std::size_t n, const float* blocked, double* out);
+  /// dst[i] = lut[src[i]] (a 256-entry table).
+  void (*decodeU8)(const std::uint8_t* src, const float* lut, float* dst, std::size_t n);
+  /// IEEE binary16 to float.
+  void (*decodeF16)(const std::uint16_t* src, float* dst, std::size_t n);
+};
+
+/// The kernels of the path in use (liveprobe/sh/simd.h).
+const Kernels& active();
+
+}  // namespace lp::kernel

@@ -1,0 +1,243 @@
+#include "liveprobe/sh/projector.h"
+
+#include <algorithm>
+#include <cmath>
+#include <optional>
+
+#include "liveprobe/sh/error.h"
+#include "project_kernel.h"
+
+namespace lp {
+
+namespace {
+
+// Exact pixel integrals for the equirect layout. With u = cos t, each basis function is
+// Y = K g(t) f(p), and the integral over a pixel is K (int g(t) sin t dt)(int f(p) dp):
+//   g: 1, cos t, sin t, sin t cos t, sin^2 t, 3 cos^2 t - 1
+//   int_{t0}^{t1} g sin t dt = int_{u1}^{u0} g du:
+//     1 -> u0 - u1;  cos -> (u0^2 - u1^2)/2;  3u^2-1 -> (u0^3 - u0) - (u1^3 - u1);
+//     sin^2 -> (u0 - u0^3/3) - (u1 - u1^3/3);  sin -> [t/2 - sin 2t/4]_{t0}^{t1};
+//     sin cos -> [sin^3 t / 3]_{t0}^{t1}
+//   f: 1, cos p, sin p, cos 2p, sin 2p with the obvious antiderivatives.
+// Basis in these factors: Y00 = k0; Y1-1 = k1 sin t sin p; Y10 = k1 cos t; Y11 = k1 sin t cos p;
+// Y2-2 = (k2/2) sin^2 t sin 2p; Y2-1 = k2 sin t cos t sin p; Y20 = k3 (3cos^2 t - 1);
+// Y21 = k2 sin t cos t cos p; Y22 = k4 sin^2 t cos 2p.
+kernel::EquirectTables equirectTables(int width, int height) {
+  const double pi = kPi;
+  constexpr double k0 = kY00, k1 = kY1, k2 = kY2, k3 = kY20, k4 = kY22;
+  kernel::EquirectTables tables;
+  auto* t = &tables;
+  t->width = width;
+  t->height = height;
+  const std::size_t padded = (std::size_t(width) + 15) / 16 * 16;
+  for (auto& c : t->col) c.assign(padded, 0.0f);
+  for (int j = 0; j < width; ++j) {
+    const double p0 = 2 * pi * j / width, p1 = 2 * pi * (j + 1) / width;
+    t->col[0][j] = float(p1 - p0);
+    t->col[1][j] = float(std::sin(p1) - std::sin(p0));
+    t->col[2][j] = float(std::cos(p0) - std::cos(p1));
+    t->col[3][j] = float((std::sin(2 * p1) - std::sin(2 * p0)) / 2);
+    t->col[4][j] = float((std::cos(2 * p0) - std::cos(2 * p1)) / 2);
+  }
+  // Row factors with the basis constants folded in (slots as kernel::kRowOf uses them).
+  for (auto& r : t->row) r.resize(std::size_t(height));
+  for (int i = 0; i < height; ++i) {
+    const double t0 = pi * i / height, t1 = pi * (i + 1) / height;
+    const double u0 = std::cos(t0), u1 = std::cos(t1);
+    const double one = u0 - u1;
+    const double cosT = (u0 * u0 - u1 * u1) / 2;
+    const double sinT = (t1 / 2 - std::sin(2 * t1) / 4) - (t0 / 2 - std::sin(2 * t0) / 4);
+    const double sinCos = (std::pow(std::sin(t1), 3) - std::pow(std::sin(t0), 3)) / 3;
+    const double sin2 = (u0 - u0 * u0 * u0 / 3) - (u1 - u1 * u1 * u1 / 3);
+    const double threeCos2 = (u0 * u0 * u0 - u0) - (u1 * u1 * u1 - u1);
+    // Each coefficient k uses one row factor; the kernel multiplies it by one column sum:
+    // L00 = k0 R1 S1; L1-1 = k1 Rs Ssin; L10 = k1 Rc S1; L11 = k1 Rs Scos; L2-2 = k2/2 Rs2 Ssin2;
+    // L2-1 = k2 Rsc Ssin; L20 = k3 R3 S1; L21 = k2 Rsc Scos; L22 = k4 Rs2 Scos2.
+    // Row factor slots (kernel::kRowOf): 0 k0*one, 1 k1*cosT, 2 k1*sinT, 3 k2*sinCos,
+    // 4 sin2 (times k2/2 for L2-2 or k4 for L22: equal, since k2/2 = k4), 5 k3*threeCos2.
+    t->row[0][i] = float(k0 * one);
+    t->row[1][i] = float(k1 * cosT);
+    t->row[2][i] = float(k1 * sinT);
+    t->row[3][i] = float(k2 * sinCos);
+    t->row[4][i] = float(k4 * sin2);
+    t->row[5][i] = float(k3 * threeCos2);
+  }
+  return tables;
+}
+
+/// Sample layouts: nine weights Y_lm(dir) dw per pixel, in blocks of 16 (kernel::Kernels).
+std::vector<float> blockedWeights(const std::vector<SphereSample>& samples) {
+  const std::size_t count = samples.size();
+  std::vector<float> w((count + 15) / 16 * 16 * kShCount, 0.0f);
+  for (std::size_t i = 0; i < count; ++i) {
+    if (samples[i].solidAngle == 0.0f) continue;
+    const auto y = shBasis(samples[i].dir);
+    for (int k = 0; k < kShCount; ++k)
+      w[((i / 16) * kShCount + k) * 16 + i % 16] = y[k] * samples[i].solidAngle;
+  }
+  return w;
+}
+
+using Sums = std::array<double, 27>;
+
+Sh9 toSh9(const Sums& s, bool bgr) {
+  Sh9 out;
+  for (int k = 0; k < kShCount; ++k)
+    out.c[k] = bgr ? Rgb(float(s[3 * k + 2]), float(s[3 * k + 1]), float(s[3 * k]))
+                   : Rgb(float(s[3 * k]), float(s[3 * k + 1]), float(s[3 * k + 2]));
+  return out;
+}
+
+void addSums(Sums& into, const Sums& part) {
+  for (int q = 0; q < 27; ++q) into[q] += part[q];
+}
+
+/// Rows of any format as linear RGB (or BGR) floats: a pointer into the frame for f32, a
+/// per-task buffer for the others.
+class RowReader {
+ public:
+  RowReader(const PanoramaView& v, const kernel::Kernels& k) : v_(v), k_(k) {}
+  /// `count` pixels starting at pixel `first` of row `row`.
+  const float* read(int row, std::size_t first, std::size_t count) {
+    const auto* base =
+        static_cast<const std::uint8_t*>(v_.data) + std::size_t(row) * v_.strideBytes();
+    const std::size_t n = 3 * count;
+    switch (v_.format) {
+      case PanoramaFormat::RgbF32:
+        return reinterpret_cast<const float*>(base) + 3 * first;
+      case PanoramaFormat::RgbF16:
+        buf_.resize(n);
+        k_.decodeF16(reinterpret_cast<const std::uint16_t*>(base) + 3 * first, buf_.data(), n);
+        return buf_.data();
+      case PanoramaFormat::BgrU8:
+      case PanoramaFormat::RgbU8:
+        buf_.resize(n);
+        k_.decodeU8(base + 3 * first, v_.decode, buf_.data(), n);
+        return buf_.data();
+    }
+    return nullptr;
+  }
+
+ private:
+  const PanoramaView& v_;
+  const kernel::Kernels& k_;
+  std::vector<float> buf_;
+};
+
+bool packed(const PanoramaView& v) { return v.strideBytes() == v.bytesPerPixel() * v.width; }
+
+}  // namespace
+
+std::size_t PanoramaView::bytesPerPixel() const {
+  switch (format) {
+    case PanoramaFormat::RgbF32:
+      return 12;
+    case PanoramaFormat::RgbF16:
+      return 6;
+    case PanoramaFormat::BgrU8:
+    case PanoramaFormat::RgbU8:
+      return 3;
+  }
+  return 0;
+}
+
+struct Projector::Tables {
+  std::optional<kernel::EquirectTables> equirect;
+  std::vector<float> weights;  ///< sample layouts
+};
+
+Projector::Projector(const LayoutSpec& spec, int width, int height)
+    : spec_(spec), width_(width), height_(height), samples_(layoutSamples(spec, width, height)) {
+  auto t = std::make_unique<Tables>();
+  if (spec.layout == Layout::Equirect)
+    t->equirect = equirectTables(width, height);
+  else
+    t->weights = blockedWeights(samples_);
+  tables_ = std::move(t);
+}
+
+Projector::~Projector() = default;
+Projector::Projector(Projector&&) noexcept = default;
+Projector& Projector::operator=(Projector&&) noexcept = default;
+
+Sh9 Projector::project(const PanoramaView& v, Executor* ex) const {
+  if (v.width != width_ || v.height != height_ || v.layout.layout != spec_.layout)
+    throw Error("projection: a " + std::to_string(v.width) + "x" + std::to_string(v.height) + " " +
+                std::string(layoutName(v.layout.layout)) + " frame given to a projector for " +
+                std::to_string(width_) + "x" + std::to_string(height_) + " " +
+                std::string(layoutName(spec_.layout)));
+  const bool u8 = v.format == PanoramaFormat::BgrU8 || v.format == PanoramaFormat::RgbU8;
+  if (u8 && !v.decode) throw Error("projection: an 8-bit frame needs its decode table");
+  if (!v.data) throw Error("projection: the frame has no pixels");
+  const bool bgr = v.format == PanoramaFormat::BgrU8;
+  const kernel::Kernels& k = kernel::active();
+  const std::size_t w = std::size_t(width_);
+
+  if (tables_->equirect) {  // bands of whole rows, at least 32 rows each
+    const auto& t = *tables_->equirect;
+    return toSh9(parallelReduce(
+                     ex, std::size_t(height_), Split{32}, Sums{},
+                     [&](std::size_t r0, std::size_t r1) {
+                       constexpr int kFlushRows = 64;  // float lanes hold this many rows at most
+                       RowReader rows(v, k);
+                       kernel::LaneSums lanes{};
+                       Sums sums{};
+                       auto flush = [&] {
+                         for (int q = 0; q < 27; ++q) {
+                           double s = 0;
+                           for (int l = 0; l < kernel::kMaxLanes; ++l)
+                             s += lanes.v[q * kernel::kMaxLanes + l];
+                           sums[q] += s;
+                         }
+                         lanes = {};
+                       };
+                       for (std::size_t i = r0; i < r1; ++i) {
+                         k.equirectRow(t, rows.read(int(i), 0, w), bgr, int(i), lanes);
+                         if ((i - r0 + 1) % kFlushRows == 0) flush();
+                       }
+                       flush();
+                       return sums;
+                     },
+                     addSums),
+                 false);
+  }
+  // Sample layouts: runs of pixels (multiples of 16, the weights' block); rows are contiguous
+  // when the frame is packed, so a run may span rows.
+  const std::size_t count = samples_.size();
+  const float* weights = tables_->weights.data();
+  return toSh9(parallelReduce(
+                   ex, count, Split{16384}, Sums{},
+                   [&](std::size_t i0, std::size_t i1) {
+                     RowReader rows(v, k);
+                     Sums sums{};
+                     if (packed(v)) {  // the run as one piece: the frame is one array
+                       k.weightedSums(rows.read(0, i0, i1 - i0), i1 - i0, weights + i0 * kShCount,
+                                      sums.data());
+                       return sums;
+                     }
+                     for (std::size_t i = i0; i < i1;) {  // strided rows: row by row
+                       const std::size_t row = i / w, first = i % w,
+                                         n = std::min(w - first, i1 - i);
+                       if (i % 16 == 0) {
+                         k.weightedSums(rows.read(int(row), first, n), n, weights + i * kShCount,
+                                        sums.data());
+                       } else {  // a row start inside a block: per sample, from the directions
+                         const Sh9 part = projectSamples(rows.read(int(row), first, n), 3,
+                                                         samples_.data() + i, n);
+                         for (int c = 0; c < kShCount; ++c)
+                           for (int ch = 0; ch < 3; ++ch)
+                             sums[3 * c + ch] += bgr ? part.c[c][2 - ch] : part.c[c][ch];
+                       }
+                       i += n;
+                     }
+                     return sums;
+                   },
+                   addSums),
+               bgr);
+}
+
+Sh9 project(const PanoramaView& frame, Executor* executor) {
+  return Projector(frame.layout, frame.width, frame.height).project(frame, executor);
+}
+
+}  // namespace lp

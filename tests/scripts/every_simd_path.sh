@@ -1,0 +1,18 @@
+#!/bin/bash
+# Runs the SH core's accuracy tests once per SIMD path this CPU runs, each forced with
+# LIVEPROBE_SIMD (liveprobe --version lists the paths). Usage: every_simd_path.sh TESTS LIVEPROBE
+set -euo pipefail
+tests=$1 liveprobe=$2
+# The suites whose numbers come from the projection kernels (each compares with an analytic
+# case, a float64 sum, the brute-force integral or R&H's published table).
+filter='ShCore.*:Layout.*:EveryLayout.*:CubeFaces.*:Published.*:Accuracy.*:ShRotation.*:Handoff.*:Simd.*'
+paths=$("$liveprobe" --version | sed -n 's/^simd: .*(this CPU runs: \(.*\))$/\1/p')
+if [ -z "$paths" ]; then
+  echo "every_simd_path: '$liveprobe --version' lists no SIMD paths" >&2
+  exit 1
+fi
+for p in $paths; do
+  echo "== LIVEPROBE_SIMD=$p"
+  LIVEPROBE_SIMD=$p "$tests" --gtest_filter="$filter" --gtest_brief=1
+done
+echo "every_simd_path: accuracy tests passed on: $paths"
