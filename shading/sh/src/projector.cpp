@@ -143,7 +143,8 @@ std::size_t PanoramaView::bytesPerPixel() const {
 
 struct Projector::Tables {
   std::optional<kernel::EquirectTables> equirect;
-  std::vector<float> weights;  ///< sample layouts
+  std::vector<float> weights;   ///< sample layouts
+  std::vector<char> blockUsed;  ///< per block of 16 pixels: any weight non-zero (in the image)
 };
 
 Projector::Projector(const LayoutSpec& spec, int width, int height)
@@ -153,6 +154,9 @@ Projector::Projector(const LayoutSpec& spec, int width, int height)
     t->equirect = equirectTables(width, height);
   else
     t->weights = blockedWeights(samples_);
+  t->blockUsed.assign((samples_.size() + 15) / 16, 0);
+  for (std::size_t i = 0; i < samples_.size(); ++i)
+    if (samples_[i].solidAngle != 0.0f) t->blockUsed[i / 16] = 1;
   tables_ = std::move(t);
 }
 
@@ -210,9 +214,23 @@ Sh9 Projector::project(const PanoramaView& v, Executor* ex) const {
                    [&](std::size_t i0, std::size_t i1) {
                      RowReader rows(v, k);
                      Sums sums{};
-                     if (packed(v)) {  // the run as one piece: the frame is one array
-                       k.weightedSums(rows.read(0, i0, i1 - i0), i1 - i0, weights + i0 * kShCount,
-                                      sums.data());
+                     if (packed(v)) {
+                       // The frame is one array: each run of blocks that hold any of the
+                       // layout's pixels in one call. Blocks wholly outside the layout's disc or
+                       // circles (a fifth of an angular map) are skipped.
+                       const auto& used = tables_->blockUsed;
+                       for (std::size_t b = i0 / 16, e = (i1 + 15) / 16; b < e;) {
+                         if (!used[b]) {
+                           ++b;
+                           continue;
+                         }
+                         std::size_t b1 = b;
+                         while (b1 < e && used[b1]) ++b1;
+                         const std::size_t p0 = b * 16, p1 = std::min(i1, b1 * 16);
+                         k.weightedSums(rows.read(0, p0, p1 - p0), p1 - p0, weights + p0 * kShCount,
+                                        sums.data());
+                         b = b1;
+                       }
                        return sums;
                      }
                      for (std::size_t i = i0; i < i1;) {  // strided rows: row by row
