@@ -12,9 +12,9 @@
 #include <sstream>
 #include <thread>
 
-#include "atomic_file.h"
 #include "coeffs_io.h"
 #include "commands.h"
+#include "liveprobe/capture/atomic_file.h"
 #include "liveprobe/capture/frame.h"
 #include "liveprobe/capture/photometry.h"
 #include "liveprobe/capture/pipeline.h"
@@ -81,19 +81,17 @@ constexpr int kWarmup =
 /// Written to a temporary file and renamed; lp::Error when gnuplot is missing or fails.
 void drawPlot(const std::string& path, const std::vector<std::array<double, kStageCount>>& frames,
               int framesPerRun, const std::string& title) {
-  const fs::path out(path);
-  const fs::path dir = out.has_parent_path() ? out.parent_path() : fs::path(".");
-  const std::string stem =
-      (dir / ("." + out.filename().string() + "." + std::to_string(::getpid()))).string();
-  const std::string data = stem + ".dat", hist = stem + ".hist", script = stem + ".gp",
-                    png = stem + ".tmp.png";
-  struct Cleanup {
+  AtomicOutput plot(path);  // gnuplot writes the PNG under its temporary name
+  const std::string& png = plot.temporary();
+  const std::string stem = png.substr(0, png.size() - fs::path(png).extension().string().size());
+  const std::string data = stem + ".dat", hist = stem + ".hist", script = stem + ".gp";
+  struct Cleanup {  // gnuplot's inputs
     std::vector<std::string> files;
     ~Cleanup() {
       std::error_code ec;
       for (const auto& f : files) fs::remove(f, ec);
     }
-  } cleanup{{data, hist, script, png}};
+  } cleanup{{data, hist, script}};
 
   std::vector<double> total;
   {
@@ -169,9 +167,7 @@ void drawPlot(const std::string& path, const std::vector<std::array<double, kSta
                                  : said.substr(0, nl)) +
                 ")");
   }
-  std::error_code ec;
-  fs::rename(png, path, ec);
-  if (ec) throw Error(path + ": cannot rename the plot into place: " + ec.message());
+  plot.commit();
 }
 
 }  // namespace

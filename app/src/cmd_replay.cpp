@@ -8,10 +8,10 @@
 #include <iostream>
 #include <sstream>
 
-#include "atomic_file.h"
 #include "coeffs_io.h"
 #include "commands.h"
 #include "hud.h"
+#include "liveprobe/capture/atomic_file.h"
 #include "liveprobe/capture/pipeline.h"
 #include "liveprobe/capture/recorder.h"
 #include "liveprobe/sh/error.h"

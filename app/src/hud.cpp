@@ -8,8 +8,8 @@
 #include <cmath>
 #include <cstdio>
 
-#include "atomic_file.h"
 #include "coeffs_io.h"
+#include "liveprobe/capture/atomic_file.h"
 #include "liveprobe/sh/error.h"
 
 namespace lp::cli {

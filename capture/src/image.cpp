@@ -1,17 +1,19 @@
 #include "liveprobe/capture/image.h"
 
-#include <fcntl.h>
+#include <png.h>
 #include <unistd.h>
 
 #include <algorithm>
 #include <array>
 #include <cmath>
 #include <cstdio>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
+#include "liveprobe/capture/atomic_file.h"
 #include "liveprobe/capture/frame.h"
 #include "liveprobe/sh/error.h"
 
@@ -31,27 +33,6 @@ namespace {
 
 // Points fd 2 at /dev/null for its lifetime. Decoders (libpng, libjpeg, OpenCV's own logging)
 // write warnings straight to stderr; we report their failure as one line of our own instead.
-class QuietStderr {
- public:
-  QuietStderr() : saved_(::dup(2)) {
-    const int null = ::open("/dev/null", O_WRONLY);
-    if (null >= 0) {
-      ::dup2(null, 2);
-      ::close(null);
-    }
-  }
-  ~QuietStderr() {
-    if (saved_ >= 0) {
-      ::dup2(saved_, 2);
-      ::close(saved_);
-    }
-  }
-  QuietStderr(const QuietStderr&) = delete;
-  QuietStderr& operator=(const QuietStderr&) = delete;
-
- private:
-  int saved_;
-};
 
 std::string lower(std::string s) {
   for (auto& c : s) c = char(std::tolower(static_cast<unsigned char>(c)));
@@ -62,19 +43,24 @@ std::string lower(std::string s) {
 // with the missing rows left black. A complete file holds at least one RLE (>= 4-byte header per
 // scanline) or flat (4 bytes per pixel) record per row, so we check the header's size line against
 // the bytes present.
-void checkRadianceComplete(const std::string& path, int width, int height) {
+// Checked before OpenCV decodes the file, whose reader reports a short file on stderr itself.
+void checkRadianceComplete(const std::string& path) {
   std::ifstream f(path, std::ios::binary);
   std::string line;
-  std::size_t headerBytes = 0;
+  if (!std::getline(f, line) || line.rfind("#?", 0) != 0) return;  // not Radiance: imread decides
+  std::size_t headerBytes = line.size() + 1;
+  int width = 0, height = 0;
   bool sawSize = false;
   while (std::getline(f, line)) {
     headerBytes += line.size() + 1;
     if (line.rfind("-Y ", 0) == 0 || line.rfind("+Y ", 0) == 0) {
-      sawSize = true;
+      char x[3] = {};
+      sawSize = std::sscanf(line.c_str() + 3, "%d %2s %d", &height, x, &width) == 3 && width > 0 &&
+                height > 0;
       break;
     }
   }
-  if (!sawSize) throw Error(path + ": Radiance header has no resolution line");
+  if (!sawSize) throw Error(path + ": Radiance header has no valid resolution line");
   const auto size = fs::file_size(path);
   const auto payload = size > headerBytes ? size - headerBytes : 0;
   // Decode the scanlines ourselves just far enough to count them.
@@ -118,22 +104,62 @@ void checkRadianceComplete(const std::string& path, int width, int height) {
   }
 }
 
+bool isPng(const std::string& path) {
+  char sig[8] = {};
+  std::ifstream(path, std::ios::binary).read(sig, 8);
+  return std::memcmp(sig, "\x89PNG\r\n\x1a\n", 8) == 0;
+}
+
+// PNG through libpng's simplified API, which keeps its errors and warnings in the png_image
+// rather than printing them (OpenCV's PNG reader lets libpng print to stderr). 8-bit files stay
+// 8-bit BGR; 16-bit files come out linear (libpng applies the file's gamma, sRGB by default).
+void readPng(const std::string& path, Frame& frame) {
+  png_image img{};
+  img.version = PNG_IMAGE_VERSION;
+  struct Free {
+    png_image* i;
+    ~Free() { png_image_free(i); }
+  } release{&img};
+  auto fail = [&] {
+    throw Error(path + ": not a readable PNG image (" + std::string(img.message) + ")");
+  };
+  if (!png_image_begin_read_from_file(&img, path.c_str())) fail();
+  const bool wide = img.format & PNG_FORMAT_FLAG_LINEAR;
+  img.format = wide ? PNG_FORMAT_LINEAR_RGB : PNG_FORMAT_BGR;
+  frame.width = int(img.width);
+  frame.height = int(img.height);
+  const std::size_t n = std::size_t(img.width) * img.height * 3;
+  if (!wide) {
+    frame.format = PixelFormat::Bgr8;
+    frame.rgb.clear();
+    frame.bgr8.resize(n);
+    if (!png_image_finish_read(&img, nullptr, frame.bgr8.data(), 0, nullptr)) fail();
+    return;
+  }
+  std::vector<std::uint16_t> linear(n);
+  if (!png_image_finish_read(&img, nullptr, linear.data(), 0, nullptr)) fail();
+  frame.format = PixelFormat::RgbF32;
+  frame.bgr8.clear();
+  frame.rgb.resize(n);
+  for (std::size_t i = 0; i < n; ++i) frame.rgb[i] = float(linear[i]) / 65535.0f;
+}
+
 }  // namespace
 
 void readImageFrame(const std::string& path, Frame& frame) {
   std::error_code ec;
   if (!fs::exists(path, ec)) throw Error(path + ": no such file");
   if (fs::is_directory(path, ec)) throw Error(path + ": is a directory, not an image");
+  const std::string ext = lower(fs::path(path).extension().string());
+  if (isPng(path)) return readPng(path, frame);
+  if (ext == ".hdr" || ext == ".pic") checkRadianceComplete(path);
   cv::Mat m;
   try {
-    QuietStderr quiet;  // libpng and OpenCV's codecs print their own multi-line complaints
     m = cv::imread(path, cv::IMREAD_UNCHANGED | cv::IMREAD_ANYDEPTH | cv::IMREAD_ANYCOLOR);
   } catch (const cv::Exception& e) {
     throw Error(path + ": cannot decode image (" + e.err + ")");
   }
   if (m.empty()) throw Error(path + ": not a readable image (unknown format or corrupt data)");
-  const std::string ext = lower(fs::path(path).extension().string());
-  if (ext == ".hdr" || ext == ".pic") checkRadianceComplete(path, m.cols, m.rows);
 
   cv::Mat bgr;
   switch (m.channels()) {
@@ -205,31 +231,17 @@ Image loadImage(const std::string& path) {
 namespace {
 
 void writeAtomically(const std::string& path, const cv::Mat& m) {
-  const fs::path target(path);
-  const std::string ext = target.extension().string();
-  if (ext.empty()) throw Error(path + ": output needs an extension (.png, .hdr, .exr, .jpg)");
-  const fs::path dir = target.has_parent_path() ? target.parent_path() : fs::path(".");
-  std::error_code ec;
-  if (!fs::is_directory(dir, ec))
-    throw Error(path + ": folder " + dir.string() + " does not exist");
-  const fs::path tmp =
-      dir / ("." + target.stem().string() + ".tmp" + std::to_string(::getpid()) + ext);
+  if (fs::path(path).extension().empty())
+    throw Error(path + ": output needs an extension (.png, .hdr, .exr, .jpg)");
+  AtomicOutput out(path);
   bool ok = false;
   try {
-    ok = cv::imwrite(tmp.string(), m);
+    ok = cv::imwrite(out.temporary(), m);
   } catch (const cv::Exception& e) {
-    fs::remove(tmp, ec);
     throw Error(path + ": cannot write (" + e.err + ")");
   }
-  if (!ok) {
-    fs::remove(tmp, ec);
-    throw Error(path + ": cannot write (unsupported extension or unwritable folder)");
-  }
-  fs::rename(tmp, target, ec);
-  if (ec) {
-    fs::remove(tmp, ec);
-    throw Error(path + ": cannot rename temporary file into place: " + ec.message());
-  }
+  if (!ok) throw Error(path + ": cannot write (unsupported extension or unwritable folder)");
+  out.commit();
 }
 
 }  // namespace

@@ -9,6 +9,7 @@
 #include <nlohmann/json.hpp>
 #include <opencv2/videoio.hpp>
 
+#include "liveprobe/capture/atomic_file.h"
 #include "liveprobe/capture/image.h"
 #include "liveprobe/sh/error.h"
 
@@ -40,11 +41,8 @@ VideoRecorder::VideoRecorder(std::string path, double fps, std::string sourceDes
     throw Error(
         path_ +
         ": unsupported extension (expected .mkv: FFV1, lossless; .avi: MJPEG; .mp4: H.264)");
-  const fs::path dir = p.has_parent_path() ? p.parent_path() : fs::path(".");
-  std::error_code ec;
-  if (!fs::is_directory(dir, ec))
-    throw Error(path_ + ": folder " + dir.string() + " does not exist");
-  tmp_ = (dir / ("." + p.stem().string() + ".tmp" + std::to_string(::getpid()) + ext)).string();
+  video_ = std::make_unique<AtomicOutput>(path_);
+  sidecar_ = std::make_unique<AtomicTextFile>(path_ + ".json");
 }
 
 VideoRecorder::~VideoRecorder() {
@@ -79,8 +77,8 @@ void VideoRecorder::write(const Frame& f) {
     exposure = exposure_;
   }
   if (!impl_->writer.isOpened()) {
-    if (!impl_->writer.open(tmp_, cv::CAP_FFMPEG, impl_->fourcc, fps_, cv::Size(f.width, f.height),
-                            true))
+    if (!impl_->writer.open(video_->temporary(), cv::CAP_FFMPEG, impl_->fourcc, fps_,
+                            cv::Size(f.width, f.height), true))
       throw Error(path_ + ": cannot open a video writer (this FFmpeg has no " +
                   (impl_->fourcc == cv::VideoWriter::fourcc('a', 'v', 'c', '1')
                        ? std::string("H.264")
@@ -95,9 +93,8 @@ void VideoRecorder::write(const Frame& f) {
 void VideoRecorder::finish() {
   if (finished_) return;
   finished_ = true;
-  std::error_code ec;
-  if (!impl_->writer.isOpened()) {  // nothing was recorded
-    fs::remove(tmp_, ec);
+  if (!impl_->writer.isOpened()) {  // nothing was recorded: nothing is left behind
+    video_->discard();
     return;
   }
   impl_->writer.release();
@@ -109,23 +106,9 @@ void VideoRecorder::finish() {
   j["frames"] = stamps_.size();
   j["timestamps"] = stamps_;
   j["exposures"] = exposures_;
-  const std::string sideTmp = tmp_ + ".json";
-  {
-    std::ofstream out(sideTmp);
-    out << j.dump() << "\n";
-    if (!out) {
-      fs::remove(tmp_, ec);
-      fs::remove(sideTmp, ec);
-      throw Error(path_ + ".json: cannot write the recording's sidecar");
-    }
-  }
-  fs::rename(tmp_, path_, ec);
-  if (!ec) fs::rename(sideTmp, path_ + ".json", ec);
-  if (ec) {
-    fs::remove(tmp_, ec);
-    fs::remove(sideTmp, ec);
-    throw Error(path_ + ": cannot move the recording into place");
-  }
+  sidecar_->line(j.dump());
+  sidecar_->commit();  // the sidecar first: a video in place always has its timing beside it
+  video_->commit();
 }
 
 }  // namespace lp

@@ -13,6 +13,9 @@
 
 namespace lp {
 
+class AtomicOutput;
+class AtomicTextFile;
+
 class VideoRecorder {
  public:
   /// Throws lp::Error on an unsupported extension or an unwritable folder. 8-bit frames are
@@ -32,9 +35,11 @@ class VideoRecorder {
  private:
   struct Impl;
   std::unique_ptr<Impl> impl_;
-  std::string path_, tmp_, source_;
-  double fps_, exposure_ = 0;               ///< float frames: the one exposure chosen on the first
-  std::vector<double> stamps_, exposures_;  ///< per frame
+  std::string path_, source_;
+  std::unique_ptr<AtomicOutput> video_;      ///< the video under its temporary name
+  std::unique_ptr<AtomicTextFile> sidecar_;  ///< FILE.json, likewise
+  double fps_, exposure_ = 0;                ///< float frames: the one exposure chosen on the first
+  std::vector<double> stamps_, exposures_;   ///< per frame
   bool finished_ = false;
 };
 

@@ -1,0 +1,79 @@
+#include "liveprobe/capture/atomic_file.h"
+
+#include <unistd.h>
+
+#include <cerrno>
+#include <cstring>
+#include <filesystem>
+
+#include "liveprobe/sh/error.h"
+
+namespace lp {
+
+namespace fs = std::filesystem;
+
+AtomicOutput::AtomicOutput(std::string path) : path_(std::move(path)) {
+  const fs::path p(path_);
+  const fs::path dir = p.has_parent_path() ? p.parent_path() : fs::path(".");
+  std::error_code ec;
+  if (!fs::is_directory(dir, ec))
+    throw Error(path_ + ": folder " + dir.string() + " does not exist");
+  if (fs::is_directory(p, ec)) throw Error(path_ + ": is a folder");
+  tmp_ = (dir /
+          ("." + p.stem().string() + ".tmp" + std::to_string(::getpid()) + p.extension().string()))
+             .string();
+}
+
+AtomicOutput::~AtomicOutput() { discard(); }
+
+void AtomicOutput::discard() {
+  if (done_) return;
+  done_ = true;
+  std::error_code ec;
+  fs::remove(tmp_, ec);
+}
+
+void AtomicOutput::commit() {
+  if (done_) throw Error(path_ + ": already finished");
+  std::error_code ec;
+  fs::rename(tmp_, path_, ec);
+  if (ec) {
+    discard();
+    throw Error(path_ + ": cannot rename into place (" + ec.message() + ")");
+  }
+  done_ = true;
+}
+
+AtomicTextFile::AtomicTextFile(const std::string& path) : file_(path) {
+  out_.open(file_.temporary());
+  if (!out_) throw Error(path + ": cannot write (" + std::strerror(errno) + ")");
+}
+
+void AtomicTextFile::line(const std::string& s) {
+  std::lock_guard lock(mutex_);
+  out_ << s << '\n';
+}
+
+void AtomicTextFile::write(const std::string& s) {
+  std::lock_guard lock(mutex_);
+  out_ << s;
+}
+
+void AtomicTextFile::commit() {
+  std::lock_guard lock(mutex_);
+  out_.flush();
+  out_.close();
+  if (!out_) {
+    file_.discard();
+    throw Error(file_.path() + ": write failed (disk full?)");
+  }
+  file_.commit();
+}
+
+void writeFileAtomically(const std::string& path, const std::string& text) {
+  AtomicTextFile f(path);
+  f.write(text);
+  f.commit();
+}
+
+}  // namespace lp
