@@ -257,6 +257,161 @@ std::array<double, kStageCount> parseInjections(const Args& a) {
 
 }  // namespace
 
+namespace {
+
+using StageTimes = std::array<double, kStageCount>;
+
+/// What the bench draws into, made once for every run.
+struct BenchScene {
+  std::unique_ptr<gl::GlContext> ctx;  // made before the renderer, which needs it current
+  gl::Renderer renderer;
+  LayoutSpec layout;
+  glm::mat3 orientation;
+  std::array<double, kStageCount> inject{};
+  Photometry photometry;  // as the pipeline: one lookup table, each frame's exposure scales it
+  Linearizer lin{photometry};
+};
+
+/// What one run keeps from frame to frame.
+struct RunState {
+  Frame frame;
+  Image image;
+  std::optional<Projector> projector;
+  float exposure = 1.0f;  ///< from the first frame's irradiance
+};
+
+/// One frame through the pipeline, stage by stage, as the replay pipeline does it: grab, convert
+/// (only frames the display cannot take as they are get a linear copy), project, upload, render
+/// and read back.
+StageTimes timeFrame(BenchScene& scene, RunState& run, FrameSource& source,
+                     const std::string& sourceName, Executor& pool, bool first) {
+  const Linearizer& lin = scene.lin;
+  Frame& frame = run.frame;
+  Image& image = run.image;
+  auto& projector = run.projector;
+  StageTimes t{};
+  auto t0 = Clock::now();
+  auto lap = [&](int stage) {
+    spin(scene.inject[std::size_t(stage)]);
+    t[std::size_t(stage)] = msSince(t0);
+    t0 = Clock::now();
+  };
+  if (!source.next(frame) && (!source.rewind() || !source.next(frame)))
+    throw Error(sourceName + ": no frames to benchmark");
+  lap(0);
+  const bool asIs = displayTakesFrameAsIs(frame, scene.photometry, scene.layout);
+  const float scale = float(frame.radianceScale);
+  if (!asIs) {
+    lin.convert(frame, image);
+    if (scale != 1.0f)
+      for (float& v : image.rgb) v *= scale;
+  }
+  lap(1);
+  if (!projector || projector->width() != frame.width || projector->height() != frame.height) {
+    if (auto why = layoutMismatch(scene.layout, frame.width, frame.height); !why.empty())
+      throw Error(sourceName + ": " + why);
+    projector.emplace(scene.layout, frame.width, frame.height);
+  }
+  const Sh9 sh = rotateSh(projectFrame(*projector, frame, lin, &pool) * scale, scene.orientation);
+  lap(2);
+  if (first) run.exposure = autoExposure(sh);
+  scene.renderer.setLighting(sh);
+  if (asIs)
+    setBackground(scene.renderer, frame, scene.layout, lin.exposure() * scale);
+  else
+    setBackground(scene.renderer, image, scene.layout,
+                  frame.format == PixelFormat::Bgr8 ? lin.exposure() * scale : 0.0f);
+  gl::Renderer::finish();
+  lap(3);
+  gl::ShadingSettings shading;
+  shading.exposure = run.exposure;
+  scene.renderer.draw(scene.ctx->framebufferSize(), gl::Camera{}, shading);
+  gl::Renderer::finish();
+  lap(4);
+  auto px = gl::Renderer::readRgb8(scene.ctx->framebufferSize());
+  lap(5);
+  return t;
+}
+
+/// Per stage: the median of the runs' medians, and p95, p99 and max over every frame; printed
+/// as a table and returned as the report's "stages".
+nlohmann::ordered_json stageSummary(const std::vector<StageTimes>& all,
+                                    const std::array<std::vector<double>, kStageCount>& runMedians,
+                                    int repeat, int frames, const std::string& description) {
+  nlohmann::ordered_json stages;
+  std::printf("%-9s %9s %9s %9s %9s   (ms; %s of %s, %s)\n", "stage", "median", "p95", "p99", "max",
+              plural(repeat, "run").c_str(), plural(frames, "frame").c_str(), description.c_str());
+  for (int s = 0; s < kStageCount; ++s) {
+    std::vector<double> v;
+    for (const auto& t : all) v.push_back(t[std::size_t(s)]);
+    const double med = percentile(runMedians[std::size_t(s)], 0.5);
+    stages[kStages[s]] = {{"median_ms", med},
+                          {"p95_ms", percentile(v, 0.95)},
+                          {"p99_ms", percentile(v, 0.99)},
+                          {"max_ms", percentile(v, 1.0)}};
+    std::printf("%-9s %9.3f %9.3f %9.3f %9.3f\n", kStages[s], med, percentile(v, 0.95),
+                percentile(v, 0.99), percentile(v, 1.0));
+  }
+  return stages;
+}
+
+/// Each stage against the baseline, both normalised by their calibration kernels and expressed
+/// at the baseline's speed. Returns the regressions; `compared` counts the stages compared.
+nlohmann::ordered_json compareWithBaseline(const nlohmann::ordered_json& stages, double calibration,
+                                           const nlohmann::json& baseline, double threshold,
+                                           int& compared) {
+  nlohmann::ordered_json regressions = nlohmann::ordered_json::array();
+  compared = 0;
+  const double baseCal = baseline["calibration_ms"].get<double>();
+  for (int s = 0; s < kStageCount; ++s) {
+    if (!baseline["stages"].contains(kStages[s])) continue;
+    const double baseMs = baseline["stages"][kStages[s]]["median_ms"].get<double>();
+    const double nowMs = stages[kStages[s]]["median_ms"].get<double>();
+    const double nowAtBase = nowMs / calibration * baseCal;
+    ++compared;
+    if (baseMs < kMeasurableMs && nowAtBase < kMeasurableMs) {
+      std::printf("%-9s %8.3f ms vs %.3f ms (too small to measure)\n", kStages[s], nowAtBase,
+                  baseMs);
+      continue;
+    }
+    const double change = baseMs > kMeasurableMs ? 100.0 * (nowAtBase - baseMs) / baseMs : 0.0;
+    if (baseMs > kMeasurableMs)
+      std::printf("%-9s %8.3f ms vs %.3f ms  %+7.1f%% (normalised by calibration)\n", kStages[s],
+                  nowAtBase, baseMs, change);
+    else
+      std::printf("%-9s %8.3f ms vs %.3f ms (baseline too small for a percentage)\n", kStages[s],
+                  nowAtBase, baseMs);
+    // A change under 0.5 ms is within scheduling noise on a 2-core machine whatever its
+    // percentage.
+    if (nowAtBase - baseMs > 0.5 && (baseMs <= kMeasurableMs || change > threshold))
+      regressions.push_back({{"stage", kStages[s]},
+                             {"change_pct", change},
+                             {"change_ms", nowAtBase - baseMs},
+                             {"median_ms", nowMs},
+                             {"baseline_median_ms", baseMs}});
+  }
+  return regressions;
+}
+
+void printVerdict(const nlohmann::ordered_json& regressions, int compared, double threshold) {
+  if (regressions.empty()) {
+    std::printf("verdict: no regression (%d stages within %.0f%% of the baseline)\n", compared,
+                threshold);
+    return;
+  }
+  std::string text;
+  for (const auto& r : regressions) {
+    char b[160];
+    std::snprintf(b, sizeof b, "%s%s +%.2f ms (%+.1f%%)", text.empty() ? "" : ", ",
+                  r["stage"].get<std::string>().c_str(), r["change_ms"].get<double>(),
+                  r["change_pct"].get<double>());
+    text += b;
+  }
+  std::printf("verdict: REGRESSION: %s (threshold %.0f%% and 0.5 ms)\n", text.c_str(), threshold);
+}
+
+}  // namespace
+
 int runBench(const Args& a) {
   installStopHandlers();
   const std::string sourceName = a.positional().empty() ? defaultRecording() : a.positional()[0];
@@ -265,19 +420,21 @@ int runBench(const Args& a) {
   const double threshold = a.numberIn("--threshold", 25.0, 0.0, 1000.0);
   const auto size = parseSize(a.get("--size", "640x360"), "--size");
   const unsigned threads = unsigned(a.integerIn("--threads", 2, 1, 64));
-  const auto inject = parseInjections(a);
   if (a.has("--plot")) requireExtension(a.get("--plot"), "--plot", {".png"});
   nlohmann::json baseline;
   if (a.has("--baseline")) baseline = readBaseline(a.get("--baseline"));
-  const LayoutSpec layout = layoutFromArgs(a);
-  const glm::mat3 orientation = envOrientationFromArgs(a);
-  const Mesh mesh = meshFromArgs(a);
-  auto ctx = openContext(gl::Backend::Headless, size);
-  gl::Renderer renderer;
-  loadModel(renderer, mesh);
-  renderer.setEnvOrientation(orientation);
+  BenchScene scene{openContext(gl::Backend::Headless, size),
+                   {},
+                   layoutFromArgs(a),
+                   envOrientationFromArgs(a),
+                   parseInjections(a)};
+  loadModel(scene.renderer, meshFromArgs(a));
+  scene.renderer.setEnvOrientation(scene.orientation);
   ThreadPool pool(threads);
-  std::vector<std::array<double, kStageCount>> all;
+
+  // The runs: each opens the source afresh and times every frame; a calibration kernel is timed
+  // before each.
+  std::vector<StageTimes> all;
   std::array<std::vector<double>, kStageCount> runMedians;
   std::vector<double> calibrations;
   std::string description;
@@ -286,67 +443,10 @@ int runBench(const Args& a) {
     calibrations.push_back(calibrationMs());
     auto source = openSource(sourceName);
     description = source->describe();
-    // As the pipeline does: one lookup table; each frame's own exposure scales its result.
-    const Photometry photometry;
-    const Linearizer lin(photometry);
-    std::optional<Projector> projector;
-    std::vector<std::array<double, kStageCount>> times;
-    Frame frame;
-    Image image;
-    float exposure = 1.0f;
+    RunState state;
+    std::vector<StageTimes> times;
     for (int i = 0; i < frames && !stopRequested(); ++i) {
-      std::array<double, kStageCount> t{};
-      auto t0 = Clock::now();
-      if (!source->next(frame)) {
-        if (!source->rewind() || !source->next(frame))
-          throw Error(sourceName + ": no frames to benchmark");
-      }
-      spin(inject[0]);
-      t[0] = msSince(t0);
-      t0 = Clock::now();
-      // As the replay pipeline does: only frames the display cannot take as they are get a
-      // linear copy.
-      const bool asIs = displayTakesFrameAsIs(frame, photometry, layout);
-      const float scale = float(frame.radianceScale);
-      if (!asIs) {
-        lin.convert(frame, image);
-        if (scale != 1.0f)
-          for (float& v : image.rgb) v *= scale;
-      }
-      spin(inject[1]);
-      t[1] = msSince(t0);
-      t0 = Clock::now();
-      if (!projector || projector->width() != frame.width || projector->height() != frame.height) {
-        if (auto why = layoutMismatch(layout, frame.width, frame.height); !why.empty())
-          throw Error(sourceName + ": " + why);
-        projector.emplace(layout, frame.width, frame.height);
-      }
-      const Sh9 sh = rotateSh(projectFrame(*projector, frame, lin, &pool) * scale, orientation);
-      spin(inject[2]);
-      t[2] = msSince(t0);
-      t0 = Clock::now();
-      if (i == 0) exposure = autoExposure(sh);
-      renderer.setLighting(sh);
-      if (asIs)
-        setBackground(renderer, frame, layout, lin.exposure() * scale);
-      else
-        setBackground(renderer, image, layout,
-                      frame.format == PixelFormat::Bgr8 ? lin.exposure() * scale : 0.0f);
-      gl::Renderer::finish();
-      spin(inject[3]);
-      t[3] = msSince(t0);
-      t0 = Clock::now();
-      gl::ShadingSettings shading;
-      shading.exposure = exposure;
-      renderer.draw(ctx->framebufferSize(), gl::Camera{}, shading);
-      gl::Renderer::finish();
-      spin(inject[4]);
-      t[4] = msSince(t0);
-      t0 = Clock::now();
-      auto px = gl::Renderer::readRgb8(ctx->framebufferSize());
-      spin(inject[5]);
-      t[5] = msSince(t0);
-      times.push_back(t);
+      times.push_back(timeFrame(scene, state, *source, sourceName, pool, i == 0));
       progress.update(std::int64_t(all.size() + times.size()));
     }
     if (times.empty()) break;
@@ -363,88 +463,27 @@ int runBench(const Args& a) {
                  plural(long(all.size()), "frame").c_str());
     return kExitInterrupted;
   }
-  const double calibration = percentile(calibrations, 0.5);
 
+  // The report: stages, calibration, the comparison, then the files and the verdict.
+  const double calibration = percentile(calibrations, 0.5);
   nlohmann::ordered_json out;
   out["frames"] = frames;
   out["runs"] = repeat;
   out["source"] = description;
-  nlohmann::ordered_json stages;
-  std::printf("%-9s %9s %9s %9s %9s   (ms; %s of %s, %s)\n", "stage", "median", "p95", "p99", "max",
-              plural(repeat, "run").c_str(), plural(frames, "frame").c_str(), description.c_str());
-  for (int s = 0; s < kStageCount; ++s) {
-    std::vector<double> v;
-    for (const auto& t : all) v.push_back(t[std::size_t(s)]);
-    const double med = percentile(runMedians[std::size_t(s)], 0.5);
-    stages[kStages[s]] = {{"median_ms", med},
-                          {"p95_ms", percentile(v, 0.95)},
-                          {"p99_ms", percentile(v, 0.99)},
-                          {"max_ms", percentile(v, 1.0)}};
-    std::printf("%-9s %9.3f %9.3f %9.3f %9.3f\n", kStages[s], med, percentile(v, 0.95),
-                percentile(v, 0.99), percentile(v, 1.0));
-  }
-  out["stages"] = stages;
+  out["stages"] = stageSummary(all, runMedians, repeat, frames, description);
   out["calibration_ms"] = calibration;
   std::printf("calibration kernel: %.3f ms\n", calibration);
-  nlohmann::ordered_json regressions = nlohmann::ordered_json::array();
   int compared = 0;
-  if (!baseline.is_null()) {
-    const double baseCal = baseline["calibration_ms"].get<double>();
-    for (int s = 0; s < kStageCount; ++s) {
-      if (!baseline["stages"].contains(kStages[s])) continue;
-      const double baseMs = baseline["stages"][kStages[s]]["median_ms"].get<double>();
-      const double nowMs = stages[kStages[s]]["median_ms"].get<double>();
-      // Both normalised by the calibration kernel, then expressed at the baseline's speed.
-      const double nowAtBase = nowMs / calibration * baseCal;
-      ++compared;
-      if (baseMs < kMeasurableMs && nowAtBase < kMeasurableMs) {
-        std::printf("%-9s %8.3f ms vs %.3f ms (too small to measure)\n", kStages[s], nowAtBase,
-                    baseMs);
-        continue;
-      }
-      const double change = baseMs > kMeasurableMs ? 100.0 * (nowAtBase - baseMs) / baseMs : 0.0;
-      if (baseMs > kMeasurableMs)
-        std::printf("%-9s %8.3f ms vs %.3f ms  %+7.1f%% (normalised by calibration)\n", kStages[s],
-                    nowAtBase, baseMs, change);
-      else
-        std::printf("%-9s %8.3f ms vs %.3f ms (baseline too small for a percentage)\n", kStages[s],
-                    nowAtBase, baseMs);
-      // A change under 0.5 ms is within scheduling noise on a 2-core machine whatever its
-      // percentage.
-      const bool slower =
-          nowAtBase - baseMs > 0.5 && (baseMs <= kMeasurableMs || change > threshold);
-      if (slower)
-        regressions.push_back({{"stage", kStages[s]},
-                               {"change_pct", change},
-                               {"change_ms", nowAtBase - baseMs},
-                               {"median_ms", nowMs},
-                               {"baseline_median_ms", baseMs}});
-    }
-  }
-  out["regressions"] = regressions;
+  out["regressions"] = baseline.is_null() ? nlohmann::ordered_json::array()
+                                          : compareWithBaseline(out["stages"], calibration,
+                                                                baseline, threshold, compared);
   if (a.has("--json")) writeFileAtomically(a.get("--json"), out.dump(2) + "\n");
   if (a.has("--plot"))
     drawPlot(a.get("--plot"), all, frames,
              "liveprobe bench: " + description + " (" + plural(repeat, "run") + " of " +
                  plural(frames, "frame") + ")");
-  if (!baseline.is_null()) {
-    if (regressions.empty()) {
-      std::printf("verdict: no regression (%d stages within %.0f%% of the baseline)\n", compared,
-                  threshold);
-    } else {
-      std::string text;
-      for (const auto& r : regressions) {
-        char b[160];
-        std::snprintf(b, sizeof b, "%s%s +%.2f ms (%+.1f%%)", text.empty() ? "" : ", ",
-                      r["stage"].get<std::string>().c_str(), r["change_ms"].get<double>(),
-                      r["change_pct"].get<double>());
-        text += b;
-      }
-      std::printf("verdict: REGRESSION: %s (threshold %.0f%% and 0.5 ms)\n", text.c_str(),
-                  threshold);
-    }
-  }
-  return regressions.empty() ? 0 : 1;
+  if (!baseline.is_null()) printVerdict(out["regressions"], compared, threshold);
+  return out["regressions"].empty() ? 0 : 1;
 }
 
 }  // namespace lp::cli

@@ -79,111 +79,134 @@ void CapturePipeline::publish(ProcessedFrame&& f) {
   cv_.notify_all();
 }
 
-void CapturePipeline::run() {
-  // The source's radiance scale (a recording's stored exposure, a camera's exposure time) may
-  // change from frame to frame: it is read per frame and applied to the coefficients (projection
-  // is linear) and to the display copy.
-  const Linearizer linearizer(opt_.photometry);
+// The capture thread's state from frame to frame.
+struct CapturePipeline::Loop {
+  explicit Loop(const PipelineOptions& o)
+      : linearizer(o.photometry), smoother(o.smoothSeconds), wallStart(Clock::now()) {
+    if (o.threads > 1) pool = std::make_unique<ThreadPool>(o.threads);
+  }
+  const Linearizer linearizer;
   std::optional<Projector> projector;
-  ShSmoother smoother(opt_.smoothSeconds);
+  ShSmoother smoother;
   std::unique_ptr<ThreadPool> pool;
-  if (opt_.threads > 1) pool = std::make_unique<ThreadPool>(opt_.threads);
   Frame frame;
+  std::shared_ptr<Image> image;  ///< this frame's linear copy, when one is made
   std::uint64_t index = 0;
-  Clock::time_point wallStart = Clock::now();
+  Clock::time_point wallStart;
   double streamStart = -1, loopOffset = 0, lastTimestamp = 0;
-  try {
-    while (!stop_ && (opt_.maxFrames < 0 || std::int64_t(index) < opt_.maxFrames)) {
-      {
-        std::unique_lock lock(mutex_);
-        cv_.wait(lock, [&] { return !paused_ || steps_ > 0 || stop_; });
-        if (stop_) break;
-        if (paused_) --steps_;
-        if (std::exchange(resync_, false)) streamStart = -1;
-      }
-      const auto t0 = Clock::now();
-      if (!source_->next(frame)) {
-        if (opt_.loop && source_->rewind() && source_->next(frame)) {
-          loopOffset = lastTimestamp + (source_->fps() > 0 ? 1.0 / source_->fps() : 0.0);
-        } else {
-          break;
-        }
-      }
-      const auto t1 = Clock::now();
-      if (opt_.onFrame) opt_.onFrame(frame);
-      const double timestamp = frame.timestamp + loopOffset;
-      lastTimestamp = timestamp;
-      const int reduce = opt_.reduce;
-      if (!projector || projector->width() * reduce != frame.width ||
-          projector->height() * reduce != frame.height) {
-        if (auto why = layoutMismatch(opt_.layout, frame.width, frame.height); !why.empty())
-          throw Error(source_->describe() + ": " + std::string(layoutName(opt_.layout.layout)) +
-                      " layout: " + why);
-        if (reduce > 1 && (opt_.layout.layout != Layout::Equirect || frame.width % reduce ||
-                           frame.height % reduce))
-          throw Error(source_->describe() + ": --reduce " + std::to_string(reduce) +
-                      " needs an equirect frame whose size is a multiple of it");
-        projector.emplace(opt_.layout, frame.width / reduce, frame.height / reduce);
-      }
-      // Convert: a linear copy only for display. The projection reads the frame itself: 8-bit
-      // through the lookup table, float scaled afterwards (projection is linear).
-      std::shared_ptr<Image> image;
-      std::shared_ptr<Frame> raw;
-      std::size_t saturated = 0;
-      if (opt_.keepImages && displayTakesFrameAsIs(frame, opt_.photometry, opt_.layout)) {
-        raw = std::make_shared<Frame>(frame);  // the display decodes it: no linear copy
-        saturated = countSaturated(frame);
-      } else if (opt_.keepImages) {
-        image = std::make_shared<Image>();
-        saturated = linearizer.convert(frame, *image);
-      } else {
-        saturated = countSaturated(frame);
-      }
-      const auto t2 = Clock::now();
-      Sh9 sh;
-      if (reduce > 1) {
-        if (!image) {
-          image = std::make_shared<Image>();
-          linearizer.convert(frame, *image);
-        }
-        const Image small = reduceEquirect(image->rgb.data(), image->width, image->height, reduce);
-        sh = projector->project(PanoramaView::rgbF32(small.rgb.data(), small.width, small.height),
-                                pool.get());
-      } else {
-        sh = projectFrame(*projector, frame, linearizer, pool.get());
-      }
-      const double scale = frame.radianceScale;  // the exposure in force for this frame
-      if (scale != 1.0) {
-        sh *= float(scale);
-        if (image)
-          for (float& v : image->rgb) v *= float(scale);
-      }
-      const float rawScale = float(scale) * opt_.photometry.exposure;
-      if (opt_.rotation) sh = rotateSh(sh, *opt_.rotation);
-      const Sh9 unsmoothed = sh;
-      sh = smoother.update(sh, timestamp);
-      const auto t3 = Clock::now();
+};
 
+bool CapturePipeline::waitForTurn(Loop& s) {
+  std::unique_lock lock(mutex_);
+  cv_.wait(lock, [&] { return !paused_ || steps_ > 0 || stop_; });
+  if (stop_) return false;
+  if (paused_) --steps_;
+  if (std::exchange(resync_, false)) s.streamStart = -1;  // resumed: pace from here
+  return true;
+}
+
+bool CapturePipeline::grab(Loop& s) {
+  if (!source_->next(s.frame)) {
+    if (!(opt_.loop && source_->rewind() && source_->next(s.frame))) return false;
+    s.loopOffset = s.lastTimestamp + (source_->fps() > 0 ? 1.0 / source_->fps() : 0.0);
+  }
+  if (opt_.onFrame) opt_.onFrame(s.frame);
+  s.lastTimestamp = s.frame.timestamp + s.loopOffset;
+  return true;
+}
+
+void CapturePipeline::fitProjector(Loop& s) const {
+  const Frame& frame = s.frame;
+  const int reduce = opt_.reduce;
+  if (s.projector && s.projector->width() * reduce == frame.width &&
+      s.projector->height() * reduce == frame.height)
+    return;
+  if (auto why = layoutMismatch(opt_.layout, frame.width, frame.height); !why.empty())
+    throw Error(source_->describe() + ": " + std::string(layoutName(opt_.layout.layout)) +
+                " layout: " + why);
+  if (reduce > 1 &&
+      (opt_.layout.layout != Layout::Equirect || frame.width % reduce || frame.height % reduce))
+    throw Error(source_->describe() + ": --reduce " + std::to_string(reduce) +
+                " needs an equirect frame whose size is a multiple of it");
+  s.projector.emplace(opt_.layout, frame.width / reduce, frame.height / reduce);
+}
+
+void CapturePipeline::convertForDisplay(Loop& s, ProcessedFrame& out) const {
+  // A linear copy only for display; the projection reads the frame itself.
+  const Frame& frame = s.frame;
+  if (opt_.keepImages && displayTakesFrameAsIs(frame, opt_.photometry, opt_.layout)) {
+    out.raw = std::make_shared<Frame>(frame);  // the display decodes it: no linear copy
+    out.saturated = countSaturated(frame);
+  } else if (opt_.keepImages) {
+    s.image = std::make_shared<Image>();
+    out.saturated = s.linearizer.convert(frame, *s.image);
+  } else {
+    out.saturated = countSaturated(frame);
+  }
+}
+
+Sh9 CapturePipeline::project(Loop& s, ProcessedFrame& out) const {
+  // 8-bit frames through the lookup table inside the projection, float ones scaled afterwards
+  // (projection is linear); --reduce projects an area-averaged copy.
+  Sh9 sh;
+  if (opt_.reduce > 1) {
+    if (!s.image) {
+      s.image = std::make_shared<Image>();
+      s.linearizer.convert(s.frame, *s.image);
+    }
+    const Image small =
+        reduceEquirect(s.image->rgb.data(), s.image->width, s.image->height, opt_.reduce);
+    sh = s.projector->project(PanoramaView::rgbF32(small.rgb.data(), small.width, small.height),
+                              s.pool.get());
+  } else {
+    sh = projectFrame(*s.projector, s.frame, s.linearizer, s.pool.get());
+  }
+  // The exposure in force for this frame (a recording's stored exposure, a camera's exposure
+  // time) scales the coefficients and the display copy.
+  const double scale = s.frame.radianceScale;
+  if (scale != 1.0) {
+    sh *= float(scale);
+    if (s.image)
+      for (float& v : s.image->rgb) v *= float(scale);
+  }
+  out.rawScale = float(scale) * opt_.photometry.exposure;
+  out.displayScale = s.frame.format == PixelFormat::Bgr8 ? out.rawScale : 0.0f;
+  if (opt_.rotation) sh = rotateSh(sh, *opt_.rotation);
+  out.unsmoothed = sh;
+  return s.smoother.update(sh, out.timestamp);
+}
+
+void CapturePipeline::pace(Loop& s, double timestamp) {
+  if (!opt_.realtime) return;
+  if (s.streamStart < 0) s.streamStart = timestamp, s.wallStart = Clock::now();
+  const auto due = s.wallStart + std::chrono::duration_cast<Clock::duration>(
+                                     std::chrono::duration<double>(timestamp - s.streamStart));
+  std::unique_lock lock(mutex_);
+  cv_.wait_until(lock, due, [&] { return bool(stop_); });
+}
+
+void CapturePipeline::run() {
+  Loop s(opt_);
+  try {
+    while (!stop_ && (opt_.maxFrames < 0 || std::int64_t(s.index) < opt_.maxFrames)) {
+      if (!waitForTurn(s)) break;
+      const auto t0 = Clock::now();
+      if (!grab(s)) break;
+      const auto t1 = Clock::now();
+      fitProjector(s);
       ProcessedFrame out;
-      out.index = index++;
-      out.sequence = frame.sequence;
-      out.timestamp = timestamp;
-      out.radiance = sh;
-      out.unsmoothed = unsmoothed;
-      if (opt_.keepImages && !raw) out.image = std::move(image);  // one background per frame
-      out.raw = std::move(raw);
-      out.rawScale = rawScale;
-      out.displayScale = frame.format == PixelFormat::Bgr8 ? rawScale : 0.0f;
+      out.index = s.index++;
+      out.sequence = s.frame.sequence;
+      out.timestamp = s.lastTimestamp;
+      convertForDisplay(s, out);
+      const auto t2 = Clock::now();
+      out.radiance = project(s, out);
+      const auto t3 = Clock::now();
+      if (opt_.keepImages && !out.raw) out.image = std::move(s.image);  // one background a frame
+      s.image.reset();
       out.times = {msBetween(t0, t1), msBetween(t1, t2), msBetween(t2, t3)};
-      out.saturated = saturated;
       if (opt_.onCaptured) opt_.onCaptured(out);
-      if (opt_.realtime) {
-        if (streamStart < 0) streamStart = timestamp, wallStart = Clock::now();
-        const auto due = wallStart + std::chrono::duration_cast<Clock::duration>(
-                                         std::chrono::duration<double>(timestamp - streamStart));
-        std::unique_lock lock(mutex_);
-        cv_.wait_until(lock, due, [&] { return bool(stop_); });
-      }
+      pace(s, out.timestamp);
       publish(std::move(out));
     }
   } catch (const std::exception& e) {

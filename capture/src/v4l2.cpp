@@ -190,8 +190,7 @@ void V4l2Source::streamOn() {
   state_ = State::Streaming;
 }
 
-void V4l2Source::setFormat() {
-  require(State::Open, "setFormat");
+std::uint32_t V4l2Source::chooseFourcc() {
   std::vector<std::uint32_t> offered;
   for (std::uint32_t i = 0;; ++i) {
     v4l2_fmtdesc d{};
@@ -205,56 +204,35 @@ void V4l2Source::setFormat() {
   };
   std::string list;
   for (auto f : offered) list += (list.empty() ? "" : ", ") + fourccText(f);
-  std::uint32_t want = fourccOf(settings_.format);
-  if (want == 0) {
-    for (CameraFormat f :
-         {CameraFormat::Mjpeg, CameraFormat::Yuyv, CameraFormat::Nv12, CameraFormat::Rgb24})
-      if (offers(fourccOf(f))) {
-        want = fourccOf(f);
-        break;
-      }
-    if (want == 0)
-      throw Error(settings_.device + ": offers no format liveprobe converts (it offers " + list +
-                  ")");
-  } else if (!offers(want)) {
-    throw Error(settings_.device + ": does not offer " + fourccText(want) + " (it offers " + list +
-                ")");
+  if (const std::uint32_t want = fourccOf(settings_.format); want != 0) {
+    if (!offers(want))
+      throw Error(settings_.device + ": VIDIOC_ENUM_FMT: does not offer " + fourccText(want) +
+                  " (it offers " + list + ")");
+    return want;
   }
-  int w = settings_.width, h = settings_.height;
-  if (w <= 0 || h <= 0) {  // the largest size of this format
-    for (std::uint32_t i = 0;; ++i) {
-      v4l2_frmsizeenum s{};
-      s.index = i;
-      s.pixel_format = want;
-      if (xioctl(VIDIOC_ENUM_FRAMESIZES, &s) < 0) break;
-      if (s.type == V4L2_FRMSIZE_TYPE_DISCRETE) {
-        if (int(s.discrete.width * s.discrete.height) > w * h)
-          w = int(s.discrete.width), h = int(s.discrete.height);
-      } else {
-        w = int(s.stepwise.max_width), h = int(s.stepwise.max_height);
-        break;
-      }
-    }
-  }
-  v4l2_format fmt{};
-  fmt.type = V4L2_BUF_TYPE_VIDEO_CAPTURE;
-  fmt.fmt.pix.width = std::uint32_t(std::max(w, 0));
-  fmt.fmt.pix.height = std::uint32_t(std::max(h, 0));
-  fmt.fmt.pix.pixelformat = want;
-  fmt.fmt.pix.field = V4L2_FIELD_ANY;
-  if (xioctl(VIDIOC_S_FMT, &fmt) < 0) fail("VIDIOC_S_FMT " + fourccText(want), errno);
-  // S_FMT adjusts what it cannot do: read back what the driver actually set.
-  if (fmt.fmt.pix.pixelformat != want)
-    throw Error(settings_.device + ": asked for " + fourccText(want) + ", the driver set " +
-                fourccText(fmt.fmt.pix.pixelformat));
-  fourcc_ = fmt.fmt.pix.pixelformat;
-  width_ = int(fmt.fmt.pix.width);
-  height_ = int(fmt.fmt.pix.height);
-  bytesPerLine_ = fmt.fmt.pix.bytesperline;
-  sizeImage_ = fmt.fmt.pix.sizeimage;
-  if (width_ <= 0 || height_ <= 0)
-    throw Error(settings_.device + ": the driver set an empty frame size");
+  for (CameraFormat f :
+       {CameraFormat::Mjpeg, CameraFormat::Yuyv, CameraFormat::Nv12, CameraFormat::Rgb24})
+    if (offers(fourccOf(f))) return fourccOf(f);
+  throw Error(settings_.device +
+              ": VIDIOC_ENUM_FMT: offers no format liveprobe converts (it offers " + list + ")");
+}
 
+std::pair<int, int> V4l2Source::largestSize(std::uint32_t fourcc) {
+  int w = 0, h = 0;
+  for (std::uint32_t i = 0;; ++i) {
+    v4l2_frmsizeenum s{};
+    s.index = i;
+    s.pixel_format = fourcc;
+    if (xioctl(VIDIOC_ENUM_FRAMESIZES, &s) < 0) break;
+    if (s.type != V4L2_FRMSIZE_TYPE_DISCRETE)
+      return {int(s.stepwise.max_width), int(s.stepwise.max_height)};
+    if (int(s.discrete.width * s.discrete.height) > w * h)
+      w = int(s.discrete.width), h = int(s.discrete.height);
+  }
+  return {w, h};
+}
+
+void V4l2Source::setRate() {
   v4l2_streamparm parm{};
   parm.type = V4L2_BUF_TYPE_VIDEO_CAPTURE;
   if (settings_.fps > 0 && xioctl(VIDIOC_G_PARM, &parm) == 0 &&
@@ -269,6 +247,32 @@ void V4l2Source::setFormat() {
            parm.parm.capture.timeperframe.numerator;
   else
     fps_ = settings_.fps > 0 ? settings_.fps : 30.0;
+}
+
+void V4l2Source::setFormat() {
+  require(State::Open, "setFormat");
+  const std::uint32_t want = chooseFourcc();
+  auto [w, h] = std::pair(settings_.width, settings_.height);
+  if (w <= 0 || h <= 0) std::tie(w, h) = largestSize(want);
+  v4l2_format fmt{};
+  fmt.type = V4L2_BUF_TYPE_VIDEO_CAPTURE;
+  fmt.fmt.pix.width = std::uint32_t(std::max(w, 0));
+  fmt.fmt.pix.height = std::uint32_t(std::max(h, 0));
+  fmt.fmt.pix.pixelformat = want;
+  fmt.fmt.pix.field = V4L2_FIELD_ANY;
+  if (xioctl(VIDIOC_S_FMT, &fmt) < 0) fail("VIDIOC_S_FMT " + fourccText(want), errno);
+  // S_FMT adjusts what it cannot do: read back what the driver actually set.
+  if (fmt.fmt.pix.pixelformat != want)
+    throw Error(settings_.device + ": VIDIOC_S_FMT: asked for " + fourccText(want) +
+                ", the driver set " + fourccText(fmt.fmt.pix.pixelformat));
+  fourcc_ = fmt.fmt.pix.pixelformat;
+  width_ = int(fmt.fmt.pix.width);
+  height_ = int(fmt.fmt.pix.height);
+  bytesPerLine_ = fmt.fmt.pix.bytesperline;
+  sizeImage_ = fmt.fmt.pix.sizeimage;
+  if (width_ <= 0 || height_ <= 0)
+    throw Error(settings_.device + ": VIDIOC_S_FMT: the driver set an empty frame size");
+  setRate();
   state_ = State::Configured;
 }
 

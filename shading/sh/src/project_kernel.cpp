@@ -33,8 +33,7 @@ using VF = hn::Vec<DF>;
 // acc lanes of coefficient k, channel c.
 inline float* laneOf(LaneSums& acc, int k, int c) { return acc.v + (3 * k + c) * kMaxLanes; }
 
-void EquirectRow(const EquirectTables& t, const float* HWY_RESTRICT row, bool bgr, int i,
-                 LaneSums& acc) {
+void EquirectRow(const EquirectTables& t, const float* HWY_RESTRICT row, int i, LaneSums& acc) {
   const DF d;
   const int n = int(hn::Lanes(d));
   const float* HWY_RESTRICT c0 = t.col[0].data();
@@ -100,7 +99,6 @@ void EquirectRow(const EquirectTables& t, const float* HWY_RESTRICT row, bool bg
   // in registers.
   const auto add = [&](int k, float f, VF r, VF g, VF b) HWY_ATTR {
     const VF fv = hn::Set(d, f);
-    if (bgr) std::swap(r, b);
     float* a = laneOf(acc, k, 0);
     hn::Store(hn::MulAdd(fv, r, hn::Load(d, a)), d, a);
     hn::Store(hn::MulAdd(fv, g, hn::Load(d, a + kMaxLanes)), d, a + kMaxLanes);

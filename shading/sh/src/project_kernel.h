@@ -33,9 +33,9 @@ struct alignas(64) LaneSums {
 };
 
 struct Kernels {
-  /// acc += row factors of row i times the 15 column-weighted sums of `row` (3 * width floats in
-  /// RGB order, or BGR with `bgr`).
-  void (*equirectRow)(const EquirectTables& t, const float* row, bool bgr, int i, LaneSums& acc);
+  /// acc += row factors of row i times the 15 column-weighted sums of `row` (3 * width floats;
+  /// the sums keep the row's channel order).
+  void (*equirectRow)(const EquirectTables& t, const float* row, int i, LaneSums& acc);
   /// out[3k + c] += sum over n pixels of rgb[3i + c] * w_k[i]. `blocked` holds the weights in
   /// blocks of 16 pixels: w_k of pixel 16 b + l at blocked[(9 b + k) * 16 + l], zero-padded to a
   /// whole block (one sequential stream, which the prefetchers follow).

@@ -164,7 +164,7 @@ Projector::~Projector() = default;
 Projector::Projector(Projector&&) noexcept = default;
 Projector& Projector::operator=(Projector&&) noexcept = default;
 
-Sh9 Projector::project(const PanoramaView& v, Executor* ex) const {
+void Projector::check(const PanoramaView& v) const {
   if (v.width != width_ || v.height != height_ || v.layout.layout != spec_.layout)
     throw Error("projection: a " + std::to_string(v.width) + "x" + std::to_string(v.height) + " " +
                 std::string(layoutName(v.layout.layout)) + " frame given to a projector for " +
@@ -173,85 +173,86 @@ Sh9 Projector::project(const PanoramaView& v, Executor* ex) const {
   const bool u8 = v.format == PanoramaFormat::BgrU8 || v.format == PanoramaFormat::RgbU8;
   if (u8 && !v.decode) throw Error("projection: an 8-bit frame needs its decode table");
   if (!v.data) throw Error("projection: the frame has no pixels");
-  const bool bgr = v.format == PanoramaFormat::BgrU8;
-  const kernel::Kernels& k = kernel::active();
-  const std::size_t w = std::size_t(width_);
+}
 
-  if (tables_->equirect) {  // bands of whole rows, at least 32 rows each
-    const auto& t = *tables_->equirect;
-    return toSh9(parallelReduce(
-                     ex, std::size_t(height_), Split{32}, Sums{},
-                     [&](std::size_t r0, std::size_t r1) {
-                       constexpr int kFlushRows = 64;  // float lanes hold this many rows at most
-                       RowReader rows(v, k);
-                       kernel::LaneSums lanes{};
-                       Sums sums{};
-                       auto flush = [&] {
-                         for (int q = 0; q < 27; ++q) {
-                           double s = 0;
-                           for (int l = 0; l < kernel::kMaxLanes; ++l)
-                             s += lanes.v[q * kernel::kMaxLanes + l];
-                           sums[q] += s;
-                         }
-                         lanes = {};
-                       };
-                       for (std::size_t i = r0; i < r1; ++i) {
-                         k.equirectRow(t, rows.read(int(i), 0, w), bgr, int(i), lanes);
-                         if ((i - r0 + 1) % kFlushRows == 0) flush();
-                       }
-                       flush();
-                       return sums;
-                     },
-                     addSums),
-                 false);
-  }
-  // Sample layouts: runs of pixels (multiples of 16, the weights' block); rows are contiguous
-  // when the frame is packed, so a run may span rows.
-  const std::size_t count = samples_.size();
+Sh9 Projector::project(const PanoramaView& v, Executor* ex) const {
+  check(v);
+  const bool bgr = v.format == PanoramaFormat::BgrU8;
+  return toSh9(tables_->equirect ? equirectSums(v, ex) : sampleSums(v, ex), bgr);
+}
+
+// Equirect: bands of whole rows (at least 32 each); per row, the kernel's 15 column sums times
+// the row factors go into float lanes, flushed to double every 64 rows (in the frame's channel
+// order).
+std::array<double, 27> Projector::equirectSums(const PanoramaView& v, Executor* ex) const {
+  const auto& t = *tables_->equirect;
+  const kernel::Kernels& k = kernel::active();
+  const auto band = [&](std::size_t r0, std::size_t r1) {
+    constexpr std::size_t kFlushRows = 64;
+    RowReader rows(v, k);
+    kernel::LaneSums lanes{};
+    Sums sums{};
+    auto flush = [&] {
+      for (int q = 0; q < 27; ++q) {
+        double s = 0;
+        for (int l = 0; l < kernel::kMaxLanes; ++l) s += lanes.v[q * kernel::kMaxLanes + l];
+        sums[q] += s;
+      }
+      lanes = {};
+    };
+    for (std::size_t i = r0; i < r1; ++i) {
+      k.equirectRow(t, rows.read(int(i), 0, std::size_t(width_)), int(i), lanes);
+      if ((i - r0 + 1) % kFlushRows == 0) flush();
+    }
+    flush();
+    return sums;
+  };
+  return parallelReduce(ex, std::size_t(height_), Split{32}, Sums{}, band, addSums);
+}
+
+// Other layouts: runs of pixels (multiples of 16, the weights' block) through the weighted
+// sums, in the frame's channel order.
+std::array<double, 27> Projector::sampleSums(const PanoramaView& v, Executor* ex) const {
+  const kernel::Kernels& k = kernel::active();
+  const bool bgr = v.format == PanoramaFormat::BgrU8;
+  const std::size_t w = std::size_t(width_);
   const float* weights = tables_->weights.data();
-  return toSh9(parallelReduce(
-                   ex, count, Split{16384}, Sums{},
-                   [&](std::size_t i0, std::size_t i1) {
-                     RowReader rows(v, k);
-                     Sums sums{};
-                     if (packed(v)) {
-                       // The frame is one array: each run of blocks that hold any of the
-                       // layout's pixels in one call. Blocks wholly outside the layout's disc or
-                       // circles (a fifth of an angular map) are skipped.
-                       const auto& used = tables_->blockUsed;
-                       for (std::size_t b = i0 / 16, e = (i1 + 15) / 16; b < e;) {
-                         if (!used[b]) {
-                           ++b;
-                           continue;
-                         }
-                         std::size_t b1 = b;
-                         while (b1 < e && used[b1]) ++b1;
-                         const std::size_t p0 = b * 16, p1 = std::min(i1, b1 * 16);
-                         k.weightedSums(rows.read(0, p0, p1 - p0), p1 - p0, weights + p0 * kShCount,
-                                        sums.data());
-                         b = b1;
-                       }
-                       return sums;
-                     }
-                     for (std::size_t i = i0; i < i1;) {  // strided rows: row by row
-                       const std::size_t row = i / w, first = i % w,
-                                         n = std::min(w - first, i1 - i);
-                       if (i % 16 == 0) {
-                         k.weightedSums(rows.read(int(row), first, n), n, weights + i * kShCount,
-                                        sums.data());
-                       } else {  // a row start inside a block: per sample, from the directions
-                         const Sh9 part = projectSamples(rows.read(int(row), first, n), 3,
-                                                         samples_.data() + i, n);
-                         for (int c = 0; c < kShCount; ++c)
-                           for (int ch = 0; ch < 3; ++ch)
-                             sums[3 * c + ch] += bgr ? part.c[c][2 - ch] : part.c[c][ch];
-                       }
-                       i += n;
-                     }
-                     return sums;
-                   },
-                   addSums),
-               bgr);
+  const auto& used = tables_->blockUsed;
+  const auto run = [&](std::size_t i0, std::size_t i1) {
+    RowReader rows(v, k);
+    Sums sums{};
+    if (packed(v)) {
+      // The frame is one array: each run of blocks that hold any of the layout's pixels in one
+      // call. Blocks wholly outside the layout's disc or circles (a fifth of an angular map) are
+      // skipped.
+      for (std::size_t b = i0 / 16, e = (i1 + 15) / 16; b < e;) {
+        if (!used[b]) {
+          ++b;
+          continue;
+        }
+        std::size_t b1 = b;
+        while (b1 < e && used[b1]) ++b1;
+        const std::size_t p0 = b * 16, p1 = std::min(i1, b1 * 16);
+        k.weightedSums(rows.read(0, p0, p1 - p0), p1 - p0, weights + p0 * kShCount, sums.data());
+        b = b1;
+      }
+      return sums;
+    }
+    for (std::size_t i = i0; i < i1;) {  // strided rows: row by row
+      const std::size_t row = i / w, first = i % w, n = std::min(w - first, i1 - i);
+      if (i % 16 == 0) {
+        k.weightedSums(rows.read(int(row), first, n), n, weights + i * kShCount, sums.data());
+      } else {  // a row start inside a block: per sample, from the directions
+        const Sh9 part = projectSamples(rows.read(int(row), first, n), 3, samples_.data() + i, n);
+        for (int c = 0; c < kShCount; ++c)
+          for (int ch = 0; ch < 3; ++ch)
+            sums[3 * c + ch] += bgr ? part.c[c][2 - ch] : part.c[c][ch];
+      }
+      i += n;
+    }
+    return sums;
+  };
+  return parallelReduce(ex, samples_.size(), Split{16384}, Sums{}, run, addSums);
 }
 
 Sh9 project(const PanoramaView& frame, Executor* executor) {

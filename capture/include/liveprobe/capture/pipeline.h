@@ -128,7 +128,15 @@ class CapturePipeline {
   const FrameSource& source() const { return *source_; }
 
  private:
+  // The capture thread: run() loops over these stages, one frame at a time.
+  struct Loop;
   void run();
+  bool waitForTurn(Loop& s);  ///< the pause / step gate; false when stopping
+  bool grab(Loop& s);         ///< the next frame (looping if asked); false at the end
+  void fitProjector(Loop& s) const;
+  void convertForDisplay(Loop& s, ProcessedFrame& out) const;
+  Sh9 project(Loop& s, ProcessedFrame& out) const;
+  void pace(Loop& s, double timestamp);  ///< --realtime: waits for the frame's time
   void publish(ProcessedFrame&& f);
   std::optional<ProcessedFrame> takeFromSlot(std::unique_lock<std::mutex>& lock);
 

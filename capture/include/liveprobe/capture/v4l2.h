@@ -12,6 +12,7 @@
 #include <optional>
 #include <string>
 #include <string_view>
+#include <utility>
 #include <vector>
 
 #include "liveprobe/capture/frame.h"
@@ -152,6 +153,11 @@ class V4l2Source final : public FrameSource {
   int xioctl(unsigned long request, void* arg);
   void releaseBuffers();
   void streamOffIoctl();
+  // setFormat()'s steps: the format (asked for, or the first liveprobe converts), the largest
+  // size it offers (when none was asked for), and the frame rate.
+  std::uint32_t chooseFourcc();
+  std::pair<int, int> largestSize(std::uint32_t fourcc);
+  void setRate();
   void convert(const std::uint8_t* data, std::size_t bytes, Frame& frame);
   std::optional<std::int32_t> getControl(std::uint32_t id);
   /// Writes a control and reads it back. Returns false when the camera has no such control

@@ -1,6 +1,7 @@
 #pragma once
 // Projection of whole panoramas to radiance coefficients: a non-owning view of a frame in any
 // pixel format and layout, and a Projector that precomputes what one (layout, size) needs.
+#include <array>
 #include <cstddef>
 #include <cstdint>
 #include <memory>
@@ -76,6 +77,10 @@ class Projector {
 
  private:
   struct Tables;
+  void check(const PanoramaView& frame) const;
+  /// The 27 sums (coefficient-major, then the frame's channel order).
+  std::array<double, 27> equirectSums(const PanoramaView& frame, Executor* executor) const;
+  std::array<double, 27> sampleSums(const PanoramaView& frame, Executor* executor) const;
   LayoutSpec spec_;
   int width_, height_;
   std::vector<SphereSample> samples_;
