@@ -82,8 +82,8 @@ int runCoeffs(const Args& a) {
               << coefficientsText(L);
     const MinIrradiance mn = minIrradiance(L);
     std::printf("min irradiance over the sphere / L00-irradiance: %.4f %.4f %.4f\n",
-                mn.value.x / (kA0 * 0.282095 * L.c[0].x), mn.value.y / (kA0 * 0.282095 * L.c[0].y),
-                mn.value.z / (kA0 * 0.282095 * L.c[0].z));
+                mn.value.x / (kA0 * kY00 * L.c[0].x), mn.value.y / (kA0 * kY00 * L.c[0].y),
+                mn.value.z / (kA0 * kY00 * L.c[0].z));
   } else {
     std::cout << coefficientsGlsl(L);
   }

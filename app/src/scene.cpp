@@ -263,7 +263,7 @@ gl::Camera cameraFromArgs(const Args& a) {
 
 float autoExposure(const Sh9& radiance, bool environment) {
   if (environment) {
-    const float meanRadiance = luminance(radiance.c[0]) * 0.282095f;
+    const float meanRadiance = luminance(radiance.c[0]) * kY00;
     return meanRadiance > 1e-12f ? 0.18f / meanRadiance : 1.0f;
   }
   // Luminance is linear, so Y(E(n)) is the irradiance of the luminance coefficients, and its

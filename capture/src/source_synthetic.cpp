@@ -1,14 +1,14 @@
 #include <cmath>
 #include <glm/glm.hpp>
-#include <numbers>
 
 #include "liveprobe/capture/frame.h"
+#include "liveprobe/sh/sh.h"
 #include "sources.h"
 
 namespace lp {
 
 void renderSyntheticSky(int width, int height, double t, std::vector<float>& rgb) {
-  constexpr double pi = std::numbers::pi;
+  constexpr double pi = kPi;
   rgb.resize(std::size_t(width) * height * 3);
   // Sun: circles the sky every 20 s, bobbing in elevation every 10 s.
   const double sunAz = 2 * pi * t / 20.0,

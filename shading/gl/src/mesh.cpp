@@ -8,11 +8,13 @@
 #include <cmath>
 #include <filesystem>
 
+#include "liveprobe/sh/sh.h"
+
 namespace lp {
 
 Mesh makeUvSphere(int segments, int rings) {
   Mesh m;
-  const float pi = 3.14159265358979f;
+  const float pi = float(kPi);
   for (int r = 0; r <= rings; ++r) {
     const float t = pi * float(r) / float(rings);  // from +y down
     for (int s = 0; s <= segments; ++s) {

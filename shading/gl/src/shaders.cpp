@@ -2,8 +2,10 @@
 
 namespace lp::gl::shaders {
 
-// Shared by both fragment shaders: exposure, tone map, sRGB encoding.
+// Shared by every fragment shader: pi (GLSL's one statement of it), exposure, tone map, sRGB
+// encoding.
 #define LP_DISPLAY_GLSL                                                                            \
+  "const float PI = 3.14159265358979;\n"                                                           \
   "uniform float uExposure;\n"                                                                     \
   "uniform int uToneMap; // 0 ACES (Narkowicz fit), 1 Reinhard, 2 linear clamp\n"                  \
   "vec3 toneMap(vec3 c) {\n"                                                                       \
@@ -58,7 +60,7 @@ void main() {
   }
   vec3 albedo = uAlbedo;
   if (uHasTexture) albedo *= texture(uAlbedoTex, vUv).rgb;
-  vec3 radiance = albedo * E / 3.14159265;  // Lambertian: B = rho E / pi
+  vec3 radiance = albedo * E / PI;  // Lambertian: B = rho E / pi
   fragColor = vec4(srgbEncode(toneMap(radiance)), 1.0);
 }
 )";
@@ -84,7 +86,6 @@ void main() {
   "map\n"                                                                                        \
   "uniform float uDisplayDivide;  // undoes the input exposure of a decoded 8-bit float "        \
   "panorama\n"                                                                                   \
-  "const float PI = 3.14159265358979;\n"                                                         \
   "vec2 panoramaUv(vec3 w) {\n"                                                                  \
   "  w = uFileFromWorld * w;\n"                                                                  \
   "  if (uMapping == 0) {\n"                                                                     \
