@@ -14,6 +14,7 @@
 
 #include "coeffs_io.h"
 #include "commands.h"
+#include "liveprobe/capture/input_file.h"
 #include "liveprobe/capture/atomic_file.h"
 #include "liveprobe/capture/frame.h"
 #include "liveprobe/capture/photometry.h"
@@ -223,6 +224,7 @@ std::string plural(long n, const char* word) {
 }
 
 nlohmann::json readBaseline(const std::string& path) {
+  requireRegularFile(path);
   std::ifstream in(path);
   if (!in) throw Error(path + ": cannot open the baseline");
   nlohmann::json b;

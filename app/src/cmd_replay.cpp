@@ -128,7 +128,8 @@ const CommandSpec kReplaySpec{
     }(),
     0,
     1,
-    "a video, an image sequence (a folder, or a pattern like frames/%04d.png), an image, a folder "
+    "a video, an image sequence (a folder, or a frame-number pattern like frames/%04d.png), an "
+    "image, a folder "
     "of six cube faces, or synthetic[:WxH[@FPS]]; default: the bundled recording "
     "recordings/sky.mkv"};
 
@@ -471,11 +472,12 @@ const CommandSpec kRecordSpec{
      {"--frames", "N", "number of frames to record"},
      {"--duration", "SECONDS", "seconds of the source to record"},
      {"--fps", "F",
-      "frame rate of image sequences and of the recording, 0 to 1000 (default: the source's)"},
+      "frame rate of image sequences and of the recording, 1 to 1000 (default: the source's)"},
      {"--quiet", "", "no progress on stderr"}},
     1,
     1,
-    "a video, an image sequence (a folder, or a pattern like frames/%04d.png), an image, a folder "
+    "a video, an image sequence (a folder, or a frame-number pattern like frames/%04d.png), an "
+    "image, a folder "
     "of six cube faces, or synthetic[:WxH[@FPS]]"};
 
 int runRecord(const Args& a) {
@@ -483,7 +485,7 @@ int runRecord(const Args& a) {
   if (!a.has("--out")) throw Error("--out FILE.mkv is required");
   requireExtension(a.get("--out"), "--out", {".mkv", ".avi", ".mp4"});
   SourceOptions so;
-  so.fps = a.numberIn("--fps", 30.0, 1e-3, 1000.0);
+  so.fps = a.numberIn("--fps", 30.0, 1.0, 1000.0);
   std::int64_t frames = a.integerIn("--frames", -1, 1, 1000000000);
   auto source = openSource(a.positional()[0], so);
   const double fps = a.has("--fps") ? so.fps : source->fps();

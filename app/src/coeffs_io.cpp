@@ -5,6 +5,7 @@
 #include <fstream>
 #include <sstream>
 
+#include "liveprobe/capture/input_file.h"
 #include "liveprobe/sh/error.h"
 
 namespace lp::cli {
@@ -54,6 +55,7 @@ Sh9 coefficientsFromJson(const nlohmann::json& j, const std::string& source) {
 }
 
 Sh9 loadCoefficients(const std::string& path) {
+  requireRegularFile(path);
   std::ifstream f(path);
   if (!f) throw Error(path + ": cannot open coefficient file");
   nlohmann::json j;

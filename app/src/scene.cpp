@@ -7,6 +7,7 @@
 #include <sstream>
 
 #include "coeffs_io.h"
+#include "liveprobe/capture/input_file.h"
 #include "liveprobe/capture/frame.h"
 #include "liveprobe/capture/photometry.h"
 #include "liveprobe/capture/resample.h"
@@ -219,6 +220,7 @@ Mesh meshFromArgs(const Args& a) {
     m = makeUvSphere();
   } else {
     try {
+      requireRegularFile(model);
       m = loadMesh(model);
     } catch (const MeshError& e) {
       throw Error(e.what());

@@ -15,6 +15,7 @@
 
 #include "liveprobe/capture/atomic_file.h"
 #include "liveprobe/capture/frame.h"
+#include "liveprobe/capture/input_file.h"
 #include "liveprobe/sh/error.h"
 
 namespace lp {
@@ -148,8 +149,7 @@ void readPng(const std::string& path, Frame& frame) {
 
 void readImageFrame(const std::string& path, Frame& frame) {
   std::error_code ec;
-  if (!fs::exists(path, ec)) throw Error(path + ": no such file");
-  if (fs::is_directory(path, ec)) throw Error(path + ": is a directory, not an image");
+  requireRegularFile(path);
   const std::string ext = lower(fs::path(path).extension().string());
   if (isPng(path)) return readPng(path, frame);
   if (ext == ".hdr" || ext == ".pic") checkRadianceComplete(path);

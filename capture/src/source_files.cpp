@@ -1,6 +1,8 @@
 // Sources backed by files: still images, cube-face sets, image sequences, video (OpenCV videoio
 // with FFmpeg).
 #include <algorithm>
+#include <charconv>
+#include <optional>
 #include <array>
 #include <cstdio>
 #include <cstdlib>
@@ -10,6 +12,7 @@
 #include <opencv2/videoio.hpp>
 
 #include "liveprobe/capture/image.h"
+#include "liveprobe/capture/input_file.h"
 #include "liveprobe/sh/error.h"
 #include "sources.h"
 
@@ -114,7 +117,12 @@ class VideoSource final : public FrameSource {
   explicit VideoSource(std::string path) : path_(std::move(path)) {
     open();
     // A recording made by `liveprobe record` carries a sidecar with its exposure and timestamps.
-    std::ifstream side(path_ + ".json");
+    std::error_code ec;
+    std::ifstream side;
+    if (fs::exists(path_ + ".json", ec)) {
+      requireRegularFile(path_ + ".json");
+      side.open(path_ + ".json");
+    }
     if (side) {
       try {
         nlohmann::json j;
@@ -190,8 +198,7 @@ class VideoSource final : public FrameSource {
  private:
   static constexpr int kMaxBadRun = 32;
   void open() {
-    std::error_code ec;
-    if (!fs::exists(path_, ec)) throw Error(path_ + ": no such file");
+    requireRegularFile(path_);
     if (!cap_.open(path_, cv::CAP_FFMPEG) || !cap_.isOpened())
       throw Error(path_ + ": cannot open as video (corrupt, truncated or unsupported codec)");
   }
@@ -228,51 +235,101 @@ std::unique_ptr<FrameSource> openCubeFaces(const std::string& dir, double fps) {
   return std::make_unique<CubeFacesSource>(faces, dir, fps);
 }
 
-std::unique_ptr<FrameSource> openSequence(const std::string& dirOrPattern, double fps) {
-  std::vector<std::string> files;
-  if (dirOrPattern.find('%') != std::string::npos) {
-    for (int i = 0, misses = 0; misses < 2 && i < 10000000; ++i) {
-      char buf[4096];
-      std::snprintf(buf, sizeof buf, dirOrPattern.c_str(), i);
-      if (fs::exists(buf))
-        files.emplace_back(buf), misses = 0;
-      else if (!files.empty() || i > 1)
-        ++misses;  // numbering may start at 0 or 1
-    }
-  } else {
-    for (const auto& e : fs::directory_iterator(dirOrPattern))
-      if (e.is_regular_file() && isImageFile(e.path())) files.push_back(e.path().string());
-    std::sort(files.begin(), files.end());
+// A frame-number pattern: exactly one %d or %0Nd (N from 1 to 9) and no other '%'. Parsed here:
+// a path is never handed to printf as a format.
+struct SequencePattern {
+  std::string prefix, suffix;
+  int width = 0;  ///< zero-padded to this many digits (0: no padding)
+  std::string at(int i) const {
+    std::string n = std::to_string(i);
+    if (int(n.size()) < width) n.insert(0, std::size_t(width) - n.size(), '0');
+    return prefix + n + suffix;
   }
-  if (files.empty()) throw Error(dirOrPattern + ": no image files in this sequence");
-  return std::make_unique<ListSource>(
-      std::move(files), fps,
-      "image sequence " + dirOrPattern + " (" + std::to_string(files.size()) + " frames)");
+};
+
+std::optional<SequencePattern> parseSequencePattern(const std::string& spec) {
+  const auto pos = spec.find('%');
+  if (pos == std::string::npos) return std::nullopt;
+  std::size_t i = pos + 1;
+  int width = 0;
+  if (i < spec.size() && spec[i] == '0') {
+    ++i;
+    if (i >= spec.size() || spec[i] < '1' || spec[i] > '9') return std::nullopt;
+    width = spec[i++] - '0';
+  }
+  if (i >= spec.size() || spec[i] != 'd') return std::nullopt;
+  if (spec.find('%', i + 1) != std::string::npos) return std::nullopt;
+  return SequencePattern{spec.substr(0, pos), spec.substr(i + 1), width};
+}
+
+std::unique_ptr<FrameSource> openSequence(const std::string& name, std::vector<std::string> files,
+                                          double fps) {
+  if (files.empty()) throw Error(name + ": no image files in this sequence");
+  const std::string what =
+      "image sequence " + name + " (" + std::to_string(files.size()) + " frames)";
+  return std::make_unique<ListSource>(std::move(files), fps, what);
+}
+
+std::unique_ptr<FrameSource> openPatternSequence(const std::string& spec,
+                                                 const SequencePattern& pattern, double fps) {
+  std::vector<std::string> files;
+  std::error_code ec;
+  for (int i = 0, misses = 0; misses < 2 && i < 10000000; ++i) {
+    const std::string f = pattern.at(i);
+    if (fs::is_regular_file(f, ec))
+      files.push_back(f), misses = 0;
+    else if (!files.empty() || i > 1)
+      ++misses;  // numbering may start at 0 or 1
+  }
+  return openSequence(spec, std::move(files), fps);
+}
+
+std::unique_ptr<FrameSource> openFolderSequence(const std::string& dir, double fps) {
+  std::vector<std::string> files;
+  for (const auto& e : fs::directory_iterator(dir))
+    if (e.is_regular_file() && isImageFile(e.path())) files.push_back(e.path().string());
+  std::sort(files.begin(), files.end());
+  return openSequence(dir, std::move(files), fps);
 }
 
 std::unique_ptr<FrameSource> openVideo(const std::string& path) {
   return std::make_unique<VideoSource>(path);
 }
 
+// ":WxH[@FPS]" with every number in range; whole-string parses, so nothing wraps around.
+bool parseSyntheticSpec(const std::string& rest, int& w, int& h, double& fps) {
+  const char* p = rest.data();
+  const char* end = p + rest.size();
+  if (p == end || *p++ != ':') return false;
+  auto r = std::from_chars(p, end, w);
+  if (r.ec != std::errc() || r.ptr == end || *r.ptr != 'x') return false;
+  r = std::from_chars(r.ptr + 1, end, h);
+  if (r.ec != std::errc()) return false;
+  if (r.ptr != end) {
+    if (*r.ptr != '@') return false;
+    r = std::from_chars(r.ptr + 1, end, fps);
+    if (r.ec != std::errc() || r.ptr != end) return false;
+  }
+  return w >= 4 && h >= 2 && w <= 16384 && h <= 16384 && fps > 0 && fps <= 1000;
+}
+
 std::unique_ptr<FrameSource> openSource(const std::string& spec, const SourceOptions& options) {
   if (spec.rfind("synthetic", 0) == 0) {
     int w = 512, h = 256;
     double fps = 30;
-    if (spec.size() > 9) {
-      if (spec[9] != ':' || std::sscanf(spec.c_str() + 10, "%dx%d@%lf", &w, &h, &fps) < 2 ||
-          w < 4 || h < 2 || w > 16384 || h > 16384 || !(fps > 0 && fps <= 1000))
-        throw Error(spec + ": expected synthetic[:WxH[@FPS]]");
-    }
+    if (spec.size() > 9 && !parseSyntheticSpec(spec.substr(9), w, h, fps))
+      throw Error(spec + ": expected synthetic[:WxH[@FPS]], W 4-16384, H 2-16384, FPS up to 1000");
     return openSynthetic(w, h, fps);
   }
   std::error_code ec;
   if (fs::is_directory(spec, ec)) {
     if (auto cube = openCubeFaces(spec, options.fps)) return cube;
-    return openSequence(spec, options.fps);
+    return openFolderSequence(spec, options.fps);
   }
-  if (spec.find('%') != std::string::npos) return openSequence(spec, options.fps);
+  if (const auto pattern = parseSequencePattern(spec))
+    return openPatternSequence(spec, *pattern, options.fps);
   if (hasVideoExtension(spec)) return openVideo(spec);
-  if (!fs::exists(spec, ec)) throw Error(spec + ": no such file");
+  requireRegularFile(spec);
   return openStill(spec, options.fps);
 }
 

@@ -58,7 +58,8 @@ struct SourceOptions {
 ///   synthetic[:WxH[@FPS]]       the procedural sky (default 512x256 at 30 fps)
 ///   DIR with px,nx,py,ny,pz,nz  six cube faces, assembled into a horizontal cross
 ///   DIR                         an image sequence (image files in name order)
-///   PATTERN with %d             an image sequence by printf pattern (frame_%04d.png)
+///   PATTERN with %d or %0Nd     an image sequence by frame number (frame_%04d.png; the one
+///                               pattern is parsed here, never used as a printf format)
 ///   *.mp4|webm|mkv|avi|mov|m4v  a video file, decoded by FFmpeg through OpenCV
 ///   anything else               a still image
 /// Throws lp::Error naming the source on failure.
