@@ -14,9 +14,9 @@
 
 #include "coeffs_io.h"
 #include "commands.h"
-#include "liveprobe/capture/input_file.h"
 #include "liveprobe/capture/atomic_file.h"
 #include "liveprobe/capture/frame.h"
+#include "liveprobe/capture/input_file.h"
 #include "liveprobe/capture/photometry.h"
 #include "liveprobe/capture/pipeline.h"
 #include "liveprobe/sh/error.h"
@@ -211,8 +211,7 @@ const CommandSpec kBenchSpec{
     }(),
     0,
     1,
-    "a video, an image sequence (a folder, or a pattern like frames/%04d.png), an image, a folder "
-    "of six cube faces, or synthetic[:WxH[@FPS]]; default: the bundled recording"};
+    LP_SOURCE_KINDS "; default: the bundled recording"};
 
 namespace {
 
@@ -229,7 +228,7 @@ nlohmann::json readBaseline(const std::string& path) {
   if (!in) throw Error(path + ": cannot open the baseline");
   nlohmann::json b;
   try {
-    in >> b;
+    b = nlohmann::json::parse(in);  // the whole file: trailing text is an error
     const double cal = b.at("calibration_ms").get<double>();
     if (!(cal > 0) || !std::isfinite(cal))
       throw Error(path + ": calibration_ms must be a positive number");

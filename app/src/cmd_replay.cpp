@@ -103,7 +103,7 @@ const CommandSpec kReplaySpec{
     "[SOURCE]",
     "Replays a panoramic stream, re-projecting the nine coefficients every frame, and draws the\n"
     "model lit by them with the frame behind it. SOURCE: a video (mp4, webm, mkv, avi, mov), an\n"
-    "image sequence (folder or printf pattern), an image, a folder of six cube faces, or\n"
+    "image sequence (folder or %04d-style pattern), an image, a folder of six cube faces, or\n"
     "synthetic[:WxH[@FPS]]; default: the bundled recording recordings/sky.mkv.\n"
     "In a window capture runs in real time on its own thread and the newest coefficients are\n"
     "drawn (stale frames are dropped and counted); Space pauses, Right steps, F1 lists the keys.\n"
@@ -128,10 +128,7 @@ const CommandSpec kReplaySpec{
     }(),
     0,
     1,
-    "a video, an image sequence (a folder, or a frame-number pattern like frames/%04d.png), an "
-    "image, a folder "
-    "of six cube faces, or synthetic[:WxH[@FPS]]; default: the bundled recording "
-    "recordings/sky.mkv"};
+    LP_SOURCE_KINDS "; default: the bundled recording recordings/sky.mkv"};
 
 namespace {
 
@@ -476,9 +473,7 @@ const CommandSpec kRecordSpec{
      {"--quiet", "", "no progress on stderr"}},
     1,
     1,
-    "a video, an image sequence (a folder, or a frame-number pattern like frames/%04d.png), an "
-    "image, a folder "
-    "of six cube faces, or synthetic[:WxH[@FPS]]"};
+    LP_SOURCE_KINDS};
 
 int runRecord(const Args& a) {
   installStopHandlers();

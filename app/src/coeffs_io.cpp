@@ -60,7 +60,7 @@ Sh9 loadCoefficients(const std::string& path) {
   if (!f) throw Error(path + ": cannot open coefficient file");
   nlohmann::json j;
   try {
-    f >> j;
+    j = nlohmann::json::parse(f);  // the whole file: trailing text is an error
   } catch (const nlohmann::json::exception& e) {
     throw Error(path + ": not valid JSON (" + std::string(e.what()) + ")");
   }

@@ -1,8 +1,10 @@
 // liveprobe: real-time diffuse lighting from panoramas with nine SH coefficients.
 // The one place that prints errors and chooses the exit code: 0 success, 1 a bad input or
 // command line (one line on stderr), 130 stopped by SIGINT or SIGTERM, 3 an internal error.
+#include <cerrno>
 #include <cstdio>
 #include <cstdlib>
+#include <cstring>
 #include <iostream>
 #include <opencv2/core/utils/logger.hpp>
 #include <string>
@@ -63,7 +65,15 @@ int main(int argc, char** argv) {
         std::cout << lp::cli::usage(c.spec);
         return 0;
       }
-      return c.run(parsed);
+      const int rc = c.run(parsed);
+      // What went to stdout must have arrived: a full disk or a closed pipe is an error too.
+      errno = 0;
+      if (std::fflush(stdout) != 0 || std::ferror(stdout))
+        throw lp::Error(std::string("standard output: ") +
+                        (errno == ENOSPC
+                             ? "no space left on the device"
+                             : "write failed (" + std::string(std::strerror(errno)) + ")"));
+      return rc;
     } catch (const lp::Error& e) {
       std::cerr << "liveprobe " << c.spec.name << ": " << e.what() << "\n";
       return 1;

@@ -7,8 +7,8 @@
 #include <sstream>
 
 #include "coeffs_io.h"
-#include "liveprobe/capture/input_file.h"
 #include "liveprobe/capture/frame.h"
+#include "liveprobe/capture/input_file.h"
 #include "liveprobe/capture/photometry.h"
 #include "liveprobe/capture/resample.h"
 #include "liveprobe/sh/error.h"

@@ -12,6 +12,11 @@
 #include "liveprobe/sh/layout.h"
 #include "liveprobe/sh/sh.h"
 
+/// What a stream command's SOURCE may be, for the commands' help.
+#define LP_SOURCE_KINDS                                                                        \
+  "a video, an image sequence (a folder, or a frame-number pattern like frames/%04d.png), an " \
+  "image, a folder of six cube faces, or synthetic[:WxH[@FPS]]"
+
 namespace lp::cli {
 
 /// Options for the model, camera and look (appended to a command's own).

@@ -1,15 +1,16 @@
 // Sources backed by files: still images, cube-face sets, image sequences, video (OpenCV videoio
 // with FFmpeg).
 #include <algorithm>
-#include <charconv>
-#include <optional>
 #include <array>
+#include <charconv>
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
 #include <opencv2/videoio.hpp>
+#include <optional>
 
 #include "liveprobe/capture/image.h"
 #include "liveprobe/capture/input_file.h"
@@ -118,20 +119,25 @@ class VideoSource final : public FrameSource {
     open();
     // A recording made by `liveprobe record` carries a sidecar with its exposure and timestamps.
     std::error_code ec;
-    std::ifstream side;
     if (fs::exists(path_ + ".json", ec)) {
       requireRegularFile(path_ + ".json");
-      side.open(path_ + ".json");
-    }
-    if (side) {
+      std::ifstream side(path_ + ".json");
       try {
-        nlohmann::json j;
-        side >> j;
-        scale_ = 1.0 / j.at("exposure").get<double>();
+        const nlohmann::json j = nlohmann::json::parse(side);  // trailing text is an error
+        // An exposure divides the frame: it must be positive, finite, and its inverse finite.
+        auto scaleOf = [&](const nlohmann::json& e) {
+          const double x = e.is_number() ? e.get<double>() : 0.0, s = 1.0 / x;
+          if (!(x > 0) || !std::isfinite(x) || !std::isfinite(s))
+            throw Error(path_ + ".json: exposure " + e.dump() + " is not a positive finite number");
+          return s;
+        };
+        scale_ = scaleOf(j.at("exposure"));
         for (const auto& t : j.at("timestamps")) stamps_.push_back(t.get<double>());
         // Recordings since the per-frame metadata keep every frame's exposure.
         if (j.contains("exposures"))
-          for (const auto& e : j.at("exposures")) scales_.push_back(1.0 / e.get<double>());
+          for (const auto& e : j.at("exposures")) scales_.push_back(scaleOf(e));
+      } catch (const Error&) {
+        throw;
       } catch (const std::exception& e) {
         throw Error(path_ + ".json: bad recording sidecar (" + e.what() + ")");
       }

@@ -1,0 +1,140 @@
+// Hostile input (issue 12): what a user types or feeds never crashes, hangs or leaves debris.
+// Each case asserts the three things: exit status 1, one line that names the input and the
+// fault, and nothing left behind in the output folder. Commands run under `timeout`, so a hang
+// fails the test (exit 124) instead of stalling the suite.
+#include <gtest/gtest.h>
+#include <sys/stat.h>
+
+#include <filesystem>
+#include <fstream>
+#include <opencv2/imgcodecs.hpp>
+#include <set>
+#include <string>
+
+#include "test_util.h"
+
+namespace {
+
+namespace fs = std::filesystem;
+
+std::set<std::string> listing(const fs::path& dir) {
+  std::set<std::string> out;
+  for (const auto& e : fs::directory_iterator(dir)) out.insert(e.path().filename().string());
+  return out;
+}
+
+// Runs `liveprobe ARGS` in `dir` and checks the three promises.
+void expectRefused(const lpt::TempDir& dir, const std::string& args, const std::string& names,
+                   const std::string& says) {
+  const auto before = listing(dir.path);
+  const auto r = lpt::runCommand("cd " + lpt::shellQuote(dir.path.string()) + " && timeout 20 " +
+                                 LIVEPROBE_BIN + " " + args);
+  EXPECT_EQ(r.exitCode, 1) << args << "\n" << r.output;
+  EXPECT_EQ(lpt::lineCount(r.output), 1) << args << "\n" << r.output;
+  EXPECT_NE(r.output.find(names), std::string::npos) << args << "\n" << r.output;
+  EXPECT_NE(r.output.find(says), std::string::npos) << args << "\n" << r.output;
+  EXPECT_EQ(listing(dir.path), before) << args << ": left files behind";
+}
+
+// A path is never a printf format: %s and %n used to crash the sequence opener, %% listed one
+// file millions of times. Only %d and %0Nd make a sequence, parsed by liveprobe itself.
+TEST(Hostile, PathsAreNeverFormatStrings) {
+  lpt::TempDir tmp;
+  for (const char* name : {"%s.png", "%n%n%n.png", "%%.png", "f_%5$d.png", "f_%d_%d.png"})
+    expectRefused(tmp, std::string("coeffs ") + lpt::shellQuote(name), name, "no such file");
+  for (const char* name : {"%s.png", "%n.png", "%%d.png"})
+    expectRefused(tmp, std::string("replay --headless --frames 1 ") + lpt::shellQuote(name), name,
+                  "no such file");
+}
+
+// The two patterns that are sequences still are: frames numbered from 0 or 1, zero-padded or not.
+TEST(Hostile, FrameNumberPatternsStillWork) {
+  lpt::TempDir tmp;
+  for (int i = 1; i <= 3; ++i)
+    ASSERT_TRUE(cv::imwrite(tmp / ("f_00" + std::to_string(i) + ".png"),
+                            cv::Mat(32, 64, CV_8UC3, cv::Scalar(40 * i, 50, 60))));
+  const auto r = lpt::runLiveprobe("replay " + lpt::shellQuote(tmp / "f_%03d.png") +
+                                   " --headless --quiet --coeffs-out " + (tmp / "c.jsonl"));
+  ASSERT_EQ(r.exitCode, 0) << r.output;
+  std::ifstream in(tmp / "c.jsonl");
+  int lines = 0;
+  for (std::string l; std::getline(in, l);) ++lines;
+  EXPECT_EQ(lines, 3);
+}
+
+// A FIFO given as any input is refused before it is opened (open() would block forever).
+TEST(Hostile, FifoInputsAreRefused) {
+  lpt::TempDir tmp;
+  const std::string fifo = tmp / "pipe.hdr";
+  ASSERT_EQ(::mkfifo(fifo.c_str(), 0600), 0);
+  const std::string json = tmp / "pipe.json", mp4 = tmp / "pipe.mp4", obj = tmp / "pipe.obj";
+  for (const auto& f : {json, mp4, obj}) ASSERT_EQ(::mkfifo(f.c_str(), 0600), 0);
+  expectRefused(tmp, "coeffs " + fifo, fifo, "FIFO");
+  expectRefused(tmp, "render --headless --out r.png --coeffs " + json, json, "FIFO");
+  expectRefused(tmp, "render --headless --out r.png --coeff L00=1 --model " + obj, obj, "FIFO");
+  expectRefused(tmp, "replay --headless --frames 1 " + mp4, mp4, "FIFO");
+  expectRefused(tmp, "record " + mp4 + " --out out.mkv", mp4, "FIFO");
+  expectRefused(tmp, "bench --frames 1 --repeat 1 --baseline " + json, json, "FIFO");
+  expectRefused(tmp, "coeffs " + tmp.path.string(), tmp.path.string(), "no image files");
+}
+
+// Sizes in a synthetic source are parsed whole and range-checked: nothing wraps around.
+TEST(Hostile, SyntheticSizesDoNotWrap) {
+  lpt::TempDir tmp;
+  for (const char* spec : {"synthetic:4294967552x128", "synthetic:64x32@-5", "synthetic:64x32x",
+                           "synthetic:1e3x64", "synthetic:64x32@30junk"})
+    expectRefused(tmp, std::string("replay --headless --frames 1 ") + spec, spec,
+                  "expected synthetic");
+}
+
+// A recording's rate is validated before anything is written.
+TEST(Hostile, RecordRatesOutOfRange) {
+  lpt::TempDir tmp;
+  for (const char* fps : {"-1", "0", "1e-9", "5000", "nan"})
+    expectRefused(tmp, std::string("record synthetic:64x32 --out out.mkv --fps ") + fps, "--fps",
+                  fps);
+}
+
+// Every write is checked, stdout's included: a full disk is an error, not a silent exit 0.
+TEST(Hostile, FullStdoutIsAnError) {
+  const auto r =
+      lpt::runCommand("( " + std::string(LIVEPROBE_BIN) + " coeffs " +
+                      lpt::dataPath("probes/latlong_256x128/grace.hdr") + " > /dev/full )");
+  EXPECT_EQ(r.exitCode, 1) << r.output;
+  EXPECT_EQ(lpt::lineCount(r.output), 1) << r.output;
+  EXPECT_NE(r.output.find("standard output: no space left"), std::string::npos) << r.output;
+}
+
+// JSON inputs are read whole: text after the value is an error, not ignored.
+TEST(Hostile, TrailingTextAfterJsonIsRefused) {
+  lpt::TempDir tmp;
+  const auto r = lpt::runLiveprobe("coeffs " + lpt::dataPath("probes/latlong_256x128/grace.hdr") +
+                                   " --format json > " + (tmp / "c.json"));
+  ASSERT_EQ(r.exitCode, 0) << r.output;
+  std::ofstream(tmp / "c.json", std::ios::app) << "junk\n";
+  expectRefused(tmp, "render --headless --out r.png --coeffs c.json", "c.json", "not valid JSON");
+  std::ofstream(tmp / "b.json") << R"({"calibration_ms": 1, "stages": {}} {"more": 1})";
+  expectRefused(tmp, "bench --frames 1 --repeat 1 --baseline b.json", "b.json",
+                "not a liveprobe bench JSON");
+}
+
+// A recording's sidecar exposures divide its frames: zero, denormal, negative or non-numbers
+// are refused, never turned into infinite or null coefficients.
+TEST(Hostile, SidecarExposuresMustBePositiveAndFinite) {
+  lpt::TempDir tmp;
+  const auto r =
+      lpt::runLiveprobe("record synthetic:64x32 --frames 2 --quiet --out " + (tmp / "rec.mkv"));
+  ASSERT_EQ(r.exitCode, 0) << r.output;
+  std::ifstream in(tmp / "rec.mkv.json");
+  const std::string sidecar((std::istreambuf_iterator<char>(in)), {});
+  const auto at = sidecar.find("\"exposure\":");
+  ASSERT_NE(at, std::string::npos) << sidecar;
+  const auto end = sidecar.find(',', at);
+  for (const char* bad : {"0", "1e-320", "-1", "\"x\""}) {
+    std::ofstream(tmp / "rec.mkv.json")
+        << sidecar.substr(0, at) << "\"exposure\":" << bad << sidecar.substr(end);
+    expectRefused(tmp, "replay --headless --frames 1 rec.mkv", "rec.mkv.json", "exposure");
+  }
+}
+
+}  // namespace
