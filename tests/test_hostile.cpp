@@ -137,4 +137,59 @@ TEST(Hostile, SidecarExposuresMustBePositiveAndFinite) {
   }
 }
 
+// assimp reads "nan" as a number; the OBJ's coordinates are checked before it sees them.
+TEST(Hostile, ModelCoordinatesMustBeFinite) {
+  lpt::TempDir tmp;
+  for (const char* bad : {"nan", "inf", "1e999", "1.2.3"}) {
+    std::ofstream(tmp / "t.obj") << "v 0 0 0\nv 1 0 " << bad << "\nv 0 1 0\nf 1 2 3\n";
+    expectRefused(tmp, "render --headless --out r.png --coeff L00=1 --model t.obj", "t.obj",
+                  "not a finite number");
+  }
+}
+
+// Five of six cube faces is a cube with a face missing, not an image sequence.
+TEST(Hostile, MissingCubeFaceIsNamed) {
+  lpt::TempDir tmp;
+  fs::create_directory(tmp.path / "cube");
+  for (const char* f : {"px", "nx", "py", "ny", "pz"})
+    fs::copy_file(lpt::dataPath(std::string("cube/pisaHDR/") + f + ".hdr"),
+                  tmp.path / "cube" / (std::string(f) + ".hdr"));
+  expectRefused(tmp, "coeffs cube", "cube", "missing nz");
+}
+
+// One limit on decoded pixels, checked from the header before decoding (a 56-byte Radiance
+// file that declares 20000x20000 would otherwise ask for 4.8 GB), raised or lowered with
+// LIVEPROBE_MAX_PIXELS.
+TEST(Hostile, PixelLimitIsCheckedFromTheHeader) {
+  lpt::TempDir tmp;
+  std::ofstream(tmp / "big.hdr") << "#?RADIANCE\nFORMAT=32-bit_rle_rgbe\n\n-Y 20000 +X 20000\n";
+  expectRefused(tmp, "coeffs big.hdr", "big.hdr", "above the limit of 268 M");
+  ASSERT_TRUE(cv::imwrite(tmp / "small.png", cv::Mat(32, 64, CV_8UC3, cv::Scalar(9, 9, 9))));
+  const auto r =
+      lpt::runCommand("cd " + lpt::shellQuote(tmp.path.string()) +
+                      " && LIVEPROBE_MAX_PIXELS=1000 " + LIVEPROBE_BIN + " coeffs small.png");
+  EXPECT_EQ(r.exitCode, 1) << r.output;
+  EXPECT_EQ(lpt::lineCount(r.output), 1) << r.output;
+  EXPECT_NE(r.output.find("small.png: 64x32"), std::string::npos) << r.output;
+}
+
+// Pixels near float's maximum sum to infinity: an error, never a null in the JSON.
+TEST(Hostile, OverflowingPixelsAreAnError) {
+  lpt::TempDir tmp;
+  ASSERT_TRUE(
+      cv::imwrite(tmp / "huge.exr", cv::Mat(32, 64, CV_32FC3, cv::Scalar(3e38, 3e38, 3e38))));
+  expectRefused(tmp, "coeffs huge.exr", "huge.exr", "not finite");
+}
+
+// A recording of a run that fails (a sequence whose second frame has another size) is discarded:
+// no video, sidecar or temporary is left, where it used to be finalised with one frame.
+TEST(Hostile, FailedRecordingIsDiscarded) {
+  lpt::TempDir tmp;
+  fs::create_directory(tmp.path / "seq");
+  ASSERT_TRUE(cv::imwrite(tmp / "seq/a.png", cv::Mat(32, 64, CV_8UC3, cv::Scalar(9, 9, 9))));
+  ASSERT_TRUE(cv::imwrite(tmp / "seq/b.png", cv::Mat(64, 128, CV_8UC3, cv::Scalar(9, 9, 9))));
+  expectRefused(tmp, "record seq --quiet --out o.mkv", "b.png", "128x64 differs");
+  expectRefused(tmp, "replay seq --headless --quiet --out-video v.mkv", "b.png", "128x64 differs");
+}
+
 }  // namespace

@@ -224,7 +224,8 @@ TEST(Recording, RoundTripThroughFfv1) {
     lp::VideoRecorder rec(file, src->fps(), src->describe());
     lp::Frame f;
     for (int i = 0; i < 10 && src->next(f); ++i) rec.write(f);
-  }  // the destructor finalises
+    rec.finish();
+  }
   ASSERT_TRUE(std::filesystem::exists(file));
   ASSERT_TRUE(std::filesystem::exists(file + ".json"));
   auto replay = lp::openSource(file);

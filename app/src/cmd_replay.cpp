@@ -425,13 +425,15 @@ int runStream(const Args& a, std::unique_ptr<FrameSource> source, bool live) {
   pipeline.stop();
   progress.finish();
   const PipelineStats st = pipeline.stats();
-  if (out.record) {
+  // A camera's frames up to a fault are real data and are kept; a replay that failed keeps
+  // nothing (the recorders' destructors discard what they wrote).
+  const bool keep = st.error.empty() || live;
+  if (out.record && keep) {
     out.record->finish();
     std::fprintf(stderr, "liveprobe: recorded %zu frames to %s\n", out.record->frames(),
                  out.record->path().c_str());
   }
-  if (out.coeffs && (st.error.empty() || live))
-    out.coeffs->commit();  // a camera's frames up to a fault are real data
+  if (out.coeffs && keep) out.coeffs->commit();
   if (!st.error.empty()) throw Error(st.error);
   if (out.video) out.video->finish();
   printSummary(description, st, tally, opt.smoothSeconds, stopRequested());

@@ -12,6 +12,7 @@
 
 #include "args.h"
 #include "commands.h"
+#include "liveprobe/capture/image.h"
 #include "liveprobe/sh/error.h"
 #include "liveprobe/sh/simd.h"
 
@@ -39,6 +40,18 @@ int main(int argc, char** argv) {
   // reported by us. Set once, here, before any decoding (library code sets no environment).
   ::setenv("OPENCV_FFMPEG_LOGLEVEL", "-8", 0);
   cv::utils::logging::setLogLevel(cv::utils::logging::LOG_LEVEL_SILENT);
+  // One limit on decoded pixels for every decoder: ours check it from the header, OpenCV's read
+  // their own variable, set here to the same number before any image is opened.
+  if (const char* env = std::getenv("LIVEPROBE_MAX_PIXELS")) {
+    char* end = nullptr;
+    const double n = std::strtod(env, &end);
+    if (end == env || *end || !(n >= 1 && n <= 1e12)) {
+      std::cerr << "liveprobe: LIVEPROBE_MAX_PIXELS=" << env << ": expected 1 to 1e12 pixels\n";
+      return 1;
+    }
+    lp::setMaxImagePixels(std::int64_t(n));
+  }
+  ::setenv("OPENCV_IO_MAX_IMAGE_PIXELS", std::to_string(lp::maxImagePixels()).c_str(), 1);
   std::vector<std::string> args(argv + 1, argv + argc);
   if (args.empty() || args[0] == "--help" || args[0] == "-h" || args[0] == "help") {
     printOverview();

@@ -105,6 +105,8 @@ Environment loadEnvironment(const std::string& source, const LayoutSpec& layout,
   env.radiance = rotateSh(project(PanoramaView::rgbF32(env.image.rgb.data(), env.image.width,
                                                        env.image.height, layout)),
                           orientation);
+  if (!isFinite(env.radiance))
+    throw Error(source + ": the coefficients are not finite (radiance too large to sum in float)");
   return env;
 }
 

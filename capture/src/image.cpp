@@ -40,6 +40,15 @@ std::string lower(std::string s) {
   return s;
 }
 
+std::int64_t gMaxPixels = kDefaultMaxImagePixels;
+
+void checkPixelCount(const std::string& path, std::int64_t width, std::int64_t height) {
+  if (width * height <= gMaxPixels) return;
+  throw Error(path + ": " + std::to_string(width) + "x" + std::to_string(height) + " is " +
+              std::to_string(width * height / 1000000) + " M pixels, above the limit of " +
+              std::to_string(gMaxPixels / 1000000) + " M (LIVEPROBE_MAX_PIXELS raises it)");
+}
+
 // OpenCV's Radiance reader accepts a file whose RLE scanlines stop early and returns the image
 // with the missing rows left black. A complete file holds at least one RLE (>= 4-byte header per
 // scanline) or flat (4 bytes per pixel) record per row, so we check the header's size line against
@@ -62,6 +71,7 @@ void checkRadianceComplete(const std::string& path) {
     }
   }
   if (!sawSize) throw Error(path + ": Radiance header has no valid resolution line");
+  checkPixelCount(path, width, height);
   const auto size = fs::file_size(path);
   const auto payload = size > headerBytes ? size - headerBytes : 0;
   // Decode the scanlines ourselves just far enough to count them.
@@ -125,6 +135,7 @@ void readPng(const std::string& path, Frame& frame) {
     throw Error(path + ": not a readable PNG image (" + std::string(img.message) + ")");
   };
   if (!png_image_begin_read_from_file(&img, path.c_str())) fail();
+  checkPixelCount(path, img.width, img.height);
   const bool wide = img.format & PNG_FORMAT_FLAG_LINEAR;
   img.format = wide ? PNG_FORMAT_LINEAR_RGB : PNG_FORMAT_BGR;
   frame.width = int(img.width);
@@ -146,6 +157,9 @@ void readPng(const std::string& path, Frame& frame) {
 }
 
 }  // namespace
+
+std::int64_t maxImagePixels() { return gMaxPixels; }
+void setMaxImagePixels(std::int64_t pixels) { gMaxPixels = pixels; }
 
 void readImageFrame(const std::string& path, Frame& frame) {
   std::error_code ec;

@@ -171,6 +171,9 @@ Sh9 CapturePipeline::project(Loop& s, ProcessedFrame& out) const {
   }
   out.rawScale = float(scale) * opt_.photometry.exposure;
   out.displayScale = s.frame.format == PixelFormat::Bgr8 ? out.rawScale : 0.0f;
+  if (!isFinite(sh))
+    throw Error(source_->describe() + ": frame " + std::to_string(out.index + 1) +
+                ": the coefficients are not finite (radiance too large to sum in float)");
   if (opt_.rotation) sh = rotateSh(sh, *opt_.rotation);
   out.unsmoothed = sh;
   return s.smoother.update(sh, out.timestamp);

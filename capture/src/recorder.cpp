@@ -47,13 +47,21 @@ VideoRecorder::VideoRecorder(std::string path, double fps, std::string sourceDes
 
 VideoRecorder::~VideoRecorder() {
   try {
-    finish();
+    discard();  // finish() was not called: the run failed, and nothing is put in place
   } catch (...) {  // a destructor must not throw; finish() already cleaned up what it could
   }
 }
 
 void VideoRecorder::write(const Frame& f) {
   if (finished_) throw Error(path_ + ": recording already finished");
+  if (!stamps_.empty() && (f.width != width_ || f.height != height_)) {
+    failed_ = true;  // a video has one frame size: this recording is discarded, not finalised
+    throw Error(path_ + ": frame " + std::to_string(stamps_.size() + 1) + " is " +
+                std::to_string(f.width) + "x" + std::to_string(f.height) + ", the recording is " +
+                std::to_string(width_) + "x" + std::to_string(height_));
+  }
+  width_ = f.width;
+  height_ = f.height;
   cv::Mat& bgr = impl_->bgr;
   double exposure = 0;
   if (f.format == PixelFormat::Bgr8) {
@@ -90,7 +98,19 @@ void VideoRecorder::write(const Frame& f) {
   exposures_.push_back(exposure);
 }
 
+void VideoRecorder::discard() {
+  if (finished_) return;
+  finished_ = true;
+  impl_->writer.release();
+  video_->discard();
+  sidecar_.reset();  // its destructor removes the temporary
+}
+
 void VideoRecorder::finish() {
+  if (failed_) {
+    discard();
+    throw Error(path_ + ": not written (a frame was refused)");
+  }
   if (finished_) return;
   finished_ = true;
   if (!impl_->writer.isOpened()) {  // nothing was recorded: nothing is left behind

@@ -236,8 +236,11 @@ std::unique_ptr<FrameSource> openCubeFaces(const std::string& dir, double fps) {
   for (const auto& e : fs::directory_iterator(dir))
     for (int k = 0; k < 6; ++k)
       if (e.path().stem() == names[k] && isImageFile(e.path())) faces[k] = e.path().string();
-  for (int k = 0; k < 6; ++k)
-    if (faces[k].empty()) return nullptr;
+  std::string found, missing;
+  for (int k = 0; k < 6; ++k) (faces[k].empty() ? missing : found) += std::string(" ") + names[k];
+  if (found.empty()) return nullptr;  // no face names: a plain sequence
+  if (!missing.empty())
+    throw Error(dir + ": a cube needs six faces; missing" + missing + " (found" + found + ")");
   return std::make_unique<CubeFacesSource>(faces, dir, fps);
 }
 

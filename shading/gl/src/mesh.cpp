@@ -5,8 +5,12 @@
 
 #include <algorithm>
 #include <assimp/Importer.hpp>
+#include <cctype>
 #include <cmath>
+#include <cstdlib>
 #include <filesystem>
+#include <fstream>
+#include <sstream>
 
 #include "liveprobe/sh/sh.h"
 
@@ -35,9 +39,35 @@ Mesh makeUvSphere(int segments, int rings) {
   return m;
 }
 
+namespace {
+
+// assimp reads a coordinate it cannot parse ("nan", "1.2.3") as a number all the same, so an OBJ's
+// vertex lines are checked first: every coordinate must be a whole, finite number.
+void checkObjCoordinates(const std::string& path) {
+  std::ifstream in(path);
+  std::string line;
+  for (int n = 1; std::getline(in, line); ++n) {
+    if (line.size() < 2 || line[0] != 'v' || (line[1] != ' ' && line[1] != 't' && line[1] != 'n'))
+      continue;
+    std::istringstream tokens(line.substr(line[1] == ' ' ? 1 : 2));
+    for (std::string t; tokens >> t;) {
+      char* end = nullptr;
+      const double v = std::strtod(t.c_str(), &end);
+      if (end != t.c_str() + t.size() || !std::isfinite(v))
+        throw MeshError(path + ": line " + std::to_string(n) + ": coordinate '" + t +
+                        "' is not a finite number");
+    }
+  }
+}
+
+}  // namespace
+
 Mesh loadMesh(const std::string& path) {
   std::error_code ec;
   if (!std::filesystem::exists(path, ec)) throw MeshError(path + ": no such file");
+  std::string ext = std::filesystem::path(path).extension().string();
+  for (auto& c : ext) c = char(std::tolower(static_cast<unsigned char>(c)));
+  if (ext == ".obj") checkObjCoordinates(path);
   Assimp::Importer importer;
   // Smooth normals are generated only where the file has none (assimp skips meshes with normals).
   const aiScene* scene = importer.ReadFile(
@@ -58,7 +88,11 @@ Mesh loadMesh(const std::string& path) {
     const auto base = std::uint32_t(out.positions.size());
     const bool uv = am->HasTextureCoords(0);
     for (unsigned v = 0; v < am->mNumVertices; ++v) {
-      out.positions.emplace_back(am->mVertices[v].x, am->mVertices[v].y, am->mVertices[v].z);
+      const glm::vec3 p(am->mVertices[v].x, am->mVertices[v].y, am->mVertices[v].z);
+      if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z))
+        throw MeshError(path + ": vertex " + std::to_string(out.positions.size() + 1) +
+                        " is not a finite number");
+      out.positions.push_back(p);
       glm::vec3 n(am->mNormals[v].x, am->mNormals[v].y, am->mNormals[v].z);
       const float len = glm::length(n);
       out.normals.push_back(len > 0 && std::isfinite(len) ? n / len : glm::vec3(0, 1, 0));

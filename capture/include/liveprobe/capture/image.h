@@ -9,6 +9,13 @@
 
 namespace lp {
 
+/// The most pixels an image file may declare: checked from its header before anything is
+/// decoded (PNG, Radiance here; OpenCV's other decoders by OPENCV_IO_MAX_IMAGE_PIXELS, which
+/// main() sets to the same). Default 268,435,456 (2^28, OpenCV's own default).
+inline constexpr std::int64_t kDefaultMaxImagePixels = std::int64_t(1) << 28;
+std::int64_t maxImagePixels();
+void setMaxImagePixels(std::int64_t pixels);
+
 /// sRGB transfer function, decode (8-bit code value / 255 -> linear) and encode.
 float srgbToLinear(float v);
 float linearToSrgb(float v);

@@ -3,8 +3,10 @@
 // through OpenCV videoio with FFmpeg, plus a JSON sidecar (FILE.json) with the exposure and every
 // frame's timestamp. 8-bit frames are stored as they came; float (HDR) frames are stored as sRGB
 // of radiance * exposure, the exposure chosen on the first frame so its brightest pixel is at 95%.
-// The video is written under a temporary name and renamed, with its sidecar, by finish() (or the
-// destructor): a stream that stops, even by a fault, leaves a playable file up to its last frame.
+// The video is written under a temporary name and renamed, with its sidecar, only by finish():
+// a caller that keeps what was recorded up to a fault (a camera unplugged mid-stream) says so.
+// Otherwise (an error, an exception) the destructor discards it, and so it does when a write was
+// refused (a frame of another size): nothing half-made is ever put in place.
 #include <memory>
 #include <string>
 #include <vector>
@@ -27,8 +29,11 @@ class VideoRecorder {
 
   /// Appends a frame (its timestamp goes to the sidecar). Throws lp::Error on a write failure.
   void write(const Frame& frame);
-  /// Closes the video, writes the sidecar, renames both into place. Idempotent.
+  /// Closes the video, writes the sidecar, renames both into place. Idempotent. After a refused
+  /// write it discards instead and throws lp::Error.
   void finish();
+  /// Removes what was written; nothing is put in place. Idempotent.
+  void discard();
   std::size_t frames() const { return stamps_.size(); }
   const std::string& path() const { return path_; }
 
@@ -40,7 +45,8 @@ class VideoRecorder {
   std::unique_ptr<AtomicTextFile> sidecar_;  ///< FILE.json, likewise
   double fps_, exposure_ = 0;                ///< float frames: the one exposure chosen on the first
   std::vector<double> stamps_, exposures_;   ///< per frame
-  bool finished_ = false;
+  int width_ = 0, height_ = 0;
+  bool finished_ = false, failed_ = false;  ///< failed: a write was refused; never finalised
 };
 
 }  // namespace lp

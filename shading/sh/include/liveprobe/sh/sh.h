@@ -38,6 +38,7 @@
 //     c1 = 0.429043 c2 = 0.511664 c3 = 0.743125 c4 = 0.886227 c5 = 0.247708.
 // ============================================================================================
 #include <array>
+#include <cmath>
 #include <cstddef>
 #include <cstdint>
 #include <glm/glm.hpp>
@@ -89,6 +90,14 @@ inline constexpr float kY1 = 0.488603f;   ///< Y1-1 / y, Y10 / z, Y11 / x
 inline constexpr float kY2 = 1.092548f;   ///< Y2-2 / xy, Y2-1 / yz, Y21 / xz
 inline constexpr float kY20 = 0.315392f;  ///< Y20 / (3z^2 - 1)
 inline constexpr float kY22 = 0.546274f;  ///< Y22 / (x^2 - y^2)
+
+/// Whether every coefficient is a finite number (a frame of radiance near float's maximum sums
+/// to infinity: callers refuse such coefficients rather than pass them on).
+inline bool isFinite(const Sh9& sh) {
+  for (const Rgb& c : sh.c)
+    if (!std::isfinite(c.x) || !std::isfinite(c.y) || !std::isfinite(c.z)) return false;
+  return true;
+}
 
 /// Clamped-cosine convolution factors A_l (l = 0, 1, 2).
 inline constexpr float kA0 = float(kPi);
