@@ -47,7 +47,7 @@ VideoRecorder::VideoRecorder(std::string path, double fps, std::string sourceDes
 
 VideoRecorder::~VideoRecorder() {
   try {
-    discard();  // finish() was not called: the run failed, and nothing is put in place
+    discard();     // finish() was not called: the run failed, and nothing is put in place
   } catch (...) {  // a destructor must not throw; finish() already cleaned up what it could
   }
 }
