@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 #include <linux/videodev2.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <fstream>
@@ -134,6 +135,31 @@ TEST(LiveMetadata, EveryFrameKeepsItsOwnExposure) {
       const double x = a[i]["coefficients"]["L00"][c], y = b[i]["coefficients"]["L00"][c];
       EXPECT_NEAR(y, x, 1e-4 * x) << "frame " << i;  // FFV1 keeps the decoded frames exactly
     }
+}
+
+// Glass-to-light latency starts at the driver's capture timestamp: a camera whose frames are
+// 200 ms old when dequeued (the emulator's latency=200) shows every figure 200 ms later, in
+// --coeffs-out (capture to coefficients) and in the summary (capture to shown).
+TEST(LiveMetadata, LatencyStartsAtTheCaptureTimestamp) {
+  auto medianLatency = [](const std::string& faults, std::string& summary) {
+    Emulator emu({"MJPG_320x160"}, faults);
+    const std::string out = emu.tmp / "c.jsonl";
+    const auto r = emu.run("live /dev/video7 --frames 12" + kCommon + "--coeffs-out " + out);
+    EXPECT_EQ(r.exitCode, 0) << r.output;
+    summary = r.output;
+    std::vector<double> v;
+    for (const auto& j : readJsonl(out)) v.push_back(j["latency_ms"]["coefficients"].get<double>());
+    EXPECT_EQ(v.size(), 12u);
+    std::sort(v.begin(), v.end());
+    return v.empty() ? 0.0 : v[v.size() / 2];
+  };
+  std::string fast, slow;
+  const double a = medianLatency("", fast), b = medianLatency("latency=200", slow);
+  EXPECT_GE(a, 0.0);
+  EXPECT_LT(a, 150.0);  // decode and projection of a 320x160 frame
+  EXPECT_NEAR(b - a, 200.0, 40.0) << a << " then " << b;
+  for (const auto* s : {&fast, &slow})
+    EXPECT_NE(s->find("latency ms (capture to shown): p50"), std::string::npos) << *s;
 }
 
 void expectFault(const Emulator& emu, const std::string& args, const std::string& says,

@@ -39,15 +39,6 @@ double msSince(Clock::time_point t0) {
   return std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
 }
 
-double percentile(std::vector<double> v, double p) {
-  if (v.empty()) return 0;
-  std::sort(v.begin(), v.end());
-  const double pos = p * double(v.size() - 1);
-  const auto i = std::size_t(pos);
-  const double f = pos - double(i);
-  return i + 1 < v.size() ? v[i] * (1 - f) + v[i + 1] * f : v[i];
-}
-
 // Busy-waits, so an injected delay costs CPU time like real work does.
 void spin(double ms) {
   const auto end = Clock::now() + std::chrono::duration<double, std::milli>(ms);
@@ -472,6 +463,14 @@ int runBench(const Args& a) {
   out["runs"] = repeat;
   out["source"] = description;
   out["stages"] = stageSummary(all, runMedians, repeat, frames, description);
+  // Latency, as replay measures it: from the frame's grab to the frame shown (read back).
+  std::vector<double> latency;
+  for (const auto& t : all) latency.push_back(t[1] + t[2] + t[3] + t[4] + t[5]);
+  out["latency_ms"] = {{"p50", percentile(latency, 0.5)},
+                       {"p95", percentile(latency, 0.95)},
+                       {"p99", percentile(latency, 0.99)}};
+  std::printf("latency (grab to shown) ms: p50 %.2f, p95 %.2f, p99 %.2f\n",
+              percentile(latency, 0.5), percentile(latency, 0.95), percentile(latency, 0.99));
   out["calibration_ms"] = calibration;
   std::printf("calibration kernel: %.3f ms\n", calibration);
   int compared = 0;

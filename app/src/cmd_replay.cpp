@@ -35,14 +35,11 @@ std::string defaultRecording() {
 
 namespace {
 
-double median(std::vector<double> v) {
-  if (v.empty()) return 0;
-  std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
-  return v[v.size() / 2];
-}
+double median(const std::vector<double>& v) { return percentile(v, 0.5); }
 
 /// One line of --coeffs-out. `renderMs` < 0 writes null (a frame that was never drawn).
-std::string coeffsLine(const ProcessedFrame& f, double renderMs) {
+/// `shownLatencyMs` < 0: not known when the line is written (live writes at capture).
+std::string coeffsLine(const ProcessedFrame& f, double renderMs, double shownLatencyMs = -1) {
   nlohmann::ordered_json j;
   j["frame"] = f.index;
   j["time"] = f.timestamp;
@@ -53,6 +50,12 @@ std::string coeffsLine(const ProcessedFrame& f, double renderMs) {
   t["project"] = f.times.projectMs;
   t["render"] = renderMs < 0 ? nlohmann::ordered_json(nullptr) : nlohmann::ordered_json(renderMs);
   j["timings_ms"] = t;
+  // Glass-to-light latency from the capture time (a camera's driver timestamp, or the grab of a
+  // file's frame): to the coefficients, and to the frame that shows them.
+  nlohmann::ordered_json l;
+  l["coefficients"] = f.coefficientsLatencyMs;
+  if (shownLatencyMs >= 0) l["shown"] = shownLatencyMs;
+  j["latency_ms"] = l;
   return j.dump();
 }
 
@@ -200,6 +203,7 @@ StreamOutputs openOutputs(const Args& a, double fps, const std::string& descript
 /// What the render loop measured, for the summary.
 struct StreamTally {
   std::vector<double> grab, convert, project, upload, render;
+  std::vector<double> latency;  ///< capture to shown, ms
   std::size_t drawn = 0, saturated = 0;
 };
 
@@ -243,7 +247,8 @@ struct StreamView {
 };
 
 void recordSample(StreamTally& t, const ProcessedFrame& f, double uploadMs, double renderMs,
-                  Hud* hud, const PipelineStats& st) {
+                  double latencyMs, Hud* hud, const PipelineStats& st) {
+  t.latency.push_back(latencyMs);
   t.grab.push_back(f.times.grabMs);
   t.convert.push_back(f.times.convertMs);
   t.project.push_back(f.times.projectMs);
@@ -255,7 +260,7 @@ void recordSample(StreamTally& t, const ProcessedFrame& f, double uploadMs, doub
   s.frame = f.index;
   s.time = f.timestamp;
   s.grabMs = f.times.grabMs, s.convertMs = f.times.convertMs, s.projectMs = f.times.projectMs;
-  s.uploadMs = uploadMs, s.renderMs = renderMs;
+  s.uploadMs = uploadMs, s.renderMs = renderMs, s.latencyMs = latencyMs;
   s.radiance = f.radiance;
   s.unsmoothed = f.unsmoothed;
   hud->push(s);
@@ -274,9 +279,10 @@ void runOffline(CapturePipeline& pipeline, StreamView& view, const StreamOutputs
     const glm::ivec2 fb = view.ctx->framebufferSize();
     const auto px = gl::Renderer::readRgb8(fb);
     const double ms = std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
+    const double latency = 1000.0 * (monotonicSeconds() - f->captureTime);
     ++tally.drawn;
-    recordSample(tally, *f, uploadMs, ms, view.hud.get(), pipeline.stats());
-    if (out.coeffs) out.coeffs->line(coeffsLine(*f, ms));
+    recordSample(tally, *f, uploadMs, ms, latency, view.hud.get(), pipeline.stats());
+    if (out.coeffs) out.coeffs->line(coeffsLine(*f, ms, latency));
     out.writeFrame(*f, fb, px);
     lastMs = ms;
     progress.update(std::int64_t(tally.drawn));
@@ -313,7 +319,8 @@ void runInteractive(CapturePipeline& pipeline, StreamView& view, StreamTally& ta
     const PipelineStats st = pipeline.stats();  // once a frame, for the HUD, progress and title
     if (f) {
       ++tally.drawn;
-      recordSample(tally, *f, uploadMs, lastMs, view.hud.get(), st);
+      recordSample(tally, *f, uploadMs, lastMs, 1000.0 * (monotonicSeconds() - f->captureTime),
+                   view.hud.get(), st);
       progress.update(std::int64_t(st.captured));
     }
     ++fpsFrames;
@@ -340,6 +347,10 @@ void printSummary(const std::string& description, const PipelineStats& st, const
                interrupted ? "; stopped by a signal" : "", median(t.grab), median(t.convert),
                median(t.project), median(t.upload), median(t.render),
                t.grab.empty() ? 0.0 : double(t.saturated) / double(t.grab.size()));
+  if (!t.latency.empty())
+    std::fprintf(stderr, "  latency ms (capture to shown): p50 %.1f, p95 %.1f, p99 %.1f\n",
+                 percentile(t.latency, 0.5), percentile(t.latency, 0.95),
+                 percentile(t.latency, 0.99));
   if (smoothSeconds > 0)
     std::fprintf(stderr,
                  "  --smooth %.3g s: lighting lags a step change by %.3g s (63%% of the step)\n",

@@ -11,6 +11,7 @@
 #include "coeffs_io.h"
 #include "liveprobe/capture/atomic_file.h"
 #include "liveprobe/sh/error.h"
+#include "progress.h"
 
 namespace lp::cli {
 
@@ -195,6 +196,12 @@ void Hud::drawStatus(ViewState& state, double frameMs) {
                 history_.back().time);
   ImGui::Text("%.1f frames/s   %.2f ms/frame", fpsSmoothed_ > 0 ? 1000.0 / fpsSmoothed_ : 0.0,
               frameMs);
+  if (!still_ && !history_.empty()) {
+    std::vector<double> latency;
+    for (const auto& h : history_) latency.push_back(h.latencyMs);
+    ImGui::Text("latency p50 %.1f  p95 %.1f  p99 %.1f ms", percentile(latency, 0.5),
+                percentile(latency, 0.95), percentile(latency, 0.99));
+  }
   if (!still_ && !history_.empty()) {
     std::vector<std::vector<float>> series(5);
     std::vector<float> all;

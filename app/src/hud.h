@@ -20,8 +20,9 @@ struct HudSample {
   std::uint64_t frame = 0;
   double time = 0;  ///< the source's timestamp, seconds
   double grabMs = 0, convertMs = 0, projectMs = 0, uploadMs = 0, renderMs = 0;
-  Sh9 radiance;    ///< as lit (after rotation and smoothing)
-  Sh9 unsmoothed;  ///< before smoothing (equal to radiance without --smooth)
+  double latencyMs = 0;  ///< capture to shown
+  Sh9 radiance;          ///< as lit (after rotation and smoothing)
+  Sh9 unsmoothed;        ///< before smoothing (equal to radiance without --smooth)
 };
 
 struct HudCounters {

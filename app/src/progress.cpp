@@ -2,6 +2,7 @@
 
 #include <unistd.h>
 
+#include <algorithm>
 #include <atomic>
 #include <cmath>
 #include <csignal>
@@ -104,6 +105,15 @@ void Progress::update(std::int64_t done) {
 void Progress::finish() {
   if (open_) std::fprintf(stderr, "\r\033[K");
   open_ = false;
+}
+
+double percentile(std::vector<double> v, double p) {
+  if (v.empty()) return 0;
+  std::sort(v.begin(), v.end());
+  const double pos = p * double(v.size() - 1);
+  const auto i = std::size_t(pos);
+  const double f = pos - double(i);
+  return i + 1 < v.size() ? v[i] * (1 - f) + v[i + 1] * f : v[i];
 }
 
 }  // namespace lp::cli

@@ -5,6 +5,7 @@
 #include <chrono>
 #include <cstdint>
 #include <string>
+#include <vector>
 
 namespace lp::cli {
 
@@ -41,5 +42,8 @@ class Progress {
 
 /// One warning line on stderr ("liveprobe: warning: ..."); the run goes on.
 void warn(const std::string& text);
+
+/// The p-quantile (0..1) of `v`, linearly interpolated; 0 for no values.
+double percentile(std::vector<double> v, double p);
 
 }  // namespace lp::cli

@@ -1,5 +1,7 @@
 #include "liveprobe/capture/pipeline.h"
 
+#include <time.h>
+
 #include <chrono>
 #include <cmath>
 #include <utility>
@@ -9,6 +11,12 @@
 #include "liveprobe/sh/executor.h"
 
 namespace lp {
+
+double monotonicSeconds() {
+  timespec t{};
+  clock_gettime(CLOCK_MONOTONIC, &t);
+  return double(t.tv_sec) + 1e-9 * double(t.tv_nsec);
+}
 
 namespace {
 using Clock = std::chrono::steady_clock;
@@ -196,6 +204,7 @@ void CapturePipeline::run() {
       const auto t0 = Clock::now();
       if (!grab(s)) break;
       const auto t1 = Clock::now();
+      const double grabbed = monotonicSeconds();
       fitProjector(s);
       ProcessedFrame out;
       out.index = s.index++;
@@ -208,6 +217,8 @@ void CapturePipeline::run() {
       if (opt_.keepImages && !out.raw) out.image = std::move(s.image);  // one background a frame
       s.image.reset();
       out.times = {msBetween(t0, t1), msBetween(t1, t2), msBetween(t2, t3)};
+      out.captureTime = s.frame.captureTime >= 0 ? s.frame.captureTime : grabbed;
+      out.coefficientsLatencyMs = 1000.0 * (monotonicSeconds() - out.captureTime);
       if (opt_.onCaptured) opt_.onCaptured(out);
       pace(s, out.timestamp);
       publish(std::move(out));

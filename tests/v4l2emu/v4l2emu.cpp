@@ -16,7 +16,8 @@
 //   LPEMU_FPS      frame rate (default 30)
 //   LPEMU_FAULTS   comma list: busy_open, busy_reqbufs, grant=N, einval_fmt, stop_after=N,
 //                  eintr, unplug_after=N, exposure_walk (auto exposure changes every frame),
-//                  refuse=ID (S_CTRL of that control id fails with EBUSY)
+//                  refuse=ID (S_CTRL of that control id fails with EBUSY), latency=MS (each
+//                  frame's timestamp is MS before its dequeue)
 //   LPEMU_LOG      file to which each call is appended as one line (for assertions)
 // What it cannot prove about real drivers: README, "Testing without a camera".
 #include <dlfcn.h>
@@ -331,9 +332,16 @@ int Emu::handle(unsigned long req, void* arg) {
         b->index = std::uint32_t(i);
         b->bytesused = bytesused[i];
         b->sequence = sequence++;
-        // CLOCK_MONOTONIC, as the flag says (the kernel's contract for UVC).
+        // CLOCK_MONOTONIC, as the flag says (the kernel's contract for UVC). latency=MS: the
+        // frame was exposed MS before it is dequeued (a slow sensor or USB transfer).
         timespec now{};
         clock_gettime(CLOCK_MONOTONIC, &now);
+        if (fault("latency")) {
+          const long long ns =
+              now.tv_sec * 1000000000LL + now.tv_nsec - faults["latency"] * 1000000LL;
+          now.tv_sec = ns / 1000000000LL;
+          now.tv_nsec = ns % 1000000000LL;
+        }
         b->timestamp.tv_sec = now.tv_sec;
         b->timestamp.tv_usec = now.tv_nsec / 1000;
         b->flags = V4L2_BUF_FLAG_MAPPED | V4L2_BUF_FLAG_TIMESTAMP_MONOTONIC;

@@ -34,6 +34,9 @@ struct Frame {
   std::optional<std::int32_t> exposure100us, gain;
 };
 
+/// Now on CLOCK_MONOTONIC, in seconds: the clock of Frame::captureTime.
+double monotonicSeconds();
+
 class FrameSource {
  public:
   virtual ~FrameSource() = default;

@@ -45,6 +45,11 @@ struct ProcessedFrame {
   float displayScale = 0.0f;
   StageTimes times;
   std::size_t saturated = 0;
+  /// Where glass-to-light latency starts, CLOCK_MONOTONIC seconds: the driver's capture time
+  /// for a camera, the moment the frame was grabbed for a file.
+  double captureTime = 0;
+  /// Capture to coefficients ready, ms.
+  double coefficientsLatencyMs = 0;
 };
 
 enum class Handoff : std::uint8_t { Latest, Every };
