@@ -3,8 +3,9 @@
 // picked by our own table below rather than HWY_DYNAMIC_DISPATCH, so LIVEPROBE_SIMD can force one
 // and the core needs Highway's headers only, not its library.
 
-// Scalar (EMU128), AVX2, AVX-512 and NEON. SVE is left out: its vectors are sizeless and cannot
-// sit in the accumulator arrays below, and no machine here runs it. AVX3_DL adds nothing we use.
+// Scalar (Highway's SCALAR or EMU128 target), AVX2, AVX-512 and NEON. SVE is left out: its vectors
+// are sizeless and cannot sit in the accumulator arrays below, and no machine here runs it. AVX3_DL
+// adds nothing we use.
 #ifndef HWY_DISABLED_TARGETS
 #define HWY_DISABLED_TARGETS \
   (HWY_SSSE3 | HWY_SSE4 | HWY_AVX3_DL | HWY_SVE | HWY_SVE2 | HWY_SVE_256 | HWY_SVE2_128)

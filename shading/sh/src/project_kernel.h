@@ -26,8 +26,8 @@ struct EquirectTables {
 inline constexpr int kRowOf[9] = {0, 2, 1, 2, 4, 3, 5, 3, 4};
 inline constexpr int kColOf[9] = {0, 2, 0, 1, 4, 2, 0, 1, 3};
 
-/// Float lanes of the 27 sums (coefficient-major, then R, G, B), kMaxLanes each; a path uses as
-/// many lanes as its vectors have and leaves the rest zero.
+/// Float lanes of the 27 sums (coefficient-major, then the frame's channels), kMaxLanes each; a
+/// path uses as many lanes as its vectors have and leaves the rest zero.
 struct alignas(64) LaneSums {
   float v[27 * kMaxLanes];
 };

@@ -2,7 +2,7 @@
 // Which SIMD instruction set the core's kernels run on. One source (Highway) is compiled for
 // every path below; at run time the best one the CPU has is used, unless LIVEPROBE_SIMD names
 // another:
-//   scalar  portable C++, one lane at a time (Highway's EMU128 target)
+//   scalar  portable C++, one lane at a time (Highway's SCALAR or EMU128 target)
 //   avx2    x86 AVX2 + FMA (8 floats)
 //   avx512  x86 AVX-512 F/VL/DQ/BW (16 floats)
 //   neon    Arm NEON (4 floats; the baseline on aarch64)
