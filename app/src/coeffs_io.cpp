@@ -3,6 +3,7 @@
 #include <cmath>
 #include <cstdio>
 #include <fstream>
+#include <limits>
 #include <sstream>
 
 #include "liveprobe/capture/input_file.h"
@@ -45,6 +46,8 @@ Sh9 coefficientsFromJson(const nlohmann::json& j, const std::string& source) {
       if (!v[ch].is_number()) throw Error(source + ": coefficient " + name + " has a non-number");
       const double x = v[ch].get<double>();
       if (!std::isfinite(x)) throw Error(source + ": coefficient " + name + " is not finite");
+      if (std::abs(x) > double(std::numeric_limits<float>::max()))
+        throw Error(source + ": coefficient " + name + " is beyond float's range");
       out.c[k][ch] = float(x);
     }
   }
