@@ -2,7 +2,6 @@
 // main() makes the camera's frames, then runs this binary again with the emulator preloaded.
 #include <gtest/gtest.h>
 #include <sys/wait.h>
-#include <time.h>
 #include <unistd.h>
 
 #include <cstdlib>
@@ -34,12 +33,6 @@ std::size_t count(const std::string& text, const std::string& what) {
   std::size_t n = 0;
   for (auto p = text.find(what); p != std::string::npos; p = text.find(what, p + 1)) ++n;
   return n;
-}
-
-double monotonicNow() {
-  timespec t{};
-  clock_gettime(CLOCK_MONOTONIC, &t);
-  return double(t.tv_sec) + 1e-9 * double(t.tv_nsec);
 }
 
 // A verb in the wrong state is refused in one line that names the state it needs.
@@ -122,7 +115,7 @@ TEST(V4l2Verbs, FramesCarryTheirCaptureTimeAndExposure) {
   src.start();
   lp::Frame f;
   ASSERT_TRUE(src.next(f));
-  const double age = monotonicNow() - f.captureTime;
+  const double age = lp::monotonicSeconds() - f.captureTime;
   EXPECT_GE(age, 0.0);
   EXPECT_LT(age, 0.5);
   ASSERT_TRUE(f.exposure100us.has_value());

@@ -1,5 +1,4 @@
 // liveprobe bench: a frame-time regression run of the whole replay pipeline, headless.
-#include <unistd.h>
 
 #include <algorithm>
 #include <chrono>

@@ -1,7 +1,6 @@
 #include "liveprobe/capture/image.h"
 
 #include <png.h>
-#include <unistd.h>
 
 #include <algorithm>
 #include <array>

@@ -1,7 +1,5 @@
 #include "liveprobe/capture/recorder.h"
 
-#include <unistd.h>
-
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
