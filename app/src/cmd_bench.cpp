@@ -11,6 +11,7 @@
 #include <sstream>
 #include <thread>
 
+#include "baseline.h"
 #include "coeffs_io.h"
 #include "commands.h"
 #include "liveprobe/capture/atomic_file.h"
@@ -212,23 +213,6 @@ std::string plural(long n, const char* word) {
   return std::to_string(n) + " " + word + (n == 1 ? "" : "s");
 }
 
-nlohmann::json readBaseline(const std::string& path) {
-  requireRegularFile(path);
-  std::ifstream in(path);
-  if (!in) throw Error(path + ": cannot open the baseline");
-  nlohmann::json b;
-  try {
-    b = nlohmann::json::parse(in);  // the whole file: trailing text is an error
-    const double cal = b.at("calibration_ms").get<double>();
-    if (!(cal > 0) || !std::isfinite(cal))
-      throw Error(path + ": calibration_ms must be a positive number");
-    for (const auto& [name, st] : b.at("stages").items()) (void)st.at("median_ms").get<double>();
-  } catch (const nlohmann::json::exception& e) {
-    throw Error(path + ": not a liveprobe bench JSON (" + e.what() + ")");
-  }
-  return b;
-}
-
 std::array<double, kStageCount> parseInjections(const Args& a) {
   std::array<double, kStageCount> inject{};
   for (const auto& d : a.all("--inject-delay")) {
@@ -353,10 +337,11 @@ nlohmann::ordered_json compareWithBaseline(const nlohmann::ordered_json& stages,
                                            int& compared) {
   nlohmann::ordered_json regressions = nlohmann::ordered_json::array();
   compared = 0;
-  const double baseCal = baseline["calibration_ms"].get<double>();
+  const double baseCal = baseline.at("calibration_ms").get<double>();
+  const nlohmann::json& baseStages = baseline.at("stages");
   for (int s = 0; s < kStageCount; ++s) {
-    if (!baseline["stages"].contains(kStages[s])) continue;
-    const double baseMs = baseline["stages"][kStages[s]]["median_ms"].get<double>();
+    if (!baseStages.contains(kStages[s])) continue;
+    const double baseMs = baseStages.at(kStages[s]).at("median_ms").get<double>();
     const double nowMs = stages[kStages[s]]["median_ms"].get<double>();
     const double nowAtBase = nowMs / calibration * baseCal;
     ++compared;
@@ -413,7 +398,8 @@ int runBench(const Args& a) {
   const unsigned threads = unsigned(a.integerIn("--threads", 2, 1, 64));
   if (a.has("--plot")) requireExtension(a.get("--plot"), "--plot", {".png"});
   nlohmann::json baseline;
-  if (a.has("--baseline")) baseline = readBaseline(a.get("--baseline"));
+  if (a.has("--baseline"))
+    baseline = parseBaseline(readInputFile(a.get("--baseline")), a.get("--baseline"));
   BenchScene scene{openContext(gl::Backend::Headless, size),
                    {},
                    layoutFromArgs(a),

@@ -58,12 +58,10 @@ Sh9 coefficientsFromJson(const nlohmann::json& j, const std::string& source) {
 }
 
 Sh9 loadCoefficients(const std::string& path) {
-  requireRegularFile(path);
-  std::ifstream f(path);
-  if (!f) throw Error(path + ": cannot open coefficient file");
+  const std::string text = readInputFile(path);
   nlohmann::json j;
   try {
-    j = nlohmann::json::parse(f);  // the whole file: trailing text is an error
+    j = nlohmann::json::parse(text);  // the whole file: trailing text is an error
   } catch (const nlohmann::json::exception& e) {
     throw Error(path + ": not valid JSON (" + std::string(e.what()) + ")");
   }

@@ -1,6 +1,8 @@
 #include "liveprobe/capture/input_file.h"
 
 #include <filesystem>
+#include <fstream>
+#include <iterator>
 
 #include "liveprobe/sh/error.h"
 
@@ -28,6 +30,15 @@ void requireRegularFile(const std::string& path) {
       throw Error(path + ": cannot be read (" + (ec ? ec.message() : std::string("unknown type")) +
                   ")");
   }
+}
+
+std::string readInputFile(const std::string& path) {
+  requireRegularFile(path);
+  std::ifstream in(path, std::ios::binary);
+  std::string bytes((std::istreambuf_iterator<char>(in)), {});
+  if (!in.good() && !in.eof()) throw Error(path + ": cannot read the file");
+  if (!in.is_open()) throw Error(path + ": cannot open the file");
+  return bytes;
 }
 
 }  // namespace lp

@@ -129,4 +129,32 @@ void VideoRecorder::finish() {
   video_->commit();
 }
 
+RecordingSidecar parseRecordingSidecar(std::string_view text, const std::string& name) {
+  RecordingSidecar out;
+  try {
+    const nlohmann::json j = nlohmann::json::parse(text);  // trailing text is an error
+    // An exposure divides the frame: it must be positive, finite, and its inverse finite.
+    auto scaleOf = [&](const nlohmann::json& e) {
+      const double x = e.is_number() ? e.get<double>() : 0.0, s = 1.0 / x;
+      if (!(x > 0) || !std::isfinite(x) || !std::isfinite(s))
+        throw Error(name + ": exposure " + e.dump() + " is not a positive finite number");
+      return s;
+    };
+    out.scale = scaleOf(j.at("exposure"));
+    for (const auto& t : j.at("timestamps")) {
+      const double s = t.get<double>();
+      if (!std::isfinite(s)) throw Error(name + ": timestamp " + t.dump() + " is not finite");
+      out.stamps.push_back(s);
+    }
+    // Recordings since the per-frame metadata keep every frame's exposure.
+    if (j.contains("exposures"))
+      for (const auto& e : j.at("exposures")) out.scales.push_back(scaleOf(e));
+  } catch (const Error&) {
+    throw;
+  } catch (const std::exception& e) {
+    throw Error(name + ": bad recording sidecar (" + e.what() + ")");
+  }
+  return out;
+}
+
 }  // namespace lp

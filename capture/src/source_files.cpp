@@ -7,12 +7,12 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
-#include <nlohmann/json.hpp>
 #include <opencv2/videoio.hpp>
 #include <optional>
 
 #include "liveprobe/capture/image.h"
 #include "liveprobe/capture/input_file.h"
+#include "liveprobe/capture/recorder.h"
 #include "liveprobe/sh/error.h"
 #include "sources.h"
 
@@ -119,27 +119,10 @@ class VideoSource final : public FrameSource {
     // A recording made by `liveprobe record` carries a sidecar with its exposure and timestamps.
     std::error_code ec;
     if (fs::exists(path_ + ".json", ec)) {
-      requireRegularFile(path_ + ".json");
-      std::ifstream side(path_ + ".json");
-      try {
-        const nlohmann::json j = nlohmann::json::parse(side);  // trailing text is an error
-        // An exposure divides the frame: it must be positive, finite, and its inverse finite.
-        auto scaleOf = [&](const nlohmann::json& e) {
-          const double x = e.is_number() ? e.get<double>() : 0.0, s = 1.0 / x;
-          if (!(x > 0) || !std::isfinite(x) || !std::isfinite(s))
-            throw Error(path_ + ".json: exposure " + e.dump() + " is not a positive finite number");
-          return s;
-        };
-        scale_ = scaleOf(j.at("exposure"));
-        for (const auto& t : j.at("timestamps")) stamps_.push_back(t.get<double>());
-        // Recordings since the per-frame metadata keep every frame's exposure.
-        if (j.contains("exposures"))
-          for (const auto& e : j.at("exposures")) scales_.push_back(scaleOf(e));
-      } catch (const Error&) {
-        throw;
-      } catch (const std::exception& e) {
-        throw Error(path_ + ".json: bad recording sidecar (" + e.what() + ")");
-      }
+      RecordingSidecar sc = parseRecordingSidecar(readInputFile(path_ + ".json"), path_ + ".json");
+      scale_ = sc.scale;
+      stamps_ = std::move(sc.stamps);
+      scales_ = std::move(sc.scales);
     }
   }
   bool next(Frame& f) override {

@@ -7,9 +7,11 @@
 #include <sys/mman.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cerrno>
 #include <chrono>
 #include <cstring>
+#include <limits>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
@@ -348,50 +350,6 @@ void V4l2Source::close() {
   state_ = State::Closed;
 }
 
-void V4l2Source::convert(const std::uint8_t* data, std::size_t bytes, Frame& f) {
-  cv::Mat bgr;
-  const std::size_t stride = bytesPerLine_;
-  switch (fourcc_) {
-    case V4L2_PIX_FMT_MJPEG:
-    case V4L2_PIX_FMT_JPEG: {
-      const int flags = settings_.mjpegReduce >= 8   ? cv::IMREAD_REDUCED_COLOR_8
-                        : settings_.mjpegReduce >= 4 ? cv::IMREAD_REDUCED_COLOR_4
-                        : settings_.mjpegReduce >= 2 ? cv::IMREAD_REDUCED_COLOR_2
-                                                     : cv::IMREAD_COLOR;
-      bgr = cv::imdecode(cv::Mat(1, int(bytes), CV_8UC1, const_cast<std::uint8_t*>(data)), flags);
-      break;
-    }
-    case V4L2_PIX_FMT_YUYV:
-      if (bytes >= std::size_t(height_) * stride)
-        cv::cvtColor(cv::Mat(height_, width_, CV_8UC2, const_cast<std::uint8_t*>(data), stride),
-                     bgr, cv::COLOR_YUV2BGR_YUYV);
-      break;
-    case V4L2_PIX_FMT_NV12:
-      if (bytes >= std::size_t(height_) * stride * 3 / 2)
-        cv::cvtColor(
-            cv::Mat(height_ * 3 / 2, width_, CV_8UC1, const_cast<std::uint8_t*>(data), stride), bgr,
-            cv::COLOR_YUV2BGR_NV12);
-      break;
-    case V4L2_PIX_FMT_RGB24:
-      if (bytes >= std::size_t(height_) * stride)
-        cv::cvtColor(cv::Mat(height_, width_, CV_8UC3, const_cast<std::uint8_t*>(data), stride),
-                     bgr, cv::COLOR_RGB2BGR);
-      break;
-  }
-  f.format = PixelFormat::Bgr8;
-  f.rgb.clear();
-  if (bgr.empty()) {  // a corrupt or short frame
-    f.width = f.height = 0;
-    f.bgr8.clear();
-    return;
-  }
-  f.width = bgr.cols, f.height = bgr.rows;
-  f.bgr8.resize(std::size_t(bgr.cols) * bgr.rows * 3);
-  for (int y = 0; y < bgr.rows; ++y)
-    std::memcpy(f.bgr8.data() + std::size_t(y) * bgr.cols * 3, bgr.ptr(y),
-                std::size_t(bgr.cols) * 3);
-}
-
 bool V4l2Source::next(Frame& frame) {
   require(State::Streaming, "next");
   for (;;) {
@@ -430,8 +388,13 @@ bool V4l2Source::next(Frame& frame) {
     const bool monotonic =
         (b.flags & V4L2_BUF_FLAG_TIMESTAMP_MASK) == V4L2_BUF_FLAG_TIMESTAMP_MONOTONIC;
     const std::uint32_t sequence = b.sequence;
-    if (!corrupt)
-      convert(static_cast<const std::uint8_t*>(buffers_[b.index]->start), b.bytesused, frame);
+    if (!corrupt) {
+      const Buffer& buf = *buffers_[b.index];
+      decodeCameraFrame(
+          {fourcc_, width_, height_, bytesPerLine_, static_cast<const std::uint8_t*>(buf.start),
+           std::min<std::size_t>(b.bytesused, buf.length)},
+          settings_.mjpegReduce, frame);
+    }
     if (xioctl(VIDIOC_QBUF, &b) < 0) {
       const int e = errno;
       if (e == ENODEV)
@@ -604,6 +567,69 @@ CameraInfo queryCamera(const std::string& path) {
     q.id |= V4L2_CTRL_FLAG_NEXT_CTRL;
   }
   return info;
+}
+
+void decodeCameraFrame(const CameraBuffer& in, int mjpegReduce, Frame& f) {
+  cv::Mat bgr;
+  auto* data = const_cast<std::uint8_t*>(in.data);  // cv::Mat wraps, never writes
+  const std::size_t stride = in.bytesPerLine, rows = std::size_t(std::max(in.height, 0));
+  // An uncompressed buffer must hold every row, each at least a row's worth of pixels.
+  auto holds = [&](std::size_t pixelBytes, std::size_t planeRows) {
+    return in.width > 0 && stride >= std::size_t(in.width) * pixelBytes &&
+           in.bytes >= planeRows * stride;
+  };
+  try {
+    switch (in.fourcc) {
+      case V4L2_PIX_FMT_MJPEG:
+      case V4L2_PIX_FMT_JPEG: {
+        const int reduce = mjpegReduce >= 8 ? 8 : mjpegReduce >= 4 ? 4 : mjpegReduce >= 2 ? 2 : 1;
+        const int flags = reduce == 8   ? cv::IMREAD_REDUCED_COLOR_8
+                          : reduce == 4 ? cv::IMREAD_REDUCED_COLOR_4
+                          : reduce == 2 ? cv::IMREAD_REDUCED_COLOR_2
+                                        : cv::IMREAD_COLOR;
+        // Only a JPEG (it starts with the SOI marker) goes to the decoder, never another format.
+        if (in.bytes < 2 || in.data[0] != 0xFF || in.data[1] != 0xD8 ||
+            in.bytes > std::size_t(std::numeric_limits<int>::max()))
+          break;
+        bgr = cv::imdecode(cv::Mat(1, int(in.bytes), CV_8UC1, data), flags);
+        // libjpeg's DCT scaling rounds up. A frame of any other size is not this stream's.
+        if (!bgr.empty() && (bgr.cols != (in.width + reduce - 1) / reduce ||
+                             bgr.rows != (in.height + reduce - 1) / reduce))
+          bgr.release();
+        break;
+      }
+      case V4L2_PIX_FMT_YUYV:
+        if (holds(2, rows))
+          cv::cvtColor(cv::Mat(in.height, in.width, CV_8UC2, data, stride), bgr,
+                       cv::COLOR_YUV2BGR_YUYV);
+        break;
+      case V4L2_PIX_FMT_NV12:
+        if (holds(1, rows * 3 / 2))
+          cv::cvtColor(cv::Mat(in.height * 3 / 2, in.width, CV_8UC1, data, stride), bgr,
+                       cv::COLOR_YUV2BGR_NV12);
+        break;
+      case V4L2_PIX_FMT_RGB24:
+        if (holds(3, rows))
+          cv::cvtColor(cv::Mat(in.height, in.width, CV_8UC3, data, stride), bgr, cv::COLOR_RGB2BGR);
+        break;
+      default:
+        break;
+    }
+  } catch (const cv::Exception&) {  // odd sizes the conversion refuses (NV12 needs even ones)
+    bgr.release();
+  }
+  f.format = PixelFormat::Bgr8;
+  f.rgb.clear();
+  if (bgr.empty()) {
+    f.width = f.height = 0;
+    f.bgr8.clear();
+    return;
+  }
+  f.width = bgr.cols, f.height = bgr.rows;
+  f.bgr8.resize(std::size_t(bgr.cols) * bgr.rows * 3);
+  for (int y = 0; y < bgr.rows; ++y)
+    std::memcpy(f.bgr8.data() + std::size_t(y) * bgr.cols * 3, bgr.ptr(y),
+                std::size_t(bgr.cols) * 3);
 }
 
 }  // namespace lp

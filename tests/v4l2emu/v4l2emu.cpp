@@ -17,7 +17,10 @@
 //   LPEMU_FAULTS   comma list: busy_open, busy_reqbufs, grant=N, einval_fmt, stop_after=N,
 //                  eintr, unplug_after=N, exposure_walk (auto exposure changes every frame),
 //                  refuse=ID (S_CTRL of that control id fails with EBUSY), latency=MS (each
-//                  frame's timestamp is MS before its dequeue)
+//                  frame's timestamp is MS before its dequeue); faults that recur, for soak
+//                  tests: corrupt_every=N (every Nth frame carries V4L2_BUF_FLAG_ERROR),
+//                  garbage_every=N (every Nth frame is 1 byte of garbage), gap_every=N (the
+//                  sequence skips a number every N frames: a frame lost before the reader)
 //   LPEMU_LOG      file to which each call is appended as one line (for assertions)
 // What it cannot prove about real drivers: README, "Testing without a camera".
 #include <dlfcn.h>
@@ -143,10 +146,17 @@ struct Emu {
     return std::uint32_t(md.w * md.h * 3 + 65536);  // MJPEG: room for any JPEG of this size
   }
 
-  // The next frame of the current mode, in its pixel format.
-  std::vector<std::uint8_t> makeFrame() {
+  // The next frame of the current mode, in its pixel format. Each is made once and kept, so a
+  // long session opens no files (a soak test counts the process's descriptors).
+  std::map<std::pair<int, std::string>, std::vector<std::uint8_t>> madeFrames;
+  const std::vector<std::uint8_t>& frameToServe() {
     const Mode& md = modes[std::size_t(mode)];
     const std::string& file = md.files[std::size_t(frameIndex++) % md.files.size()];
+    auto& made = madeFrames[{mode, file}];
+    if (made.empty()) made = makeFrame(md, file);
+    return made;
+  }
+  std::vector<std::uint8_t> makeFrame(const Mode& md, const std::string& file) {
     if (md.fourcc == V4L2_PIX_FMT_MJPEG && (file.ends_with(".jpg") || file.ends_with(".jpeg"))) {
       std::ifstream in(file, std::ios::binary);
       return std::vector<std::uint8_t>((std::istreambuf_iterator<char>(in)), {});
@@ -331,6 +341,9 @@ int Emu::handle(unsigned long req, void* arg) {
         done[i] = false;
         b->index = std::uint32_t(i);
         b->bytesused = bytesused[i];
+        // gap_every: the driver lost a frame before this one (its sequence number is skipped).
+        if (fault("gap_every") && (sequence + 1) % std::uint32_t(faults["gap_every"]) == 0)
+          ++sequence;
         b->sequence = sequence++;
         // CLOCK_MONOTONIC, as the flag says (the kernel's contract for UVC). latency=MS: the
         // frame was exposed MS before it is dequeued (a slow sensor or USB transfer).
@@ -345,6 +358,8 @@ int Emu::handle(unsigned long req, void* arg) {
         b->timestamp.tv_sec = now.tv_sec;
         b->timestamp.tv_usec = now.tv_nsec / 1000;
         b->flags = V4L2_BUF_FLAG_MAPPED | V4L2_BUF_FLAG_TIMESTAMP_MONOTONIC;
+        if (fault("corrupt_every") && b->sequence % std::uint32_t(faults["corrupt_every"]) == 0)
+          b->flags |= V4L2_BUF_FLAG_ERROR;  // the driver saw a damaged transfer
         b->length = std::uint32_t(store[i].size());
         return 0;
       }
@@ -576,10 +591,16 @@ int poll(struct pollfd* fds, nfds_t n, int timeout) {
   // Fill the first queued buffer with the next frame.
   for (std::size_t i = 0; i < e.queued.size(); ++i)
     if (e.queued[i]) {
-      const auto frame = e.makeFrame();
+      const auto& frame = e.frameToServe();
       auto* dst = static_cast<std::uint8_t*>(e.maps[i]);
       if (dst) std::memcpy(dst, frame.data(), std::min(frame.size(), e.store[i].size()));
       e.bytesused[i] = std::uint32_t(std::min(frame.size(), e.store[i].size()));
+      // garbage_every: a frame the driver passes on without flagging it, one byte of zeros.
+      if (e.fault("garbage_every") &&
+          (e.served + 1) % std::uint32_t(e.faults["garbage_every"]) == 0) {
+        if (dst) dst[0] = 0;
+        e.bytesused[i] = 1;
+      }
       e.queued[i] = false;
       e.done[i] = true;
       ++e.served;

@@ -10,4 +10,8 @@ namespace lp {
 /// not a file".
 void requireRegularFile(const std::string& path);
 
+/// The whole of a regular file's bytes (a JSON document, a sidecar, a baseline). Throws lp::Error
+/// naming `path` when it is no regular file or cannot be read.
+std::string readInputFile(const std::string& path);
+
 }  // namespace lp

@@ -9,6 +9,7 @@
 // refused (a frame of another size): nothing half-made is ever put in place.
 #include <memory>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "liveprobe/capture/frame.h"
@@ -48,5 +49,15 @@ class VideoRecorder {
   int width_ = 0, height_ = 0;
   bool finished_ = false, failed_ = false;  ///< failed: a write was refused; never finalised
 };
+
+/// What a recording's sidecar (FILE.json) holds, as the replay reads it.
+struct RecordingSidecar {
+  double scale = 1.0;                  ///< radiance scale (1 / exposure) of every frame
+  std::vector<double> stamps, scales;  ///< per frame; scales only in recordings that keep them
+};
+
+/// Parses a sidecar's text (the whole of it: trailing text is an error). Exposures must be
+/// positive and finite with a finite inverse, timestamps finite. Throws lp::Error naming `name`.
+RecordingSidecar parseRecordingSidecar(std::string_view text, const std::string& name);
 
 }  // namespace lp

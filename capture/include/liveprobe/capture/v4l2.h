@@ -7,6 +7,7 @@
 // states (open, setFormat, allocateBuffers, streamOn, streamOff, close) that can; the fd and the
 // mappings have RAII owners; buffers are requested and released as a pair with a rollback;
 // streamOff() is idempotent and returns every buffer, and a stopped source can start again.
+#include <cstddef>
 #include <cstdint>
 #include <memory>
 #include <optional>
@@ -50,6 +51,20 @@ enum class CameraFormat : std::uint8_t { Auto, Mjpeg, Yuyv, Nv12, Rgb24 };
 std::string_view cameraFormatName(CameraFormat f);
 /// "mjpeg", "yuyv", "nv12", "rgb24" or "auto"; throws lp::Error.
 CameraFormat parseCameraFormat(std::string_view name);
+
+/// One buffer as a camera filled it, in the format negotiated with VIDIOC_S_FMT.
+struct CameraBuffer {
+  std::uint32_t fourcc = 0;      ///< V4L2_PIX_FMT_*
+  int width = 0, height = 0;     ///< negotiated frame size
+  std::size_t bytesPerLine = 0;  ///< negotiated row stride (uncompressed formats)
+  const std::uint8_t* data = nullptr;
+  std::size_t bytes = 0;  ///< bytes used (never more than the buffer holds)
+};
+
+/// Decodes a camera buffer into a BGR8 frame; MJPEG at 1/`mjpegReduce` scale (1, 2, 4, 8). A
+/// corrupt or short buffer, a stride shorter than a row, or a compressed frame whose size is not
+/// the negotiated one leaves an empty frame (width 0), which the caller counts as dropped.
+void decodeCameraFrame(const CameraBuffer& buffer, int mjpegReduce, Frame& frame);
 
 struct CameraSettings {
   std::string device;                        ///< /dev/videoN
@@ -158,7 +173,6 @@ class V4l2Source final : public FrameSource {
   std::uint32_t chooseFourcc();
   std::pair<int, int> largestSize(std::uint32_t fourcc);
   void setRate();
-  void convert(const std::uint8_t* data, std::size_t bytes, Frame& frame);
   std::optional<std::int32_t> getControl(std::uint32_t id);
   /// Writes a control and reads it back. Returns false when the camera has no such control
   /// (VIDIOC_QUERYCTRL: EINVAL); a refused write, or a value that does not read back, is an
