@@ -3,6 +3,7 @@
 // fault, and nothing left behind in the output folder. Commands run under `timeout`, so a hang
 // fails the test (exit 124) instead of stalling the suite.
 #include <gtest/gtest.h>
+#include <linux/videodev2.h>
 #include <sys/stat.h>
 
 #include <filesystem>
@@ -10,7 +11,10 @@
 #include <opencv2/imgcodecs.hpp>
 #include <set>
 #include <string>
+#include <vector>
 
+#include "liveprobe/capture/frame.h"
+#include "liveprobe/capture/v4l2.h"
 #include "test_util.h"
 
 namespace {
@@ -193,3 +197,41 @@ TEST(Hostile, FailedRecordingIsDiscarded) {
 }
 
 }  // namespace
+
+namespace {
+
+lp::Frame decodeMjpeg(const std::vector<std::uint8_t>& jpeg, int width, int height) {
+  lp::Frame f;
+  lp::decodeCameraFrame({V4L2_PIX_FMT_MJPEG, width, height, 0, jpeg.data(), jpeg.size()}, 1, f);
+  return f;
+}
+
+}  // namespace
+
+// A camera frame is decoded only when its JPEG header declares the negotiated size: a corrupt
+// header that declares 65535x65535 used to make the decoder allocate gigabytes (found by the
+// camera_frame fuzz target; its input is in tests/fuzz/corpus/camera_frame/).
+TEST(Hostile, CameraFrameOfAnotherSizeIsDropped) {
+  cv::Mat img(16, 32, CV_8UC3, cv::Scalar(40, 80, 120));
+  std::vector<std::uint8_t> jpeg;
+  ASSERT_TRUE(cv::imencode(".jpg", img, jpeg));
+  const lp::Frame ok = decodeMjpeg(jpeg, 32, 16);
+  EXPECT_EQ(ok.width, 32);
+  EXPECT_EQ(ok.height, 16);
+  EXPECT_EQ(decodeMjpeg(jpeg, 64, 32).width, 0) << "a frame of another size was accepted";
+  // The same frame with its SOF height patched to 65535: dropped before any decoding.
+  std::vector<std::uint8_t> huge = jpeg;
+  for (std::size_t i = 2; i + 8 < huge.size(); ++i)
+    if (huge[i] == 0xFF && huge[i + 1] == 0xC0) {
+      huge[i + 5] = huge[i + 6] = 0xFF;
+      break;
+    }
+  EXPECT_EQ(decodeMjpeg(huge, 32, 16).width, 0);
+  // Not a JPEG at all (no SOI marker), and a buffer shorter than its rows, in YUYV.
+  std::vector<std::uint8_t> png;
+  ASSERT_TRUE(cv::imencode(".png", img, png));
+  EXPECT_EQ(decodeMjpeg(png, 32, 16).width, 0);
+  lp::Frame yuyv;
+  lp::decodeCameraFrame({V4L2_PIX_FMT_YUYV, 32, 16, 64, png.data(), 64 * 15}, 1, yuyv);
+  EXPECT_EQ(yuyv.width, 0);
+}

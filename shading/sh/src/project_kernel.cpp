@@ -202,6 +202,10 @@ const Kernels kKernels = {&EquirectRow, &WeightedSums, &DecodeU8, &DecodeF16};
 HWY_AFTER_NAMESPACE();
 
 #if HWY_ONCE
+#if HWY_ARCH_X86
+#include <cpuid.h>
+#endif
+
 #include <atomic>
 #include <cstdlib>
 #include <mutex>
@@ -239,12 +243,20 @@ std::vector<Path> compiledPaths() {
   return p;
 }
 
+#if HWY_ARCH_X86
+// F16C: CPUID leaf 1, ECX bit 29 (clang 14's __builtin_cpu_supports does not know the name).
+bool cpuHasF16c() {
+  unsigned a = 0, b = 0, c = 0, d = 0;
+  return __get_cpuid(1, &a, &b, &c, &d) && (c & (1u << 29)) != 0;
+}
+#endif
+
 // What Highway's targets require of the CPU (hwy/targets.cc), asked of the compiler's runtime.
 bool cpuRuns(std::int64_t target) {
 #if HWY_ARCH_X86
   if (target == HWY_AVX2)
     return __builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma") &&
-           __builtin_cpu_supports("bmi2") && __builtin_cpu_supports("f16c");
+           __builtin_cpu_supports("bmi2") && cpuHasF16c();
   if (target == HWY_AVX3)
     return __builtin_cpu_supports("avx512f") && __builtin_cpu_supports("avx512vl") &&
            __builtin_cpu_supports("avx512dq") && __builtin_cpu_supports("avx512bw") &&
