@@ -9,6 +9,7 @@
 #include <filesystem>
 #include <fstream>
 #include <opencv2/imgcodecs.hpp>
+#include <opencv2/videoio.hpp>
 #include <set>
 #include <string>
 #include <vector>
@@ -234,4 +235,47 @@ TEST(Hostile, CameraFrameOfAnotherSizeIsDropped) {
   lp::Frame yuyv;
   lp::decodeCameraFrame({V4L2_PIX_FMT_YUYV, 32, 16, 64, png.data(), 64 * 15}, 1, yuyv);
   EXPECT_EQ(yuyv.width, 0);
+}
+
+// OpenCV's video writer does not report FFmpeg's write errors: a video cut short by a full disk
+// (here, a file size limit; SIGXFSZ ignored, so writes fail as on a full disk) is found when it
+// is read back, reported, and removed with its sidecar.
+TEST(Hostile, VideoCutShortByTheDiskIsAnError) {
+  lpt::TempDir tmp;
+  const auto before = listing(tmp.path);
+  const auto r =
+      lpt::runCommand("cd " + lpt::shellQuote(tmp.path.string()) +
+                      " && trap '' XFSZ && ulimit -f 300 && " + "timeout 60 " + LIVEPROBE_BIN +
+                      " replay synthetic:256x128@30 --frames 60 --headless --size 320x180 --quiet "
+                      "--out-video v.mkv");
+  EXPECT_EQ(r.exitCode, 1) << r.output;
+  EXPECT_NE(r.output.find("v.mkv: the video was not written whole"), std::string::npos) << r.output;
+  EXPECT_EQ(listing(tmp.path), before) << "left files behind";
+}
+
+// A video with no frames is refused, never "replayed".
+TEST(Hostile, VideoWithoutFramesIsRefused) {
+  lpt::TempDir tmp;
+  {
+    cv::VideoWriter w((tmp / "zero.mkv"), cv::CAP_FFMPEG,
+                      cv::VideoWriter::fourcc('F', 'F', 'V', '1'), 30, {64, 32}, true);
+    ASSERT_TRUE(w.isOpened());
+  }
+  expectRefused(tmp, "replay zero.mkv --headless --frames 5 --size 64x36", "zero.mkv",
+                "cannot open as video");
+  expectRefused(tmp, "coeffs zero.mkv", "zero.mkv", "cannot open as video");
+}
+
+// An image write that fails (a file size limit here, with SIGXFSZ ignored, as a full disk fails
+// with ENOSPC) is one line that says why, and nothing is left behind.
+TEST(Hostile, ImageWriteFailureSaysWhy) {
+  lpt::TempDir tmp;
+  const auto before = listing(tmp.path);
+  const auto r = lpt::runCommand("cd " + lpt::shellQuote(tmp.path.string()) +
+                                 " && trap '' XFSZ && ulimit -f 2 && timeout 60 " + LIVEPROBE_BIN +
+                                 " render --headless --coeff L00=1 --size 512x512 --out r.png");
+  EXPECT_EQ(r.exitCode, 1) << r.output;
+  EXPECT_EQ(lpt::lineCount(r.output), 1) << r.output;
+  EXPECT_NE(r.output.find("r.png: cannot write (file too large"), std::string::npos) << r.output;
+  EXPECT_EQ(listing(tmp.path), before) << "left files behind";
 }

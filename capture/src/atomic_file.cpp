@@ -44,28 +44,50 @@ void AtomicOutput::commit() {
   done_ = true;
 }
 
+namespace {
+
+// errno in the user's words: a full disk is "no space left on the device".
+std::string writeFault(int err) {
+  if (err == ENOSPC) return "no space left on the device";
+  if (err == EFBIG) return "file too large for this file system or limit";
+  return err ? std::strerror(err) : "write failed";
+}
+
+}  // namespace
+
 AtomicTextFile::AtomicTextFile(const std::string& path) : file_(path) {
-  out_.open(file_.temporary());
-  if (!out_) throw Error(path + ": cannot write (" + std::strerror(errno) + ")");
+  out_.open(file_.temporary(), std::ios::binary);
+  if (!out_) throw Error(path + ": cannot write (" + writeFault(errno) + ")");
+}
+
+void AtomicTextFile::noteFault() {
+  if (!out_ && fault_ == 0) fault_ = errno ? errno : EIO;
 }
 
 void AtomicTextFile::line(const std::string& s) {
   std::lock_guard lock(mutex_);
+  errno = 0;
   out_ << s << '\n';
+  noteFault();
 }
 
 void AtomicTextFile::write(const std::string& s) {
   std::lock_guard lock(mutex_);
+  errno = 0;
   out_ << s;
+  noteFault();
 }
 
 void AtomicTextFile::commit() {
   std::lock_guard lock(mutex_);
+  errno = 0;
   out_.flush();
+  noteFault();
   out_.close();
-  if (!out_) {
+  noteFault();
+  if (!out_ || fault_) {
     file_.discard();
-    throw Error(file_.path() + ": write failed (disk full?)");
+    throw Error(file_.path() + ": cannot write (" + writeFault(fault_) + ")");
   }
   file_.commit();
 }

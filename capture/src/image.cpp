@@ -244,17 +244,19 @@ Image loadImage(const std::string& path) {
 namespace {
 
 void writeAtomically(const std::string& path, const cv::Mat& m) {
-  if (fs::path(path).extension().empty())
-    throw Error(path + ": output needs an extension (.png, .hdr, .exr, .jpg)");
-  AtomicOutput out(path);
-  bool ok = false;
+  const std::string ext = lower(fs::path(path).extension().string());
+  if (ext.empty()) throw Error(path + ": output needs an extension (.png, .hdr, .exr, .jpg)");
+  // Encoded in memory first, so that an encoder's refusal and a failed write (a full disk) are
+  // told apart, and the write goes through the one checked, atomic writer.
+  std::vector<std::uint8_t> bytes;
   try {
-    ok = cv::imwrite(out.temporary(), m);
+    if (!cv::imencode(ext, m, bytes)) throw Error(path + ": cannot encode an image as " + ext);
   } catch (const cv::Exception& e) {
-    throw Error(path + ": cannot write (" + e.err + ")");
+    throw Error(path + ": cannot encode an image as " + ext + " (" + e.err + ")");
+  } catch (const std::bad_alloc&) {
+    throw Error(path + ": out of memory while encoding the image");
   }
-  if (!ok) throw Error(path + ": cannot write (unsupported extension or unwritable folder)");
-  out.commit();
+  writeFileAtomically(path, std::string(bytes.begin(), bytes.end()));
 }
 
 }  // namespace

@@ -116,6 +116,27 @@ void VideoRecorder::finish() {
     return;
   }
   impl_->writer.release();
+  // OpenCV's writer does not report FFmpeg's write errors (a full disk, a file size limit): the
+  // finished video is opened again, and its container must account for every frame written.
+  {
+    cv::VideoCapture check;
+    double count = -1;
+    try {
+      if (check.open(video_->temporary(), cv::CAP_FFMPEG))
+        count = check.get(cv::CAP_PROP_FRAME_COUNT);
+    } catch (const cv::Exception&) {
+      count = -1;
+    }
+    if (std::abs(count - double(stamps_.size())) > 1) {
+      video_->discard();
+      sidecar_.reset();
+      throw Error(path_ + ": the video was not written whole (" +
+                  (count < 0 ? std::string("it cannot be read back")
+                             : std::to_string(std::llround(count)) + " of " +
+                                   std::to_string(stamps_.size()) + " frames") +
+                  "); is the disk full?");
+    }
+  }
   nlohmann::ordered_json j;
   j["source"] = source_;
   j["fps"] = fps_;

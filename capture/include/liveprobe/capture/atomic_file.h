@@ -47,9 +47,12 @@ class AtomicTextFile {
   const std::string& path() const { return file_.path(); }
 
  private:
+  void noteFault();  ///< keeps errno of the first failed write (later calls overwrite it)
+
   AtomicOutput file_;
   std::ofstream out_;
   std::mutex mutex_;
+  int fault_ = 0;
 };
 
 /// The whole of `text` to `path`, atomically.
