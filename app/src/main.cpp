@@ -6,6 +6,7 @@
 #include <cstdlib>
 #include <cstring>
 #include <iostream>
+#include <new>
 #include <opencv2/core/utils/logger.hpp>
 #include <string>
 #include <vector>
@@ -89,6 +90,10 @@ int main(int argc, char** argv) {
       return rc;
     } catch (const lp::Error& e) {
       std::cerr << "liveprobe " << c.spec.name << ": " << e.what() << "\n";
+      return 1;
+    } catch (const std::bad_alloc&) {
+      std::cerr << "liveprobe " << c.spec.name
+                << ": out of memory (a smaller --size, or LIVEPROBE_MAX_PIXELS, may help)\n";
       return 1;
     } catch (const std::exception& e) {
       std::cerr << "liveprobe " << c.spec.name << ": internal error: " << e.what() << "\n";
