@@ -35,9 +35,9 @@ void requireRegularFile(const std::string& path) {
 std::string readInputFile(const std::string& path) {
   requireRegularFile(path);
   std::ifstream in(path, std::ios::binary);
-  std::string bytes((std::istreambuf_iterator<char>(in)), {});
-  if (!in.good() && !in.eof()) throw Error(path + ": cannot read the file");
   if (!in.is_open()) throw Error(path + ": cannot open the file");
+  std::string bytes((std::istreambuf_iterator<char>(in)), {});
+  if (in.bad()) throw Error(path + ": cannot read the file");
   return bytes;
 }
 

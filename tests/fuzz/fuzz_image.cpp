@@ -1,8 +1,6 @@
 // libFuzzer target: image files through liveprobe's reader (libpng for PNG, a Radiance header
 // check, then OpenCV for HDR, EXR, JPEG), under a pixel limit of 2^20. The first byte picks the
 // extension. Any input ends in a frame within the limit with finite pixels, or in lp::Error.
-#include <unistd.h>
-
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
@@ -12,6 +10,7 @@
 #include "liveprobe/capture/frame.h"
 #include "liveprobe/capture/image.h"
 #include "liveprobe/sh/error.h"
+#include "temp_input.h"
 
 namespace {
 constexpr std::int64_t kLimit = std::int64_t(1) << 20;
@@ -26,14 +25,7 @@ extern "C" int LLVMFuzzerInitialize(int*, char***) {
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   if (size < 1) return 0;
   static const char* const kExt[] = {".hdr", ".png", ".exr", ".jpg"};
-  const std::string path =
-      "/tmp/liveprobe-fuzz-image-" + std::to_string(::getpid()) + kExt[data[0] % 4];
-  if (std::FILE* f = std::fopen(path.c_str(), "wb")) {
-    std::fwrite(data + 1, 1, size - 1, f);
-    std::fclose(f);
-  } else {
-    std::abort();
-  }
+  const std::string path = writeFuzzInput("image", kExt[data[0] % 4], data + 1, size - 1);
   try {
     lp::Frame f;
     lp::readImageFrame(path, f);

@@ -1,8 +1,6 @@
 // libFuzzer target: the model loader's input checks (`--model FILE.obj`): the coordinate check,
 // then assimp, then liveprobe's own checks of what assimp returns. Any input ends in a mesh
 // whose positions are finite and whose indices are in range, or in lp::MeshError.
-#include <unistd.h>
-
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
@@ -10,16 +8,10 @@
 #include <string>
 
 #include "liveprobe/gl/mesh.h"
+#include "temp_input.h"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
-  static const std::string path =
-      "/tmp/liveprobe-fuzz-model-" + std::to_string(::getpid()) + ".obj";
-  if (std::FILE* f = std::fopen(path.c_str(), "wb")) {
-    std::fwrite(data, 1, size, f);
-    std::fclose(f);
-  } else {
-    std::abort();
-  }
+  const std::string path = writeFuzzInput("model", ".obj", data, size);
   try {
     const lp::Mesh m = lp::loadMesh(path);
     for (const auto& p : m.positions)
