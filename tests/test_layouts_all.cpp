@@ -5,6 +5,7 @@
 #include <cmath>
 #include <numbers>
 
+#include "layout_dirs.h"
 #include "liveprobe/capture/frame.h"
 #include "liveprobe/capture/image.h"
 #include "liveprobe/sh/layout.h"
@@ -36,8 +37,7 @@ dvec3 sampleEquirect(const lp::Image& eq, dvec3 d) {
 
 // Fills a W x H image by asking `dirAt(x, y)` (pixel centre) for each pixel's world direction;
 // 4x4 supersampling within each pixel keeps the resampling from aliasing.
-template <class DirFn>
-lp::Image resample(const lp::Image& eq, int w, int h, DirFn dirAt) {
+lp::Image resample(const lp::Image& eq, int w, int h, const lpt::DirAt& dirAt) {
   lp::Image out(w, h);
   for (int i = 0; i < h; ++i)
     for (int j = 0; j < w; ++j) {
@@ -78,11 +78,6 @@ void expectSameLighting(const lp::Sh9& ref, const lp::Sh9& got, const std::strin
   }
 }
 
-// Directions from the conventions in liveprobe/sh/layout.h, written out again.
-dvec3 lensLocal(double t, double p) {
-  return {std::sin(t) * std::cos(p), std::sin(t) * std::sin(p), std::cos(t)};
-}
-
 class EveryLayout : public ::testing::Test {
  protected:
   void SetUp() override {
@@ -94,76 +89,31 @@ class EveryLayout : public ::testing::Test {
 };
 
 TEST_F(EveryLayout, Angular) {
-  const int w = 512;
-  auto img = resample(eq_, w, w, [&](double x, double y) -> std::optional<dvec3> {
-    const double u = (x - w / 2.0) / (w / 2.0), v = (w / 2.0 - y) / (w / 2.0), r = std::hypot(u, v);
-    if (r > 1) return std::nullopt;
-    const dvec3 l = lensLocal(kPi * r, std::atan2(v, u));
-    return dvec3(-l.z, -l.x, l.y);
-  });
+  auto img = resample(eq_, 512, 512, lpt::angularDirs(512));
   expectSameLighting(ref_, project(img, lp::Layout::Angular), "angular");
 }
 
 TEST_F(EveryLayout, MirrorBall) {
   // A 640x480 photo with the ball off-centre.
   const double cx = 300, cy = 250, R = 220;
-  auto img = resample(eq_, 640, 480, [&](double x, double y) -> std::optional<dvec3> {
-    const double u = (x - cx) / R, v = (cy - y) / R, r = std::hypot(u, v);
-    if (r > 1) return std::nullopt;
-    const dvec3 l = lensLocal(2 * std::asin(r), std::atan2(v, u));
-    return dvec3(-l.z, -l.x, l.y);
-  });
+  auto img = resample(eq_, 640, 480, lpt::mirrorBallDirs(cx, cy, R));
   lp::LayoutSpec spec(lp::Layout::MirrorBall);
   spec.circle = {float(cx), float(cy), float(R)};
   expectSameLighting(ref_, project(img, spec), "mirror ball");
 }
 
-// OpenGL's face table, and the world = (Z, -X, Y) map of liveprobe/sh/axes.h.
-dvec3 glFace(int face, double s, double t) {
-  const double sc = 2 * s - 1, tc = 2 * t - 1;
-  const dvec3 g[6] = {{1, -tc, -sc}, {-1, -tc, sc}, {sc, 1, tc},
-                      {sc, -1, -tc}, {sc, -tc, 1},  {-sc, -tc, -1}};
-  const dvec3 r = glm::normalize(g[face]);
-  return {r.z, -r.x, r.y};
-}
-
 TEST_F(EveryLayout, CubeCrosses) {
   const int n = 128;
-  // Horizontal: +Y at (1,0); -X,+Z,+X,-Z on row 1; -Y at (1,2).
-  const int hc[6][2] = {{2, 1}, {0, 1}, {1, 0}, {1, 2}, {1, 1}, {3, 1}};
-  auto h = resample(eq_, 4 * n, 3 * n, [&](double x, double y) -> std::optional<dvec3> {
-    for (int f = 0; f < 6; ++f)
-      if (int(x / n) == hc[f][0] && int(y / n) == hc[f][1])
-        return glFace(f, x / n - hc[f][0], y / n - hc[f][1]);
-    return std::nullopt;
-  });
+  auto h = resample(eq_, 4 * n, 3 * n, lpt::cubeCrossDirs(n, false));
   expectSameLighting(ref_, project(h, lp::Layout::Cube), "horizontal cross");
-  // Vertical: -Z below -Y, rotated by 180 degrees.
-  const int vc[6][2] = {{2, 1}, {0, 1}, {1, 0}, {1, 2}, {1, 1}, {1, 3}};
-  auto v = resample(eq_, 3 * n, 4 * n, [&](double x, double y) -> std::optional<dvec3> {
-    for (int f = 0; f < 6; ++f)
-      if (int(x / n) == vc[f][0] && int(y / n) == vc[f][1]) {
-        double s = x / n - vc[f][0], t = y / n - vc[f][1];
-        if (f == 5) s = 1 - s, t = 1 - t;
-        return glFace(f, s, t);
-      }
-    return std::nullopt;
-  });
+  auto v = resample(eq_, 3 * n, 4 * n, lpt::cubeCrossDirs(n, true));
   expectSameLighting(ref_, project(v, lp::Layout::Cube), "vertical cross");
 }
 
 TEST_F(EveryLayout, DualFisheye) {
   for (float fov : {190.0f, 220.0f}) {
     const int h = 384, w = 2 * h;
-    const double half = glm::radians(double(fov)) / 2, R = h / 2.0;
-    auto img = resample(eq_, w, h, [&](double x, double y) -> std::optional<dvec3> {
-      const bool front = x < w / 2.0;
-      const double u = (x - (front ? w / 4.0 : 3 * w / 4.0)) / R, v = (h / 2.0 - y) / R,
-                   r = std::hypot(u, v);
-      if (r > 1) return std::nullopt;
-      const dvec3 l = lensLocal(r * half, std::atan2(v, u));  // (right, up, forward)
-      return front ? dvec3(-l.z, -l.x, l.y) : dvec3(l.z, l.x, l.y);
-    });
+    auto img = resample(eq_, w, h, lpt::dualFisheyeDirs(w, h, fov));
     lp::LayoutSpec spec(lp::Layout::DualFisheye);
     spec.fisheyeFovDeg = fov;
     expectSameLighting(ref_, project(img, spec), "dual fisheye " + std::to_string(int(fov)));

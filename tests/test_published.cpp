@@ -77,4 +77,67 @@ TEST(Published, DirectionalLightWorstCase) {
   EXPECT_LT(r.minShOverMean, 0.0);
 }
 
+// The same light taken out as a disc light (issue 13): the error drops from 9.4% to at most 0.1%.
+TEST(Published, DirectionalLightAsALight) {
+  double power = 0;
+  const lp::Image img = lpt::discEquirect(2048, 1024, glm::normalize(glm::dvec3(0.3, -0.5, 0.6)),
+                                          1.5 * std::numbers::pi / 180, 100.0f, &power);
+  const lp::LightOptions sun;
+  const auto r = lp::cli::compareIrradiance(img, lp::Layout::Equirect, 64, 32, {}, 0,
+                                            glm::mat3(1.0f), {}, &sun);
+  ASSERT_EQ(r.lights.size(), 1u);
+  EXPECT_GT(r.maxFracTotal, 0.085);
+  EXPECT_LT(r.maxFracTotalSun, 0.001);
+}
+
+// The real maps against the brute-force integral, SH alone and SH of the rest plus the lights
+// (README's error table). Where a dominant compact source is found the targets are mean <= 0.6%
+// and max <= 2% of the total intensity for the maps listed here; no map is worse than SH alone.
+// The maps that miss the targets with a light found (royal_esplanade, ennis, moonless_golf) are
+// in README with the reason; they are held to "no worse than SH alone" here.
+TEST(Published, SunAndSkyOnRealMaps) {
+  struct Case {
+    std::string file;
+    lp::Layout layout;
+    int lights;         // --lights K
+    bool meetsTargets;  // a source is found and the targets hold
+  };
+  const Case cases[] = {
+      {"equirect/pedestrian_overpass_1k.hdr", lp::Layout::Equirect, 1, true},
+      {"equirect/quarry_01_1k.hdr", lp::Layout::Equirect, 1, true},
+      {"probes/latlong_256x128/grace.hdr", lp::Layout::Equirect, 2, true},
+      {"equirect/blouberg_sunrise_2_1k.hdr", lp::Layout::Equirect, 1, false},
+      {"equirect/moonless_golf_1k.hdr", lp::Layout::Equirect, 1, false},
+      {"equirect/royal_esplanade_1k.hdr", lp::Layout::Equirect, 1, false},
+      {"equirect/venice_sunset_1k.hdr", lp::Layout::Equirect, 1, false},
+      {"probes/latlong_256x128/ennis.hdr", lp::Layout::Equirect, 1, false},
+      {"probes/latlong_256x128/grace.hdr", lp::Layout::Equirect, 1, false},
+      {"probes/latlong_256x128/pisa.hdr", lp::Layout::Equirect, 1, false},
+      {"probes/latlong_256x128/uffizi.hdr", lp::Layout::Equirect, 1, false},
+      {"probes/latlong_256x128/wells.hdr", lp::Layout::Equirect, 1, false},
+      {"probes/latlong_full/grace_latlong.exr", lp::Layout::Equirect, 1, false},
+      {"probes/beach_probe.hdr", lp::Layout::Angular, 1, false},
+  };
+  for (const Case& c : cases) {
+    SCOPED_TRACE(c.file + " --lights " + std::to_string(c.lights));
+    const lp::Image img = lp::loadImage(lpt::dataPath(c.file));
+    lp::LightOptions sun;
+    sun.maxLights = c.lights;
+    const auto r =
+        lp::cli::compareIrradiance(img, c.layout, 64, 32, {}, 0, glm::mat3(1.0f), {}, &sun);
+    EXPECT_LE(r.meanFracTotalSun, r.meanFracTotal + 1e-6);
+    EXPECT_LE(r.maxFracTotalSun, r.maxFracTotal + 1e-6);
+    if (c.meetsTargets) {
+      EXPECT_EQ(int(r.lights.size()), c.lights);
+      EXPECT_LE(r.meanFracTotalSun, 0.006);
+      EXPECT_LE(r.maxFracTotalSun, 0.02);
+    }
+    // No light: the coefficients are the whole map's, so the errors are SH alone's (up to the
+    // float rounding of the basis sum against the quadratic form).
+    if (r.lights.empty()) {
+      EXPECT_NEAR(r.maxFracTotalSun, r.maxFracTotal, 1e-6);
+    }
+  }
+}
+
 }  // namespace

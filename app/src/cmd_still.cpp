@@ -146,7 +146,9 @@ const CommandSpec kCompareSpec{
                 {"--out", "PNG", "figure: SH map, brute-force map and error, with a colour scale"},
                 {"--json", "", "print JSON instead of text"},
                 {"--quiet", "", "no progress on stderr"},
-                kWindowOpt}),
+                kWindowOpt,
+                {"--sun", "", "also measure SH of the rest plus the extracted lights"},
+                lightOptionSpecs()[1]}),
     1,
     1,
     "an environment map (.hdr, .exr, .png, .jpg), or a folder of six cube faces"};
@@ -157,12 +159,14 @@ int runCompare(const Args& a) {
   Environment env = loadEnvironment(a);
   installStopHandlers();
   Progress progress("compare: brute force", std::int64_t(w) * h, a.has("--quiet"), "normals");
-  const CompareResult r =
-      compareIrradiance(env.image, env.layout, w, h, chooseWindow(a, env.radiance), 0,
-                        env.orientation, [&](std::size_t done) {
-                          progress.update(std::int64_t(done));
-                          return !stopRequested();
-                        });
+  const LightOptions lights = chooseLights(a);
+  const CompareResult r = compareIrradiance(
+      env.image, env.layout, w, h, chooseWindow(a, env.radiance), 0, env.orientation,
+      [&](std::size_t done) {
+        progress.update(std::int64_t(done));
+        return !stopRequested();
+      },
+      lights.maxLights > 0 ? &lights : nullptr);
   progress.finish();
   if (stopRequested()) {
     std::fprintf(stderr, "liveprobe: compare stopped by a signal after %s\n", "part of the grid");
@@ -183,6 +187,11 @@ int runCompare(const Args& a) {
     j["sh_ms"] = r.shMs;
     j["brute_ms"] = r.bruteMs;
     j["speed_ratio"] = r.bruteMs / r.shMs;
+    if (r.sun) {
+      j["sun_mean_frac_total"] = r.meanFracTotalSun;
+      j["sun_max_frac_total"] = r.maxFracTotalSun;
+      j["lights"] = lightsJson(r.lights);
+    }
     std::cout << j.dump(2) << "\n";
   } else {
     std::printf("%s (%s, %dx%d), %dx%d normals\n", a.positional()[0].c_str(),
@@ -190,6 +199,16 @@ int runCompare(const Args& a) {
                 env.image.height, w, h);
     std::printf("  |E_sh - E| / total intensity: mean %.3f%%  max %.3f%%\n", 100 * r.meanFracTotal,
                 100 * r.maxFracTotal);
+    if (r.sun) {
+      std::printf("  with %zu light%s, |E_sh+lights - E| / total: mean %.3f%%  max %.3f%%\n",
+                  r.lights.size(), r.lights.size() == 1 ? "" : "s", 100 * r.meanFracTotalSun,
+                  100 * r.maxFracTotalSun);
+      for (const Light& l : r.lights)
+        std::printf(
+            "    light: direction (%.4f, %.4f, %.4f), radius %.2f deg, %.1f%% of the power%s\n",
+            l.dir.x, l.dir.y, l.dir.z, glm::degrees(l.angularRadius), 100 * l.share,
+            l.clipped ? " (clipped: a lower bound)" : "");
+    }
     std::printf("  |E_sh - E| / mean irradiance: mean %.3f%%  max %.3f%%\n", 100 * r.meanRelMean,
                 100 * r.maxRelMean);
     std::printf("  min E_sh / mean irradiance:   %.4f%s\n", r.minShOverMean,

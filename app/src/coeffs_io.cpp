@@ -32,6 +32,20 @@ nlohmann::ordered_json coefficientsJson(const Sh9& radiance) {
   return c;
 }
 
+nlohmann::ordered_json lightsJson(const std::vector<Light>& lights) {
+  nlohmann::ordered_json a = nlohmann::ordered_json::array();
+  for (const Light& l : lights) {
+    nlohmann::ordered_json j;
+    j["direction"] = {jsonFloat(l.dir.x), jsonFloat(l.dir.y), jsonFloat(l.dir.z)};
+    j["angular_radius_deg"] = jsonFloat(glm::degrees(l.angularRadius));
+    j["power"] = {jsonFloat(l.power.x), jsonFloat(l.power.y), jsonFloat(l.power.z)};
+    j["share"] = jsonFloat(l.share);
+    j["clipped"] = l.clipped;
+    a.push_back(std::move(j));
+  }
+  return a;
+}
+
 Sh9 coefficientsFromJson(const nlohmann::json& j, const std::string& source) {
   const nlohmann::json& c = j.contains("coefficients") ? j["coefficients"] : j;
   if (!c.is_object()) throw Error(source + ": no \"coefficients\" object");

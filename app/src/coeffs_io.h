@@ -4,12 +4,18 @@
 #include <nlohmann/json.hpp>
 #include <string>
 
+#include "liveprobe/sh/lights.h"
 #include "liveprobe/sh/sh.h"
 
 namespace lp::cli {
 
 /// {"L00": [r,g,b], "L1-1": [...], ..., "L22": [...]} in storage order.
 nlohmann::ordered_json coefficientsJson(const Sh9& radiance);
+
+/// [{"direction": [x,y,z], "angular_radius_deg": a, "power": [r,g,b], "share": s,
+///   "clipped": false}, ...]: the lights beside the coefficients, in the same world frame (R&H,
+/// +z up) and units (power: radiance times steradians, the irradiance facing the light).
+nlohmann::ordered_json lightsJson(const std::vector<Light>& lights);
 
 /// Reads the "coefficients" object of `liveprobe coeffs` JSON (or a bare coefficients object).
 /// Throws lp::Error naming `source` for a missing name, a non-numeric or non-finite value.

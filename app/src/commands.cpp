@@ -2,6 +2,19 @@
 
 namespace lp::cli {
 
+std::vector<OptionSpec> lightOptionSpecs() {
+  return {{"--sun", "",
+           "take the dominant compact source (sun, lamp, window) out of the coefficients and keep "
+           "it as a disc light"},
+          {"--lights", "K", "up to K such lights (implies --sun; 1..8, default 1)"}};
+}
+
+LightOptions chooseLights(const Args& a) {
+  LightOptions o;
+  o.maxLights = a.has("--lights") ? a.integerIn("--lights", 1, 1, 8) : (a.has("--sun") ? 1 : 0);
+  return o;
+}
+
 const std::vector<Command>& commands() {
   static const std::vector<Command> all = {
       {kCoeffsSpec, runCoeffs,

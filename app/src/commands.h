@@ -7,6 +7,7 @@
 
 #include "args.h"
 #include "liveprobe/capture/frame.h"
+#include "liveprobe/sh/lights.h"
 
 namespace lp::cli {
 
@@ -31,6 +32,11 @@ int runDevices(const Args&);
 /// The replay pipeline with an opened camera as its source (cmd_replay.cpp).
 int runStreamForLive(const Args& a, std::unique_ptr<FrameSource> camera);
 std::vector<OptionSpec> streamOptions();
+/// --sun and --lights K: extraction of the dominant compact lights (liveprobe/sh/lights.h).
+std::vector<OptionSpec> lightOptionSpecs();
+/// The extraction asked for: maxLights = K with --lights K, 1 with --sun alone, 0 without either.
+LightOptions chooseLights(const Args& a);
+
 /// recordings/sky.mkv in the source tree, or $LIVEPROBE_DEFAULT_RECORDING.
 std::string defaultRecording();
 

@@ -21,7 +21,8 @@ double msSince(std::chrono::steady_clock::time_point t0) {
 
 CompareResult compareIrradiance(const Image& img, const LayoutSpec& layout, int width, int height,
                                 const BandWindow& window, unsigned threads,
-                                const glm::mat3& orientation, const BruteProgress& progress) {
+                                const glm::mat3& orientation, const BruteProgress& progress,
+                                const LightOptions* sun) {
   const Projector projector(layout, img.width, img.height);
   auto samples = projector.samples();
   for (auto& s : samples) s.dir = orientation * s.dir;
@@ -36,14 +37,24 @@ CompareResult compareIrradiance(const Image& img, const LayoutSpec& layout, int 
   r.yBrute.resize(grid.size());
 
   auto t0 = std::chrono::steady_clock::now();
-  const Sh9 L = applyWindow(rotateSh(projector.project(PanoramaView::rgbF32(
-                                         img.rgb.data(), img.width, img.height, layout)),
-                                     orientation),
-                            window);
+  const auto view = PanoramaView::rgbF32(img.rgb.data(), img.width, img.height, layout);
+  std::vector<float> peaks;
+  const Sh9 whole = projector.project(view, nullptr, &peaks);
+  const Sh9 L = applyWindow(rotateSh(whole, orientation), window);
   const auto m = irradianceMatrices(L);
   for (std::size_t i = 0; i < grid.size(); ++i)
     r.ySh[i] = luminance(evalIrradianceQuadratic(m, normals[i]));
   r.shMs = msSince(t0);
+  if (sun) {
+    const LightSplit split =
+        rotateSplit(LightExtractor(projector).extract(view, whole, peaks, *sun), orientation);
+    const Sh9 residual = applyWindow(split.residual, window);
+    r.sun = true;
+    r.lights = split.lights;
+    r.ySun.resize(grid.size());
+    for (std::size_t i = 0; i < grid.size(); ++i)
+      r.ySun[i] = luminance(evalIrradiance(residual, split.lights, normals[i]));
+  }
 
   t0 = std::chrono::steady_clock::now();
   ThreadPool pool(threads);
@@ -72,6 +83,16 @@ CompareResult compareIrradiance(const Image& img, const LayoutSpec& layout, int 
   r.meanRelMean = meanErr / r.meanIrradiance;
   r.maxRelMean = errMax / r.meanIrradiance;
   r.minShOverMean = shMin / r.meanIrradiance;
+  if (r.sun) {
+    double sunSum = 0, sunMax = 0;
+    for (std::size_t i = 0; i < grid.size(); ++i) {
+      const double d = std::abs(double(r.ySun[i]) - r.yBrute[i]);
+      sunSum += grid[i].solidAngle * d;
+      sunMax = std::max(sunMax, d);
+    }
+    r.meanFracTotalSun = sunSum / wsum / r.totalIntensity;
+    r.maxFracTotalSun = sunMax / r.totalIntensity;
+  }
   return r;
 }
 

@@ -6,6 +6,7 @@
 #include "liveprobe/capture/image.h"
 #include "liveprobe/sh/brute.h"
 #include "liveprobe/sh/layout.h"
+#include "liveprobe/sh/lights.h"
 #include "liveprobe/sh/sh.h"
 
 namespace lp::cli {
@@ -19,15 +20,23 @@ struct CompareResult {
   double meanRelMean = 0, maxRelMean = 0;      ///< |E_sh - E| / mean irradiance
   double minShOverMean = 0;                    ///< min Y(E_sh) / mean irradiance
   double shMs = 0, bruteMs = 0;
+  /// With lights (compare --sun): SH of the residual plus the lights, its errors, and the lights.
+  bool sun = false;
+  std::vector<float> ySun;
+  double meanFracTotalSun = 0, maxFracTotalSun = 0;
+  std::vector<Light> lights;
 };
 
 /// Evaluates both methods on a W x H equirect grid of normals (pixel centres, weighted by their
 /// solid angle). `window` is applied to the SH coefficients first.
-/// `orientation` turns the environment (world from file) for both methods.
+/// `orientation` turns the environment (world from file) for both methods. With `sun`, the
+/// lights are also extracted (liveprobe/sh/lights.h) and SH-of-the-rest plus lights is measured
+/// beside SH alone.
 CompareResult compareIrradiance(const Image& img, const LayoutSpec& layout, int width, int height,
                                 const BandWindow& window = {}, unsigned threads = 0,
                                 const glm::mat3& orientation = glm::mat3(1.0f),
-                                const BruteProgress& progress = {});
+                                const BruteProgress& progress = {},
+                                const LightOptions* sun = nullptr);
 
 /// The SH map, the brute-force map (same exposure) and |error| / total intensity with a colour
 /// scale, side by side, as an 8-bit PNG.

@@ -67,9 +67,18 @@ void VideoRecorder::write(const Frame& f) {
     bgr = cv::Mat(f.height, f.width, CV_8UC3, const_cast<std::uint8_t*>(f.bgr8.data()));
   } else {
     if (exposure_ == 0) {
-      float peak = 0;
-      for (float v : f.rgb) peak = std::max(peak, v);
-      exposure_ = peak > 0 ? 0.95 / peak : 1.0;
+      // As a camera exposes: the 99.9th percentile of the pixels' largest channel at 95%, so a
+      // sun's few pixels clip rather than push the sky into the lowest codes.
+      std::vector<float> peaks(f.rgb.size() / 3);
+      for (std::size_t i = 0; i < peaks.size(); ++i)
+        peaks[i] = std::max(f.rgb[3 * i], std::max(f.rgb[3 * i + 1], f.rgb[3 * i + 2]));
+      float level = 0;
+      if (!peaks.empty()) {
+        const auto at = peaks.begin() + std::ptrdiff_t(peaks.size() - 1 - peaks.size() / 1000);
+        std::nth_element(peaks.begin(), at, peaks.end());
+        level = *at;
+      }
+      exposure_ = level > 0 ? 0.95 / level : 1.0;
     }
     bgr.create(f.height, f.width, CV_8UC3);
     const float k = float(exposure_);

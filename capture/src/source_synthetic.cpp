@@ -7,14 +7,18 @@
 
 namespace lp {
 
+glm::vec3 syntheticSunDirection(double t) {
+  // Circles the sky every 20 s, bobbing in elevation every 10 s.
+  const double sunAz = 2 * kPi * t / 20.0,
+               sunEl = glm::radians(30.0 + 20.0 * std::sin(2 * kPi * t / 10.0));
+  return glm::vec3(std::cos(sunEl) * std::cos(sunAz), std::cos(sunEl) * std::sin(sunAz),
+                   std::sin(sunEl));
+}
+
 void renderSyntheticSky(int width, int height, double t, std::vector<float>& rgb) {
   constexpr double pi = kPi;
   rgb.resize(std::size_t(width) * height * 3);
-  // Sun: circles the sky every 20 s, bobbing in elevation every 10 s.
-  const double sunAz = 2 * pi * t / 20.0,
-               sunEl = glm::radians(30.0 + 20.0 * std::sin(2 * pi * t / 10.0));
-  const glm::dvec3 sun(std::cos(sunEl) * std::cos(sunAz), std::cos(sunEl) * std::sin(sunAz),
-                       std::sin(sunEl));
+  const glm::dvec3 sun(syntheticSunDirection(t));
   // Two coloured area lights near the horizon, turning the other way at other speeds.
   struct AreaLight {
     double az, el, halfWidth, halfHeight;
@@ -43,7 +47,10 @@ void renderSyntheticSky(int width, int height, double t, std::vector<float>& rgb
         L = glm::dvec3(0.22, 0.18, 0.14) * (0.6 + 0.4 * (1 + z));
       }
       const double cosSun = glm::dot(d, sun);
-      L += glm::dvec3(9.0, 8.0, 6.5) * std::exp((cosSun - 1.0) / 0.004);      // ~5 deg soft disc
+      // The sun: a bright core of about 1 degree (40% of the map's power, as a clear day's sun)
+      // in a soft ~5 degree aureole.
+      L += glm::dvec3(1600.0, 1500.0, 1350.0) * std::exp((cosSun - 1.0) / 0.0004);
+      L += glm::dvec3(3.0, 2.6, 2.0) * std::exp((cosSun - 1.0) / 0.004);
       L += glm::dvec3(0.4, 0.3, 0.2) * std::pow(std::max(0.0, cosSun), 8.0);  // glow
       for (const auto& a : lights) {
         double dAz = std::remainder(p - a.az, 2 * pi);

@@ -25,6 +25,7 @@
 #include "liveprobe/sh/brute.h"
 #include "liveprobe/sh/executor.h"
 #include "liveprobe/sh/layout.h"
+#include "liveprobe/sh/lights.h"
 #include "liveprobe/sh/projector.h"
 #include "liveprobe/sh/sh.h"
 #include "liveprobe/sh/simd.h"
@@ -93,6 +94,33 @@ void projectBench(benchmark::State& state, lp::Layout layout, bool u8, Size s, i
   state.counters["ns_per_pixel"] =
       benchmark::Counter(double(s.w) * s.h * 1e-9, benchmark::Counter::kIsIterationInvariantRate |
                                                        benchmark::Counter::kInvert);
+}
+
+// Projection alone, and projection with light extraction (the row peaks taken during the
+// projection, then the sun's neighbourhood), on the same frame in the same run: issue 13's cost
+// budget is the ratio of the two (at most 1.2 at 1920x1080 and 3840x1920).
+void lightsBench(benchmark::State& state, bool u8, Size s, bool extract) {
+  const lp::Projector proj(lp::Layout::Equirect, s.w, s.h);
+  const lp::LightExtractor extractor(proj);
+  const lp::Linearizer lin;
+  const lp::PanoramaView view =
+      u8 ? lp::PanoramaView::bgrU8(skyU8(s).data(), s.w, s.h, lin.table().data())
+         : lp::PanoramaView::rgbF32(skyF32(s).data(), s.w, s.h);
+  std::vector<float> peaks;
+  std::size_t lights = 0;
+  auto run = [&] {
+    if (!extract) return proj.project(view, pool(2));
+    const lp::Sh9 whole = proj.project(view, pool(2), &peaks);
+    const lp::LightSplit split = extractor.extract(view, whole, peaks, {});
+    lights = split.lights.size();
+    return split.residual;
+  };
+  benchmark::DoNotOptimize(run());
+  for (auto _ : state) {
+    const lp::Sh9 sh = run();
+    benchmark::DoNotOptimize(sh);
+  }
+  state.counters["lights"] = double(lights);
 }
 
 // The plain loop: per-pixel basis from precomputed directions and solid angles, 27 multiply-adds
@@ -351,6 +379,16 @@ void registerAll() {
           ->UseRealTime()
           ->Unit(benchmark::kMicrosecond);
     }
+  for (const char* type : {"u8", "f32"})
+    for (Size s : {Size{1920, 1080}, Size{3840, 1920}})
+      for (const bool extract : {false, true})
+        benchmark::RegisterBenchmark(
+            ("Lights/equirect/" + std::string(type) + "/" + sizeName(s) + "/threads:2/" +
+             (extract ? "project+lights" : "project"))
+                .c_str(),
+            [=](benchmark::State& st) { lightsBench(st, std::string(type) == "u8", s, extract); })
+            ->UseRealTime()
+            ->Unit(benchmark::kMicrosecond);
   for (Size s : {Size{300, 300}, Size{3840, 1920}})
     benchmark::RegisterBenchmark(("Reference/equirect/f32/" + sizeName(s) + "/threads:1").c_str(),
                                  [=](benchmark::State& st) { referenceLoop(st, s); })

@@ -19,6 +19,7 @@
 #include <hwy/highway.h>
 
 #include <algorithm>
+#include <cmath>
 #include <cstring>
 
 #include "project_kernel.h"
@@ -194,8 +195,19 @@ void DecodeF16(const std::uint16_t* HWY_RESTRICT src, float* HWY_RESTRICT dst, s
   }
 }
 
+float MaxOf(const float* HWY_RESTRICT p, std::size_t n) {
+  const DF d;
+  const std::size_t lanes = hn::Lanes(d);
+  VF m = hn::Set(d, -HUGE_VALF);
+  std::size_t i = 0;
+  for (; i + lanes <= n; i += lanes) m = hn::Max(m, hn::LoadU(d, p + i));
+  float out = hn::GetLane(hn::MaxOfLanes(d, m));
+  for (; i < n; ++i) out = std::max(out, p[i]);
+  return out;
+}
+
 // NOLINTNEXTLINE(cert-err58-cpp): a constant table, no allocation
-const Kernels kKernels = {&EquirectRow, &WeightedSums, &DecodeU8, &DecodeF16};
+const Kernels kKernels = {&EquirectRow, &WeightedSums, &DecodeU8, &DecodeF16, &MaxOf};
 
 }  // namespace HWY_NAMESPACE
 }  // namespace lp::kernel

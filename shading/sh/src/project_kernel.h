@@ -44,6 +44,8 @@ struct Kernels {
   void (*decodeU8)(const std::uint8_t* src, const float* lut, float* dst, std::size_t n);
   /// IEEE binary16 to float.
   void (*decodeF16)(const std::uint16_t* src, float* dst, std::size_t n);
+  /// The largest of n floats (-inf for none).
+  float (*maxOf)(const float* p, std::size_t n);
 };
 
 /// The kernels of the path in use (liveprobe/sh/simd.h).

@@ -175,16 +175,43 @@ void Projector::check(const PanoramaView& v) const {
   if (!v.data) throw Error("projection: the frame has no pixels");
 }
 
-Sh9 Projector::project(const PanoramaView& v, Executor* ex) const {
+Sh9 Projector::project(const PanoramaView& v, Executor* ex, std::vector<float>* rowPeaks) const {
   check(v);
   const bool bgr = v.format == PanoramaFormat::BgrU8;
-  return toSh9(tables_->equirect ? equirectSums(v, ex) : sampleSums(v, ex), bgr);
+  if (rowPeaks) rowPeaks->assign(std::size_t(height_), 0.0f);
+  if (tables_->equirect) return toSh9(equirectSums(v, ex, rowPeaks), bgr);
+  if (rowPeaks) {
+    const kernel::Kernels& k = kernel::active();
+    parallelFor(ex, std::size_t(height_), Split{16}, [&](std::size_t r0, std::size_t r1) {
+      RowReader rows(v, k);
+      for (std::size_t i = r0; i < r1; ++i)
+        (*rowPeaks)[i] =
+            k.maxOf(rows.read(int(i), 0, std::size_t(width_)), 3 * std::size_t(width_));
+    });
+  }
+  return toSh9(sampleSums(v, ex), bgr);
+}
+
+std::array<float, kShCount> Projector::pixelWeights(std::size_t index) const {
+  std::array<float, kShCount> w{};
+  if (tables_->equirect) {
+    const auto& t = *tables_->equirect;
+    const std::size_t i = index / std::size_t(width_), j = index % std::size_t(width_);
+    for (int k = 0; k < kShCount; ++k)
+      w[k] = t.row[kernel::kRowOf[k]][i] * t.col[kernel::kColOf[k]][j];
+    return w;
+  }
+  const float* blocked = tables_->weights.data();
+  for (int k = 0; k < kShCount; ++k)
+    w[k] = blocked[((index / 16) * kShCount + k) * 16 + index % 16];
+  return w;
 }
 
 // Equirect: bands of whole rows (at least 32 each); per row, the kernel's 15 column sums times
 // the row factors go into float lanes, flushed to double every 64 rows (in the frame's channel
 // order).
-std::array<double, 27> Projector::equirectSums(const PanoramaView& v, Executor* ex) const {
+std::array<double, 27> Projector::equirectSums(const PanoramaView& v, Executor* ex,
+                                               std::vector<float>* rowPeaks) const {
   const auto& t = *tables_->equirect;
   const kernel::Kernels& k = kernel::active();
   const auto band = [&](std::size_t r0, std::size_t r1) {
@@ -201,7 +228,9 @@ std::array<double, 27> Projector::equirectSums(const PanoramaView& v, Executor* 
       lanes = {};
     };
     for (std::size_t i = r0; i < r1; ++i) {
-      k.equirectRow(t, rows.read(int(i), 0, std::size_t(width_)), int(i), lanes);
+      const float* row = rows.read(int(i), 0, std::size_t(width_));
+      k.equirectRow(t, row, int(i), lanes);
+      if (rowPeaks) (*rowPeaks)[i] = k.maxOf(row, 3 * std::size_t(width_));
       if ((i - r0 + 1) % kFlushRows == 0) flush();
     }
     flush();
@@ -253,6 +282,46 @@ std::array<double, 27> Projector::sampleSums(const PanoramaView& v, Executor* ex
     return sums;
   };
   return parallelReduce(ex, samples_.size(), Split{16384}, Sums{}, run, addSums);
+}
+
+namespace {
+// IEEE binary16 to float, scalar (the kernels convert whole rows; this reads single pixels).
+float halfToFloat(std::uint16_t h) {
+  const std::uint32_t sign = std::uint32_t(h & 0x8000u) << 16, exp = (h >> 10) & 0x1fu,
+                      man = h & 0x3ffu;
+  float v;
+  if (exp == 0)
+    v = std::ldexp(float(man), -24);  // zero or subnormal
+  else if (exp == 31)
+    v = man ? NAN : INFINITY;
+  else
+    v = std::ldexp(float(man | 0x400u), int(exp) - 25);
+  return sign ? -v : v;
+}
+}  // namespace
+
+Rgb readPixel(const PanoramaView& v, std::size_t index) {
+  const std::size_t row = index / std::size_t(v.width), col = index % std::size_t(v.width);
+  const auto* base = static_cast<const std::uint8_t*>(v.data) + row * v.strideBytes();
+  switch (v.format) {
+    case PanoramaFormat::RgbF32: {
+      const float* p = reinterpret_cast<const float*>(base) + 3 * col;
+      return {p[0], p[1], p[2]};
+    }
+    case PanoramaFormat::RgbF16: {
+      const auto* p = reinterpret_cast<const std::uint16_t*>(base) + 3 * col;
+      return {halfToFloat(p[0]), halfToFloat(p[1]), halfToFloat(p[2])};
+    }
+    case PanoramaFormat::BgrU8: {
+      const std::uint8_t* p = base + 3 * col;
+      return {v.decode[p[2]], v.decode[p[1]], v.decode[p[0]]};
+    }
+    case PanoramaFormat::RgbU8: {
+      const std::uint8_t* p = base + 3 * col;
+      return {v.decode[p[0]], v.decode[p[1]], v.decode[p[2]]};
+    }
+  }
+  return Rgb(0.0f);
 }
 
 Sh9 project(const PanoramaView& frame, Executor* executor) {

@@ -3,6 +3,7 @@
 // files (OpenCV videoio with FFmpeg), a synthetic sky, and (issue 5) V4L2 cameras. One small
 // interface; one factory, openSource().
 #include <cstdint>
+#include <glm/glm.hpp>
 #include <memory>
 #include <optional>
 #include <string>
@@ -71,5 +72,8 @@ std::unique_ptr<FrameSource> openSource(const std::string& spec, const SourceOpt
 /// The synthetic sky at time t (seconds): an equirect HDR with a moving sun, a sky gradient, a
 /// ground, and two coloured area lights moving around the horizon. Deterministic in t.
 void renderSyntheticSky(int width, int height, double t, std::vector<float>& rgb);
+/// Where the synthetic sky's sun is at time t: a full turn of azimuth every 20 s, elevation
+/// 30 + 20 sin(2 pi t / 10) degrees (unit, R&H frame). The truth that light tracking is tested on.
+glm::vec3 syntheticSunDirection(double t);
 
 }  // namespace lp

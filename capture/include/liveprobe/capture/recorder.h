@@ -2,7 +2,8 @@
 // Recording a stream for later replay: FFV1 in .mkv (lossless) or MJPEG in .avi (near-lossless),
 // through OpenCV videoio with FFmpeg, plus a JSON sidecar (FILE.json) with the exposure and every
 // frame's timestamp. 8-bit frames are stored as they came; float (HDR) frames are stored as sRGB
-// of radiance * exposure, the exposure chosen on the first frame so its brightest pixel is at 95%.
+// of radiance * exposure, the exposure chosen on the first frame so that 99.9% of its pixels are at
+// or below 95% (a sun's few pixels clip, as on a camera).
 // The video is written under a temporary name and renamed, with its sidecar, only by finish():
 // a caller that keeps what was recorded up to a fault (a camera unplugged mid-stream) says so.
 // Otherwise (an error, an exception) the destructor discards it, and so it does when a write was

@@ -73,19 +73,32 @@ class Projector {
   /// Radiance coefficients of `frame`, which must have this projector's size and layout (throws
   /// lp::Error otherwise, and for an 8-bit view without its decode table). With an executor the
   /// frame is split across its threads.
-  Sh9 project(const PanoramaView& frame, Executor* executor = nullptr) const;
+  /// `rowPeaks`, when given, receives per row the largest linear channel value of the row (what
+  /// light extraction starts from, liveprobe/sh/lights.h). For equirect frames it is taken from
+  /// each row while the projection holds it in cache; other layouts read the frame once more.
+  Sh9 project(const PanoramaView& frame, Executor* executor = nullptr,
+              std::vector<float>* rowPeaks = nullptr) const;
+
+  /// The nine weights pixel `index` contributes with to project(): for equirect the exact pixel
+  /// integrals of the basis, for other layouts Y_lm(dir) dw. Coefficients of a change to a few
+  /// pixels are sum over them of (change x weights), exactly as project() would count it.
+  std::array<float, kShCount> pixelWeights(std::size_t index) const;
 
  private:
   struct Tables;
   void check(const PanoramaView& frame) const;
   /// The 27 sums (coefficient-major, then the frame's channel order).
-  std::array<double, 27> equirectSums(const PanoramaView& frame, Executor* executor) const;
+  std::array<double, 27> equirectSums(const PanoramaView& frame, Executor* executor,
+                                      std::vector<float>* rowPeaks) const;
   std::array<double, 27> sampleSums(const PanoramaView& frame, Executor* executor) const;
   LayoutSpec spec_;
   int width_, height_;
   std::vector<SphereSample> samples_;
   std::unique_ptr<const Tables> tables_;
 };
+
+/// Linear RGB of pixel `index` (row-major) of `frame`, in R, G, B order whatever the format.
+Rgb readPixel(const PanoramaView& frame, std::size_t index);
 
 /// One-off projection: Projector(frame.layout, frame.width, frame.height).project(frame).
 Sh9 project(const PanoramaView& frame, Executor* executor = nullptr);

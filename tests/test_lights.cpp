@@ -1,0 +1,235 @@
+// Sun and sky (liveprobe/sh/lights.h), each against an independent truth: the disc light's
+// irradiance against numerical integration over the disc; a rendered sky with a disc sun of known
+// direction, radius and power in every layout; a sky with no sun left untouched; and the moving
+// sun of the synthetic source tracked frame by frame.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <numbers>
+#include <optional>
+#include <random>
+
+#include "layout_dirs.h"
+#include "liveprobe/capture/frame.h"
+#include "liveprobe/sh/image.h"
+#include "liveprobe/sh/lights.h"
+#include "liveprobe/sh/projector.h"
+
+namespace {
+
+constexpr double kPi = std::numbers::pi;
+using glm::dvec3;
+
+double angleDeg(dvec3 a, dvec3 b) {
+  return glm::degrees(
+      std::acos(std::clamp(glm::dot(glm::normalize(a), glm::normalize(b)), -1.0, 1.0)));
+}
+
+// A uniform disc's clamped-cosine irradiance, by midpoint quadrature over the disc in its own
+// polar coordinates (independent of the closed form).
+double discIrradianceByQuadrature(double radius, double beta, double radiance) {
+  const int nr = 400, np = 800;
+  const dvec3 n(std::sin(beta), 0, std::cos(beta));  // the light is at +z
+  double e = 0;
+  for (int i = 0; i < nr; ++i) {
+    const double t0 = radius * i / nr, t1 = radius * (i + 1) / nr, t = 0.5 * (t0 + t1);
+    const double ring = (std::cos(t0) - std::cos(t1)) * 2 * kPi / np;
+    for (int j = 0; j < np; ++j) {
+      const double p = 2 * kPi * (j + 0.5) / np;
+      const dvec3 w(std::sin(t) * std::cos(p), std::sin(t) * std::sin(p), std::cos(t));
+      e += radiance * std::max(0.0, glm::dot(n, w)) * ring;
+    }
+  }
+  return e;
+}
+
+TEST(Lights, DiscIrradianceIsTheExactClampedCosine) {
+  for (const double radiusDeg : {0.0, 0.5, 5.0, 20.0}) {
+    const double a = glm::radians(radiusDeg);
+    const double omega = 2 * kPi * (1 - std::cos(a));
+    lp::Light light;
+    light.dir = {0.0f, 0.0f, 1.0f};
+    light.angularRadius = float(a);
+    light.power = glm::vec3(2.0f);
+    for (const double betaDeg : {0.0, 30.0, 80.0, 88.0, 90.0, 93.0, 105.0, 120.0}) {
+      const double beta = glm::radians(betaDeg);
+      const double truth = radiusDeg == 0.0 ? 2.0 * std::max(0.0, std::cos(beta))
+                                            : discIrradianceByQuadrature(a, beta, 2.0 / omega);
+      const glm::vec3 n(float(std::sin(beta)), 0.0f, float(std::cos(beta)));
+      EXPECT_NEAR(lp::lightIrradiance(light, n).x, truth, 2e-4 * 2.0)
+          << "radius " << radiusDeg << " beta " << betaDeg;
+    }
+  }
+}
+
+// A smooth sky (linear in the direction: exactly bands 0 and 1) and a disc sun.
+struct SunSky {
+  dvec3 sunDir;
+  double radius;  ///< radians
+  dvec3 sunRadiance;
+  dvec3 sky(dvec3 d) const {
+    return {0.5 + 0.3 * d.z, 0.6 + 0.2 * d.z + 0.1 * d.y, 0.9 + 0.1 * d.x};
+  }
+  double omega() const { return 2 * kPi * (1 - std::cos(radius)); }
+  dvec3 power() const { return sunRadiance * omega(); }
+};
+
+// Renders the sky (and the sun when `withSun`) into a layout: pixels near the sun are the average
+// of 8x8 sub-samples, so the disc's edge is anti-aliased and its power right to well under 1%;
+// the others (and the sky-only image alike) are sampled at their centre.
+lp::Image render(const SunSky& s, int w, int h, const lpt::DirAt& dirAt, bool withSun) {
+  lp::Image img(w, h);
+  const double cosR = std::cos(s.radius), cosNear = std::cos(s.radius + glm::radians(4.0));
+  for (int i = 0; i < h; ++i)
+    for (int j = 0; j < w; ++j) {
+      dvec3 sum(0);
+      int n = 0;
+      const auto centre = dirAt(j + 0.5, i + 0.5);
+      const int sub = centre && glm::dot(*centre, s.sunDir) >= cosNear ? 8 : 1;
+      for (int a = 0; a < sub; ++a)
+        for (int b = 0; b < sub; ++b)
+          if (auto d = dirAt(j + (b + 0.5) / sub, i + (a + 0.5) / sub)) {
+            sum += s.sky(*d);
+            if (withSun && glm::dot(*d, s.sunDir) >= cosR) sum += s.sunRadiance;
+            ++n;
+          }
+      if (n) {
+        float* p = img.pixel(j, i);
+        sum /= double(n);
+        p[0] = float(sum.x), p[1] = float(sum.y), p[2] = float(sum.z);
+      }
+    }
+  return img;
+}
+
+struct LayoutCase {
+  std::string name;
+  lp::LayoutSpec spec;
+  int w, h;
+  lpt::DirAt dirs;
+};
+
+std::vector<LayoutCase> everyLayout() {
+  lp::LayoutSpec ball(lp::Layout::MirrorBall);
+  ball.circle = {300.0f, 250.0f, 220.0f};
+  return {{"equirect", lp::Layout::Equirect, 1024, 512, lpt::equirectDirs(1024, 512)},
+          {"angular", lp::Layout::Angular, 512, 512, lpt::angularDirs(512)},
+          {"mirrorball", ball, 640, 480, lpt::mirrorBallDirs(300, 250, 220)},
+          {"cube", lp::Layout::Cube, 512, 384, lpt::cubeCrossDirs(128, false)},
+          {"fisheye", lp::Layout::DualFisheye, 1024, 512, lpt::dualFisheyeDirs(1024, 512, 190)}};
+}
+
+// The sun is found in every layout: direction within 0.25 degrees, power within 1%, radius within
+// 20%, and what is left is the sky's coefficients within 1e-3 of L00.
+TEST(Lights, DiscSunInEveryLayout) {
+  // One sun well inside every layout's view, one in the fisheye lenses' overlap (|x| < 0.087).
+  for (const dvec3 dir :
+       {glm::normalize(dvec3(-0.5, -0.4, 0.6)), glm::normalize(dvec3(0.03, 0.8, 0.3))}) {
+    SunSky s{dir, glm::radians(2.0), {}};
+    s.sunRadiance = dvec3(4.0, 3.5, 3.0) / s.omega();  // about half of the whole map's power
+    for (const LayoutCase& c : everyLayout()) {
+      SCOPED_TRACE(c.name + " sun (" + std::to_string(dir.x) + ", " + std::to_string(dir.y) + ")");
+      const lp::Image sunny = render(s, c.w, c.h, c.dirs, true);
+      const lp::Image sky = render(s, c.w, c.h, c.dirs, false);
+      const auto view = lp::PanoramaView::rgbF32(sunny.rgb.data(), c.w, c.h, c.spec);
+      const lp::LightSplit split = lp::projectWithLights(view, {});
+      ASSERT_EQ(split.lights.size(), 1u);
+      const lp::Light& l = split.lights[0];
+      EXPECT_LT(angleDeg(dvec3(l.dir), dir), 0.25);
+      for (int ch = 0; ch < 3; ++ch) EXPECT_NEAR(l.power[ch], s.power()[ch], 0.01 * s.power()[ch]);
+      EXPECT_NEAR(glm::degrees(l.angularRadius), 2.0, 0.4);
+      EXPECT_FALSE(l.clipped);
+      const lp::Sh9 skyOnly =
+          lp::project(lp::PanoramaView::rgbF32(sky.rgb.data(), c.w, c.h, c.spec));
+      for (int k = 0; k < lp::kShCount; ++k)
+        for (int ch = 0; ch < 3; ++ch)
+          EXPECT_NEAR(split.residual.c[k][ch], skyOnly.c[k][ch], 1e-3 * skyOnly.c[0][ch])
+              << lp::kShNames[k] << " ch " << ch;
+    }
+  }
+}
+
+// A map with no compact source (a smooth sky, in every layout) has no light, and its coefficients
+// are exactly the whole map's.
+TEST(Lights, NoSunLeavesTheMapExactlyAsItIs) {
+  SunSky s{dvec3(0, 0, 1), 0.0, dvec3(0)};
+  for (const LayoutCase& c : everyLayout()) {
+    const lp::Image sky = render(s, c.w / 2, c.h / 2,
+                                 c.name == "mirrorball" ? lpt::mirrorBallDirs(150, 125, 110)
+                                 : c.name == "equirect" ? lpt::equirectDirs(c.w / 2, c.h / 2)
+                                 : c.name == "angular"  ? lpt::angularDirs(c.w / 2)
+                                 : c.name == "cube"     ? lpt::cubeCrossDirs(64, false)
+                                                    : lpt::dualFisheyeDirs(c.w / 2, c.h / 2, 190),
+                                 false);
+    lp::LayoutSpec spec = c.spec;
+    if (c.name == "mirrorball") spec.circle = {150.0f, 125.0f, 110.0f};
+    const auto view = lp::PanoramaView::rgbF32(sky.rgb.data(), sky.width, sky.height, spec);
+    const lp::LightSplit split = lp::projectWithLights(view, {});
+    EXPECT_TRUE(split.lights.empty()) << c.name;
+    EXPECT_EQ(split.residual, lp::project(view)) << c.name;
+  }
+}
+
+// Several lamps: --lights 3 finds three suns of different power, brightest first.
+TEST(Lights, SeveralLights) {
+  const dvec3 dirs[3] = {glm::normalize(dvec3(-1, 0.2, 0.3)), glm::normalize(dvec3(0.2, 1, 0.5)),
+                         glm::normalize(dvec3(0.5, -0.6, 0.2))};
+  const double powers[3] = {3.0, 2.0, 1.2};
+  const int w = 1024, h = 512;
+  const auto dirAt = lpt::equirectDirs(w, h);
+  SunSky s{dirs[0], glm::radians(1.0), dvec3(0)};
+  lp::Image img = render(s, w, h, dirAt, false);
+  for (int i = 0; i < h; ++i)
+    for (int j = 0; j < w; ++j)
+      for (int a = 0; a < 8; ++a)
+        for (int b = 0; b < 8; ++b) {
+          const dvec3 d = *dirAt(j + (b + 0.5) / 8, i + (a + 0.5) / 8);
+          for (int k = 0; k < 3; ++k)
+            if (glm::dot(d, dirs[k]) >= std::cos(s.radius))
+              for (int ch = 0; ch < 3; ++ch)
+                img.pixel(j, i)[ch] += float(powers[k] / s.omega() / 64);
+        }
+  lp::LightOptions o;
+  o.maxLights = 3;
+  const auto split = lp::projectWithLights(lp::PanoramaView::rgbF32(img.rgb.data(), w, h), o);
+  ASSERT_EQ(split.lights.size(), 3u);
+  for (int k = 0; k < 3; ++k) {
+    EXPECT_LT(angleDeg(dvec3(split.lights[k].dir), dirs[k]), 0.25) << k;
+    EXPECT_NEAR(split.lights[k].power.y, powers[k], 0.01 * powers[k]) << k;
+  }
+}
+
+// The synthetic source's sun moves (a full turn in 20 s, bobbing in elevation): the extracted
+// direction follows the generator's own sun every frame, within 0.5 degrees.
+TEST(Lights, TracksTheSyntheticMovingSun) {
+  const int w = 512, h = 256;
+  std::vector<float> rgb;
+  for (int f = 0; f < 40; ++f) {
+    const double t = 0.5 * f;
+    lp::renderSyntheticSky(w, h, t, rgb);
+    const auto split = lp::projectWithLights(lp::PanoramaView::rgbF32(rgb.data(), w, h), {});
+    ASSERT_EQ(split.lights.size(), 1u) << "t = " << t;
+    EXPECT_LT(angleDeg(dvec3(split.lights[0].dir), dvec3(lp::syntheticSunDirection(t))), 0.5)
+        << "t = " << t;
+  }
+}
+
+// 8-bit frames: a source at the code maximum is clipped, its power a lower bound, and says so.
+TEST(Lights, ClippedEightBitSunIsALowerBound) {
+  const int w = 512, h = 256;
+  std::vector<std::uint8_t> bgr(std::size_t(w) * h * 3, 10);  // a dark room, a lamp at 255
+  const dvec3 sun = glm::normalize(dvec3(-1, 0.3, 0.5));
+  const auto dirAt = lpt::equirectDirs(w, h);
+  for (int i = 0; i < h; ++i)
+    for (int j = 0; j < w; ++j)
+      if (glm::dot(*dirAt(j + 0.5, i + 0.5), sun) > std::cos(glm::radians(3.0)))
+        for (int c = 0; c < 3; ++c) bgr[(std::size_t(i) * w + j) * 3 + c] = 255;
+  float lut[256];
+  for (int v = 0; v < 256; ++v) lut[v] = std::pow(v / 255.0f, 2.2f);
+  const auto split = lp::projectWithLights(lp::PanoramaView::bgrU8(bgr.data(), w, h, lut), {});
+  ASSERT_EQ(split.lights.size(), 1u);
+  EXPECT_TRUE(split.lights[0].clipped);
+  EXPECT_LT(angleDeg(dvec3(split.lights[0].dir), sun), 0.5);
+}
+
+}  // namespace
