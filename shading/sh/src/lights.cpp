@@ -147,6 +147,7 @@ LightSplit LightExtractor::extract(const PanoramaView& frame, const Sh9& whole,
   const float clipLevel = u8 ? frame.decode[255] : INFINITY;
   std::unordered_map<std::uint32_t, Rgb> filled;  // residual values of the lights' pixels
   const auto value = [&](std::uint32_t i) {
+    if (filled.empty()) return readPixel(frame, i);
     const auto it = filled.find(i);
     return it != filled.end() ? it->second : readPixel(frame, i);
   };
@@ -183,36 +184,61 @@ LightSplit LightExtractor::extract(const PanoramaView& frame, const Sh9& whole,
     const float glare = std::max(glm::radians(opt.glareDeg), 2.0f * pixelRadius);
     const float ringWidth = std::max(glm::radians(opt.ringDeg), 3.0f * pixelRadius);
 
-    // 2. The core, first in a small cap (most sources are small), then in the largest one. The
-    //    region is centred on the core's centroid (the peak pixel may be on a plateau's edge).
-    float coreRadius = 0.0f;
-    glm::vec3 centre = d0;
-    for (const float reach : {std::min(maxRadius, glm::radians(2.0f)), maxRadius}) {
-      const float searchRadius = 2.0f * reach + glare + ringWidth + pixelRadius;
-      const float cosSearch = std::cos(searchRadius);
+    // 2. The core, in caps of growing reach (most sources are small, and the cost is the cap's
+    //    pixels): the first reach that holds it, or not compact once it is wider than the
+    //    largest. Then the cap is taken again around the core's centroid (the peak pixel may be
+    //    on a plateau's edge), wide enough for the region and its ring.
+    // `stride` > 1 takes every stride-th pixel of the index (each then stands for `stride`
+    // pixels): the core's area needs a few thousand samples, not every pixel of a 4K frame.
+    const auto gather = [&](glm::vec3 centre, float radius, std::uint32_t stride) {
+      const float cosSearch = std::cos(radius);
       cap.clear();
-      index_->forCap(d0, searchRadius, [&](std::uint32_t i) {
-        const float c = glm::dot(samples[i].dir, d0);
+      std::uint32_t n = 0;
+      index_->forCap(centre, radius, [&](std::uint32_t i) {
+        if (n++ % stride != 0) return;
+        const float c = glm::dot(samples[i].dir, centre);
         if (c >= cosSearch) cap.push_back({i, c, value(i)});
       });
+    };
+    constexpr float kCoreSamples = 4000.0f;
+    float coreRadius = INFINITY;
+    glm::vec3 centre = d0;
+    // Each cap is centred on the centroid found so far; a reach that holds the core is measured
+    // once more if its centroid moved by more than a pixel (a plateau seen from its edge).
+    bool again = false;
+    for (float reach = glm::radians(1.0f);;) {
+      const float radius = 1.25f * reach + pixelRadius;  // a margin: a wide core shows as wider
+      const float pixels = 4.0f * float(kPi) * std::sin(0.5f * radius) * std::sin(0.5f * radius) /
+                           samples[peak].solidAngle;
+      const auto stride = std::uint32_t(std::max(1.0f, pixels / kCoreSamples));
+      const glm::vec3 from = centre;
+      gather(from, radius, stride);
       double coreArea = 0;
       glm::dvec3 coreSum(0.0);
       for (const CapPixel& p : cap) {
         const float lum = luminance(p.value);
         if (lum < opt.coreFraction * peakLum) continue;
-        coreArea += samples[p.index].solidAngle;
+        coreArea += double(samples[p.index].solidAngle) * stride;
         coreSum += glm::dvec3(samples[p.index].dir) * double(lum * samples[p.index].solidAngle);
       }
       coreRadius = float(std::acos(std::max(-1.0, 1.0 - coreArea / (2 * kPi)))) + pixelRadius;
-      centre = glm::vec3(glm::normalize(coreSum));
-      if (coreRadius <= reach) break;
+      if (glm::length(coreSum) > 0.0) centre = glm::vec3(glm::normalize(coreSum));
+      if (coreRadius > maxRadius) break;                // already wider than any light
+      if (coreRadius <= reach || reach >= maxRadius) {  // held within this reach
+        if (again || glm::dot(centre, from) >= std::cos(pixelRadius)) break;
+        again = true;  // measure it once more around its centroid
+        continue;
+      }
+      again = false;
+      reach = std::min(2.0f * reach, maxRadius);
     }
     if (coreRadius > maxRadius) break;  // not compact: no (further) light
-    for (CapPixel& p : cap) p.cosAngle = glm::dot(samples[p.index].dir, centre);
+    const float regionGlare = std::max(glare, 0.5f * coreRadius);
+    gather(centre, coreRadius + regionGlare + ringWidth + pixelRadius, 1);
 
     // 3-4. The region and the ring around it; the fill is the ring's median.
-    const float cosRegion = std::cos(coreRadius + glare),
-                cosRing = std::cos(coreRadius + glare + ringWidth);
+    const float cosRegion = std::cos(coreRadius + regionGlare),
+                cosRing = std::cos(coreRadius + regionGlare + ringWidth);
     ring.clear();
     for (const CapPixel& p : cap)
       if (p.cosAngle < cosRegion && p.cosAngle >= cosRing) ring.push_back(p.value);
@@ -244,18 +270,24 @@ LightSplit LightExtractor::extract(const PanoramaView& frame, const Sh9& whole,
         halfMaxArea += samples[p.index].solidAngle;
     light.angularRadius = float(std::acos(std::max(-1.0, 1.0 - halfMaxArea / (2 * kPi))));
 
-    // Commit: the region keeps min(L, fill); the coefficients lose exactly what the light took.
+    // Commit: the coefficients lose exactly what the light took (summed in double); for the
+    // next light, the region keeps min(L, fill).
+    std::array<glm::dvec3, kShCount> taken{};
+    for (const CapPixel& p : cap) {
+      if (p.cosAngle < cosRegion) continue;
+      const glm::dvec3 excess(glm::max(p.value - fill, Rgb(0.0f)));
+      const auto w = projector_->pixelWeights(p.index);
+      for (int k = 0; k < kShCount; ++k) taken[k] += excess * double(w[k]);
+    }
+    for (int k = 0; k < kShCount; ++k) out.residual.c[k] -= Rgb(taken[k]);
+    out.lights.push_back(light);
+    if (n + 1 == opt.maxLights) break;
     std::vector<std::size_t> rows;
     for (const CapPixel& p : cap) {
       if (p.cosAngle < cosRegion) continue;
-      const Rgb excess = glm::max(p.value - fill, Rgb(0.0f));
-      filled[p.index] = p.value - excess;
-      const auto w = projector_->pixelWeights(p.index);
-      for (int k = 0; k < kShCount; ++k) out.residual.c[k] -= excess * w[k];
+      filled[p.index] = glm::min(p.value, fill);
       rows.push_back(p.index / width);
     }
-    out.lights.push_back(light);
-    if (n + 1 == opt.maxLights) break;
     // The rows the light touched: their peaks from what is left.
     std::sort(rows.begin(), rows.end());
     rows.erase(std::unique(rows.begin(), rows.end()), rows.end());

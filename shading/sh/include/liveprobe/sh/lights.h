@@ -10,12 +10,15 @@
 // Extraction, per light (in the R&H world frame of liveprobe/sh/sh.h; all angles are between
 // pixel directions, so it is the same for every layout):
 //   1. the peak: the pixel with the largest linear channel value (Projector::project's row peaks);
-//   2. the core: pixels within the search cap (maxRadiusDeg + glare + ring) whose luminance is at
-//      least coreFraction of the peak's. Its radius theta_c is that of the disc with the core's
-//      solid angle, plus the peak pixel's own radius sqrt(dw / pi) (an area, so a few stray
-//      bright pixels inside the cap do not count as a wide source);
-//   3. the region: the cap of radius theta_c + glare (glareDeg, at least two pixels), which takes
-//      the glare around the source too (at 1024x512 it holds 15-20% of a sun's power);
+//   2. the core: pixels near the peak whose luminance is at least coreFraction of the peak's,
+//      searched in caps of growing reach (1, 2, 4, 8 degrees, each with a 25% margin; a cap of
+//      many pixels is sampled with a stride, ~4000 samples). Its radius theta_c is that of the
+//      disc with the core's solid angle, plus the peak pixel's own radius sqrt(dw / pi) (an area,
+//      so a few stray bright pixels do not count as a wide source); its centre the
+//      luminance-weighted centroid;
+//   3. the region: the cap of radius theta_c + glare around that centre, glare = the larger of
+//      glareDeg, two pixels and theta_c / 2; it takes the glare around the source too (at
+//      1024x512 a sun's glare holds 15-20% of its power);
 //   4. the fill: per channel, the median of the ring [theta_r, theta_r + ring] around it
 //      (ringDeg, at least three pixels): the sky that the source hides;
 //   5. the light: per pixel of the region, max(L - fill, 0). Its power is the sum of that times
