@@ -114,6 +114,44 @@ TEST_F(GlTest, IrradianceMatchesCpuPerPixel) {
   }
 }
 
+// The same with disc lights beside the coefficients (issue 13): the GLSL's lightIrradiance equals
+// the CPU's at every pixel, a sharp sun and a wide disc whose horizon band crosses the sphere.
+TEST_F(GlTest, IrradianceWithLightsMatchesCpuPerPixel) {
+  lp::gl::Renderer r;
+  r.setMesh(lp::makeUvSphere(512, 256));
+  Sh9 L;
+  L.c[0] = glm::vec3(1.0f, 0.8f, 1.2f);
+  L.c[2] = glm::vec3(0.2f);
+  std::vector<lp::Light> lights(2);
+  lights[0].dir = glm::normalize(glm::vec3(-0.6f, -0.7f, 0.3f));
+  lights[0].angularRadius = glm::radians(0.27f);
+  lights[0].power = {6.0f, 5.5f, 5.0f};
+  lights[1].dir = glm::normalize(glm::vec3(0.3f, -0.9f, -0.2f));
+  lights[1].angularRadius = glm::radians(12.0f);
+  lights[1].power = {0.5f, 1.0f, 2.0f};
+  r.setLighting(L, lights);
+  for (int trial = 0; trial < 2; ++trial) {
+    lp::gl::Camera cam;
+    cam.yawDeg = 70.0f + 60.0f * trial;
+    const auto px = pass(r, cam, OutputMode::Irradiance);
+    int covered = 0;
+    double worst = 0;
+    for (int y = 0; y < kSize; ++y)
+      for (int x = 0; x < kSize; ++x) {
+        glm::vec3 n;
+        if (!sphereNormal(cam, x, y, &n)) continue;
+        ++covered;
+        const glm::vec3 cpu = lp::evalIrradiance(L, lights, lp::axes::worldFromGl(n));
+        for (int c = 0; c < 3; ++c) {
+          const double e = double(std::abs(px[4 * (y * kSize + x) + c] - cpu[c]) / cpu[c]);
+          worst = std::max(worst, e);
+        }
+      }
+    EXPECT_GT(covered, 5000);
+    EXPECT_LT(worst, 2e-3) << "trial " << trial;
+  }
+}
+
 // The restatement's figures 3-6: one coefficient at a time, on the sphere and the bunny. The
 // normal pass tells where each pixel faces; the display pass is what the user sees.
 struct Single {

@@ -44,14 +44,15 @@ double discIrradianceByQuadrature(double radius, double beta, double radiance) {
 }
 
 TEST(Lights, DiscIrradianceIsTheExactClampedCosine) {
-  for (const double radiusDeg : {0.0, 0.5, 5.0, 20.0}) {
+  for (const double radiusDeg : {0.0, 0.27, 0.5, 1.0, 5.0, 20.0}) {
     const double a = glm::radians(radiusDeg);
     const double omega = 2 * kPi * (1 - std::cos(a));
     lp::Light light;
     light.dir = {0.0f, 0.0f, 1.0f};
     light.angularRadius = float(a);
     light.power = glm::vec3(2.0f);
-    for (const double betaDeg : {0.0, 30.0, 80.0, 88.0, 90.0, 93.0, 105.0, 120.0}) {
+    for (const double betaDeg :
+         {0.0, 30.0, 80.0, 88.0, 89.9, 90.0, 90.1, 90.2, 93.0, 105.0, 120.0}) {
       const double beta = glm::radians(betaDeg);
       const double truth = radiusDeg == 0.0 ? 2.0 * std::max(0.0, std::cos(beta))
                                             : discIrradianceByQuadrature(a, beta, 2.0 / omega);

@@ -180,7 +180,26 @@ void Renderer::setAlbedoTexture(const float* rgb, int width, int height) {
   albedoTex_ = makeFloatTexture(rgb, width, height, GL_REPEAT);
 }
 
-void Renderer::setLighting(const Sh9& radiance) { sh_ = irradianceMatrices(radiance); }
+void Renderer::setLighting(const Sh9& radiance) { setLighting(radiance, {}); }
+
+void Renderer::setLighting(const Sh9& residual, const std::vector<Light>& lights) {
+  sh_ = irradianceMatrices(residual);
+  lights_.assign(lights.begin(),
+                 lights.begin() + std::ptrdiff_t(std::min<std::size_t>(lights.size(), kMaxLights)));
+}
+
+void Renderer::setIrradianceUniforms(const Program& program) const {
+  glUniformMatrix4fv(loc(program, "uShR"), 1, GL_FALSE, glm::value_ptr(sh_[0]));
+  glUniformMatrix4fv(loc(program, "uShG"), 1, GL_FALSE, glm::value_ptr(sh_[1]));
+  glUniformMatrix4fv(loc(program, "uShB"), 1, GL_FALSE, glm::value_ptr(sh_[2]));
+  glUniform1i(loc(program, "uLightCount"), int(lights_.size()));
+  for (std::size_t i = 0; i < lights_.size(); ++i) {
+    const std::string at = "[" + std::to_string(i) + "]";
+    glUniform3fv(loc(program, ("uLightDir" + at).c_str()), 1, glm::value_ptr(lights_[i].dir));
+    glUniform3fv(loc(program, ("uLightPower" + at).c_str()), 1, glm::value_ptr(lights_[i].power));
+    glUniform1f(loc(program, ("uLightRadius" + at).c_str()), lights_[i].angularRadius);
+  }
+}
 
 void Renderer::setBackground(const float* rgb, int width, int height, BackgroundMapping mapping,
                              float displayScale) {
@@ -287,9 +306,7 @@ void Renderer::draw(glm::ivec2 size, const Camera& camera, const ShadingSettings
     glDepthFunc(GL_LESS);
     glUseProgram(modelProgram_.get());
     glUniformMatrix4fv(loc(modelProgram_, "uViewProj"), 1, GL_FALSE, glm::value_ptr(viewProj));
-    glUniformMatrix4fv(loc(modelProgram_, "uShR"), 1, GL_FALSE, glm::value_ptr(sh_[0]));
-    glUniformMatrix4fv(loc(modelProgram_, "uShG"), 1, GL_FALSE, glm::value_ptr(sh_[1]));
-    glUniformMatrix4fv(loc(modelProgram_, "uShB"), 1, GL_FALSE, glm::value_ptr(sh_[2]));
+    setIrradianceUniforms(modelProgram_);
     glUniformMatrix3fv(loc(modelProgram_, "uWorldFromGl"), 1, GL_FALSE,
                        glm::value_ptr(worldFromGl));
     glUniform3fv(loc(modelProgram_, "uAlbedo"), 1, glm::value_ptr(albedo_));
@@ -326,9 +343,7 @@ void Renderer::drawProbeViews(const Camera& camera, const ShadingSettings& s) {
   glUniform1i(loc(probeProgram_, "uHavePanorama"), backgroundTex_.isValid());
   glUniformMatrix3fv(loc(probeProgram_, "uWorldFromView"), 1, GL_FALSE,
                      glm::value_ptr(worldFromView));
-  glUniformMatrix4fv(loc(probeProgram_, "uShR"), 1, GL_FALSE, glm::value_ptr(sh_[0]));
-  glUniformMatrix4fv(loc(probeProgram_, "uShG"), 1, GL_FALSE, glm::value_ptr(sh_[1]));
-  glUniformMatrix4fv(loc(probeProgram_, "uShB"), 1, GL_FALSE, glm::value_ptr(sh_[2]));
+  setIrradianceUniforms(probeProgram_);
   glBindVertexArray(emptyVao_.get());
   for (int v = 0; v < 3; ++v) {
     Target& t = probes_[std::size_t(v)];

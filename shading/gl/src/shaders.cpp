@@ -19,6 +19,45 @@ namespace lp::gl::shaders {
   "  return mix(c * 12.92, 1.055 * pow(c, vec3(1.0 / 2.4)) - 0.055, step(vec3(0.0031308), c));\n"  \
   "}\n"
 
+// Shared by the model and the probe views: irradiance from the coefficients plus the lights.
+// shIrradiance is R&H eq. 12, E(n) = n4^T M n4 with n in the R&H world frame, term for term the
+// CPU lp::evalIrradianceQuadratic() (shading/sh/src/sh.cpp); lightIrradiance is a uniform disc's
+// exact clamped cosine, term for term lp::lightIrradiance() (shading/sh/src/lights.cpp).
+#define LP_IRRADIANCE_GLSL                                                             \
+  "const int MAX_LIGHTS = 4;\n"                                                        \
+  "uniform mat4 uShR, uShG, uShB;\n"                                                   \
+  "uniform int uLightCount;\n"                                                         \
+  "uniform vec3 uLightDir[MAX_LIGHTS];\n"                                              \
+  "uniform vec3 uLightPower[MAX_LIGHTS];\n"                                            \
+  "uniform float uLightRadius[MAX_LIGHTS];\n"                                          \
+  "vec3 shIrradiance(vec3 n) {\n"                                                      \
+  "  vec4 n4 = vec4(n, 1.0);\n"                                                        \
+  "  return vec3(dot(n4, uShR * n4), dot(n4, uShG * n4), dot(n4, uShB * n4));\n"       \
+  "}\n"                                                                                \
+  "vec3 lightIrradiance(int i, vec3 n) {\n"                                            \
+  "  float c = dot(n, uLightDir[i]);\n"                                                \
+  "  float sa = sin(uLightRadius[i]), ca = cos(uLightRadius[i]);\n"                    \
+  "  if (c >= sa) return uLightPower[i] * (c * (1.0 + ca) * 0.5);\n"                   \
+  "  if (c <= -sa) return vec3(0.0);\n"                                                \
+  "  float sHalf = sin(0.5 * uLightRadius[i]);\n"                                      \
+  "  vec3 radiance = uLightPower[i] / (4.0 * PI * sHalf * sHalf);\n"                   \
+  "  if (sa < 0.02) {\n"                                                               \
+  "    float t0 = -c / sa, r = sqrt(max(0.0, 1.0 - t0 * t0));\n"                       \
+  "    float f = c * (0.5 * PI - t0 * r - asin(t0)) + (2.0 / 3.0) * sa * r * r * r;\n" \
+  "    return radiance * max(sa * sa * f, 0.0);\n"                                     \
+  "  }\n"                                                                              \
+  "  float s = sqrt(max(0.0, 1.0 - c * c));\n"                                         \
+  "  float x = ca / sa, y = clamp(-x * c / s, -1.0, 1.0);\n"                           \
+  "  float q = s * sqrt(1.0 - y * y);\n"                                               \
+  "  float f = (c * acos(y) - x * q) * sa * sa + atan(q / x);\n"                       \
+  "  return radiance * max(f, 0.0);\n"                                                 \
+  "}\n"                                                                                \
+  "vec3 irradiance(vec3 n) {\n"                                                        \
+  "  vec3 E = shIrradiance(n);\n"                                                      \
+  "  for (int i = 0; i < uLightCount; ++i) E += lightIrradiance(i, n);\n"              \
+  "  return E;\n"                                                                      \
+  "}\n"
+
 const char* const kModelVs = R"(#version 330 core
 layout(location = 0) in vec3 aPos;
 layout(location = 1) in vec3 aNormal;
@@ -33,27 +72,19 @@ void main() {
 }
 )";
 
-const char* const kModelFs = "#version 330 core\n" LP_DISPLAY_GLSL R"(
+const char* const kModelFs = "#version 330 core\n" LP_DISPLAY_GLSL LP_IRRADIANCE_GLSL R"(
 in vec3 vNormal;
 in vec2 vUv;
 out vec4 fragColor;
-uniform mat4 uShR, uShG, uShB;
 uniform mat3 uWorldFromGl;  // liveprobe/sh/axes.h
 uniform vec3 uAlbedo;
 uniform bool uHasTexture;
 uniform sampler2D uAlbedoTex;
 uniform int uOutput;        // 0 display, 1 raw irradiance, 2 world normal
 
-// Irradiance (Ramamoorthi & Hanrahan 2001, eq. 12): E(n) = n4^T M n4, n4 = (n, 1), n in the
-// R&H world frame. Term for term the CPU lp::evalIrradianceQuadratic() in shading/sh/src/sh.cpp.
-vec3 shIrradiance(vec3 n) {
-  vec4 n4 = vec4(n, 1.0);
-  return vec3(dot(n4, uShR * n4), dot(n4, uShG * n4), dot(n4, uShB * n4));
-}
-
 void main() {
   vec3 n = normalize(uWorldFromGl * normalize(vNormal));
-  vec3 E = shIrradiance(n);
+  vec3 E = irradiance(n);
   if (uOutput != 0) {
     fragColor = vec4(uOutput == 1 ? E : n, 1.0);
     return;
@@ -122,18 +153,13 @@ void main() {
 // 0: the whole panorama unwrapped as an equirect (the world's, after orientation);
 // 1: a grey (50%) diffuse ball lit by the coefficients; 2: a chrome ball reflecting the
 // environment. The balls are seen orthographically from the camera's direction.
-const char* const kProbeFs = "#version 330 core\n" LP_DISPLAY_GLSL LP_PANORAMA_GLSL R"(
+const char* const kProbeFs =
+    "#version 330 core\n" LP_DISPLAY_GLSL LP_PANORAMA_GLSL LP_IRRADIANCE_GLSL R"(
 in vec2 vNdc;
 out vec4 fragColor;
 uniform int uMode;
 uniform mat3 uWorldFromView;   // camera space -> R&H world
-uniform mat4 uShR, uShG, uShB;
 uniform bool uHavePanorama;
-
-vec3 shIrradiance(vec3 n) {
-  vec4 n4 = vec4(n, 1.0);
-  return vec3(dot(n4, uShR * n4), dot(n4, uShG * n4), dot(n4, uShB * n4));
-}
 
 void main() {
   if (uMode == 0) {
@@ -149,7 +175,7 @@ void main() {
   }
   vec3 nView = vec3(vNdc, sqrt(1.0 - r2));
   if (uMode == 1) {
-    vec3 E = shIrradiance(normalize(uWorldFromView * nView));
+    vec3 E = irradiance(normalize(uWorldFromView * nView));
     fragColor = vec4(srgbEncode(toneMap(0.5 * E / PI)), 1.0);
   } else {
     vec3 r = reflect(vec3(0.0, 0.0, -1.0), nView);

@@ -9,6 +9,7 @@
 
 #include "liveprobe/gl/handles.h"
 #include "liveprobe/gl/mesh.h"
+#include "liveprobe/sh/lights.h"
 #include "liveprobe/sh/sh.h"
 
 namespace lp::gl {
@@ -75,6 +76,10 @@ class Renderer {
   /// Linear RGB albedo texture (rows top to bottom); multiplies Mesh::albedo.
   void setAlbedoTexture(const float* rgb, int width, int height);
   void setLighting(const Sh9& radiance);
+  /// The coefficients and disc lights (liveprobe/sh/lights.h) together: the shaders add each
+  /// light's exact clamped cosine to the coefficients' irradiance. At most kMaxLights are drawn.
+  void setLighting(const Sh9& residual, const std::vector<Light>& lights);
+  static constexpr int kMaxLights = 4;
   /// Linear RGB panorama for the background (rows top to bottom). `displayScale` > 0 says it was
   /// decoded from an 8-bit (sRGB) source and multiplied by that scale: shown display-referred
   /// (ShadingSettings::displayReferredBackground), it is divided by it and encoded back, so it
@@ -135,6 +140,8 @@ class Renderer {
   int backgroundW_ = 0, backgroundH_ = 0;
   bool backgroundSrgb_ = false;
   std::array<glm::mat4, 3> sh_{};
+  std::vector<Light> lights_;
+  void setIrradianceUniforms(const Program& program) const;
 };
 
 /// Throws ContextError if glGetError() reports an error, naming `where`.

@@ -70,7 +70,8 @@ struct LightSplit {
 /// Irradiance of a uniform disc light at normal n, the exact clamped cosine (the spherical cap's
 /// form factor, Snyder 1996, as in Lagarde & de Rousiers 2014, "Moving Frostbite to PBR", eq. 15):
 /// power * (1 + cos a)/2 * cos b where the whole disc is above the surface's horizon, the
-/// horizon-clipped integral where it straddles it, 0 below. The same formula is the GLSL's
+/// horizon-clipped integral where it straddles it (for a disc under 1.15 degrees, the flat-disc
+/// form of that band, whose float terms do not cancel), 0 below. The same formula is the GLSL's
 /// (shading/gl/src/shaders.cpp, lightIrradiance): keep the two identical.
 glm::vec3 lightIrradiance(const Light& light, glm::vec3 n);
 
