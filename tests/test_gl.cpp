@@ -80,6 +80,26 @@ void saveDisplay(const std::vector<float>& rgba, const std::string& name) {
   lp::saveRgb8(outputPath(name), kSize, kSize, rgb.data());
 }
 
+// The largest relative difference, over the pixels that see the unit sphere (at least 5000 of
+// them), between a float pass and `cpu` at the pixel's analytic normal (R&H world frame).
+template <class Cpu>
+double worstAgainstCpu(const lp::gl::Camera& cam, const std::vector<float>& px, Cpu cpu) {
+  int covered = 0;
+  double worst = 0;
+  for (int y = 0; y < kSize; ++y)
+    for (int x = 0; x < kSize; ++x) {
+      glm::vec3 n;
+      if (!sphereNormal(cam, x, y, &n)) continue;
+      ++covered;
+      const glm::vec3 e = cpu(lp::axes::worldFromGl(n));
+      for (int c = 0; c < 3; ++c)
+        worst =
+            std::max(worst, double(std::abs(px[4 * (y * kSize + x) + c] - e[c]) / std::abs(e[c])));
+    }
+  EXPECT_GT(covered, 5000);
+  return worst;
+}
+
 // GL against CPU: at every covered pixel of a unit sphere, E from the float framebuffer equals
 // the CPU evaluation at the analytic normal of that pixel, within 1e-3 relative.
 TEST_F(GlTest, IrradianceMatchesCpuPerPixel) {
@@ -96,20 +116,8 @@ TEST_F(GlTest, IrradianceMatchesCpuPerPixel) {
     cam.yawDeg = 40.0f * trial;
     cam.pitchDeg = -20.0f + 20.0f * trial;
     const auto px = pass(r, cam, OutputMode::Irradiance);
-    int covered = 0;
-    double worst = 0;
-    for (int y = 0; y < kSize; ++y)
-      for (int x = 0; x < kSize; ++x) {
-        glm::vec3 n;
-        if (!sphereNormal(cam, x, y, &n)) continue;
-        ++covered;
-        const glm::vec3 cpu = lp::evalIrradiance(L, lp::axes::worldFromGl(n));
-        for (int c = 0; c < 3; ++c) {
-          const double rel = std::abs(px[4 * (y * kSize + x) + c] - cpu[c]) / std::abs(cpu[c]);
-          worst = std::max(worst, rel);
-        }
-      }
-    EXPECT_GT(covered, 5000);
+    const double worst =
+        worstAgainstCpu(cam, px, [&](glm::vec3 n) { return lp::evalIrradiance(L, n); });
     EXPECT_LT(worst, 1e-3) << "trial " << trial;
   }
 }
@@ -134,20 +142,8 @@ TEST_F(GlTest, IrradianceWithLightsMatchesCpuPerPixel) {
     lp::gl::Camera cam;
     cam.yawDeg = 70.0f + 60.0f * trial;
     const auto px = pass(r, cam, OutputMode::Irradiance);
-    int covered = 0;
-    double worst = 0;
-    for (int y = 0; y < kSize; ++y)
-      for (int x = 0; x < kSize; ++x) {
-        glm::vec3 n;
-        if (!sphereNormal(cam, x, y, &n)) continue;
-        ++covered;
-        const glm::vec3 cpu = lp::evalIrradiance(L, lights, lp::axes::worldFromGl(n));
-        for (int c = 0; c < 3; ++c) {
-          const double e = double(std::abs(px[4 * (y * kSize + x) + c] - cpu[c]) / cpu[c]);
-          worst = std::max(worst, e);
-        }
-      }
-    EXPECT_GT(covered, 5000);
+    const double worst =
+        worstAgainstCpu(cam, px, [&](glm::vec3 n) { return lp::evalIrradiance(L, lights, n); });
     EXPECT_LT(worst, 2e-3) << "trial " << trial;
   }
 }
