@@ -5,15 +5,20 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <fstream>
+#include <nlohmann/json.hpp>
 #include <numbers>
 #include <optional>
 #include <random>
 
+#include "coeffs_io.h"
 #include "layout_dirs.h"
 #include "liveprobe/capture/frame.h"
+#include "liveprobe/capture/pipeline.h"
 #include "liveprobe/sh/image.h"
 #include "liveprobe/sh/lights.h"
 #include "liveprobe/sh/projector.h"
+#include "test_util.h"
 
 namespace {
 
@@ -142,10 +147,15 @@ TEST(Lights, DiscSunInEveryLayout) {
       EXPECT_FALSE(l.clipped);
       const lp::Sh9 skyOnly =
           lp::project(lp::PanoramaView::rgbF32(sky.rgb.data(), c.w, c.h, c.spec));
+      // And the lights' own coefficients make up the rest of the whole map's.
+      const lp::Sh9 whole = lp::project(view), sum = split.residual + lp::lightsToSh(split.lights);
       for (int k = 0; k < lp::kShCount; ++k)
-        for (int ch = 0; ch < 3; ++ch)
+        for (int ch = 0; ch < 3; ++ch) {
           EXPECT_NEAR(split.residual.c[k][ch], skyOnly.c[k][ch], 1e-3 * skyOnly.c[0][ch])
               << lp::kShNames[k] << " ch " << ch;
+          EXPECT_NEAR(sum.c[k][ch], whole.c[k][ch], 1e-3 * whole.c[0][ch])
+              << lp::kShNames[k] << " ch " << ch;
+        }
     }
   }
 }
@@ -231,6 +241,97 @@ TEST(Lights, ClippedEightBitSunIsALowerBound) {
   ASSERT_EQ(split.lights.size(), 1u);
   EXPECT_TRUE(split.lights[0].clipped);
   EXPECT_LT(angleDeg(dvec3(split.lights[0].dir), sun), 0.5);
+}
+
+// --sun everywhere the coefficients go (issue 13, part 4).
+
+// `coeffs --sun`: the lights beside the coefficients, and the two together are the whole map's.
+TEST(LightsCli, CoeffsJsonCarriesTheLights) {
+  const std::string map = lpt::shellQuote(lpt::dataPath("equirect/pedestrian_overpass_1k.hdr"));
+  const auto whole = lpt::runLiveprobe("coeffs " + map);
+  const auto sun = lpt::runLiveprobe("coeffs " + map + " --sun");
+  ASSERT_EQ(whole.exitCode, 0) << whole.output;
+  ASSERT_EQ(sun.exitCode, 0) << sun.output;
+  const auto jw = nlohmann::json::parse(whole.output), js = nlohmann::json::parse(sun.output);
+  EXPECT_FALSE(jw.contains("lights"));
+  const auto lights = lp::cli::lightsFromJson(js, "coeffs --sun");
+  ASSERT_EQ(lights.size(), 1u);
+  EXPECT_GT(lights[0].share, 0.5f);  // the sun holds more than half the power
+  const lp::Sh9 all = lp::cli::coefficientsFromJson(jw, "coeffs"),
+                sum = lp::cli::coefficientsFromJson(js, "coeffs --sun") + lp::lightsToSh(lights);
+  for (int k = 0; k < lp::kShCount; ++k)
+    for (int ch = 0; ch < 3; ++ch)
+      EXPECT_NEAR(sum.c[k][ch], all.c[k][ch], 1e-3 * all.c[0][ch]) << lp::kShNames[k];
+  // --coeffs reads the lights back: the render of a file with a light differs from without.
+  lpt::TempDir tmp;
+  const std::string f = tmp / "sun.json", g = tmp / "sky.json";
+  std::ofstream(f) << sun.output;
+  nlohmann::json sky = js;
+  sky.erase("lights");
+  std::ofstream(g) << sky.dump();
+  EXPECT_EQ(lpt::runLiveprobe("render --coeffs " + f + " --exposure 1 --size 64x36 --out " +
+                              (tmp / "a.png"))
+                .exitCode,
+            0);
+  EXPECT_EQ(lpt::runLiveprobe("render --coeffs " + g + " --exposure 1 --size 64x36 --out " +
+                              (tmp / "b.png"))
+                .exitCode,
+            0);
+  std::ifstream a(tmp / "a.png", std::ios::binary), b(tmp / "b.png", std::ios::binary);
+  const std::string pa((std::istreambuf_iterator<char>(a)), {}),
+      pb((std::istreambuf_iterator<char>(b)), {});
+  EXPECT_FALSE(pa.empty());
+  EXPECT_NE(pa, pb);
+  // A malformed light is a one-line error naming the file.
+  nlohmann::json bad = js;
+  bad["lights"][0]["direction"] = {0, 0, 0};
+  std::ofstream(tmp / "bad.json") << bad.dump();
+  lpt::expectOneLineError("render --coeffs " + (tmp / "bad.json") + " --out " + (tmp / "c.png"),
+                          "bad.json", "direction");
+}
+
+// replay --sun --coeffs-out: every line holds the light, and it follows the synthetic sun (the
+// generator's own direction) within 0.5 degrees, through the whole capture pipeline.
+TEST(LightsCli, ReplayTracksTheSunIntoCoeffsOut) {
+  lpt::TempDir tmp;
+  const std::string out = tmp / "c.jsonl";
+  const auto r = lpt::runLiveprobe(
+      "replay synthetic:512x256@10 --frames 30 --headless --msaa 1 "
+      "--size 64x36 --quiet --sun --coeffs-out " +
+      out);
+  ASSERT_EQ(r.exitCode, 0) << r.output;
+  EXPECT_NE(r.output.find("lights: in 30 of 30 frames"), std::string::npos) << r.output;
+  std::ifstream in(out);
+  int n = 0;
+  for (std::string line; std::getline(in, line); ++n) {
+    const auto j = nlohmann::json::parse(line);
+    const auto lights = lp::cli::lightsFromJson(j, "line");
+    ASSERT_EQ(lights.size(), 1u) << line;
+    const double t = j["time"].get<double>();
+    EXPECT_LT(angleDeg(dvec3(lights[0].dir), dvec3(lp::syntheticSunDirection(t))), 0.5) << t;
+  }
+  EXPECT_EQ(n, 30);
+}
+
+// --smooth: a light's direction moves by slerp and its power by the coefficients' average.
+TEST(Lights, SmoothingSlerpsTheDirection) {
+  lp::LightSmoother smoother(1.0);
+  lp::Light a, b;
+  a.dir = {1, 0, 0}, a.power = glm::vec3(2.0f), a.angularRadius = 0.01f;
+  b.dir = glm::vec3(std::cos(glm::radians(10.0f)), std::sin(glm::radians(10.0f)), 0),
+  b.power = glm::vec3(4.0f), b.angularRadius = 0.01f;
+  smoother.update({a}, 0.0);
+  const auto s = smoother.update({b}, 0.5);  // alpha = 1 - exp(-0.5)
+  const double alpha = 1 - std::exp(-0.5);
+  ASSERT_EQ(s.size(), 1u);
+  EXPECT_NEAR(angleDeg(dvec3(s[0].dir), dvec3(a.dir)), 10.0 * alpha, 1e-3);
+  EXPECT_NEAR(std::abs(glm::length(s[0].dir) - 1.0f), 0.0, 1e-6);
+  EXPECT_NEAR(s[0].power.x, 2.0 + 2.0 * alpha, 1e-5);
+  // A light more than 20 degrees from any before starts afresh; a jump back in time restarts.
+  lp::Light c = a;
+  c.dir = {-1, 0, 0};
+  EXPECT_EQ(smoother.update({c}, 1.0)[0].dir, c.dir);
+  EXPECT_EQ(smoother.update({a}, 0.2)[0].dir, a.dir);
 }
 
 }  // namespace

@@ -71,7 +71,8 @@ int runRender(const Args& a) {
   const gl::Camera camera = cameraFromArgs(a);
   ViewState state;
   state.camera = camera;
-  state.shading = shadingFromArgs(a, lighting.radiance, lighting.background.has_value());
+  state.shading =
+      shadingFromArgs(a, lighting.radiance, lighting.background.has_value(), lighting.lights);
   const Mesh mesh = meshFromArgs(a);
   auto ctx = openContext(backendFromArgs(a), size);
   try {
@@ -124,7 +125,8 @@ int runView(const Args& a) {
   Lighting lighting = requireLighting(a);
   ViewState state;
   state.camera = state.initialCamera = cameraFromArgs(a);
-  state.shading = shadingFromArgs(a, lighting.radiance, lighting.background.has_value());
+  state.shading =
+      shadingFromArgs(a, lighting.radiance, lighting.background.has_value(), lighting.lights);
   const Mesh mesh = meshFromArgs(a);
   const bool screenshot = a.has("--screenshot");
   if (screenshot)
@@ -157,7 +159,7 @@ int runView(const Args& a) {
       if (hud && (state.hud || state.help)) {
         hud->draw(fb, renderer, state, lastMs);
         if (hud->edited()) {
-          renderer.setLighting(lighting.radiance);
+          renderer.setLighting(lighting.radiance, lighting.lights);
           HudSample s;
           s.radiance = s.unsmoothed = lighting.radiance;
           hud->push(s);

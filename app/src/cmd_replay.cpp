@@ -44,6 +44,7 @@ std::string coeffsLine(const ProcessedFrame& f, double renderMs, double shownLat
   j["frame"] = f.index;
   j["time"] = f.timestamp;
   j["coefficients"] = coefficientsJson(f.radiance);
+  if (!f.lights.empty()) j["lights"] = lightsJson(f.lights);
   nlohmann::ordered_json t;
   t["grab"] = f.times.grabMs;
   t["convert"] = f.times.convertMs;
@@ -84,8 +85,9 @@ std::vector<OptionSpec> streamOptions() {
         false, false, g},
        {"--input-exposure", "X", "linear radiance scale applied to the input (default 1)", false,
         false, g},
-       {"--smooth", "SECONDS", "exponential moving average of the coefficients (and its latency)",
-        false, false, g},
+       {"--smooth", "SECONDS",
+        "exponential moving average of the coefficients and lights (and its latency)", false, false,
+        g},
        {"--fps", "F", "frame rate of image sequences, 0 to 1000 (default 30)", false, false, g},
        {"--reduce", "F", "equirect: project an F x F area average, 1 to 64 (error in README)",
         false, false, g},
@@ -96,6 +98,11 @@ std::vector<OptionSpec> streamOptions() {
        {"--coeffs-out", "FILE.jsonl", "one JSON line per frame: coefficients and stage timings",
         false, false, g},
        {"--hud", "", "draw the HUD into headless frames too", false, false, g},
+       {"--sun", "",
+        "take the dominant compact source (sun, lamp, window) out of the coefficients and light "
+        "the model with it as a disc light",
+        false, false, g},
+       {"--lights", "K", "up to K such lights (implies --sun; 1..8)", false, false, g},
        {"--no-hud", "", "hide the HUD (H toggles it in a window)", false, false, g},
        {"--quiet", "", "no progress on stderr", false, false, g}});
   return o;
@@ -144,6 +151,7 @@ PipelineOptions pipelineOptionsFromArgs(const Args& a) {
   opt.smoothSeconds = a.numberIn("--smooth", 0.0, 0.0, 3600.0);
   opt.loop = a.has("--loop");
   opt.reduce = a.integerIn("--reduce", 1, 1, 64);
+  opt.lights = chooseLights(a);
   opt.threads = unsigned(a.integerIn("--threads", 2, 1, 64));
   opt.maxFrames = a.integerIn("--frames", -1, 1, 1000000000);
   return opt;
@@ -205,6 +213,7 @@ struct StreamTally {
   std::vector<double> grab, convert, project, upload, render;
   std::vector<double> latency;  ///< capture to shown, ms
   std::size_t drawn = 0, saturated = 0;
+  std::size_t withLight = 0, clippedLight = 0;  ///< frames with a light; of them, clipped
 };
 
 /// Everything the render loop holds: GL, the HUD, the interactive state.
@@ -230,9 +239,10 @@ struct StreamView {
       if (w > 0)
         warnIfLayoutLooksWrong(source, layout, w, h, f.image ? f.image->rgb.data() : nullptr);
     }
-    if (!haveLighting && autoExposure) state.shading.exposure = cli::autoExposure(f.radiance);
+    if (!haveLighting && autoExposure)
+      state.shading.exposure = cli::autoExposure(f.radiance, true, f.lights);
     haveLighting = true;
-    renderer->setLighting(f.radiance);
+    renderer->setLighting(f.radiance, f.lights);
     if (f.image) setBackground(*renderer, *f.image, layout, f.displayScale);
     if (f.raw) setBackground(*renderer, *f.raw, layout, f.rawScale);
     // The time to hand the data to GL, not waiting for it (no glFinish stalling every frame);
@@ -255,6 +265,9 @@ void recordSample(StreamTally& t, const ProcessedFrame& f, double uploadMs, doub
   t.upload.push_back(uploadMs);
   t.render.push_back(renderMs);
   t.saturated += f.saturated;
+  if (!f.lights.empty()) ++t.withLight;
+  if (std::any_of(f.lights.begin(), f.lights.end(), [](const Light& l) { return l.clipped; }))
+    ++t.clippedLight;
   if (!hud) return;
   HudSample s;
   s.frame = f.index;
@@ -263,6 +276,7 @@ void recordSample(StreamTally& t, const ProcessedFrame& f, double uploadMs, doub
   s.uploadMs = uploadMs, s.renderMs = renderMs, s.latencyMs = latencyMs;
   s.radiance = f.radiance;
   s.unsmoothed = f.unsmoothed;
+  s.lights = f.lights;
   hud->push(s);
   hud->setCounters({st.captured, t.drawn, st.dropped, st.skipped,
                     t.grab.empty() ? 0.0 : double(t.saturated) / double(t.grab.size())});
@@ -351,6 +365,12 @@ void printSummary(const std::string& description, const PipelineStats& st, const
     std::fprintf(stderr, "  latency ms (capture to shown): p50 %.1f, p95 %.1f, p99 %.1f\n",
                  percentile(t.latency, 0.5), percentile(t.latency, 0.95),
                  percentile(t.latency, 0.99));
+  if (t.withLight > 0 || t.clippedLight > 0)
+    std::fprintf(stderr, "  lights: in %zu of %zu frames%s\n", t.withLight, t.grab.size(),
+                 t.clippedLight > 0 ? (", clipped (8-bit maximum: power is a lower bound) in " +
+                                       std::to_string(t.clippedLight))
+                                          .c_str()
+                                    : "");
   if (smoothSeconds > 0)
     std::fprintf(stderr,
                  "  --smooth %.3g s: lighting lags a step change by %.3g s (63%% of the step)\n",

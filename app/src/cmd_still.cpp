@@ -57,7 +57,12 @@ const CommandSpec kCoeffsSpec{
     "FILE",
     "Prints the nine radiance coefficients L_lm (R&H convention, before the A_l factors) of an\n"
     "environment map (.hdr, .exr, or 8-bit PNG/JPEG decoded from sRGB).",
-    withLayout({{"--format", "json|text|glsl", "output format (default json)"}, kWindowOpt}),
+    [] {
+      auto o =
+          withLayout({{"--format", "json|text|glsl", "output format (default json)"}, kWindowOpt});
+      for (auto& l : lightOptionSpecs()) o.push_back(l);
+      return o;
+    }(),
     1,
     1,
     "an environment map (.hdr, .exr, .png, .jpg), or a folder of six cube faces"};
@@ -67,6 +72,8 @@ int runCoeffs(const Args& a) {
   if (format != "json" && format != "text" && format != "glsl")
     throw Error("--format " + format + ": expected json, text or glsl");
   Environment env = loadEnvironment(a);
+  const LightOptions lights = chooseLights(a);
+  splitLights(env, lights);
   const Sh9 L = applyWindow(env.radiance, chooseWindow(a, env.radiance));
   if (format == "json") {
     nlohmann::ordered_json j;
@@ -75,16 +82,27 @@ int runCoeffs(const Args& a) {
     j["width"] = env.image.width;
     j["height"] = env.image.height;
     j["coefficients"] = coefficientsJson(L);
+    if (lights.maxLights > 0) j["lights"] = lightsJson(env.lights);
     std::cout << j.dump() << "\n";
   } else if (format == "text") {
     std::cout << a.positional()[0] << " (" << layoutName(env.layout.layout) << ", "
               << env.image.width << "x" << env.image.height << ")\n"
               << coefficientsText(L);
+    if (lights.maxLights > 0 && env.lights.empty())
+      std::printf("lights: none (no compact source holds 5%% of the power)\n");
+    for (const Light& l : env.lights)
+      std::printf(
+          "light: direction (%.4f, %.4f, %.4f), radius %.2f deg, power %.6g %.6g %.6g, "
+          "%.1f%% of the power%s\n",
+          l.dir.x, l.dir.y, l.dir.z, glm::degrees(l.angularRadius), l.power.x, l.power.y, l.power.z,
+          100 * l.share, l.clipped ? " (clipped: a lower bound)" : "");
     const MinIrradiance mn = minIrradiance(L);
     std::printf("min irradiance over the sphere / L00-irradiance: %.4f %.4f %.4f\n",
                 mn.value.x / (kA0 * kY00 * L.c[0].x), mn.value.y / (kA0 * kY00 * L.c[0].y),
                 mn.value.z / (kA0 * kY00 * L.c[0].z));
   } else {
+    if (!env.lights.empty())
+      throw Error("--format glsl: carries the coefficients only; use json for the lights");
     std::cout << coefficientsGlsl(L);
   }
   return 0;

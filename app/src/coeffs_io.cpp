@@ -71,7 +71,52 @@ Sh9 coefficientsFromJson(const nlohmann::json& j, const std::string& source) {
   return out;
 }
 
-Sh9 loadCoefficients(const std::string& path) {
+namespace {
+glm::vec3 finiteTriple(const nlohmann::json& v, const std::string& what) {
+  if (!v.is_array() || v.size() != 3) throw Error(what + " must be an array of three numbers");
+  glm::vec3 out;
+  for (int i = 0; i < 3; ++i) {
+    if (!v[i].is_number()) throw Error(what + " has a non-number");
+    const double x = v[i].get<double>();
+    if (!std::isfinite(x) || std::abs(x) > double(std::numeric_limits<float>::max()))
+      throw Error(what + " is not a finite float");
+    out[i] = float(x);
+  }
+  return out;
+}
+}  // namespace
+
+std::vector<Light> lightsFromJson(const nlohmann::json& j, const std::string& source) {
+  std::vector<Light> lights;
+  if (!j.is_object() || !j.contains("lights")) return lights;
+  const auto& a = j["lights"];
+  if (!a.is_array()) throw Error(source + ": \"lights\" must be an array");
+  for (std::size_t i = 0; i < a.size(); ++i) {
+    const std::string what = source + ": light " + std::to_string(i + 1);
+    const auto& o = a[i];
+    if (!o.is_object() || !o.contains("direction") || !o.contains("power"))
+      throw Error(what + " needs \"direction\" and \"power\"");
+    Light l;
+    const glm::vec3 d = finiteTriple(o["direction"], what + " direction");
+    const float len = glm::length(d);
+    if (!(len > 1e-6f) || !std::isfinite(len)) throw Error(what + " direction has no length");
+    l.dir = d / len;
+    l.power = finiteTriple(o["power"], what + " power");
+    if (l.power.x < 0 || l.power.y < 0 || l.power.z < 0) throw Error(what + " power is negative");
+    if (o.contains("angular_radius_deg")) {
+      const auto& r = o["angular_radius_deg"];
+      if (!r.is_number() || !(r.get<double>() >= 0.0 && r.get<double>() <= 90.0))
+        throw Error(what + " angular_radius_deg must be a number in [0, 90]");
+      l.angularRadius = glm::radians(float(r.get<double>()));
+    }
+    if (o.contains("share") && o["share"].is_number()) l.share = float(o["share"].get<double>());
+    if (o.contains("clipped") && o["clipped"].is_boolean()) l.clipped = o["clipped"].get<bool>();
+    lights.push_back(l);
+  }
+  return lights;
+}
+
+Sh9 loadCoefficients(const std::string& path, std::vector<Light>* lights) {
   const std::string text = readInputFile(path);
   nlohmann::json j;
   try {
@@ -79,6 +124,7 @@ Sh9 loadCoefficients(const std::string& path) {
   } catch (const nlohmann::json::exception& e) {
     throw Error(path + ": not valid JSON (" + std::string(e.what()) + ")");
   }
+  if (lights) *lights = lightsFromJson(j, path);
   return coefficientsFromJson(j, path);
 }
 

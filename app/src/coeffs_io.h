@@ -21,8 +21,14 @@ nlohmann::ordered_json lightsJson(const std::vector<Light>& lights);
 /// Throws lp::Error naming `source` for a missing name, a non-numeric or non-finite value.
 Sh9 coefficientsFromJson(const nlohmann::json& j, const std::string& source);
 
-/// Reads a file written by `liveprobe coeffs --format json`.
-Sh9 loadCoefficients(const std::string& path);
+/// Reads the optional "lights" array beside the coefficients (lightsJson's form; none: empty).
+/// Throws lp::Error naming `source` for a malformed light: a direction that is not three finite
+/// numbers of non-zero length, a radius outside [0, 90] degrees, a power not three finite numbers
+/// at or above zero.
+std::vector<Light> lightsFromJson(const nlohmann::json& j, const std::string& source);
+
+/// Reads a file written by `liveprobe coeffs --format json`; its lights, if any, into `lights`.
+Sh9 loadCoefficients(const std::string& path, std::vector<Light>* lights = nullptr);
 
 std::string coefficientsText(const Sh9& radiance);
 std::string coefficientsGlsl(const Sh9& radiance);

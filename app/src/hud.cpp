@@ -259,6 +259,26 @@ void Hud::drawLight(gl::Renderer& renderer) {
         {float(s.x) * scale, float(s.y) * scale}, {0, 1}, {1, 0});
   };
   image(gl::ProbeView::Panorama, 1.05f);
+  {
+    // The lights (--sun) marked where they are on the panorama: the inset is the world's equirect
+    // (azimuth left to right from +x, the zenith at the top; shaders.cpp, kProbeFs mode 0).
+    const ImVec2 lo = ImGui::GetItemRectMin(), hi = ImGui::GetItemRectMax();
+    const std::vector<Light> none;
+    const auto& lights = history_.empty() ? none : history_.back().lights;
+    ImDrawList* marks = ImGui::GetWindowDrawList();
+    for (const Light& l : lights) {
+      float p = std::atan2(l.dir.y, l.dir.x);
+      if (p < 0) p += 2 * float(kPi);
+      const float t = std::acos(std::clamp(l.dir.z, -1.0f, 1.0f));
+      const ImVec2 c{lo.x + (hi.x - lo.x) * p / (2 * float(kPi)),
+                     lo.y + (hi.y - lo.y) * t / float(kPi)};
+      marks->AddCircle(c, 7.0f, IM_COL32(255, 60, 40, 255), 16, 2.0f);
+      marks->AddCircle(c, 8.5f, IM_COL32(0, 0, 0, 200), 16, 1.0f);
+    }
+    for (const Light& l : lights)
+      ImGui::Text("light %.0f%%  r %.2f deg  E %.3g%s", 100 * l.share,
+                  glm::degrees(l.angularRadius), luminance(l.power), l.clipped ? " clipped" : "");
+  }
   image(gl::ProbeView::DiffuseBall, 1.0f);
   ImGui::SameLine();
   image(gl::ProbeView::ChromeBall, 1.0f);

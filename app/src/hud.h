@@ -11,6 +11,7 @@
 
 #include "liveprobe/gl/context.h"
 #include "liveprobe/gl/renderer.h"
+#include "liveprobe/sh/lights.h"
 #include "liveprobe/sh/sh.h"
 
 namespace lp::cli {
@@ -20,9 +21,10 @@ struct HudSample {
   std::uint64_t frame = 0;
   double time = 0;  ///< the source's timestamp, seconds
   double grabMs = 0, convertMs = 0, projectMs = 0, uploadMs = 0, renderMs = 0;
-  double latencyMs = 0;  ///< capture to shown
-  Sh9 radiance;          ///< as lit (after rotation and smoothing)
-  Sh9 unsmoothed;        ///< before smoothing (equal to radiance without --smooth)
+  double latencyMs = 0;       ///< capture to shown
+  Sh9 radiance;               ///< as lit (after rotation and smoothing)
+  Sh9 unsmoothed;             ///< before smoothing (equal to radiance without --smooth)
+  std::vector<Light> lights;  ///< as lit (--sun): marked on the panorama inset
 };
 
 struct HudCounters {

@@ -7,6 +7,7 @@
 #include <sstream>
 
 #include "coeffs_io.h"
+#include "commands.h"
 #include "liveprobe/capture/frame.h"
 #include "liveprobe/capture/input_file.h"
 #include "liveprobe/capture/photometry.h"
@@ -110,6 +111,15 @@ Environment loadEnvironment(const std::string& source, const LayoutSpec& layout,
   return env;
 }
 
+void splitLights(Environment& env, const LightOptions& options) {
+  if (options.maxLights <= 0) return;
+  const auto view =
+      PanoramaView::rgbF32(env.image.rgb.data(), env.image.width, env.image.height, env.layout);
+  const LightSplit split = rotateSplit(projectWithLights(view, options), env.orientation);
+  env.radiance = split.residual;
+  env.lights = split.lights;
+}
+
 void warnIfLayoutLooksWrong(const std::string& source, const LayoutSpec& layout, int w, int h,
                             const float* rgb) {
   if (layout.layout == Layout::Equirect && w == h) {
@@ -160,9 +170,11 @@ std::vector<OptionSpec> lightingOptions() {
   std::vector<OptionSpec> o = {
       {"--env", "FILE", "environment map that lights the model and is drawn behind it"}};
   for (auto& l : layoutOptions()) o.push_back(l);
-  o.insert(o.end(), {{"--coeffs", "FILE.json", "coefficients written by liveprobe coeffs"},
-                     {"--coeff", "NAME=VALUE",
-                      "set one coefficient (VALUE or r,g,b), others zero; repeatable", true}});
+  o.insert(o.end(),
+           {{"--coeffs", "FILE.json", "coefficients (and lights) written by liveprobe coeffs"},
+            {"--coeff", "NAME=VALUE",
+             "set one coefficient (VALUE or r,g,b), others zero; repeatable", true}});
+  for (auto& l : lightOptionSpecs()) o.push_back(l);
   return o;
 }
 
@@ -187,9 +199,15 @@ std::optional<Lighting> lightingFromArgs(const Args& a) {
   const int kinds = int(a.has("--env")) + int(a.has("--coeffs")) + int(a.has("--coeff"));
   if (kinds > 1) throw Error("give only one of --env, --coeffs and --coeff");
   if (kinds == 0) return std::nullopt;
+  if (chooseLights(a).maxLights > 0 && !a.has("--env"))
+    throw Error(
+        "--sun and --lights take the lights out of an --env map (a --coeffs file carries "
+        "its own)");
   Lighting l;
   if (a.has("--env")) {
     Environment env = loadEnvironment(a.get("--env"), layoutFromArgs(a), envOrientationFromArgs(a));
+    splitLights(env, chooseLights(a));
+    l.lights = env.lights;
     l.layout = env.layout;
     l.orientation = env.orientation;
     l.displayScale = env.displayScale;
@@ -197,7 +215,7 @@ std::optional<Lighting> lightingFromArgs(const Args& a) {
     l.background = std::move(env.image);
   } else {
     if (a.has("--coeffs")) {
-      l.radiance = loadCoefficients(a.get("--coeffs"));
+      l.radiance = loadCoefficients(a.get("--coeffs"), &l.lights);
     } else {
       std::vector<int> seen;
       for (const auto& c : a.all("--coeff")) {
@@ -210,7 +228,9 @@ std::optional<Lighting> lightingFromArgs(const Args& a) {
         l.radiance.c[std::size_t(k)] = one.c[std::size_t(k)];
       }
     }
-    l.radiance = rotateSh(l.radiance, envOrientationFromArgs(a));
+    const glm::mat3 o = envOrientationFromArgs(a);
+    l.radiance = rotateSh(l.radiance, o);
+    for (Light& light : l.lights) light.dir = glm::normalize(o * light.dir);
   }
   return l;
 }
@@ -265,7 +285,8 @@ gl::Camera cameraFromArgs(const Args& a) {
   return c;
 }
 
-float autoExposure(const Sh9& radiance, bool environment) {
+float autoExposure(const Sh9& withoutLights, bool environment, const std::vector<Light>& lights) {
+  const Sh9 radiance = withoutLights + lightsToSh(lights);  // the whole environment's
   if (environment) {
     const float meanRadiance = luminance(radiance.c[0]) * kY00;
     return meanRadiance > 1e-12f ? 0.18f / meanRadiance : 1.0f;
@@ -280,11 +301,12 @@ float autoExposure(const Sh9& radiance, bool environment) {
   return peakRadiance > 1e-12f ? 1.0f / peakRadiance : 1.0f;
 }
 
-gl::ShadingSettings shadingFromArgs(const Args& a, const Sh9& radiance, bool environment) {
+gl::ShadingSettings shadingFromArgs(const Args& a, const Sh9& radiance, bool environment,
+                                    const std::vector<Light>& lights) {
   gl::ShadingSettings s;
   const std::string e = a.get("--exposure", "auto");
-  s.exposure =
-      e == "auto" ? autoExposure(radiance, environment) : float(parseNumber(e, "--exposure"));
+  s.exposure = e == "auto" ? autoExposure(radiance, environment, lights)
+                           : float(parseNumber(e, "--exposure"));
   if (!(s.exposure > 0)) throw Error("--exposure " + e + ": must be positive or auto");
   const std::string tm = a.get("--tonemap", "aces");
   if (tm == "aces")
@@ -325,7 +347,7 @@ void loadModel(gl::Renderer& r, const Mesh& mesh) {
 
 void loadScene(gl::Renderer& r, const Mesh& mesh, const Lighting& lighting) {
   loadModel(r, mesh);
-  r.setLighting(lighting.radiance);
+  r.setLighting(lighting.radiance, lighting.lights);
   r.setEnvOrientation(lighting.orientation);
   if (lighting.background)
     setBackground(r, *lighting.background, lighting.layout, lighting.displayScale);

@@ -37,7 +37,8 @@ struct Environment {
   Image image;  ///< linear RGB, as stored in the file
   LayoutSpec layout;
   glm::mat3 orientation{1.0f};  ///< world from file (envOrientationFromArgs)
-  Sh9 radiance;                 ///< unwindowed, turned by `orientation`
+  Sh9 radiance;                 ///< unwindowed, turned by `orientation` (with lights: the rest)
+  std::vector<Light> lights;    ///< splitLights: the dominant compact lights, turned likewise
   float displayScale = 0.0f;    ///< an 8-bit file: the scale its decoded values carry; 0 for HDR
 };
 /// Reads the first frame of `source` through the capture path (photometry, layout check) and
@@ -46,6 +47,11 @@ struct Environment {
 Environment loadEnvironment(const std::string& source, const LayoutSpec& layout,
                             const glm::mat3& orientation = glm::mat3(1.0f));
 
+/// Splits the environment's lights out of its coefficients (liveprobe/sh/lights.h): `radiance`
+/// becomes the rest and `lights` the lights, both turned by the orientation. No-op for
+/// options.maxLights = 0.
+void splitLights(Environment& env, const LightOptions& options);
+
 /// One warning line when the frame's shape suggests another layout than the one given: a square
 /// image or a 16:9 frame taken as equirect, or an angular map whose corners are not black.
 void warnIfLayoutLooksWrong(const std::string& source, const LayoutSpec& layout, int width,
@@ -53,6 +59,7 @@ void warnIfLayoutLooksWrong(const std::string& source, const LayoutSpec& layout,
 
 struct Lighting {
   Sh9 radiance;
+  std::vector<Light> lights;        ///< --sun with --env, or the "lights" of a --coeffs file
   std::optional<Image> background;  ///< the environment, when lighting came from one
   LayoutSpec layout;
   glm::mat3 orientation{1.0f};
@@ -79,13 +86,15 @@ Mesh meshFromArgs(const Args& a);
 gl::Camera cameraFromArgs(const Args& a);
 /// --exposure X|auto (default auto: the environment's mean radiance maps to 0.18), --tonemap,
 /// --no-background.
-gl::ShadingSettings shadingFromArgs(const Args& a, const Sh9& radiance, bool environment = true);
+gl::ShadingSettings shadingFromArgs(const Args& a, const Sh9& radiance, bool environment = true,
+                                    const std::vector<Light>& lights = {});
 
 /// The automatic exposure. With an environment (a background to match): the photographic rule,
 /// the mean radiance (L00 Y00, luminance) maps to 0.18. Without one (coefficients only), from the
 /// irradiance itself: the brightest white diffuse surface (max over n of Y(E(n)) / pi) maps to
 /// 1.0, so any set of coefficients, a single one included, is visible. 1 if all is dark.
-float autoExposure(const Sh9& radiance, bool environment = true);
+float autoExposure(const Sh9& radiance, bool environment = true,
+                   const std::vector<Light>& lights = {});
 gl::Backend backendFromArgs(const Args& a);
 
 /// Creates a GL context (lp::Error on failure).

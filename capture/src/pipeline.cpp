@@ -2,6 +2,7 @@
 
 #include <time.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <utility>
@@ -41,6 +42,55 @@ Sh9 projectFrame(const Projector& projector, const Frame& frame, const Linearize
              PanoramaView::rgbF32(frame.rgb.data(), frame.width, frame.height, projector.spec()),
              executor) *
          linearizer.exposure();
+}
+
+LightSplit projectFrameWithLights(const Projector& projector, const LightExtractor& extractor,
+                                  const Frame& frame, const Linearizer& linearizer,
+                                  Executor* executor, const LightOptions& options) {
+  std::vector<float> peaks;
+  if (frame.format == PixelFormat::Bgr8) {
+    const auto view = PanoramaView::bgrU8(frame.bgr8.data(), frame.width, frame.height,
+                                          linearizer.table().data(), projector.spec());
+    return extractor.extract(view, projector.project(view, executor, &peaks), peaks, options);
+  }
+  const auto view =
+      PanoramaView::rgbF32(frame.rgb.data(), frame.width, frame.height, projector.spec());
+  LightSplit split =
+      extractor.extract(view, projector.project(view, executor, &peaks), peaks, options);
+  const float k = linearizer.exposure();
+  split.residual *= k;
+  for (Light& l : split.lights) l.power *= k;
+  return split;
+}
+
+glm::vec3 slerp(glm::vec3 a, glm::vec3 b, float t) {
+  const float c = std::clamp(glm::dot(a, b), -1.0f, 1.0f);
+  const float angle = std::acos(c);
+  if (angle < 1e-4f) return glm::normalize(glm::mix(a, b, t));
+  const float s = std::sin(angle);
+  return glm::normalize(a * (std::sin((1.0f - t) * angle) / s) + b * (std::sin(t * angle) / s));
+}
+
+std::vector<Light> LightSmoother::update(const std::vector<Light>& lights, double timestamp) {
+  const double dt = timestamp - last_;
+  last_ = timestamp;
+  if (tau_ <= 0 || !started_ || dt < 0) {  // off, the first frame, or a loop: start afresh
+    started_ = true;
+    return state_ = lights;
+  }
+  const float alpha = float(1.0 - std::exp(-dt / tau_));
+  std::vector<Light> next = lights;
+  for (Light& l : next) {
+    const Light* match = nullptr;
+    for (const Light& p : state_)
+      if (!match || glm::dot(p.dir, l.dir) > glm::dot(match->dir, l.dir)) match = &p;
+    if (!match || glm::dot(match->dir, l.dir) < std::cos(glm::radians(20.0f))) continue;
+    l.dir = slerp(match->dir, l.dir, alpha);
+    l.power = match->power + alpha * (l.power - match->power);
+    l.angularRadius = match->angularRadius + alpha * (l.angularRadius - match->angularRadius);
+    l.share = match->share + alpha * (l.share - match->share);
+  }
+  return state_ = next;
 }
 
 Sh9 ShSmoother::update(const Sh9& x, double timestamp) {
@@ -90,12 +140,17 @@ void CapturePipeline::publish(ProcessedFrame&& f) {
 // The capture thread's state from frame to frame.
 struct CapturePipeline::Loop {
   explicit Loop(const PipelineOptions& o)
-      : linearizer(o.photometry), smoother(o.smoothSeconds), wallStart(Clock::now()) {
+      : linearizer(o.photometry),
+        smoother(o.smoothSeconds),
+        lightSmoother(o.smoothSeconds),
+        wallStart(Clock::now()) {
     if (o.threads > 1) pool = std::make_unique<ThreadPool>(o.threads);
   }
   const Linearizer linearizer;
   std::optional<Projector> projector;
+  std::optional<LightExtractor> extractor;  ///< for `projector`, when lights are asked for
   ShSmoother smoother;
+  LightSmoother lightSmoother;
   std::unique_ptr<ThreadPool> pool;
   Frame frame;
   std::shared_ptr<Image> image;  ///< this frame's linear copy, when one is made
@@ -137,6 +192,8 @@ void CapturePipeline::fitProjector(Loop& s) const {
     throw Error(source_->describe() + ": --reduce " + std::to_string(reduce) +
                 " needs an equirect frame whose size is a multiple of it");
   s.projector.emplace(opt_.layout, frame.width / reduce, frame.height / reduce);
+  s.extractor.reset();
+  if (opt_.lights.maxLights > 0) s.extractor.emplace(*s.projector);
 }
 
 void CapturePipeline::convertForDisplay(Loop& s, ProcessedFrame& out) const {
@@ -156,7 +213,7 @@ void CapturePipeline::convertForDisplay(Loop& s, ProcessedFrame& out) const {
 Sh9 CapturePipeline::project(Loop& s, ProcessedFrame& out) const {
   // 8-bit frames through the lookup table inside the projection, float ones scaled afterwards
   // (projection is linear); --reduce projects an area-averaged copy.
-  Sh9 sh;
+  LightSplit split;
   if (opt_.reduce > 1) {
     if (!s.image) {
       s.image = std::make_shared<Image>();
@@ -164,16 +221,27 @@ Sh9 CapturePipeline::project(Loop& s, ProcessedFrame& out) const {
     }
     const Image small =
         reduceEquirect(s.image->rgb.data(), s.image->width, s.image->height, opt_.reduce);
-    sh = s.projector->project(PanoramaView::rgbF32(small.rgb.data(), small.width, small.height),
-                              s.pool.get());
+    const auto view = PanoramaView::rgbF32(small.rgb.data(), small.width, small.height);
+    if (s.extractor) {
+      std::vector<float> peaks;
+      split = s.extractor->extract(view, s.projector->project(view, s.pool.get(), &peaks), peaks,
+                                   opt_.lights);
+    } else {
+      split.residual = s.projector->project(view, s.pool.get());
+    }
+  } else if (s.extractor) {
+    split = projectFrameWithLights(*s.projector, *s.extractor, s.frame, s.linearizer, s.pool.get(),
+                                   opt_.lights);
   } else {
-    sh = projectFrame(*s.projector, s.frame, s.linearizer, s.pool.get());
+    split.residual = projectFrame(*s.projector, s.frame, s.linearizer, s.pool.get());
   }
+  Sh9& sh = split.residual;
   // The exposure in force for this frame (a recording's stored exposure, a camera's exposure
   // time) scales the coefficients and the display copy.
   const double scale = s.frame.radianceScale;
   if (scale != 1.0) {
     sh *= float(scale);
+    for (Light& l : split.lights) l.power *= float(scale);
     if (s.image)
       for (float& v : s.image->rgb) v *= float(scale);
   }
@@ -182,9 +250,10 @@ Sh9 CapturePipeline::project(Loop& s, ProcessedFrame& out) const {
   if (!isFinite(sh))
     throw Error(source_->describe() + ": frame " + std::to_string(out.index + 1) +
                 ": the coefficients are not finite (radiance too large to sum in float)");
-  if (opt_.rotation) sh = rotateSh(sh, *opt_.rotation);
-  out.unsmoothed = sh;
-  return s.smoother.update(sh, out.timestamp);
+  if (opt_.rotation) split = rotateSplit(split, *opt_.rotation);
+  out.unsmoothed = split.residual;
+  out.lights = s.lightSmoother.update(split.lights, out.timestamp);
+  return s.smoother.update(split.residual, out.timestamp);
 }
 
 void CapturePipeline::pace(Loop& s, double timestamp) {

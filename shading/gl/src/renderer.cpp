@@ -139,8 +139,19 @@ std::vector<float> FloatTarget::readRgba() const {
   return px;
 }
 
+namespace {
+/// A shader source with `#define NAME` after its #version line.
+std::string withDefine(const char* source, const std::string& name) {
+  std::string s(source);
+  s.insert(s.find('\n') + 1, "#define " + name + "\n");
+  return s;
+}
+}  // namespace
+
 Renderer::Renderer()
     : modelProgram_(link(shaders::kModelVs, shaders::kModelFs, "model shader")),
+      modelLitProgram_(link(shaders::kModelVs, withDefine(shaders::kModelFs, "LP_LIGHTS").c_str(),
+                            "model shader with lights")),
       backgroundProgram_(link(shaders::kBackgroundVs, shaders::kBackgroundFs, "background shader")),
       probeProgram_(link(shaders::kBackgroundVs, shaders::kProbeFs, "probe view shader")) {
   GLuint id = 0;
@@ -304,19 +315,20 @@ void Renderer::draw(glm::ivec2 size, const Camera& camera, const ShadingSettings
   if (indexCount_ > 0) {
     glEnable(GL_DEPTH_TEST);
     glDepthFunc(GL_LESS);
-    glUseProgram(modelProgram_.get());
-    glUniformMatrix4fv(loc(modelProgram_, "uViewProj"), 1, GL_FALSE, glm::value_ptr(viewProj));
-    setIrradianceUniforms(modelProgram_);
-    glUniformMatrix3fv(loc(modelProgram_, "uWorldFromGl"), 1, GL_FALSE,
-                       glm::value_ptr(worldFromGl));
-    glUniform3fv(loc(modelProgram_, "uAlbedo"), 1, glm::value_ptr(albedo_));
-    glUniform1i(loc(modelProgram_, "uHasTexture"), albedoTex_.isValid() && hasUv_);
-    glUniform1f(loc(modelProgram_, "uExposure"), s.exposure);
-    glUniform1i(loc(modelProgram_, "uToneMap"), int(s.toneMap));
-    glUniform1i(loc(modelProgram_, "uOutput"), int(s.output));
+    // The variant without the lights' loop when there is none (see shaders.cpp).
+    const Program& model = lights_.empty() ? modelProgram_ : modelLitProgram_;
+    glUseProgram(model.get());
+    glUniformMatrix4fv(loc(model, "uViewProj"), 1, GL_FALSE, glm::value_ptr(viewProj));
+    setIrradianceUniforms(model);
+    glUniformMatrix3fv(loc(model, "uWorldFromGl"), 1, GL_FALSE, glm::value_ptr(worldFromGl));
+    glUniform3fv(loc(model, "uAlbedo"), 1, glm::value_ptr(albedo_));
+    glUniform1i(loc(model, "uHasTexture"), albedoTex_.isValid() && hasUv_);
+    glUniform1f(loc(model, "uExposure"), s.exposure);
+    glUniform1i(loc(model, "uToneMap"), int(s.toneMap));
+    glUniform1i(loc(model, "uOutput"), int(s.output));
     glActiveTexture(GL_TEXTURE1);
     glBindTexture(GL_TEXTURE_2D, albedoTex_.get());
-    glUniform1i(loc(modelProgram_, "uAlbedoTex"), 1);
+    glUniform1i(loc(model, "uAlbedoTex"), 1);
     glBindVertexArray(meshVao_.get());
     glDrawElements(GL_TRIANGLES, indexCount_, GL_UNSIGNED_INT, nullptr);
   }

@@ -20,6 +20,8 @@ namespace lp::gl::shaders {
   "}\n"
 
 // Shared by the model and the probe views: irradiance from the coefficients plus the lights.
+// The lights' loop is compiled only where LP_LIGHTS is defined: on llvmpipe it costs the model
+// pass 10-20% even with no light, so the renderer keeps a model variant without it.
 // shIrradiance is R&H eq. 12, E(n) = n4^T M n4 with n in the R&H world frame, term for term the
 // CPU lp::evalIrradianceQuadratic() (shading/sh/src/sh.cpp); lightIrradiance is a uniform disc's
 // exact clamped cosine, term for term lp::lightIrradiance() (shading/sh/src/lights.cpp).
@@ -54,7 +56,9 @@ namespace lp::gl::shaders {
   "}\n"                                                                                \
   "vec3 irradiance(vec3 n) {\n"                                                        \
   "  vec3 E = shIrradiance(n);\n"                                                      \
+  "#ifdef LP_LIGHTS\n"                                                                 \
   "  for (int i = 0; i < uLightCount; ++i) E += lightIrradiance(i, n);\n"              \
+  "#endif\n"                                                                           \
   "  return E;\n"                                                                      \
   "}\n"
 
@@ -154,7 +158,7 @@ void main() {
 // 1: a grey (50%) diffuse ball lit by the coefficients; 2: a chrome ball reflecting the
 // environment. The balls are seen orthographically from the camera's direction.
 const char* const kProbeFs =
-    "#version 330 core\n" LP_DISPLAY_GLSL LP_PANORAMA_GLSL LP_IRRADIANCE_GLSL R"(
+    "#version 330 core\n#define LP_LIGHTS\n" LP_DISPLAY_GLSL LP_PANORAMA_GLSL LP_IRRADIANCE_GLSL R"(
 in vec2 vNdc;
 out vec4 fragColor;
 uniform int uMode;

@@ -37,6 +37,17 @@ glm::vec3 evalIrradiance(const Sh9& residual, const std::vector<Light>& lights, 
   return e;
 }
 
+Sh9 lightsToSh(const std::vector<Light>& lights) {
+  Sh9 out;
+  for (const Light& l : lights) {
+    const float ca = std::cos(l.angularRadius);
+    const float band[3] = {1.0f, 0.5f * (1.0f + ca), 0.5f * ca * (1.0f + ca)};
+    const auto y = shBasis(l.dir);
+    for (int k = 0; k < kShCount; ++k) out.c[k] += l.power * (y[k] * band[shBand(k)]);
+  }
+  return out;
+}
+
 LightSplit rotateSplit(const LightSplit& split, const glm::mat3& rotation) {
   LightSplit out{rotateSh(split.residual, rotation), split.lights};
   for (Light& l : out.lights) l.dir = glm::normalize(rotation * l.dir);

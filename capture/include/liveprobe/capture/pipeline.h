@@ -18,6 +18,7 @@
 #include "liveprobe/capture/photometry.h"
 #include "liveprobe/sh/executor.h"
 #include "liveprobe/sh/layout.h"
+#include "liveprobe/sh/lights.h"
 #include "liveprobe/sh/projector.h"
 #include "liveprobe/sh/sh.h"
 
@@ -30,11 +31,14 @@ struct StageTimes {
 };
 
 struct ProcessedFrame {
-  std::uint64_t index = 0;             ///< position in this pipeline's output, from 0
-  std::uint64_t sequence = 0;          ///< the source's frame number
-  double timestamp = 0;                ///< the source's timestamp, seconds
-  Sh9 radiance;                        ///< after orientation and smoothing
-  Sh9 unsmoothed;                      ///< after orientation, before smoothing
+  std::uint64_t index = 0;     ///< position in this pipeline's output, from 0
+  std::uint64_t sequence = 0;  ///< the source's frame number
+  double timestamp = 0;        ///< the source's timestamp, seconds
+  Sh9 radiance;    ///< after orientation and smoothing (with lights: the residual, the sky)
+  Sh9 unsmoothed;  ///< after orientation, before smoothing
+  /// With PipelineOptions::lights: the dominant compact lights (liveprobe/sh/lights.h), after
+  /// orientation and smoothing, beside the residual `radiance`.
+  std::vector<Light> lights;
   std::shared_ptr<const Image> image;  ///< the linear frame (when PipelineOptions::keepImages)
   /// Instead of `image`, for sRGB 8-bit frames: the frame as captured, with the linear scale
   /// (exposure) that applies to its decoded values. The GPU decodes sRGB for display.
@@ -68,6 +72,8 @@ struct PipelineOptions {
   bool keepImages = true;  ///< hand the linear frame over too (for the background)
   unsigned threads = 2;    ///< threads for one frame's projection
   int reduce = 1;          ///< equirect: project an f x f area average (reduceEquirect)
+  /// Light extraction (--sun, --lights K); maxLights = 0 (the default) leaves it off.
+  LightOptions lights{.maxLights = 0};
   /// Called on the capture thread for every processed frame, before the handoff.
   std::function<void(const ProcessedFrame&)> onCaptured;
   /// Called on the capture thread with every raw frame as the source gave it (for recording).
@@ -97,6 +103,24 @@ class ShSmoother {
   double last_ = 0;
 };
 
+/// Smooths lights as ShSmoother smooths coefficients, with the same alpha: each light is matched
+/// to the nearest light of the previous result (within 20 degrees); its direction moves by slerp,
+/// its power and radius by the average. A light with no match starts afresh.
+class LightSmoother {
+ public:
+  explicit LightSmoother(double tauSeconds) : tau_(tauSeconds) {}
+  std::vector<Light> update(const std::vector<Light>& lights, double timestamp);
+
+ private:
+  double tau_;
+  std::vector<Light> state_;
+  double last_ = 0;
+  bool started_ = false;
+};
+
+/// Spherical linear interpolation between unit vectors a and b (t in [0, 1]).
+glm::vec3 slerp(glm::vec3 a, glm::vec3 b, float t);
+
 /// Whether the display takes this frame as it is: 8-bit sRGB in a layout the background shader
 /// draws directly (equirect, angular). Then no linear copy is made for it; the GPU decodes sRGB.
 bool displayTakesFrameAsIs(const Frame& frame, const Photometry& photometry,
@@ -107,6 +131,11 @@ bool displayTakesFrameAsIs(const Frame& frame, const Photometry& photometry,
 /// is linear). The projector must have the frame's size.
 Sh9 projectFrame(const Projector& projector, const Frame& frame, const Linearizer& linearizer,
                  Executor* executor);
+/// The same, split into the residual coefficients and the lights (in the frame's orientation and
+/// the same radiance units as projectFrame's).
+LightSplit projectFrameWithLights(const Projector& projector, const LightExtractor& extractor,
+                                  const Frame& frame, const Linearizer& linearizer,
+                                  Executor* executor, const LightOptions& options);
 
 class CapturePipeline {
  public:

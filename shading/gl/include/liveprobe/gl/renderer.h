@@ -125,7 +125,7 @@ class Renderer {
   void ensureMultisample(glm::ivec2 size, int samples);
   void bindPanorama(const Program& program, const ShadingSettings& s) const;
 
-  Program modelProgram_, backgroundProgram_, probeProgram_;
+  Program modelProgram_, modelLitProgram_, backgroundProgram_, probeProgram_;
   Target msaa_;
   std::array<Target, 3> probes_;
   glm::mat3 fileFromWorld_{1.0f};

@@ -100,6 +100,11 @@ class LightExtractor {
   std::unique_ptr<const Index> index_;
 };
 
+/// Radiance coefficients of the lights themselves: a uniform disc of power P, radius a, towards d
+/// projects to P Y_lm(d) times 1, (1 + cos a)/2 and cos a (1 + cos a)/2 for bands 0, 1, 2. So
+/// residual + lightsToSh(lights) is the whole map's coefficients (for what the lights took).
+Sh9 lightsToSh(const std::vector<Light>& lights);
+
 /// The split turned by `rotation` (world from file, as rotateSh): the residual by rotateSh, each
 /// light's direction by the matrix.
 LightSplit rotateSplit(const LightSplit& split, const glm::mat3& rotation);
