@@ -148,6 +148,112 @@ TEST_F(GlTest, IrradianceWithLightsMatchesCpuPerPixel) {
   }
 }
 
+// --shadows --ground: the shadow of a unit sphere on the ground plane falls where geometry puts
+// it. The darkened region (shadows on against off: everything else is equal) matches, pixel by
+// pixel, the ground points whose ray towards the sun hits the sphere (this test's own ray
+// casting), and its centroid lies on the ray from the sun through the sphere's centre.
+TEST_F(GlTest, SunShadowFallsWhereGeometryPutsIt) {
+  lp::gl::Renderer r;
+  r.setMesh(lp::makeUvSphere(512, 256));
+  Sh9 L;
+  L.c[0] = glm::vec3(0.3f);
+  std::vector<lp::Light> lights(1);
+  lights[0].dir = glm::normalize(glm::vec3(0.3f, -0.6f, 0.74f));  // R&H world
+  lights[0].angularRadius = glm::radians(0.27f);
+  lights[0].power = glm::vec3(3.0f);
+  r.setLighting(L, lights);
+  const glm::vec3 sun = lp::axes::glFromWorld(lights[0].dir);  // GL frame, towards the sun
+  auto check = [&](const lp::gl::Camera& cam, const std::string& name) {
+    auto render = [&](bool shadows) {
+      lp::gl::FloatTarget target(kSize, kSize);
+      target.bind();
+      lp::gl::ShadingSettings s;
+      s.toneMap = lp::gl::ToneMap::Linear;
+      s.exposure = 0.5f;
+      s.ground = true;
+      s.shadows = shadows;
+      r.draw({kSize, kSize}, cam, s);
+      return target.readRgba();
+    };
+    const auto lit = render(false), shadowed = render(true);
+    saveDisplay(shadowed, name);
+    glm::dvec2 cRendered(0), cExpected(0);
+    double nRendered = 0, nExpected = 0, both = 0;
+    for (int y = 0; y < kSize; ++y)
+      for (int x = 0; x < kSize; ++x) {
+        glm::vec3 o;
+        const glm::vec3 d = pixelRayGl(cam, x, y, &o);
+        const float b = glm::dot(o, d), disc = b * b - (glm::dot(o, o) - 1.0f);
+        if (disc >= 0 || d.y >= 0) continue;  // the sphere itself, or above the horizon
+        const glm::vec3 p = o + ((-1.0f - o.y) / d.y) * d;  // on the ground plane y = -1
+        const float along = -glm::dot(p, sun);              // (c - p) . sun, c = 0
+        const bool expected = along > 0 && glm::length(-p - along * sun) < 1.0f;
+        const std::size_t i = 4 * (std::size_t(y) * kSize + x);
+        const bool rendered = shadowed[i + 1] < 0.8f * lit[i + 1];
+        if (expected) cExpected += glm::dvec2(x, y), ++nExpected;
+        if (rendered) cRendered += glm::dvec2(x, y), ++nRendered;
+        both += expected && rendered;
+      }
+    EXPECT_GT(nExpected, 500) << name;
+    cExpected /= nExpected, cRendered /= nRendered;
+    EXPECT_LT(glm::length(cRendered - cExpected), 2.0) << name << ": centroids, pixels";
+    EXPECT_GT(both / (nExpected + nRendered - both), 0.9) << name << ": intersection over union";
+    return cRendered;
+  };
+  lp::gl::Camera side;
+  side.yawDeg = 20.0f, side.pitchDeg = 35.0f, side.distance = 5.0f;
+  check(side, "shadow_sphere.png");
+  // Seen facing the sun, in the vertical plane of the ray from the sun through the centre,
+  // what the sphere hides of its shadow is symmetric about that plane: the darkened region's
+  // centroid, taken back to the ground, lies on the ray's ground track.
+  lp::gl::Camera along;
+  along.yawDeg = glm::degrees(std::atan2(-sun.x, -sun.z)), along.pitchDeg = 60.0f;
+  along.distance = 5.0f;
+  const glm::dvec2 c = check(along, "shadow_sphere_facing_sun.png");
+  glm::vec3 o;
+  const glm::vec3 d = pixelRayGl(along, int(c.x), int(c.y), &o);
+  const glm::vec3 p = o + ((-1.0f - o.y) / d.y) * d;
+  const glm::vec2 track = glm::normalize(glm::vec2(sun.x, sun.z));  // the ray's ground direction
+  const float lateral = std::abs(p.x * track.y - p.z * track.x);    // distance from the track
+  EXPECT_LT(lateral, 0.03f) << "the centroid is " << lateral << " off the sun ray's track";
+  // The penumbra follows the angular radius: the ground pixels between shadow and light (30-70%
+  // of the lit value) are many more for an 8-degree sun than for the real sun's 0.27 degrees.
+  auto penumbra = [&](float radiusDeg) {
+    lights[0].angularRadius = glm::radians(radiusDeg);
+    r.setLighting(L, lights);
+    int n = 0;
+    for (const bool on : {false, true}) {
+      lp::gl::FloatTarget target(kSize, kSize);
+      target.bind();
+      lp::gl::ShadingSettings s;
+      s.toneMap = lp::gl::ToneMap::Linear, s.exposure = 0.5f, s.ground = true, s.shadows = on;
+      r.draw({kSize, kSize}, side, s);
+      static std::vector<float> off;
+      const auto px = target.readRgba();
+      if (!on) {
+        off = px;
+        continue;
+      }
+      for (int y = 0; y < kSize; ++y)
+        for (int x = 0; x < kSize; ++x) {
+          glm::vec3 o;
+          const glm::vec3 d = pixelRayGl(side, x, y, &o);
+          const float b = glm::dot(o, d);
+          if (b * b - (glm::dot(o, o) - 1.0f) >= 0) continue;  // the ground only
+          const std::size_t i = 4 * (std::size_t(y) * kSize + x) + 1;
+          const auto linear = [](float v) {  // the display pass writes sRGB
+            return v <= 0.04045f ? v / 12.92f : std::pow((v + 0.055f) / 1.055f, 2.4f);
+          };
+          const float ratio = linear(px[i]) / linear(off[i]);
+          n += ratio > 0.3f && ratio < 0.7f;
+        }
+    }
+    return n;
+  };
+  const int sharp = penumbra(0.27f), soft = penumbra(8.0f);
+  EXPECT_GT(soft, 4 * sharp) << "penumbra pixels: sharp " << sharp << ", soft " << soft;
+}
+
 // The restatement's figures 3-6: one coefficient at a time, on the sphere and the bunny. The
 // normal pass tells where each pixel faces; the display pass is what the user sees.
 struct Single {

@@ -116,16 +116,18 @@ void saveCompareFigure(const std::string& path, const CompareResult& r) {
     cv::resize(small, big, {pw, ph}, 0, 0, cv::INTER_NEAREST);
     big.copyTo(fig(cv::Rect(x0, label, pw, ph)));
   };
-  drawMap(r.ySh, 0);
+  // With --sun the figure is of SH plus the lights (the "after" beside compare's "before").
+  const std::vector<float>& ySh = r.sun ? r.ySun : r.ySh;
+  drawMap(ySh, 0);
   drawMap(r.yBrute, pw + gap);
 
   // Panel 3: |E_sh - E| / total intensity, inferno colour map from 0 to the maximum error.
-  const double emax = std::max(1e-12, r.maxFracTotal);
+  const double emax = std::max(1e-12, r.sun ? r.maxFracTotalSun : r.maxFracTotal);
   cv::Mat err(r.height, r.width, CV_8UC1);
   for (int i = 0; i < r.height; ++i)
     for (int j = 0; j < r.width; ++j) {
       const double e =
-          std::abs(double(r.ySh[i * r.width + j]) - r.yBrute[i * r.width + j]) / r.totalIntensity;
+          std::abs(double(ySh[i * r.width + j]) - r.yBrute[i * r.width + j]) / r.totalIntensity;
       err.at<std::uint8_t>(i, j) = std::uint8_t(std::lround(255 * std::min(1.0, e / emax)));
     }
   cv::Mat errBig, errColour;
@@ -147,7 +149,8 @@ void saveCompareFigure(const std::string& path, const CompareResult& r) {
   const auto white = cv::Scalar(235, 235, 235);
   cv::putText(fig, text, {bx + 20, label + 12}, cv::FONT_HERSHEY_SIMPLEX, 0.4, white);
   cv::putText(fig, "0%", {bx + 20, label + ph - 2}, cv::FONT_HERSHEY_SIMPLEX, 0.4, white);
-  cv::putText(fig, "SH (9 coefficients)", {4, 19}, cv::FONT_HERSHEY_SIMPLEX, 0.5, white);
+  cv::putText(fig, r.sun ? "SH + lights" : "SH (9 coefficients)", {4, 19}, cv::FONT_HERSHEY_SIMPLEX,
+              0.5, white);
   cv::putText(fig, "brute force", {pw + gap + 4, 19}, cv::FONT_HERSHEY_SIMPLEX, 0.5, white);
   cv::putText(fig, "|error| / total intensity", {2 * (pw + gap) + 4, 19}, cv::FONT_HERSHEY_SIMPLEX,
               0.5, white);

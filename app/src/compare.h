@@ -38,8 +38,8 @@ CompareResult compareIrradiance(const Image& img, const LayoutSpec& layout, int 
                                 const BruteProgress& progress = {},
                                 const LightOptions* sun = nullptr);
 
-/// The SH map, the brute-force map (same exposure) and |error| / total intensity with a colour
-/// scale, side by side, as an 8-bit PNG.
+/// The SH map (with --sun: SH of the rest plus the lights), the brute-force map (same exposure)
+/// and |error| / total intensity with a colour scale, side by side, as an 8-bit PNG.
 void saveCompareFigure(const std::string& path, const CompareResult& r);
 
 }  // namespace lp::cli

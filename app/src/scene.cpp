@@ -41,6 +41,12 @@ std::vector<OptionSpec> sceneOptions() {
           {"--no-background", "", "do not draw the panorama behind the model", false, false, l},
           {"--msaa", "1|2|4|8", "multisample anti-aliasing, samples per pixel (default 4)", false,
            false, l},
+          {"--shadows", "",
+           "the first light (--sun) casts the model's shadow, sharp or soft as its angular radius",
+           false, false, l},
+          {"--ground", "",
+           "a shadow catcher under the model: the background darkened by its shadow and occlusion",
+           false, false, l},
           {"--headless", "", "render offscreen through OSMesa even when a display exists", false,
            false, l}};
 }
@@ -319,6 +325,8 @@ gl::ShadingSettings shadingFromArgs(const Args& a, const Sh9& radiance, bool env
     throw Error("--tonemap " + tm + ": expected aces, reinhard or linear");
   s.background = !a.has("--no-background");
   s.displayReferredBackground = !a.has("--tonemap-background");
+  s.shadows = a.has("--shadows");
+  s.ground = a.has("--ground");
   s.samples = a.integer("--msaa", 4);
   if (s.samples != 1 && s.samples != 2 && s.samples != 4 && s.samples != 8)
     throw Error("--msaa " + a.get("--msaa") + ": expected 1, 2, 4 or 8");

@@ -152,8 +152,17 @@ Renderer::Renderer()
     : modelProgram_(link(shaders::kModelVs, shaders::kModelFs, "model shader")),
       modelLitProgram_(link(shaders::kModelVs, withDefine(shaders::kModelFs, "LP_LIGHTS").c_str(),
                             "model shader with lights")),
+      modelShadowProgram_(
+          link(shaders::kModelVs,
+               withDefine(withDefine(shaders::kModelFs, "LP_LIGHTS").c_str(), "LP_SHADOWS").c_str(),
+               "model shader with shadows")),
       backgroundProgram_(link(shaders::kBackgroundVs, shaders::kBackgroundFs, "background shader")),
-      probeProgram_(link(shaders::kBackgroundVs, shaders::kProbeFs, "probe view shader")) {
+      probeProgram_(link(shaders::kBackgroundVs, shaders::kProbeFs, "probe view shader")),
+      depthProgram_(link(shaders::kDepthVs, shaders::kDepthFs, "shadow depth shader")),
+      groundProgram_(link(shaders::kGroundVs, shaders::kGroundFs, "ground shader")),
+      groundShadowProgram_(link(shaders::kGroundVs,
+                                withDefine(shaders::kGroundFs, "LP_SHADOWS").c_str(),
+                                "ground shader with shadows")) {
   GLuint id = 0;
   glGenVertexArrays(1, &id);
   emptyVao_.reset(id);
@@ -182,6 +191,16 @@ void Renderer::setMesh(const Mesh& mesh) {
   }
   indices_ = upload(GL_ELEMENT_ARRAY_BUFFER, mesh.indices);
   indexCount_ = GLsizei(mesh.indices.size());
+  // Bounding sphere (about the box's centre) and lowest point, for the shadow map and the ground.
+  glm::vec3 lo(INFINITY), hi(-INFINITY);
+  for (const glm::vec3& p : mesh.positions) lo = glm::min(lo, p), hi = glm::max(hi, p);
+  if (!mesh.positions.empty()) {
+    const glm::vec3 c = 0.5f * (lo + hi);
+    float r = 0.0f;
+    for (const glm::vec3& p : mesh.positions) r = std::max(r, glm::length(p - c));
+    bounds_ = glm::vec4(c, r);
+    groundY_ = lo.y;
+  }
   albedo_ = mesh.albedo;
   glBindVertexArray(0);
   checkGl("Renderer::setMesh");
@@ -208,7 +227,9 @@ void Renderer::setIrradianceUniforms(const Program& program) const {
     const std::string at = "[" + std::to_string(i) + "]";
     glUniform3fv(loc(program, ("uLightDir" + at).c_str()), 1, glm::value_ptr(lights_[i].dir));
     glUniform3fv(loc(program, ("uLightPower" + at).c_str()), 1, glm::value_ptr(lights_[i].power));
-    glUniform1f(loc(program, ("uLightRadius" + at).c_str()), lights_[i].angularRadius);
+    const float a = lights_[i].angularRadius;
+    glUniform3f(loc(program, ("uLightTrig" + at).c_str()), std::sin(a), std::cos(a),
+                std::sin(0.5f * a));
   }
 }
 
@@ -288,6 +309,13 @@ void Renderer::ensureMultisample(glm::ivec2 size, int samples) {
 
 void Renderer::draw(glm::ivec2 size, const Camera& camera, const ShadingSettings& s) {
   GLint target = 0;
+  const bool shadows = s.shadows && !lights_.empty() && indexCount_ > 0;
+  if (shadows) {
+    GLint bound = 0;
+    glGetIntegerv(GL_DRAW_FRAMEBUFFER_BINDING, &bound);
+    renderShadowMap();
+    glBindFramebuffer(GL_FRAMEBUFFER, GLuint(bound));
+  }
   const bool multisample = s.samples > 1 && s.output == OutputMode::Display;
   if (multisample) {
     glGetIntegerv(GL_DRAW_FRAMEBUFFER_BINDING, &target);
@@ -316,10 +344,13 @@ void Renderer::draw(glm::ivec2 size, const Camera& camera, const ShadingSettings
     glEnable(GL_DEPTH_TEST);
     glDepthFunc(GL_LESS);
     // The variant without the lights' loop when there is none (see shaders.cpp).
-    const Program& model = lights_.empty() ? modelProgram_ : modelLitProgram_;
+    const Program& model = shadows           ? modelShadowProgram_
+                           : lights_.empty() ? modelProgram_
+                                             : modelLitProgram_;
     glUseProgram(model.get());
     glUniformMatrix4fv(loc(model, "uViewProj"), 1, GL_FALSE, glm::value_ptr(viewProj));
     setIrradianceUniforms(model);
+    setShadowUniforms(model, shadows);
     glUniformMatrix3fv(loc(model, "uWorldFromGl"), 1, GL_FALSE, glm::value_ptr(worldFromGl));
     glUniform3fv(loc(model, "uAlbedo"), 1, glm::value_ptr(albedo_));
     glUniform1i(loc(model, "uHasTexture"), albedoTex_.isValid() && hasUv_);
@@ -332,6 +363,8 @@ void Renderer::draw(glm::ivec2 size, const Camera& camera, const ShadingSettings
     glBindVertexArray(meshVao_.get());
     glDrawElements(GL_TRIANGLES, indexCount_, GL_UNSIGNED_INT, nullptr);
   }
+  if (s.ground && indexCount_ > 0 && s.output == OutputMode::Display)
+    drawGround(viewProj, camera, s);
   glBindVertexArray(0);
   if (multisample) {
     glBindFramebuffer(GL_READ_FRAMEBUFFER, msaa_.fbo.get());
@@ -340,6 +373,98 @@ void Renderer::draw(glm::ivec2 size, const Camera& camera, const ShadingSettings
     glBindFramebuffer(GL_FRAMEBUFFER, GLuint(target));
   }
   checkGl("Renderer::draw");
+}
+
+void Renderer::renderShadowMap() {
+  if (!shadowFbo_.isValid()) {
+    GLuint id = 0;
+    glGenTextures(1, &id);
+    shadowDepth_.reset(id);
+    glBindTexture(GL_TEXTURE_2D, id);
+    glTexImage2D(GL_TEXTURE_2D, 0, GL_DEPTH_COMPONENT32F, kShadowSize, kShadowSize, 0,
+                 GL_DEPTH_COMPONENT, GL_FLOAT, nullptr);
+    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
+    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
+    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_S, GL_CLAMP_TO_EDGE);
+    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
+    glGenFramebuffers(1, &id);
+    shadowFbo_.reset(id);
+    glBindFramebuffer(GL_FRAMEBUFFER, id);
+    glFramebufferTexture2D(GL_FRAMEBUFFER, GL_DEPTH_ATTACHMENT, GL_TEXTURE_2D, shadowDepth_.get(),
+                           0);
+    glDrawBuffer(GL_NONE);
+    glReadBuffer(GL_NONE);
+  }
+  // An orthographic view along the light, covering the model and the ground around it (three
+  // bounding radii each way).
+  const glm::vec3 toLight = glm::normalize(axes::glFromWorld(lights_[0].dir));
+  const glm::vec3 centre(bounds_),
+      up = std::abs(toLight.y) > 0.99f ? glm::vec3(1, 0, 0) : glm::vec3(0, 1, 0);
+  const float half = 3.0f * bounds_.w, depth = 8.0f * bounds_.w;
+  lightViewProj_ = glm::ortho(-half, half, -half, half, 0.0f, depth) *
+                   glm::lookAt(centre + toLight * (0.5f * depth), centre, up);
+  shadowTexelWorld_ = 2.0f * half / float(kShadowSize);
+  shadowDepthRange_ = depth;
+  glBindFramebuffer(GL_FRAMEBUFFER, shadowFbo_.get());
+  glViewport(0, 0, kShadowSize, kShadowSize);
+  glClear(GL_DEPTH_BUFFER_BIT);
+  glEnable(GL_DEPTH_TEST);
+  glDepthFunc(GL_LESS);
+  glUseProgram(depthProgram_.get());
+  glUniformMatrix4fv(loc(depthProgram_, "uLightViewProj"), 1, GL_FALSE,
+                     glm::value_ptr(lightViewProj_));
+  glBindVertexArray(meshVao_.get());
+  glDrawElements(GL_TRIANGLES, indexCount_, GL_UNSIGNED_INT, nullptr);
+  glBindVertexArray(0);
+  checkGl("Renderer::renderShadowMap");
+}
+
+void Renderer::setShadowUniforms(const Program& program, bool on) const {
+  glUniform1i(loc(program, "uShadows"), on);
+  if (!on) return;
+  glActiveTexture(GL_TEXTURE2);
+  glBindTexture(GL_TEXTURE_2D, shadowDepth_.get());
+  glUniform1i(loc(program, "uShadowMap"), 2);
+  glUniformMatrix4fv(loc(program, "uLightViewProj"), 1, GL_FALSE, glm::value_ptr(lightViewProj_));
+  glUniform1f(loc(program, "uShadowTexel"), 1.0f / float(kShadowSize));
+  glUniform1f(loc(program, "uShadowTexelWorld"), shadowTexelWorld_);
+  glUniform1f(loc(program, "uShadowDepthRange"), shadowDepthRange_);
+  glUniform1f(loc(program, "uTanRadius"), std::tan(lights_[0].angularRadius));
+}
+
+void Renderer::drawGround(const glm::mat4& viewProj, const Camera& camera,
+                          const ShadingSettings& s) {
+  if (!groundVao_.isValid()) {
+    GLuint id = 0;
+    glGenVertexArrays(1, &id);
+    groundVao_.reset(id);
+  }
+  // A square 40 bounding radii wide at the model's lowest point (rebuilt with the mesh's bounds).
+  const float r = 20.0f * bounds_.w, y = groundY_;
+  const std::vector<glm::vec3> quad = {{-r, y, -r}, {r, y, -r}, {r, y, r},
+                                       {-r, y, -r}, {r, y, r},  {-r, y, r}};
+  glBindVertexArray(groundVao_.get());
+  groundVertices_ = upload(GL_ARRAY_BUFFER, quad);
+  glEnableVertexAttribArray(0);
+  glVertexAttribPointer(0, 3, GL_FLOAT, GL_FALSE, 0, nullptr);
+  glEnable(GL_DEPTH_TEST);
+  glDepthFunc(GL_LESS);
+  const bool shadows = s.shadows && !lights_.empty();
+  const Program& ground = shadows ? groundShadowProgram_ : groundProgram_;
+  glUseProgram(ground.get());
+  glUniformMatrix4fv(loc(ground, "uViewProj"), 1, GL_FALSE, glm::value_ptr(viewProj));
+  glUniformMatrix3fv(loc(ground, "uWorldFromGl"), 1, GL_FALSE,
+                     glm::value_ptr(axes::worldFromGlMatrix()));
+  glUniform3fv(loc(ground, "uEye"), 1, glm::value_ptr(camera.eye()));
+  glUniform4fv(loc(ground, "uOccluder"), 1, glm::value_ptr(bounds_));
+  glUniform1i(loc(ground, "uHavePanorama"), backgroundTex_.isValid());
+  glUniform1f(loc(ground, "uExposure"), s.exposure);
+  glUniform1i(loc(ground, "uToneMap"), int(s.toneMap));
+  setIrradianceUniforms(ground);
+  setShadowUniforms(ground, shadows);
+  bindPanorama(ground, s);
+  glDrawArrays(GL_TRIANGLES, 0, 6);
+  checkGl("Renderer::drawGround");
 }
 
 void Renderer::drawProbeViews(const Camera& camera, const ShadingSettings& s) {

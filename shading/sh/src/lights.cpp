@@ -93,7 +93,7 @@ struct LightExtractor::Index {
   /// Calls f(pixel) for every pixel in buckets that may hold directions within `radius` of `d`
   /// (a superset of the cap; the caller tests the angle).
   template <class F>
-  void forCap(glm::vec3 d, double radius, F&& f) const {
+  void forCap(glm::vec3 d, double radius, F&& f, std::uint32_t stride = 1) const {
     const double theta = std::acos(std::clamp(double(d.z), -1.0, 1.0)),
                  phi = std::atan2(double(d.y), double(d.x));
     const double lo = theta - radius, hi = theta + radius;
@@ -112,11 +112,14 @@ struct LightExtractor::Index {
     const int c0 = allCols ? 0 : int(std::floor((phi - dPhi) / kBucket)) - 1;
     const int c1 = allCols ? kBucketCols - 1 : int(std::floor((phi + dPhi) / kBucket)) + 1;
     const int span = std::min(c1 - c0, kBucketCols - 1);
+    std::uint32_t skip = 0;  // with a stride, every stride-th pixel of the buckets in turn
     for (int r = r0; r <= r1; ++r)
       for (int c = c0; c <= c0 + span; ++c) {
         const std::size_t b =
             std::size_t(r) * kBucketCols + std::size_t(bucketCol((c + 0.5) * kBucket));
-        for (std::uint32_t k = start[b]; k < start[b + 1]; ++k) f(pixels[k]);
+        std::uint32_t k = start[b] + skip;
+        for (; k < start[b + 1]; k += stride) f(pixels[k]);
+        skip = k - start[b + 1];
       }
   }
 };
@@ -213,12 +216,13 @@ LightSplit LightExtractor::extract(const PanoramaView& frame, const Sh9& whole,
     const auto gather = [&](glm::vec3 centre, float radius, std::uint32_t stride) {
       const float cosSearch = std::cos(radius);
       cap.clear();
-      std::uint32_t n = 0;
-      index_->forCap(centre, radius, [&](std::uint32_t i) {
-        if (n++ % stride != 0) return;
-        const float c = glm::dot(samples[i].dir, centre);
-        if (c >= cosSearch) cap.push_back({i, c, value(i)});
-      });
+      index_->forCap(
+          centre, radius,
+          [&](std::uint32_t i) {
+            const float c = glm::dot(samples[i].dir, centre);
+            if (c >= cosSearch) cap.push_back({i, c, value(i)});
+          },
+          stride);
     };
     constexpr float kCoreSamples = 4000.0f;
     float coreRadius = INFINITY;

@@ -45,6 +45,12 @@ struct ShadingSettings {
   int samples = 1;
   /// An 8-bit (sRGB) background is shown as the source looks: no exposure, no tone map.
   bool displayReferredBackground = true;
+  /// --shadows: the first light casts the model's shadow through a shadow map (on the model and
+  /// the ground), its soft edge sized by the light's angular radius.
+  bool shadows = false;
+  /// --ground: a shadow catcher plane under the model (the background, darkened by the model's
+  /// shadow and ambient occlusion).
+  bool ground = false;
 };
 
 /// The small views the HUD shows (Renderer::drawProbeViews).
@@ -123,9 +129,25 @@ class Renderer {
     int samples = 0;
   };
   void ensureMultisample(glm::ivec2 size, int samples);
+  /// The first light's depth map of the mesh; sets the shadow uniforms' values.
+  void renderShadowMap();
+  void setShadowUniforms(const Program& program, bool on) const;
+  void drawGround(const glm::mat4& viewProj, const Camera& camera, const ShadingSettings& s);
   void bindPanorama(const Program& program, const ShadingSettings& s) const;
 
-  Program modelProgram_, modelLitProgram_, backgroundProgram_, probeProgram_;
+  // Variants: without lights, with lights, with lights and the shadow map (see shaders.cpp).
+  Program modelProgram_, modelLitProgram_, modelShadowProgram_, backgroundProgram_, probeProgram_,
+      depthProgram_, groundProgram_, groundShadowProgram_;
+  // The shadow map (--shadows) and the ground (--ground).
+  static constexpr int kShadowSize = 2048;
+  Framebuffer shadowFbo_;
+  Texture shadowDepth_;
+  glm::mat4 lightViewProj_{1.0f};
+  float shadowTexelWorld_ = 0.0f, shadowDepthRange_ = 1.0f;
+  glm::vec4 bounds_{0.0f, 0.0f, 0.0f, 1.0f};  ///< the mesh's bounding sphere (GL frame)
+  float groundY_ = -1.0f;                     ///< the mesh's lowest point
+  VertexArray groundVao_;
+  Buffer groundVertices_;
   Target msaa_;
   std::array<Target, 3> probes_;
   glm::mat3 fileFromWorld_{1.0f};
