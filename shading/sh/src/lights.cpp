@@ -258,15 +258,30 @@ LightSplit LightExtractor::extract(const PanoramaView& frame, const Sh9& whole,
     }
     if (coreRadius > maxRadius) break;  // not compact: no (further) light
     const float regionGlare = std::max(glare, 0.5f * coreRadius);
-    gather(centre, coreRadius + regionGlare + ringWidth + pixelRadius, 1);
 
-    // 3-4. The region and the ring around it; the fill is the ring's median.
+    // 3-4. The region and the ring around it; the fill is the ring's median. A wide ring is
+    //    sampled (~4000 pixels), and so is a first estimate of the light's share: a source that
+    //    plainly falls short is dropped before its region is read whole.
     const float cosRegion = std::cos(coreRadius + regionGlare),
                 cosRing = std::cos(coreRadius + regionGlare + ringWidth);
+    const float outer = coreRadius + regionGlare + ringWidth + pixelRadius;
+    const auto outerStride = std::uint32_t(
+        std::max(1.0f, 4.0f * float(kPi) * std::sin(0.5f * outer) * std::sin(0.5f * outer) /
+                           samples[peak].solidAngle / kCoreSamples));
+    gather(centre, outer, outerStride);
     ring.clear();
     for (const CapPixel& p : cap)
       if (p.cosAngle < cosRegion && p.cosAngle >= cosRing) ring.push_back(p.value);
     const Rgb fill = channelMedian(ring);
+    if (outerStride > 1) {
+      double estimate = 0;
+      for (const CapPixel& p : cap)
+        if (p.cosAngle >= cosRegion)
+          estimate += double(luminance(glm::max(p.value - fill, Rgb(0.0f)))) *
+                      samples[p.index].solidAngle * outerStride;
+      if (estimate < 0.5 * opt.minShare * totalLum) break;        // far below the share: no light
+      gather(centre, coreRadius + regionGlare + pixelRadius, 1);  // the region, every pixel
+    }
 
     // 5. The light: what lies above the fill.
     glm::dvec3 power(0.0), centroid(0.0);

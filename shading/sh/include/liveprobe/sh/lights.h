@@ -19,8 +19,10 @@
 //   3. the region: the cap of radius theta_c + glare around that centre, glare = the larger of
 //      glareDeg, two pixels and theta_c / 2; it takes the glare around the source too (at
 //      1024x512 a sun's glare holds 15-20% of its power);
-//   4. the fill: per channel, the median of the ring [theta_r, theta_r + ring] around it
-//      (ringDeg, at least three pixels): the sky that the source hides;
+//   4. the fill: per channel, the median of the ring [theta_r, theta_r + ring] around it (ringDeg,
+//      at least three pixels): the sky that the source hides. A wide ring is sampled (~4000
+//      pixels), and with it an estimate of the light's share drops a source below half of
+//      minShare before its region is read whole;
 //   5. the light: per pixel of the region, max(L - fill, 0). Its power is the sum of that times
 //      dw (per channel, with the layout's exact solid angles); its direction the
 //      luminance-power-weighted centroid; its angular radius that of the disc whose solid angle
