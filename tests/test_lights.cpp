@@ -262,6 +262,14 @@ TEST(LightsCli, CoeffsJsonCarriesTheLights) {
   for (int k = 0; k < lp::kShCount; ++k)
     for (int ch = 0; ch < 3; ++ch)
       EXPECT_NEAR(sum.c[k][ch], all.c[k][ch], 1e-3 * all.c[0][ch]) << lp::kShNames[k];
+  // --env-rotate turns the lights with the coefficients: yaw 90 about +z takes (x, y, z) to
+  // (-y, x, z).
+  const auto turned = lpt::runLiveprobe("coeffs " + map + " --sun --env-rotate 90,0,0");
+  ASSERT_EQ(turned.exitCode, 0) << turned.output;
+  const auto lt = lp::cli::lightsFromJson(nlohmann::json::parse(turned.output), "turned");
+  ASSERT_EQ(lt.size(), 1u);
+  EXPECT_LT(glm::length(lt[0].dir - glm::vec3(-lights[0].dir.y, lights[0].dir.x, lights[0].dir.z)),
+            1e-4f);
   // --coeffs reads the lights back: the render of a file with a light differs from without.
   lpt::TempDir tmp;
   const std::string f = tmp / "sun.json", g = tmp / "sky.json";

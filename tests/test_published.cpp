@@ -93,8 +93,8 @@ TEST(Published, DirectionalLightAsALight) {
 // The real maps against the brute-force integral, SH alone and SH of the rest plus the lights
 // (README's error table). Where a dominant compact source is found the targets are mean <= 0.6%
 // and max <= 2% of the total intensity for the maps listed here; no map is worse than SH alone.
-// The maps that miss the targets with a light found (royal_esplanade, ennis, moonless_golf) are
-// in README with the reason; they are held to "no worse than SH alone" here.
+// The maps that miss the targets (royal_esplanade, and moonless_golf and the reduced Grace with
+// one light only) are in README with the reason; they are held to "no worse than SH alone" here.
 TEST(Published, SunAndSkyOnRealMaps) {
   struct Case {
     std::string file;
@@ -106,6 +106,7 @@ TEST(Published, SunAndSkyOnRealMaps) {
       {"equirect/pedestrian_overpass_1k.hdr", lp::Layout::Equirect, 1, true},
       {"equirect/quarry_01_1k.hdr", lp::Layout::Equirect, 1, true},
       {"probes/latlong_256x128/grace.hdr", lp::Layout::Equirect, 2, true},
+      {"equirect/moonless_golf_1k.hdr", lp::Layout::Equirect, 2, true},
       {"equirect/blouberg_sunrise_2_1k.hdr", lp::Layout::Equirect, 1, false},
       {"equirect/moonless_golf_1k.hdr", lp::Layout::Equirect, 1, false},
       {"equirect/royal_esplanade_1k.hdr", lp::Layout::Equirect, 1, false},
