@@ -1,5 +1,6 @@
 #include "coeffs_io.h"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <fstream>
@@ -109,7 +110,8 @@ std::vector<Light> lightsFromJson(const nlohmann::json& j, const std::string& so
         throw Error(what + " angular_radius_deg must be a number in [0, 90]");
       l.angularRadius = glm::radians(float(r.get<double>()));
     }
-    if (o.contains("share") && o["share"].is_number()) l.share = float(o["share"].get<double>());
+    if (o.contains("share") && o["share"].is_number())  // a fraction: kept in [0, 1]
+      l.share = float(std::clamp(o["share"].get<double>(), 0.0, 1.0));
     if (o.contains("clipped") && o["clipped"].is_boolean()) l.clipped = o["clipped"].get<bool>();
     lights.push_back(l);
   }

@@ -16,7 +16,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     const lp::Sh9 sh = lp::cli::coefficientsFromJson(j, "fuzz");
     if (!lp::isFinite(sh)) std::abort();  // the reader promises finite coefficients
     for (const lp::Light& l : lp::cli::lightsFromJson(j, "fuzz"))  // and finite, unit lights
-      if (!std::isfinite(l.power.x + l.power.y + l.power.z) ||
+      if (!std::isfinite(l.power.x) || !std::isfinite(l.power.y) || !std::isfinite(l.power.z) ||
           std::abs(glm::length(l.dir) - 1.0f) > 1e-3f)
         std::abort();
   } catch (const nlohmann::json::exception&) {
