@@ -58,6 +58,7 @@ void showStill(Hud& hud, const Args& a, const Lighting& lighting) {
                 false, true);
   HudSample s;
   s.radiance = s.unsmoothed = lighting.radiance;
+  s.lights = lighting.lights;
   hud.push(s);
 }
 
@@ -162,6 +163,7 @@ int runView(const Args& a) {
           renderer.setLighting(lighting.radiance, lighting.lights);
           HudSample s;
           s.radiance = s.unsmoothed = lighting.radiance;
+          s.lights = lighting.lights;
           hud->push(s);
         }
       }
