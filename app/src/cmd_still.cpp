@@ -90,12 +90,7 @@ int runCoeffs(const Args& a) {
               << coefficientsText(L);
     if (lights.maxLights > 0 && env.lights.empty())
       std::printf("lights: none (no compact source holds 5%% of the power)\n");
-    for (const Light& l : env.lights)
-      std::printf(
-          "light: direction (%.4f, %.4f, %.4f), radius %.2f deg, power %.6g %.6g %.6g, "
-          "%.1f%% of the power%s\n",
-          l.dir.x, l.dir.y, l.dir.z, glm::degrees(l.angularRadius), l.power.x, l.power.y, l.power.z,
-          100 * l.share, l.clipped ? " (clipped: a lower bound)" : "");
+    for (const Light& l : env.lights) std::printf("light: %s\n", lightText(l).c_str());
     const MinIrradiance mn = minIrradiance(L);
     std::printf("min irradiance over the sphere / L00-irradiance: %.4f %.4f %.4f\n",
                 mn.value.x / (kA0 * kY00 * L.c[0].x), mn.value.y / (kA0 * kY00 * L.c[0].y),
@@ -221,11 +216,7 @@ int runCompare(const Args& a) {
       std::printf("  with %zu light%s, |E_sh+lights - E| / total: mean %.3f%%  max %.3f%%\n",
                   r.lights.size(), r.lights.size() == 1 ? "" : "s", 100 * r.meanFracTotalSun,
                   100 * r.maxFracTotalSun);
-      for (const Light& l : r.lights)
-        std::printf(
-            "    light: direction (%.4f, %.4f, %.4f), radius %.2f deg, %.1f%% of the power%s\n",
-            l.dir.x, l.dir.y, l.dir.z, glm::degrees(l.angularRadius), 100 * l.share,
-            l.clipped ? " (clipped: a lower bound)" : "");
+      for (const Light& l : r.lights) std::printf("    light: %s\n", lightText(l).c_str());
     }
     std::printf("  |E_sh - E| / mean irradiance: mean %.3f%%  max %.3f%%\n", 100 * r.meanRelMean,
                 100 * r.maxRelMean);

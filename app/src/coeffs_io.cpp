@@ -72,6 +72,16 @@ Sh9 coefficientsFromJson(const nlohmann::json& j, const std::string& source) {
   return out;
 }
 
+std::string lightText(const Light& l) {
+  char b[256];
+  std::snprintf(b, sizeof b,
+                "direction (%.4f, %.4f, %.4f), radius %.2f deg, power %.6g %.6g %.6g, %.1f%% of "
+                "the power%s",
+                l.dir.x, l.dir.y, l.dir.z, glm::degrees(l.angularRadius), l.power.x, l.power.y,
+                l.power.z, 100 * l.share, l.clipped ? " (clipped: a lower bound)" : "");
+  return b;
+}
+
 namespace {
 glm::vec3 finiteTriple(const nlohmann::json& v, const std::string& what) {
   if (!v.is_array() || v.size() != 3) throw Error(what + " must be an array of three numbers");

@@ -21,6 +21,10 @@ nlohmann::ordered_json lightsJson(const std::vector<Light>& lights);
 /// Throws lp::Error naming `source` for a missing name, a non-numeric or non-finite value.
 Sh9 coefficientsFromJson(const nlohmann::json& j, const std::string& source);
 
+/// One light as a line of text: "direction (x, y, z), radius R deg, power r g b, S% of the
+/// power" (and " (clipped: a lower bound)").
+std::string lightText(const Light& light);
+
 /// Reads the optional "lights" array beside the coefficients (lightsJson's form; none: empty).
 /// Throws lp::Error naming `source` for a malformed light: a direction that is not three finite
 /// numbers of non-zero length, a radius outside [0, 90] degrees, a power not three finite numbers

@@ -234,9 +234,9 @@ std::optional<Lighting> lightingFromArgs(const Args& a) {
         l.radiance.c[std::size_t(k)] = one.c[std::size_t(k)];
       }
     }
-    const glm::mat3 o = envOrientationFromArgs(a);
-    l.radiance = rotateSh(l.radiance, o);
-    for (Light& light : l.lights) light.dir = glm::normalize(o * light.dir);
+    LightSplit turned = rotateSplit({l.radiance, l.lights}, envOrientationFromArgs(a));
+    l.radiance = turned.residual;
+    l.lights = std::move(turned.lights);
   }
   return l;
 }

@@ -201,6 +201,19 @@ void Renderer::setMesh(const Mesh& mesh) {
     bounds_ = glm::vec4(c, r);
     groundY_ = lo.y;
   }
+  // The ground (--ground): a square 40 bounding radii wide at the model's lowest point.
+  if (!groundVao_.isValid()) {
+    GLuint id = 0;
+    glGenVertexArrays(1, &id);
+    groundVao_.reset(id);
+  }
+  const float g = 20.0f * bounds_.w, y = groundY_;
+  const std::vector<glm::vec3> quad = {{-g, y, -g}, {g, y, -g}, {g, y, g},
+                                       {-g, y, -g}, {g, y, g},  {-g, y, g}};
+  glBindVertexArray(groundVao_.get());
+  groundVertices_ = upload(GL_ARRAY_BUFFER, quad);
+  glEnableVertexAttribArray(0);
+  glVertexAttribPointer(0, 3, GL_FLOAT, GL_FALSE, 0, nullptr);
   albedo_ = mesh.albedo;
   glBindVertexArray(0);
   checkGl("Renderer::setMesh");
@@ -434,19 +447,7 @@ void Renderer::setShadowUniforms(const Program& program, bool on) const {
 
 void Renderer::drawGround(const glm::mat4& viewProj, const Camera& camera,
                           const ShadingSettings& s) {
-  if (!groundVao_.isValid()) {
-    GLuint id = 0;
-    glGenVertexArrays(1, &id);
-    groundVao_.reset(id);
-  }
-  // A square 40 bounding radii wide at the model's lowest point (rebuilt with the mesh's bounds).
-  const float r = 20.0f * bounds_.w, y = groundY_;
-  const std::vector<glm::vec3> quad = {{-r, y, -r}, {r, y, -r}, {r, y, r},
-                                       {-r, y, -r}, {r, y, r},  {-r, y, r}};
   glBindVertexArray(groundVao_.get());
-  groundVertices_ = upload(GL_ARRAY_BUFFER, quad);
-  glEnableVertexAttribArray(0);
-  glVertexAttribPointer(0, 3, GL_FLOAT, GL_FALSE, 0, nullptr);
   glEnable(GL_DEPTH_TEST);
   glDepthFunc(GL_LESS);
   const bool shadows = s.shadows && !lights_.empty();
