@@ -10,13 +10,16 @@
 
 #include "coeffs_io.h"
 #include "commands.h"
+#include "engine_export.h"
 #include "hud.h"
 #include "liveprobe/capture/atomic_file.h"
 #include "liveprobe/capture/pipeline.h"
 #include "liveprobe/capture/recorder.h"
 #include "liveprobe/sh/error.h"
+#include "mqtt_publisher.h"
 #include "progress.h"
 #include "scene.h"
+#include "stream_server.h"
 
 namespace lp::cli {
 
@@ -36,29 +39,6 @@ std::string defaultRecording() {
 namespace {
 
 double median(const std::vector<double>& v) { return percentile(v, 0.5); }
-
-/// One line of --coeffs-out. `renderMs` < 0 writes null (a frame that was never drawn).
-/// `shownLatencyMs` < 0: not known when the line is written (live writes at capture).
-std::string coeffsLine(const ProcessedFrame& f, double renderMs, double shownLatencyMs = -1) {
-  nlohmann::ordered_json j;
-  j["frame"] = f.index;
-  j["time"] = f.timestamp;
-  j["coefficients"] = coefficientsJson(f.radiance);
-  if (!f.lights.empty()) j["lights"] = lightsJson(f.lights);
-  nlohmann::ordered_json t;
-  t["grab"] = f.times.grabMs;
-  t["convert"] = f.times.convertMs;
-  t["project"] = f.times.projectMs;
-  t["render"] = renderMs < 0 ? nlohmann::ordered_json(nullptr) : nlohmann::ordered_json(renderMs);
-  j["timings_ms"] = t;
-  // Glass-to-light latency from the capture time (a camera's driver timestamp, or the grab of a
-  // file's frame): to the coefficients, and to the frame that shows them.
-  nlohmann::ordered_json l;
-  l["coefficients"] = f.coefficientsLatencyMs;
-  if (shownLatencyMs >= 0) l["shown"] = shownLatencyMs;
-  j["latency_ms"] = l;
-  return j.dump();
-}
 
 Photometry photometryFromArgs(const Args& a) {
   Photometry p;
@@ -97,7 +77,25 @@ std::vector<OptionSpec> streamOptions() {
        {"--duration", "SECONDS", "stop after this much of the source's time", false, false, g},
        {"--coeffs-out", "FILE.jsonl", "one JSON line per frame: coefficients and stage timings",
         false, false, g},
+       {"--coeffs-format", "FORMAT",
+        "the coefficients in --coeffs-out lines: json (default), three, babylon, filament, "
+        "unity or webxr (README: Lighting your engine)",
+        false, false, g},
        {"--hud", "", "draw the HUD into headless frames too", false, false, g},
+       {"--serve", "[ADDR:]PORT",
+        "serve every frame's record over WebSocket (ws://ADDR:PORT/?format=three|babylon|...) "
+        "and a three.js page lit by it at http://ADDR:PORT/; ADDR defaults to 127.0.0.1",
+        false, false, g},
+       {"--serve-remote", "", "allow --serve on an address other machines can reach", false, false,
+        g},
+       {"--serve-clients", "N", "--serve: at most N clients at once, 1 to 1000 (default 32)", false,
+        false, g},
+       {"--serve-idle", "SECONDS",
+        "--serve: close a client that answers no ping for this long, 2 to 3600 (default 30)", false,
+        false, g},
+       {"--publish", "mqtt://HOST[:PORT]/TOPIC",
+        "publish every frame's record to an MQTT broker, retained (in --coeffs-format)", false,
+        false, g},
        {"--sun", "",
         "take the dominant compact source (sun, lamp, window) out of the coefficients and light "
         "the model with it as a disc light",
@@ -125,6 +123,10 @@ const CommandSpec kReplaySpec{
       o.insert(
           o.end(),
           {{"--loop", "", "start again at the end of the source", false, false, "Stream"},
+           {"--realtime", "",
+            "headless: play at the source's frame rate, not as fast as frames render (the "
+            "default with --serve or --publish)",
+            false, false, "Stream"},
            {"--size", "WxH", "window or frame size (default 1280x720; headless 640x360)", false,
             false, g},
            {"--out-dir", "DIR", "headless: write each rendered frame as DIR/frame_NNNNNN.png",
@@ -160,6 +162,7 @@ PipelineOptions pipelineOptionsFromArgs(const Args& a) {
 /// Where the frames go besides the screen: --coeffs-out, --out-dir, --out-video, --record.
 struct StreamOutputs {
   std::unique_ptr<AtomicTextFile> coeffs;
+  CoeffFormat format;  ///< --coeffs-format
   std::string outDir;
   std::unique_ptr<VideoRecorder> video, record;
 
@@ -188,6 +191,7 @@ StreamOutputs openOutputs(const Args& a, double fps, const std::string& descript
   StreamOutputs o;
   if (a.has("--out-dir") && a.has("--out-video"))
     throw Error("give --out-dir or --out-video, not both");
+  o.format = parseCoeffFormat(a.get("--coeffs-format", "json"), "--coeffs-format", true);
   if (a.has("--coeffs-out")) o.coeffs = std::make_unique<AtomicTextFile>(a.get("--coeffs-out"));
   o.outDir = a.get("--out-dir");
   if (!o.outDir.empty()) {
@@ -256,8 +260,24 @@ struct StreamView {
   }
 };
 
+/// Where records go beyond the screen and files: the WebSocket stream and the MQTT broker.
+struct RecordSinks {
+  std::unique_ptr<StreamServer> server;
+  std::unique_ptr<MqttPublisher> mqtt;
+
+  void fill(HudCounters& c) const {
+    if (server) {
+      const StreamStats s = server->stats();
+      c.streamClients = std::int64_t(s.clients);
+      c.streamDropped = std::int64_t(s.dropped);
+    }
+    if (mqtt) c.mqttLost = std::int64_t(mqtt->stats().lost);
+  }
+};
+
 void recordSample(StreamTally& t, const ProcessedFrame& f, double uploadMs, double renderMs,
-                  double latencyMs, Hud* hud, const PipelineStats& st) {
+                  double latencyMs, Hud* hud, const PipelineStats& st,
+                  const RecordSinks* sinks = nullptr) {
   t.latency.push_back(latencyMs);
   t.grab.push_back(f.times.grabMs);
   t.convert.push_back(f.times.convertMs);
@@ -278,13 +298,15 @@ void recordSample(StreamTally& t, const ProcessedFrame& f, double uploadMs, doub
   s.unsmoothed = f.unsmoothed;
   s.lights = f.lights;
   hud->push(s);
-  hud->setCounters({st.captured, t.drawn, st.dropped, st.skipped,
-                    t.grab.empty() ? 0.0 : double(t.saturated) / double(t.grab.size())});
+  HudCounters c{st.captured, t.drawn, st.dropped, st.skipped,
+                t.grab.empty() ? 0.0 : double(t.saturated) / double(t.grab.size())};
+  if (sinks) sinks->fill(c);
+  hud->setCounters(c);
 }
 
 /// Headless replay: every frame drawn, in order, and written.
 void runOffline(CapturePipeline& pipeline, StreamView& view, const StreamOutputs& out,
-                StreamTally& tally, Progress& progress) {
+                StreamTally& tally, Progress& progress, const RecordSinks& sinks) {
   double lastMs = 0;
   while (auto f = pipeline.waitNext()) {
     const double uploadMs = view.use(*f);
@@ -295,8 +317,8 @@ void runOffline(CapturePipeline& pipeline, StreamView& view, const StreamOutputs
     const double ms = std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
     const double latency = 1000.0 * (monotonicSeconds() - f->captureTime);
     ++tally.drawn;
-    recordSample(tally, *f, uploadMs, ms, latency, view.hud.get(), pipeline.stats());
-    if (out.coeffs) out.coeffs->line(coeffsLine(*f, ms, latency));
+    recordSample(tally, *f, uploadMs, ms, latency, view.hud.get(), pipeline.stats(), &sinks);
+    if (out.coeffs) out.coeffs->line(frameRecord(*f, out.format, {ms, latency}));
     out.writeFrame(*f, fb, px);
     lastMs = ms;
     progress.update(std::int64_t(tally.drawn));
@@ -306,7 +328,8 @@ void runOffline(CapturePipeline& pipeline, StreamView& view, const StreamOutputs
 
 /// A window (or a camera headless): the newest coefficients, never waiting for capture.
 void runInteractive(CapturePipeline& pipeline, StreamView& view, StreamTally& tally,
-                    Progress& progress, bool live, const std::string& title) {
+                    Progress& progress, bool live, const std::string& title,
+                    const RecordSinks& sinks) {
   auto fpsT0 = Clock::now();
   std::size_t fpsFrames = 0;
   double lastMs = 0;
@@ -334,7 +357,7 @@ void runInteractive(CapturePipeline& pipeline, StreamView& view, StreamTally& ta
     if (f) {
       ++tally.drawn;
       recordSample(tally, *f, uploadMs, lastMs, 1000.0 * (monotonicSeconds() - f->captureTime),
-                   view.hud.get(), st);
+                   view.hud.get(), st, &sinks);
       progress.update(std::int64_t(st.captured));
     }
     ++fpsFrames;
@@ -350,7 +373,7 @@ void runInteractive(CapturePipeline& pipeline, StreamView& view, StreamTally& ta
 }
 
 void printSummary(const std::string& description, const PipelineStats& st, const StreamTally& t,
-                  double smoothSeconds, bool interrupted) {
+                  double smoothSeconds, bool interrupted, const RecordSinks& sinks) {
   std::fprintf(stderr,
                "liveprobe: %s: %zu frames captured, %zu drawn, %zu dropped (stale), %zu skipped "
                "(corrupt)%s%s%s\n"
@@ -371,10 +394,55 @@ void printSummary(const std::string& description, const PipelineStats& st, const
                                        std::to_string(t.clippedLight))
                                           .c_str()
                                     : "");
+  if (sinks.server) {
+    const StreamStats s = sinks.server->stats();
+    std::fprintf(stderr,
+                 "  stream: %llu clients served, %llu messages sent, %llu dropped for slow "
+                 "clients, %llu refused (client limit), %llu closed (bad message or idle)\n",
+                 (unsigned long long)s.connected, (unsigned long long)s.sent,
+                 (unsigned long long)s.dropped, (unsigned long long)s.refused,
+                 (unsigned long long)s.closed);
+  }
+  if (sinks.mqtt) {
+    const MqttStats m = sinks.mqtt->stats();
+    std::fprintf(stderr,
+                 "  mqtt %s:%d/%s: %llu published, %llu lost (no broker connection), %llu "
+                 "reconnects\n",
+                 sinks.mqtt->target().host.c_str(), sinks.mqtt->target().port,
+                 sinks.mqtt->target().topic.c_str(), (unsigned long long)m.published,
+                 (unsigned long long)m.lost, (unsigned long long)m.reconnects);
+  }
   if (smoothSeconds > 0)
     std::fprintf(stderr,
                  "  --smooth %.3g s: lighting lags a step change by %.3g s (63%% of the step)\n",
                  smoothSeconds, smoothSeconds);
+}
+
+RecordSinks openSinks(const Args& a, const CoeffFormat& format) {
+  RecordSinks s;
+  if (a.has("--serve")) {
+    StreamServerOptions o;
+    parseServeAddress(a.get("--serve"), a.has("--serve-remote"), o);
+    o.maxClients = int(a.integerIn("--serve-clients", 32, 1, 1000));
+    o.idleSeconds = int(a.integerIn("--serve-idle", 30, 2, 3600));
+    o.defaultFormat = parseCoeffFormat("three", "--serve", true);
+    const char* web = std::getenv("LIVEPROBE_WEB_DIR");
+    o.webDir = web ? web : LIVEPROBE_WEB_DIR;
+    o.threeDir = o.webDir + "/node_modules/three/build";
+    if (!fs::exists(o.threeDir + "/three.module.js"))
+      std::fprintf(stderr,
+                   "liveprobe: --serve: three.js is not installed in %s (scripts/build installs "
+                   "it); the page will not draw\n",
+                   o.threeDir.c_str());
+    s.server = std::make_unique<StreamServer>(o);
+    std::fprintf(stderr, "liveprobe: serving http://%s:%d/ (WebSocket ws://%s:%d/?format=three)\n",
+                 o.host.c_str(), s.server->port(), o.host.c_str(), s.server->port());
+  } else if (a.has("--serve-remote") || a.has("--serve-clients") || a.has("--serve-idle")) {
+    throw Error("--serve-remote, --serve-clients and --serve-idle go with --serve");
+  }
+  if (a.has("--publish"))
+    s.mqtt = std::make_unique<MqttPublisher>(parseMqttUrl(a.get("--publish")), format);
+  return s;
 }
 
 // The pipeline and the render loop, for replay (a file) and live (a camera). A camera is never
@@ -400,7 +468,10 @@ int runStream(const Args& a, std::unique_ptr<FrameSource> source, bool live) {
   const bool endless =
       !live && opt.maxFrames < 0 && (opt.loop || description.rfind("synthetic", 0) == 0);
   opt.handoff = headless && !live ? Handoff::Every : Handoff::Latest;
-  opt.realtime = !headless && !live;
+  // A window plays in real time; so does a headless replay that serves or publishes (its readers
+  // want the source's pace, not as fast as it renders), or that asks with --realtime.
+  opt.realtime =
+      !live && (!headless || a.has("--realtime") || a.has("--serve") || a.has("--publish"));
 
   StreamView view;
   view.state.shading = shadingFromArgs(a, Sh9{});
@@ -410,9 +481,20 @@ int runStream(const Args& a, std::unique_ptr<FrameSource> source, bool live) {
   opt.keepImages = true;  // the background can be switched on at any time (B), and the HUD shows it
 
   StreamOutputs out = openOutputs(a, fps, description);
-  if ((!headless || live) && out.coeffs) {
-    AtomicTextFile* file = out.coeffs.get();
-    opt.onCaptured = [file](const ProcessedFrame& f) { file->line(coeffsLine(f, -1)); };
+  RecordSinks sinks = openSinks(a, out.format);
+  {
+    // At capture, on capture's thread: --coeffs-out lines of a window or a camera, the stream
+    // and MQTT. None of them waits on a reader.
+    AtomicTextFile* file = (!headless || live) ? out.coeffs.get() : nullptr;
+    StreamServer* server = sinks.server.get();
+    MqttPublisher* mqtt = sinks.mqtt.get();
+    const CoeffFormat format = out.format;
+    if (file || server || mqtt)
+      opt.onCaptured = [file, server, mqtt, format](const ProcessedFrame& f) {
+        if (file) file->line(frameRecord(f, format, {}));
+        if (server) server->publish(f);
+        if (mqtt) mqtt->publish(f);
+      };
   }
   if (out.record) {  // --record (live): the raw stream, finalised even when capture stops on a
                      // fault
@@ -446,15 +528,16 @@ int runStream(const Args& a, std::unique_ptr<FrameSource> source, bool live) {
   StreamTally tally;
   try {
     if (view.ctx->isHeadless() && !live)
-      runOffline(pipeline, view, out, tally, progress);
+      runOffline(pipeline, view, out, tally, progress, sinks);
     else
-      runInteractive(pipeline, view, tally, progress, live, description);
+      runInteractive(pipeline, view, tally, progress, live, description, sinks);
   } catch (const gl::ContextError& e) {
     pipeline.stop();
     throw Error(std::string("GL: ") + e.what());
   }
   pipeline.stop();
   progress.finish();
+  if (sinks.server) sinks.server->stop();  // every client gets a clean close (1001)
   const PipelineStats st = pipeline.stats();
   // A camera's frames up to a fault are real data and are kept; a replay that failed keeps
   // nothing (the recorders' destructors discard what they wrote).
@@ -467,7 +550,7 @@ int runStream(const Args& a, std::unique_ptr<FrameSource> source, bool live) {
   if (out.coeffs && keep) out.coeffs->commit();
   if (!st.error.empty()) throw Error(st.error);
   if (out.video) out.video->finish();
-  printSummary(description, st, tally, opt.smoothSeconds, stopRequested());
+  printSummary(description, st, tally, opt.smoothSeconds, stopRequested(), sinks);
   return stopRequested() ? kExitInterrupted : 0;
 }
 

@@ -7,6 +7,7 @@
 #include "coeffs_io.h"
 #include "commands.h"
 #include "compare.h"
+#include "engine_export.h"
 #include "liveprobe/capture/image.h"
 #include "liveprobe/sh/brute.h"
 #include "liveprobe/sh/error.h"
@@ -58,8 +59,11 @@ const CommandSpec kCoeffsSpec{
     "Prints the nine radiance coefficients L_lm (R&H convention, before the A_l factors) of an\n"
     "environment map (.hdr, .exr, or 8-bit PNG/JPEG decoded from sRGB).",
     [] {
-      auto o =
-          withLayout({{"--format", "json|text|glsl", "output format (default json)"}, kWindowOpt});
+      auto o = withLayout(
+          {{"--format", "FORMAT",
+            "json (default), text, glsl, or an engine's: three, babylon, filament, unity, gltf, "
+            "webxr (README: Lighting your engine)"},
+           kWindowOpt});
       for (auto& l : lightOptionSpecs()) o.push_back(l);
       return o;
     }(),
@@ -68,14 +72,21 @@ const CommandSpec kCoeffsSpec{
     "an environment map (.hdr, .exr, .png, .jpg), or a folder of six cube faces"};
 
 int runCoeffs(const Args& a) {
-  const std::string format = a.get("--format", "json");
-  if (format != "json" && format != "text" && format != "glsl")
-    throw Error("--format " + format + ": expected json, text or glsl");
+  const CoeffFormat cf = parseCoeffFormat(a.get("--format", "json"), "--format", false);
+  const std::string& format = cf.name;
   Environment env = loadEnvironment(a);
   const LightOptions lights = chooseLights(a);
   splitLights(env, lights);
   const Sh9 L = applyWindow(env.radiance, chooseWindow(a, env.radiance));
-  if (format == "json") {
+  if (cf.engine == Engine::Gltf) {
+    std::cout << gltfDocument(env, L, env.lights).dump() << "\n";
+  } else if (cf.engine) {
+    nlohmann::ordered_json j;
+    j["source"] = a.positional()[0];
+    j["format"] = format;
+    j["coefficients"] = engineJson(*cf.engine, L, env.lights);
+    std::cout << j.dump() << "\n";
+  } else if (format == "json") {
     nlohmann::ordered_json j;
     j["source"] = a.positional()[0];
     j["layout"] = std::string(layoutName(env.layout.layout));

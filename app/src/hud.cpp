@@ -233,6 +233,10 @@ void Hud::drawStatus(ViewState& state, double frameMs) {
                 counters_.dropped);
     ImGui::Text("skipped %zu  saturated %.1f/frame", counters_.skipped,
                 counters_.saturatedPerFrame);
+    if (counters_.streamClients >= 0)
+      ImGui::Text("stream: %lld clients, %lld dropped", (long long)counters_.streamClients,
+                  (long long)counters_.streamDropped);
+    if (counters_.mqttLost >= 0) ImGui::Text("mqtt: %lld lost", (long long)counters_.mqttLost);
   }
   float ev = std::log2(state.shading.exposure);
   if (ImGui::SliderFloat("exposure (EV)", &ev, -16.0f, 16.0f, "%.2f"))

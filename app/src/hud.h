@@ -30,6 +30,8 @@ struct HudSample {
 struct HudCounters {
   std::size_t captured = 0, drawn = 0, dropped = 0, skipped = 0;
   double saturatedPerFrame = 0;
+  /// --serve: clients now and frames they missed (-1: not serving); --publish: messages lost.
+  std::int64_t streamClients = -1, streamDropped = 0, mqttLost = -1;
 };
 
 /// What the viewer's keys and the HUD's widgets change.

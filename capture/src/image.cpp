@@ -286,6 +286,15 @@ void saveRgb8(const std::string& path, int width, int height, const std::uint8_t
   writeAtomically(path, bgr);
 }
 
+std::vector<std::uint8_t> encodePng8(int width, int height, int channels,
+                                     const std::uint8_t* rgba) {
+  cv::Mat m(height, width, channels == 4 ? CV_8UC4 : CV_8UC3, const_cast<std::uint8_t*>(rgba)), bgr;
+  cv::cvtColor(m, bgr, channels == 4 ? cv::COLOR_RGBA2BGRA : cv::COLOR_RGB2BGR);
+  std::vector<std::uint8_t> bytes;
+  if (!cv::imencode(".png", bgr, bytes)) throw Error("cannot encode an image as PNG");
+  return bytes;
+}
+
 void saveImage8(const std::string& path, int width, int height, int channels,
                 const std::uint8_t* data) {
   cv::Mat m(height, width, channels == 4 ? CV_8UC4 : CV_8UC3, const_cast<std::uint8_t*>(data));

@@ -325,6 +325,10 @@ std::vector<SphereSample> layoutSamples(const LayoutSpec& spec, int width, int h
   return {};
 }
 
+glm::vec3 cubeFaceDirection(int face, double s, double t) {
+  return axes::worldFromGl(cubeDirGl(face, s, t));
+}
+
 std::optional<glm::vec2> layoutPixel(const LayoutSpec& spec, int width, int height, glm::vec3 dir) {
   const glm::dvec3 d = glm::normalize(glm::dvec3(dir));
   auto onDisc = [](double cx, double cy, double radius, double r, double p) {

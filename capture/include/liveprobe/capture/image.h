@@ -39,6 +39,10 @@ void saveImage(const std::string& path, const Image& img);
 /// Writes 8-bit sRGB RGB pixels (rows top to bottom) atomically, as saveImage does.
 void saveRgb8(const std::string& path, int width, int height, const std::uint8_t* rgb);
 
+/// 8-bit RGB (channels 3) or RGBA (4) pixels, rows top to bottom, as the bytes of a PNG file.
+/// Throws lp::Error.
+std::vector<std::uint8_t> encodePng8(int width, int height, int channels, const std::uint8_t* rgba);
+
 /// Writes already-encoded 8-bit BGR(A) pixels (OpenCV order) atomically, as saveImage does.
 void saveImage8(const std::string& path, int width, int height, int channels,
                 const std::uint8_t* data);

@@ -87,6 +87,10 @@ inline glm::vec3 worldToAngular(glm::vec3 w) { return {-w.y, w.z, -w.x}; }
 /// their exact solid angles. Used for output irradiance maps.
 std::vector<SphereSample> equirectSamples(int width, int height);
 
+/// The world direction of point (s, t) in [0, 1]^2 of OpenGL cube face `face` (0..5: +X, -X, +Y,
+/// -Y, +Z, -Z; t = 0 is the face's first row), as the cube layout above defines it. Not normalised.
+glm::vec3 cubeFaceDirection(int face, double s, double t);
+
 /// Where the world direction `dir` lands in a W x H frame of the layout, in pixel coordinates
 /// (x right, y down, pixel centres at +0.5), or nullopt where the layout does not see it. The
 /// inverse of layoutSamples' directions (for resampling, backgrounds and tests).

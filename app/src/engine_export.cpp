@@ -1,0 +1,336 @@
+#include "engine_export.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include "coeffs_io.h"
+#include "liveprobe/capture/image.h"
+#include "liveprobe/sh/error.h"
+#include "liveprobe/sh/layout.h"
+
+namespace lp::cli {
+
+namespace {
+
+using ojson = nlohmann::ordered_json;
+
+ojson triple(glm::vec3 v) { return {jsonFloat(v.x), jsonFloat(v.y), jsonFloat(v.z)}; }
+
+/// 27 floats: r, g, b of each coefficient in liveprobe's order.
+ojson flat27(const Sh9& sh) {
+  ojson a = ojson::array();
+  for (const Rgb& c : sh.c)
+    for (int ch = 0; ch < 3; ++ch) a.push_back(jsonFloat(c[ch]));
+  return a;
+}
+
+ojson nineTriples(const Sh9& sh) {
+  ojson a = ojson::array();
+  for (const Rgb& c : sh.c) a.push_back(triple(c));
+  return a;
+}
+
+/// A light as colour (maximum 1) times intensity: the irradiance it gives a surface facing it.
+struct ColorIntensity {
+  glm::vec3 color{0.0f};
+  float intensity = 0.0f;
+};
+ColorIntensity colorIntensity(glm::vec3 power) {
+  const float m = std::max({power.x, power.y, power.z});
+  if (!(m > 0.0f)) return {};
+  return {power / m, m};
+}
+
+/// A light's direction (towards it) in the engine's frame.
+glm::vec3 towards(const Light& l, Engine e) { return glm::normalize(engineFromWorld(e) * l.dir); }
+
+// ---- glTF: RGBD cube faces -------------------------------------------------------------------
+
+/// RGBD, as EXT_lights_image_based's 4-channel PNGs hold HDR (Babylon's packing): alpha
+/// D = clamp(floor(max(255 / max(rgb), 1)) / 255, 1/255, 1), colour sRGB(rgb D); a reader
+/// divides the linear colour by D.
+void packRgbd(glm::vec3 c, std::uint8_t* out) {
+  const float m = std::max({c.x, c.y, c.z, 1e-6f});
+  const float d = std::clamp(std::floor(std::max(255.0f / m, 1.0f)) / 255.0f, 1.0f / 255.0f, 1.0f);
+  for (int ch = 0; ch < 3; ++ch)
+    out[ch] = std::uint8_t(std::lround(255.0f * linearToSrgb(std::clamp(c[ch] * d, 0.0f, 1.0f))));
+  out[3] = std::uint8_t(std::lround(255.0f * d));
+}
+
+std::string base64(const std::vector<std::uint8_t>& b) {
+  static const char* k = "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
+  std::string s;
+  s.reserve((b.size() + 2) / 3 * 4);
+  for (std::size_t i = 0; i < b.size(); i += 3) {
+    const std::uint32_t v = std::uint32_t(b[i]) << 16 |
+                            (i + 1 < b.size() ? std::uint32_t(b[i + 1]) << 8 : 0u) |
+                            (i + 2 < b.size() ? std::uint32_t(b[i + 2]) : 0u);
+    s += k[v >> 18 & 63];
+    s += k[v >> 12 & 63];
+    s += i + 1 < b.size() ? k[v >> 6 & 63] : '=';
+    s += i + 2 < b.size() ? k[v & 63] : '=';
+  }
+  return s;
+}
+
+/// One face of the environment's radiance, n x n, each texel the mean of 4 x 4 nearest-pixel
+/// samples (a box filter: no GGX prefiltering).
+std::vector<glm::vec3> radianceFace(const Environment& env, int face, int n) {
+  std::vector<glm::vec3> out(std::size_t(n) * n, glm::vec3(0.0f));
+  const glm::mat3 fileFromWorld = glm::transpose(env.orientation);
+  constexpr int kSub = 4;
+  for (int i = 0; i < n; ++i)
+    for (int j = 0; j < n; ++j) {
+      glm::vec3 sum(0.0f);
+      int count = 0;
+      for (int a = 0; a < kSub; ++a)
+        for (int b = 0; b < kSub; ++b) {
+          const glm::vec3 d = glm::normalize(
+              cubeFaceDirection(face, (j + (b + 0.5) / kSub) / n, (i + (a + 0.5) / kSub) / n));
+          const auto px =
+              layoutPixel(env.layout, env.image.width, env.image.height, fileFromWorld * d);
+          if (!px) continue;
+          const int x = std::clamp(int(px->x), 0, env.image.width - 1);
+          const int y = std::clamp(int(px->y), 0, env.image.height - 1);
+          const float* p = &env.image.rgb[(std::size_t(y) * env.image.width + x) * 3];
+          sum += glm::vec3(p[0], p[1], p[2]);
+          ++count;
+        }
+      out[std::size_t(i) * n + j] = count > 0 ? sum / float(count) : glm::vec3(0.0f);
+    }
+  return out;
+}
+
+std::vector<glm::vec3> halve(const std::vector<glm::vec3>& f, int n) {
+  const int h = n / 2;
+  std::vector<glm::vec3> out(std::size_t(h) * h);
+  for (int i = 0; i < h; ++i)
+    for (int j = 0; j < h; ++j)
+      out[std::size_t(i) * h + j] =
+          0.25f *
+          (f[std::size_t(2 * i) * n + 2 * j] + f[std::size_t(2 * i) * n + 2 * j + 1] +
+           f[std::size_t(2 * i + 1) * n + 2 * j] + f[std::size_t(2 * i + 1) * n + 2 * j + 1]);
+  return out;
+}
+
+std::string rgbdPngDataUri(const std::vector<glm::vec3>& face, int n) {
+  std::vector<std::uint8_t> rgba(std::size_t(n) * n * 4);
+  for (std::size_t i = 0; i < face.size(); ++i) packRgbd(face[i], &rgba[i * 4]);
+  return "data:image/png;base64," + base64(encodePng8(n, n, 4, rgba.data()));
+}
+
+}  // namespace
+
+CoeffFormat parseCoeffFormat(const std::string& name, const std::string& flag, bool perFrame) {
+  CoeffFormat f;
+  f.name = name;
+  f.engine = parseEngine(name);
+  const bool ok = perFrame ? (name == "json" || (f.engine && *f.engine != Engine::Gltf))
+                           : (name == "json" || name == "text" || name == "glsl" || f.engine);
+  if (!ok)
+    throw Error(flag + " " + name + ": expected " + coeffFormatNames(perFrame) +
+                (perFrame && (name == "gltf" || name == "text" || name == "glsl")
+                     ? " (a per-frame record is one JSON line; use coeffs --format " + name +
+                           " for a still)"
+                     : ""));
+  return f;
+}
+
+std::string coeffFormatNames(bool perFrame) {
+  return perFrame ? "json, three, babylon, filament, unity or webxr"
+                  : "json, text, glsl, three, babylon, filament, unity, gltf or webxr";
+}
+
+ojson engineJson(Engine engine, const Sh9& radiance, const std::vector<Light>& lights) {
+  const Sh9 L = toEngineFrame(radiance, engine);
+  ojson j;
+  switch (engine) {
+    case Engine::Three: {
+      // LightProbe.fromJSON({sh, intensity}); a DirectionalLight per light, placed along
+      // `direction` (it shines from there towards the origin), colour times intensity = the
+      // irradiance facing it.
+      j["sh"] = flat27(L);
+      j["intensity"] = 1;
+      ojson a = ojson::array();
+      for (const Light& l : lights) {
+        const ColorIntensity ci = colorIntensity(l.power);
+        a.push_back({{"direction", triple(towards(l, engine))},
+                     {"color", triple(ci.color)},
+                     {"intensity", jsonFloat(ci.intensity)},
+                     {"angular_radius_deg", jsonFloat(glm::degrees(l.angularRadius))}});
+      }
+      j["directionalLights"] = a;
+      break;
+    }
+    case Engine::WebXr: {
+      j["sphericalHarmonicsCoefficients"] = flat27(L);
+      if (!lights.empty()) {
+        const glm::vec3 d = towards(lights[0], engine);
+        const glm::vec3 p = lights[0].power;
+        j["primaryLightDirection"] = {
+            {"x", jsonFloat(d.x)}, {"y", jsonFloat(d.y)}, {"z", jsonFloat(d.z)}, {"w", 0}};
+        j["primaryLightIntensity"] = {
+            {"x", jsonFloat(p.x)}, {"y", jsonFloat(p.y)}, {"z", jsonFloat(p.z)}, {"w", 1}};
+      }
+      break;
+    }
+    case Engine::Babylon: {
+      Sh9 h = condonShortley(toIrradiance(L));
+      h *= float(1.0 / kPi);
+      static const char* names[kShCount] = {"l00",  "l1_1", "l10", "l11", "l2_2",
+                                            "l2_1", "l20",  "l21", "l22"};
+      ojson hj;
+      for (int k = 0; k < kShCount; ++k) hj[names[k]] = triple(h.c[k]);
+      j["harmonics"] = hj;
+      const BabylonPolynomial p = babylonPolynomial(h);
+      j["polynomial"] = {{"x", triple(p.x)},   {"y", triple(p.y)},   {"z", triple(p.z)},
+                         {"xx", triple(p.xx)}, {"yy", triple(p.yy)}, {"zz", triple(p.zz)},
+                         {"yz", triple(p.yz)}, {"zx", triple(p.zx)}, {"xy", triple(p.xy)}};
+      ojson a = ojson::array();
+      for (const Light& l : lights) {  // DirectionalLight.direction: where the light travels
+        const ColorIntensity ci = colorIntensity(l.power);
+        a.push_back({{"direction", triple(-towards(l, engine))},
+                     {"diffuse", triple(ci.color)},
+                     {"intensity", jsonFloat(ci.intensity)}});
+      }
+      j["directionalLights"] = a;
+      break;
+    }
+    case Engine::Filament:
+    case Engine::Unity: {
+      const Sh9 s = preScaledIrradiance(L);
+      if (engine == Engine::Filament) {
+        j["irradiance"] = nineTriples(s);  // IndirectLight::Builder::irradiance(3, sh)
+      } else {                             // SphericalHarmonicsL2[channel, coefficient]
+        ojson sh = ojson::array();
+        for (int ch = 0; ch < 3; ++ch) {
+          ojson row = ojson::array();
+          for (int k = 0; k < kShCount; ++k) row.push_back(jsonFloat(s.c[k][ch]));
+          sh.push_back(row);
+        }
+        j["sh"] = sh;
+      }
+      ojson a = ojson::array();
+      for (std::size_t i = 0; i < lights.size(); ++i) {
+        const Light& l = lights[i];
+        const ColorIntensity ci = colorIntensity(l.power);
+        ojson o;
+        if (engine == Engine::Filament) {  // LightManager: SUN (the first), else DIRECTIONAL
+          o["type"] = i == 0 ? "SUN" : "DIRECTIONAL";
+          o["direction"] = triple(-towards(l, engine));
+          o["color"] = triple(ci.color);
+          o["intensity"] = jsonFloat(ci.intensity);
+          if (i == 0) o["sunAngularRadius"] = jsonFloat(glm::degrees(l.angularRadius));
+        } else {  // a Directional Light whose transform.forward is where the light travels
+          o["forward"] = triple(-towards(l, engine));
+          o["color"] = triple(ci.color);
+          o["intensity"] = jsonFloat(ci.intensity);
+        }
+        a.push_back(o);
+      }
+      j["lights"] = a;
+      break;
+    }
+    case Engine::Gltf:
+      throw Error("gltf: a document, not a record (gltfDocument)");
+  }
+  return j;
+}
+
+ojson gltfDocument(const Environment& env, const Sh9& radiance, const std::vector<Light>& lights) {
+  const Sh9 L = toEngineFrame(radiance, Engine::Gltf);
+  ojson doc;
+  doc["asset"] = {{"version", "2.0"}, {"generator", "liveprobe coeffs --format gltf"}};
+  ojson used = ojson::array({"EXT_lights_image_based"});
+  if (!lights.empty()) used.push_back("KHR_lights_punctual");
+  doc["extensionsUsed"] = used;
+  // The specular cube: faces in OpenGL's order and orientation, mips 64, 32 and 16.
+  constexpr int kSize = 64, kMips = 3;
+  ojson images = ojson::array(), mips = ojson::array();
+  std::vector<std::vector<glm::vec3>> faces(6);
+  for (int f = 0; f < 6; ++f) faces[std::size_t(f)] = radianceFace(env, f, kSize);
+  for (int m = 0, n = kSize; m < kMips; ++m, n /= 2) {
+    ojson level = ojson::array();
+    for (int f = 0; f < 6; ++f) {
+      if (m > 0) faces[std::size_t(f)] = halve(faces[std::size_t(f)], n * 2);
+      level.push_back(images.size());
+      images.push_back(
+          {{"uri", rgbdPngDataUri(faces[std::size_t(f)], n)}, {"mimeType", "image/png"}});
+    }
+    mips.push_back(level);
+  }
+  ojson light;
+  light["name"] = "liveprobe";
+  light["rotation"] = {0, 0, 0, 1};
+  light["intensity"] = 1;
+  light["irradianceCoefficients"] = nineTriples(condonShortley(toIrradiance(L)));
+  light["specularImageSize"] = kSize;
+  light["specularImages"] = mips;
+  ojson ext;
+  ext["EXT_lights_image_based"] = {{"lights", ojson::array({light})}};
+  ojson scene = {{"name", "liveprobe"},
+                 {"extensions", {{"EXT_lights_image_based", {{"light", 0}}}}}};
+  if (!lights.empty()) {
+    // KHR_lights_punctual: a directional light shines along its node's -Z, lux = the
+    // irradiance facing it. The node's rotation turns -Z to the direction the light travels.
+    ojson punctual = ojson::array(), nodes = ojson::array(), sceneNodes = ojson::array();
+    for (std::size_t i = 0; i < lights.size(); ++i) {
+      const ColorIntensity ci = colorIntensity(lights[i].power);
+      punctual.push_back({{"type", "directional"},
+                          {"color", triple(ci.color)},
+                          {"intensity", jsonFloat(ci.intensity)}});
+      const glm::vec3 travel = -towards(lights[i], Engine::Gltf);
+      // Quaternion taking (0, 0, -1) to `travel`.
+      const glm::vec3 from(0, 0, -1);
+      const float c = glm::dot(from, travel);
+      glm::vec4 q;
+      if (c < -0.999999f)
+        q = {0, 1, 0, 0};  // opposite: half a turn about +y
+      else {
+        const glm::vec3 axis = glm::cross(from, travel);
+        q = glm::normalize(glm::vec4(axis, 1.0f + c));
+      }
+      nodes.push_back(
+          {{"name", "liveprobe light " + std::to_string(i + 1)},
+           {"rotation", {jsonFloat(q.x), jsonFloat(q.y), jsonFloat(q.z), jsonFloat(q.w)}},
+           {"extensions", {{"KHR_lights_punctual", {{"light", i}}}}}});
+      sceneNodes.push_back(i);
+    }
+    ext["KHR_lights_punctual"] = {{"lights", punctual}};
+    doc["nodes"] = nodes;
+    scene["nodes"] = sceneNodes;
+  }
+  doc["extensions"] = ext;
+  doc["images"] = images;
+  doc["scene"] = 0;
+  doc["scenes"] = ojson::array({scene});
+  return doc;
+}
+
+std::string frameRecord(const ProcessedFrame& f, const CoeffFormat& format, RecordTimes t) {
+  ojson j;
+  j["frame"] = f.index;
+  j["time"] = f.timestamp;
+  if (format.engine) {
+    j["format"] = format.name;
+    j["coefficients"] = engineJson(*format.engine, f.radiance, f.lights);
+  } else {
+    j["coefficients"] = coefficientsJson(f.radiance);
+    if (!f.lights.empty()) j["lights"] = lightsJson(f.lights);
+  }
+  ojson tm;
+  tm["grab"] = f.times.grabMs;
+  tm["convert"] = f.times.convertMs;
+  tm["project"] = f.times.projectMs;
+  tm["render"] = t.renderMs < 0 ? ojson(nullptr) : ojson(t.renderMs);
+  j["timings_ms"] = tm;
+  // Glass-to-light latency from the capture time (a camera's driver timestamp, or the grab of a
+  // file's frame): to the coefficients, and to the frame that shows them.
+  ojson l;
+  l["coefficients"] = f.coefficientsLatencyMs;
+  if (t.shownLatencyMs >= 0) l["shown"] = t.shownLatencyMs;
+  j["latency_ms"] = l;
+  return j.dump();
+}
+
+}  // namespace lp::cli

@@ -1,0 +1,49 @@
+#pragma once
+// The coefficients and lights in each engine's convention (liveprobe/sh/engines.h says the
+// frames and forms), and the one serializer of a frame's record: --coeffs-out lines, the
+// WebSocket stream and MQTT messages are all frameRecord().
+#include <nlohmann/json.hpp>
+#include <string>
+#include <vector>
+
+#include "liveprobe/capture/pipeline.h"
+#include "liveprobe/sh/engines.h"
+#include "liveprobe/sh/lights.h"
+#include "scene.h"
+
+namespace lp::cli {
+
+/// json (liveprobe's own, R&H frame), text, glsl, or one engine's.
+struct CoeffFormat {
+  std::string name = "json";
+  std::optional<Engine> engine;  ///< set for the engine formats
+};
+
+/// Parses a format name given to `flag`. `perFrame`: a record's format (json or an engine other
+/// than gltf, whose document carries images); otherwise any of them.
+CoeffFormat parseCoeffFormat(const std::string& name, const std::string& flag, bool perFrame);
+
+/// The names, for help texts: "json|text|glsl|three|babylon|filament|unity|gltf|webxr".
+std::string coeffFormatNames(bool perFrame);
+
+/// The coefficients and lights as `engine` takes them (a JSON object; gltf excluded).
+nlohmann::ordered_json engineJson(Engine engine, const Sh9& radiance,
+                                  const std::vector<Light>& lights);
+
+/// A glTF 2.0 document: EXT_lights_image_based with irradianceCoefficients and specular cube
+/// images made from the environment (RGBD PNGs, embedded), and a KHR_lights_punctual
+/// directional light per light.
+nlohmann::ordered_json gltfDocument(const Environment& env, const Sh9& radiance,
+                                    const std::vector<Light>& lights);
+
+/// Timings of one frame beside its coefficients; negative: unknown (written as null or left out).
+struct RecordTimes {
+  double renderMs = -1;
+  double shownLatencyMs = -1;
+};
+
+/// One frame's record, one line of JSON: frame, time, format, coefficients (and lights) in
+/// `format`, stage timings and latency.
+std::string frameRecord(const ProcessedFrame& f, const CoeffFormat& format, RecordTimes t);
+
+}  // namespace lp::cli

@@ -1,0 +1,54 @@
+#pragma once
+// Fan-out through an MQTT broker (replay/live --publish mqtt://HOST:PORT/TOPIC): every frame's
+// record (engine_export.h's frameRecord) published retained, QoS 0, with libmosquitto, so a
+// late subscriber gets the newest frame at once. A lost broker never stalls capture: libmosquitto
+// reconnects on its own thread with exponential backoff, and what could not be handed to the
+// broker meanwhile is counted.
+#include <atomic>
+#include <cstdint>
+#include <string>
+
+#include "engine_export.h"
+
+struct mosquitto;
+
+namespace lp::cli {
+
+struct MqttTarget {
+  std::string host;
+  int port = 1883;
+  std::string topic;
+};
+
+/// Parses mqtt://HOST[:PORT]/TOPIC. Throws lp::Error naming --publish.
+MqttTarget parseMqttUrl(const std::string& url);
+
+struct MqttStats {
+  std::uint64_t published = 0;   ///< handed to the broker's connection
+  std::uint64_t lost = 0;        ///< not sent: no connection at the time
+  std::uint64_t reconnects = 0;  ///< connections made after the first
+  bool connected = false;
+};
+
+class MqttPublisher {
+ public:
+  /// Starts connecting (in the background: a broker that is down is retried, not an error).
+  MqttPublisher(MqttTarget target, CoeffFormat format);
+  ~MqttPublisher();
+  MqttPublisher(const MqttPublisher&) = delete;
+  MqttPublisher& operator=(const MqttPublisher&) = delete;
+
+  /// Publishes the frame's record (any thread; never waits for the broker).
+  void publish(const ProcessedFrame& frame);
+  MqttStats stats() const;
+  const MqttTarget& target() const { return target_; }
+
+ private:
+  MqttTarget target_;
+  CoeffFormat format_;
+  mosquitto* mosq_ = nullptr;
+  std::atomic<std::uint64_t> published_{0}, lost_{0}, connects_{0};
+  std::atomic<bool> connected_{false};
+};
+
+}  // namespace lp::cli

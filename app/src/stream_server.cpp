@@ -1,0 +1,298 @@
+#include "stream_server.h"
+
+#include <arpa/inet.h>
+#include <libwebsockets.h>
+#include <linux/sockios.h>
+#include <sys/ioctl.h>
+
+#include <atomic>
+#include <chrono>
+#include <cstring>
+#include <mutex>
+#include <thread>
+
+#include "liveprobe/sh/error.h"
+
+namespace lp::cli {
+
+namespace {
+
+/// One client. lws allocates per-session memory as plain bytes: it holds a pointer to this.
+struct Session {
+  CoeffFormat format;
+  std::uint64_t sent = 0;  ///< sequence number of the last frame sent (or skipped)
+  bool resend = false;     ///< the newest frame again (the client changed its format)
+  std::string refusal;     ///< set: closed at its first write, with this reason (1008)
+  std::string rx;          ///< a message arriving in fragments
+};
+
+/// A client whose socket still holds more than this, unsent, gets no new message until it has
+/// read it: the kernel's buffers never fill with stale frames (latest value, low latency).
+constexpr int kMaxUnsentBytes = 16 * 1024;
+struct SessionSlot {
+  Session* s;
+};
+
+bool isLoopback(const std::string& host) {
+  if (host == "localhost") return true;
+  in_addr a{};
+  if (inet_pton(AF_INET, host.c_str(), &a) != 1) return false;
+  return (ntohl(a.s_addr) >> 24) == 127;
+}
+
+}  // namespace
+
+void parseServeAddress(const std::string& text, bool remote, StreamServerOptions& o) {
+  const auto colon = text.rfind(':');
+  const std::string host = colon == std::string::npos ? "127.0.0.1" : text.substr(0, colon);
+  const std::string port = colon == std::string::npos ? text : text.substr(colon + 1);
+  char* end = nullptr;
+  const long p = std::strtol(port.c_str(), &end, 10);
+  if (port.empty() || *end != '\0' || p < 0 || p > 65535)
+    throw Error("--serve " + text + ": expected [ADDR:]PORT with PORT in 0..65535");
+  in_addr a{};
+  if (host != "localhost" && inet_pton(AF_INET, host.c_str(), &a) != 1)
+    throw Error("--serve " + text + ": " + host + " is not an IPv4 address or localhost");
+  if (!isLoopback(host) && !remote)
+    throw Error("--serve " + text + ": " + host +
+                " is reachable from other machines; add --serve-remote to listen there");
+  o.host = host == "localhost" ? "127.0.0.1" : host;
+  o.port = int(p);
+}
+
+struct StreamServer::Impl {
+  StreamServerOptions opt;
+  lws_context* context = nullptr;
+  lws_vhost* vhost = nullptr;
+  std::thread thread;
+  std::atomic<bool> stopping{false};
+  std::atomic<int> boundPort{0};
+
+  // The newest frame, handed over by publish() (capture's thread) under the mutex.
+  mutable std::mutex mutex;
+  ProcessedFrame latest;
+  std::uint64_t latestSeq = 0;
+  StreamStats stats;  // under the mutex
+
+  lws_protocols protocols[2]{};
+  lws_http_mount mounts[2]{};
+  lws_retry_bo_t retry{};
+
+  static int callback(lws* wsi, lws_callback_reasons reason, void* user, void* in, size_t len);
+  int onWriteable(lws* wsi, Session& s);
+  int onReceive(lws* wsi, Session& s, const char* in, size_t len);
+  int close(lws* wsi, lws_close_status status, const std::string& why) {
+    lws_close_reason(wsi, status, reinterpret_cast<unsigned char*>(const_cast<char*>(why.data())),
+                     std::min<std::size_t>(why.size(), 120));
+    return -1;
+  }
+};
+
+int StreamServer::Impl::onWriteable(lws* wsi, Session& s) {
+  if (stopping) return close(wsi, LWS_CLOSE_STATUS_GOINGAWAY, "liveprobe stopped");
+  if (!s.refusal.empty()) return close(wsi, LWS_CLOSE_STATUS_POLICY_VIOLATION, s.refusal);
+  int unsent = 0;
+  if (ioctl(lws_get_socket_fd(wsi), SIOCOUTQ, &unsent) == 0 && unsent > kMaxUnsentBytes)
+    return 0;  // the next publish() asks again
+  ProcessedFrame f;
+  std::uint64_t seq;
+  {
+    std::lock_guard lock(mutex);
+    if (latestSeq == 0 || (s.sent == latestSeq && !s.resend)) return 0;
+    f = latest;
+    seq = latestSeq;
+    if (!s.resend && seq > s.sent + 1) stats.dropped += seq - s.sent - 1;
+    s.resend = false;
+  }
+  const std::string msg = frameRecord(f, s.format, {});
+  std::vector<unsigned char> buf(LWS_PRE + msg.size());
+  std::memcpy(buf.data() + LWS_PRE, msg.data(), msg.size());
+  if (lws_write(wsi, buf.data() + LWS_PRE, msg.size(), LWS_WRITE_TEXT) < int(msg.size())) return -1;
+  s.sent = seq;
+  std::lock_guard lock(mutex);
+  ++stats.sent;
+  return 0;
+}
+
+int StreamServer::Impl::onReceive(lws* wsi, Session& s, const char* in, size_t len) {
+  // What a client may send: {"format": "NAME"} to change the format of the messages it gets.
+  if (lws_frame_is_binary(wsi)) {
+    std::lock_guard lock(mutex);
+    ++stats.closed;
+    return close(wsi, LWS_CLOSE_STATUS_UNACCEPTABLE_OPCODE, "binary messages are not accepted");
+  }
+  if (s.rx.size() + len > opt.maxClientMessage) {
+    std::lock_guard lock(mutex);
+    ++stats.closed;
+    return close(wsi, LWS_CLOSE_STATUS_MESSAGE_TOO_LARGE,
+                 "message over " + std::to_string(opt.maxClientMessage) + " bytes");
+  }
+  s.rx.append(in, len);
+  if (!lws_is_final_fragment(wsi) || lws_remaining_packet_payload(wsi) > 0) return 0;
+  const std::string text = std::move(s.rx);
+  s.rx.clear();
+  try {
+    const auto j = nlohmann::json::parse(text);
+    if (!j.is_object() || j.size() != 1 || !j.contains("format") || !j["format"].is_string())
+      throw Error("expected {\"format\": NAME}");
+    s.format = parseCoeffFormat(j["format"].get<std::string>(), "format", true);
+    s.resend = true;  // the newest frame again, in the new format
+    lws_callback_on_writable(wsi);
+    return 0;
+  } catch (const std::exception& e) {
+    std::lock_guard lock(mutex);
+    ++stats.closed;
+    return close(wsi, LWS_CLOSE_STATUS_INVALID_PAYLOAD, e.what());
+  }
+}
+
+int StreamServer::Impl::callback(lws* wsi, lws_callback_reasons reason, void* user, void* in,
+                                 size_t len) {
+  lws_context* ctx = lws_get_context(wsi);
+  auto* self = ctx ? static_cast<Impl*>(lws_context_user(ctx)) : nullptr;
+  auto* slot = static_cast<SessionSlot*>(user);
+  if (!self) return lws_callback_http_dummy(wsi, reason, user, in, len);
+  switch (reason) {
+    case LWS_CALLBACK_FILTER_PROTOCOL_CONNECTION: {
+      std::lock_guard lock(self->mutex);
+      if (self->stopping || self->stats.clients >= std::uint64_t(self->opt.maxClients)) {
+        ++self->stats.refused;
+        return 1;  // refuses the upgrade
+      }
+      return 0;
+    }
+    case LWS_CALLBACK_ESTABLISHED: {
+      slot->s = new Session;
+      slot->s->format = self->opt.defaultFormat;
+      char buf[64];
+      if (const char* f = lws_get_urlarg_by_name(wsi, "format=", buf, sizeof buf)) {
+        try {
+          slot->s->format = parseCoeffFormat(f, "format", true);
+        } catch (const Error& e) {
+          slot->s->refusal = e.what();  // closed once the handshake is through, with the reason
+        }
+      }
+      {
+        std::lock_guard lock(self->mutex);
+        ++self->stats.clients;
+        ++self->stats.connected;
+        // Frames before it came are not its drops; the newest is sent at once.
+        slot->s->sent = self->latestSeq;
+        slot->s->resend = self->latestSeq > 0;
+      }
+      lws_callback_on_writable(wsi);
+      return 0;
+    }
+    case LWS_CALLBACK_CLOSED:
+      if (slot && slot->s) {
+        std::lock_guard lock(self->mutex);
+        // What it never got before it left (a client that stopped reading) was dropped too.
+        if (self->latestSeq > slot->s->sent) self->stats.dropped += self->latestSeq - slot->s->sent;
+        --self->stats.clients;
+        delete slot->s;
+        slot->s = nullptr;
+      }
+      return 0;
+    case LWS_CALLBACK_SERVER_WRITEABLE:
+      return slot && slot->s ? self->onWriteable(wsi, *slot->s) : 0;
+    case LWS_CALLBACK_RECEIVE:
+      return slot && slot->s ? self->onReceive(wsi, *slot->s, static_cast<const char*>(in), len)
+                             : -1;
+    case LWS_CALLBACK_EVENT_WAIT_CANCELLED:  // publish() or stop() woke the service loop
+      lws_callback_on_writable_all_protocol(self->context, &self->protocols[0]);
+      return 0;
+    default:
+      return lws_callback_http_dummy(wsi, reason, user, in, len);
+  }
+}
+
+StreamServer::StreamServer(StreamServerOptions options) : impl_(std::make_unique<Impl>()) {
+  Impl& m = *impl_;
+  m.opt = std::move(options);
+  lws_set_log_level(LLL_ERR, [](int, const char*) {});  // errors reach the user as lp::Error
+  m.protocols[0].name = "liveprobe";
+  m.protocols[0].callback = &Impl::callback;
+  m.protocols[0].per_session_data_size = sizeof(SessionSlot);
+  m.protocols[0].rx_buffer_size = m.opt.maxClientMessage;
+  // / serves the page; /three/ three.js's build (both plain files).
+  m.mounts[0].mountpoint = "/";
+  m.mounts[0].mountpoint_len = 1;
+  m.mounts[0].origin = m.opt.webDir.c_str();
+  m.mounts[0].def = "index.html";
+  m.mounts[0].origin_protocol = LWSMPRO_FILE;
+  m.mounts[0].mount_next = &m.mounts[1];
+  m.mounts[1].mountpoint = "/three";
+  m.mounts[1].mountpoint_len = 6;
+  m.mounts[1].origin = m.opt.threeDir.c_str();
+  m.mounts[1].origin_protocol = LWSMPRO_FILE;
+  // Idle: a client that has not answered a ping for idleSeconds is hung up.
+  m.retry.secs_since_valid_ping = std::uint16_t(std::max(1, m.opt.idleSeconds / 2));
+  m.retry.secs_since_valid_hangup = std::uint16_t(std::max(2, m.opt.idleSeconds));
+
+  lws_context_creation_info info{};
+  info.port = m.opt.port;  // 0: the kernel picks a free one
+  info.iface = m.opt.host.c_str();
+  info.protocols = m.protocols;
+  info.mounts = m.mounts;
+  info.user = &m;
+  info.retry_and_idle_policy = &m.retry;
+  info.options = LWS_SERVER_OPTION_DISABLE_IPV6 | LWS_SERVER_OPTION_VALIDATE_UTF8;
+  info.fd_limit_per_thread = unsigned(m.opt.maxClients) + 32;
+  info.timeout_secs = unsigned(m.opt.idleSeconds);
+  m.context = lws_create_context(&info);
+  if (!m.context)
+    throw Error("--serve " + m.opt.host + ":" + std::to_string(m.opt.port) +
+                ": cannot listen there (the port is in use, or the address is not this "
+                "machine's)");
+  m.vhost = lws_get_vhost_by_name(m.context, "default");
+  m.boundPort = m.vhost ? lws_get_vhost_listen_port(m.vhost) : m.opt.port;
+  m.thread = std::thread([&m] {
+    auto stopAt = std::chrono::steady_clock::time_point::max();
+    while (true) {
+      lws_service(m.context, 0);
+      if (m.stopping) {
+        const auto now = std::chrono::steady_clock::now();
+        if (stopAt == std::chrono::steady_clock::time_point::max())
+          stopAt = now + std::chrono::seconds(2);
+        std::uint64_t clients;
+        {
+          std::lock_guard lock(m.mutex);
+          clients = m.stats.clients;
+        }
+        if (clients == 0 || now > stopAt) break;
+        lws_callback_on_writable_all_protocol(m.context, &m.protocols[0]);
+      }
+    }
+    lws_context_destroy(m.context);
+    m.context = nullptr;
+  });
+}
+
+StreamServer::~StreamServer() { stop(); }
+
+int StreamServer::port() const { return impl_->boundPort; }
+
+void StreamServer::publish(const ProcessedFrame& frame) {
+  {
+    std::lock_guard lock(impl_->mutex);
+    impl_->latest = frame;
+    impl_->latest.image.reset();  // the record needs the numbers, not the pixels
+    impl_->latest.raw.reset();
+    ++impl_->latestSeq;
+  }
+  if (impl_->context && !impl_->stopping) lws_cancel_service(impl_->context);
+}
+
+StreamStats StreamServer::stats() const {
+  std::lock_guard lock(impl_->mutex);
+  return impl_->stats;
+}
+
+void StreamServer::stop() {
+  if (!impl_->thread.joinable()) return;
+  impl_->stopping = true;
+  lws_cancel_service(impl_->context);
+  impl_->thread.join();
+}
+
+}  // namespace lp::cli

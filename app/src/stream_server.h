@@ -1,0 +1,60 @@
+#pragma once
+// The live coefficient stream (replay/live --serve): a WebSocket server (libwebsockets) that sends
+// every client the newest frame's record (engine_export.h's frameRecord, in the format the client
+// asked for) and answers HTTP at / with the web page of app/web (a three.js scene lit by the
+// stream). Latest-value semantics: a slow client gets the newest frame when it can take one,
+// never a queue; what it missed is counted as dropped. Capture never waits for a client.
+#include <cstdint>
+#include <memory>
+#include <string>
+
+#include "engine_export.h"
+
+namespace lp::cli {
+
+struct StreamServerOptions {
+  std::string host = "127.0.0.1";  ///< an IPv4 address, or "localhost"
+  int port = 8080;                 ///< 0: any free port (port() tells which)
+  int maxClients = 32;
+  int idleSeconds = 30;                 ///< a client that answers no ping for this long is closed
+  std::size_t maxClientMessage = 4096;  ///< the largest message a client may send, bytes
+  CoeffFormat defaultFormat;            ///< for clients that ask for none (?format=)
+  std::string webDir;                   ///< the page (index.html, main.js)
+  std::string threeDir;                 ///< three.js's build folder, served at /three/
+};
+
+/// "[ADDR:]PORT" of --serve: ADDR defaults to 127.0.0.1. An address beyond the loopback is
+/// refused unless `remote` (--serve-remote). Throws lp::Error naming the flag.
+void parseServeAddress(const std::string& text, bool remote, StreamServerOptions& o);
+
+struct StreamStats {
+  std::uint64_t connected = 0;  ///< clients served, in all
+  std::uint64_t clients = 0;    ///< connected now
+  std::uint64_t sent = 0;       ///< messages sent
+  std::uint64_t dropped = 0;    ///< frames a slow client missed (it got a newer one instead)
+  std::uint64_t refused = 0;    ///< connections over the client limit
+  std::uint64_t closed = 0;     ///< clients closed for a bad message, or idle
+};
+
+class StreamServer {
+ public:
+  /// Binds and starts serving on its own thread. Throws lp::Error if the address can't be bound.
+  explicit StreamServer(StreamServerOptions options);
+  ~StreamServer();  ///< stop()
+  StreamServer(const StreamServer&) = delete;
+  StreamServer& operator=(const StreamServer&) = delete;
+
+  int port() const;
+  /// Hands the server a frame (any thread; never waits for a client).
+  void publish(const ProcessedFrame& frame);
+  StreamStats stats() const;
+  /// Closes every connection (status 1001, going away) and stops serving. Idempotent.
+  void stop();
+
+  struct Impl;
+
+ private:
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace lp::cli

@@ -1,0 +1,27 @@
+// Starting `liveprobe replay --serve` for the stream and browser tests: the port it bound (it
+// binds port 0, so the kernel picks a free loopback port), its stderr, and its end.
+import { spawn } from 'node:child_process';
+import { readFileSync, readdirSync } from 'node:fs';
+import { liveprobe } from './common.mjs';
+
+export function serve(args) {
+  const proc = spawn(liveprobe, ['replay', ...args], { stdio: ['ignore', 'ignore', 'pipe'] });
+  let stderr = '';
+  const exited = new Promise((resolve) => proc.on('exit', (code, signal) => resolve({ code, signal, stderr })));
+  const port = new Promise((resolve, reject) => {
+    proc.stderr.on('data', (d) => {
+      stderr += d;
+      const m = stderr.match(/serving http:\/\/127\.0\.0\.1:(\d+)\//);
+      if (m) resolve(Number(m[1]));
+    });
+    exited.then((e) => reject(new Error(`liveprobe exited (${e.code}): ${stderr}`)));
+  });
+  return { proc, port, exited, stderr: () => stderr };
+}
+
+/// Resident memory (kB) and open file descriptors of a process, from /proc.
+export function usage(pid) {
+  const status = readFileSync(`/proc/${pid}/status`, 'utf8');
+  const rss = Number(status.match(/VmRSS:\s+(\d+)/)[1]);
+  return { rss, fds: readdirSync(`/proc/${pid}/fd`).length };
+}
