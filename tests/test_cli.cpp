@@ -7,7 +7,9 @@
 #include <numbers>
 #include <opencv2/imgcodecs.hpp>
 
+#include "coeffs_io.h"
 #include "liveprobe/capture/image.h"
+#include "liveprobe/sh/sh.h"
 #include "test_util.h"
 
 namespace {
@@ -92,6 +94,77 @@ TEST(Cli, IrradianceMapOfConstantEnvironment) {
   expectOneLineError("irradiance " + f + " --out " + tmp / "nodir/x.hdr", "nodir",
                      "does not exist");
   expectOneLineError("irradiance " + f, "irradiance", "--out");
+}
+
+// irradiance --cube: each face texel holds E at the direction the OpenGL specification gives that
+// texel (its cube-map table, restated here), turned into the world frame by liveprobe's GL map
+// (GL (X, Y, Z) = (-y, z, x)); and the cross, read back as a cube layout, projects to the
+// irradiance coefficients A_l L_lm (E is band-limited to l <= 2, so that is exact up to
+// sampling).
+TEST(Cli, IrradianceCubeFollowsOpenGlsFaceTable) {
+  lpt::TempDir tmp;
+  const std::string map = lpt::dataPath("probes/latlong_256x128/grace.hdr");
+  const int n = 32;
+  const std::string out = tmp / "cube.exr";
+  auto r = runLiveprobe("irradiance " + map + " --cube " + std::to_string(n) + " --out " + out);
+  ASSERT_EQ(r.exitCode, 0) << r.output;
+  r = runLiveprobe("coeffs " + map);
+  ASSERT_EQ(r.exitCode, 0) << r.output;
+  const lp::Sh9 L = lp::cli::coefficientsFromJson(nlohmann::json::parse(r.output), "coeffs");
+  const lp::Image e = lp::loadImage(out);
+  ASSERT_EQ(e.width, 4 * n);
+  ASSERT_EQ(e.height, 3 * n);
+  // GL 4.6, table 8.19: major axis, sc, tc for each face; (s, t) = ((sc/|ma| + 1)/2, ...).
+  struct Face {
+    int col, row;  // cell of the horizontal cross
+    glm::vec3 (*dir)(float sc, float tc);
+  };
+  const Face faces[6] = {
+      {2, 1, [](float sc, float tc) { return glm::vec3(1, -tc, -sc); }},   // +X
+      {0, 1, [](float sc, float tc) { return glm::vec3(-1, -tc, sc); }},   // -X
+      {1, 0, [](float sc, float tc) { return glm::vec3(sc, 1, tc); }},     // +Y
+      {1, 2, [](float sc, float tc) { return glm::vec3(sc, -1, -tc); }},   // -Y
+      {1, 1, [](float sc, float tc) { return glm::vec3(sc, -tc, 1); }},    // +Z
+      {3, 1, [](float sc, float tc) { return glm::vec3(-sc, -tc, -1); }},  // -Z
+  };
+  double worst = 0, scale = 0;
+  for (const Face& f : faces)
+    for (int i = 0; i < n; i += 5)
+      for (int j = 0; j < n; j += 5) {
+        const float sc = 2 * (j + 0.5f) / n - 1, tc = 2 * (i + 0.5f) / n - 1;
+        const glm::vec3 g = glm::normalize(f.dir(sc, tc));
+        const glm::vec3 world(g.z, -g.x, g.y);
+        const lp::Rgb truth = lp::evalIrradiance(L, world);
+        const float* px = &e.rgb[(std::size_t(f.row * n + i) * e.width + f.col * n + j) * 3];
+        for (int ch = 0; ch < 3; ++ch) {
+          worst = std::max(worst, double(std::abs(px[ch] - truth[ch])));
+          scale = std::max(scale, double(std::abs(truth[ch])));
+        }
+      }
+  EXPECT_LT(worst / scale, 1e-5);
+  r = runLiveprobe("coeffs " + out + " --layout cube");
+  ASSERT_EQ(r.exitCode, 0) << r.output;
+  const lp::Sh9 E = lp::cli::coefficientsFromJson(nlohmann::json::parse(r.output), "cube");
+  const lp::Sh9 truth = lp::toIrradiance(L);
+  for (int k = 0; k < lp::kShCount; ++k)
+    EXPECT_NEAR(E.c[k].x, truth.c[k].x, 2e-3 * truth.c[0].x) << lp::kShNames[k];
+  expectOneLineError("irradiance " + map + " --cube 16 --size 64x32 --out " + out, "--cube",
+                     "not both");
+}
+
+TEST(CliBadInput, EngineFormats) {
+  const std::string map = lpt::dataPath("probes/latlong_256x128/grace.hdr");
+  expectOneLineError("coeffs " + map + " --format povray", "--format povray", "expected json");
+  expectOneLineError("replay synthetic:64x32 --headless --frames 1 --coeffs-format gltf",
+                     "--coeffs-format gltf", "one JSON line");
+  expectOneLineError("replay synthetic:64x32 --headless --frames 1 --publish http://x/y",
+                     "--publish http://x/y", "mqtt://");
+  expectOneLineError("replay synthetic:64x32 --headless --frames 1 --publish mqtt://x",
+                     "--publish mqtt://x", "no topic");
+  expectOneLineError("replay synthetic:64x32 --headless --frames 1 --serve 70000", "--serve 70000",
+                     "0..65535");
+  expectOneLineError("replay synthetic:64x32 --headless --frames 1 --serve-clients 4",
+                     "--serve-clients", "go with --serve");
 }
 
 TEST(Cli, CompareJson) {

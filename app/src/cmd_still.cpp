@@ -117,11 +117,15 @@ int runCoeffs(const Args& a) {
 const CommandSpec kIrradianceSpec{
     "irradiance",
     "FILE",
-    "Writes the irradiance environment map E(n), equirectangular and indexed by normal, computed\n"
-    "from nine coefficients (sh) or by brute-force hemispherical integration (brute).\n"
+    "Writes the irradiance environment map E(n), equirectangular and indexed by normal (or a cube\n"
+    "map with --cube), computed from nine coefficients (sh) or by brute-force hemispherical\n"
+    "integration (brute).\n"
     "PNG output is sRGB-encoded E/pi (the radiance of a white diffuse surface), clamped to 1.",
     withLayout({{"--out", "FILE", "output image (.hdr, .exr: linear irradiance; .png: 8-bit)"},
                 {"--size", "WxH", "output size, each side up to 8192 (default 256x128)"},
+                {"--cube", "N",
+                 "write a cube map instead: six N x N faces in OpenGL's convention, as a 4N x 3N "
+                 "horizontal cross (N up to 4096)"},
                 {"--method", "sh|brute", "how to compute E (default sh)"},
                 kWindowOpt}),
     1,
@@ -131,12 +135,18 @@ const CommandSpec kIrradianceSpec{
 int runIrradiance(const Args& a) {
   if (!a.has("--out")) throw Error("--out FILE is required");
   requireExtension(a.get("--out"), "--out", {".hdr", ".exr", ".png"});
-  const auto [w, h] = parseSize(a.get("--size", "256x128"), "--size", 8192);
+  if (a.has("--cube") && a.has("--size")) throw Error("give --size or --cube, not both");
+  // The equirect indexed by normal, or (--cube N) the six faces as a 4N x 3N horizontal cross in
+  // OpenGL's face convention: the cube layout that liveprobe reads (liveprobe/sh/layout.h).
+  const bool cube = a.has("--cube");
+  const int faceSize = int(a.integerIn("--cube", 0, 1, 4096));
+  const auto [w, h] = cube ? std::pair{4 * faceSize, 3 * faceSize}
+                           : parseSize(a.get("--size", "256x128"), "--size", 8192);
   const std::string method = a.get("--method", "sh");
   if (method != "sh" && method != "brute")
     throw Error("--method " + method + ": expected sh or brute");
   Environment env = loadEnvironment(a);
-  const auto grid = equirectSamples(w, h);
+  const auto grid = cube ? layoutSamples(LayoutSpec(Layout::Cube), w, h) : equirectSamples(w, h);
   std::vector<glm::vec3> normals(grid.size());
   for (std::size_t i = 0; i < grid.size(); ++i) normals[i] = grid[i].dir;
   std::vector<Rgb> e(grid.size());
@@ -151,7 +161,8 @@ int runIrradiance(const Args& a) {
     e = bruteIrradiance(env.image.rgb.data(), 3, samples.data(), samples.size(), normals, &pool);
   }
   Image out(w, h);
-  for (std::size_t i = 0; i < e.size(); ++i) std::copy_n(&e[i].x, 3, out.rgb.data() + 3 * i);
+  for (std::size_t i = 0; i < e.size(); ++i)  // (cells of the cross outside the faces: black)
+    if (grid[i].solidAngle > 0) std::copy_n(&e[i].x, 3, out.rgb.data() + 3 * i);
   const std::string path = a.get("--out");
   const std::string ext = path.size() > 4 ? path.substr(path.size() - 4) : "";
   if (ext != ".hdr" && ext != ".exr")

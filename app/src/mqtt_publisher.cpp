@@ -2,7 +2,10 @@
 
 #include <mosquitto.h>
 
+#include <chrono>
+#include <cstdio>
 #include <mutex>
+#include <thread>
 
 #include "liveprobe/sh/error.h"
 
@@ -62,6 +65,15 @@ MqttPublisher::MqttPublisher(MqttTarget target, CoeffFormat format)
     mosquitto_destroy(mosq_);
     throw Error("--publish: cannot start the MQTT client's thread");
   }
+  // The first frames should reach a broker that is up: wait for the connection up to 3 s.
+  const auto until = std::chrono::steady_clock::now() + std::chrono::seconds(3);
+  while (!connected_ && std::chrono::steady_clock::now() < until)
+    std::this_thread::sleep_for(std::chrono::milliseconds(5));
+  if (!connected_)
+    std::fprintf(stderr,
+                 "liveprobe: --publish: no broker at %s:%d yet; capture goes on, retrying in the "
+                 "background\n",
+                 target_.host.c_str(), target_.port);
 }
 
 MqttPublisher::~MqttPublisher() {

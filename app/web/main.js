@@ -76,7 +76,6 @@ function apply(msg) {
   for (let k = 0; k < 9; ++k)
     rows.push(`<tr><td>${names[k]}</td>${[0, 1, 2].map((ch) => `<td>${c.sh[3 * k + ch].toFixed(4)}</td>`).join('')}</tr>`);
   document.getElementById('coeffs').innerHTML = rows.join('');
-  state.textContent = JSON.stringify({ frame: msg.frame, exposure, coefficients: c, frames });
 }
 
 function connect() {
@@ -86,6 +85,8 @@ function connect() {
     const msg = JSON.parse(ev.data);
     ++frames, ++rateN;
     if (!(freeze && last)) { last = msg; apply(msg); }
+    // What the page shows, for tests: the frame drawn and how many messages came.
+    state.textContent = JSON.stringify({ frame: last.frame, exposure, coefficients: last.coefficients, frames });
   };
   ws.onclose = (ev) => {
     status.textContent = `disconnected (${ev.code}${ev.reason ? ': ' + ev.reason : ''}); retrying`;
