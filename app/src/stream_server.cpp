@@ -263,8 +263,7 @@ StreamServer::StreamServer(StreamServerOptions options) : impl_(std::make_unique
         lws_callback_on_writable_all_protocol(m.context, &m.protocols[0]);
       }
     }
-    lws_context_destroy(m.context);
-    m.context = nullptr;
+    lws_context_destroy(m.context);  // (publish() no longer touches it: `stopping` is set)
   });
 }
 

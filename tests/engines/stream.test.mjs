@@ -149,6 +149,23 @@ test('an unknown format in the query closes with a reason; the client limit refu
   assert.match(end.stderr, / 1 refused \(client limit\)/);
 });
 
+test('a client that answers no ping for --serve-idle seconds is closed, freeing its place', async () => {
+  const s = serve(['synthetic:128x64@30', '--headless', '--size', '64x36', '--duration', '8',
+                   '--serve', '0', '--serve-clients', '1', '--serve-idle', '2', '--quiet']);
+  const port = await s.port;
+  const silent = client(port);
+  await silent.open;
+  silent.ws._socket.pause();  // reads nothing, so it answers no ping
+  const early = client(port);
+  await assert.rejects(early.open, /socket hang up|Unexpected server response/, 'the one place is taken');
+  await sleep(4000);
+  const late = client(port);
+  await late.open;  // the silent client was hung up after 2 s
+  await late.closedP;
+  const end = await s.exited;
+  assert.equal(end.code, 0, end.stderr);
+});
+
 test('listening beyond the loopback must be asked for', () => {
   const r = spawnSync(liveprobe, ['replay', 'synthetic:64x32', '--headless', '--frames', '1', '--serve', '0.0.0.0:0'],
                       { encoding: 'utf8' });
