@@ -4,11 +4,12 @@ import { execFileSync } from 'node:child_process';
 import { readFileSync, mkdtempSync } from 'node:fs';
 import { tmpdir } from 'node:os';
 import { join } from 'node:path';
+import { fileURLToPath } from 'node:url';
 import { EXRLoader } from 'three/examples/jsm/loaders/EXRLoader.js';
 import { FloatType } from 'three';
 
 export const liveprobe = process.env.LIVEPROBE_BIN || 'liveprobe';
-export const data = process.env.LIVEPROBE_DATA || join(import.meta.dirname, '../../../shared/data');
+export const data = process.env.LIVEPROBE_DATA || fileURLToPath(new URL('../../../shared/data', import.meta.url));
 
 /// The maps of the issue: Grace (lat-long), Venice (equirect), the beach (angular).
 export const maps = [
