@@ -14,6 +14,7 @@
 #include "coeffs_io.h"
 #include "layout_dirs.h"
 #include "liveprobe/capture/frame.h"
+#include "liveprobe/capture/image.h"
 #include "liveprobe/capture/pipeline.h"
 #include "liveprobe/sh/image.h"
 #include "liveprobe/sh/lights.h"
@@ -241,6 +242,44 @@ TEST(Lights, ClippedEightBitSunIsALowerBound) {
   ASSERT_EQ(split.lights.size(), 1u);
   EXPECT_TRUE(split.lights[0].clipped);
   EXPECT_LT(angleDeg(dvec3(split.lights[0].dir), sun), 0.5);
+}
+
+// An 8-bit sun as a camera clips it: a plateau at 255 inside a bright aureole, so bright that
+// 30% of the clipped value reaches far beyond 8 degrees. The core is then the clipped plateau, and
+// the light (a lower bound, under 5% of the power here) is kept by the clipped rule (1%); the
+// split still conserves the map. A clipped speck under 1% is no light.
+TEST(Lights, ClippedSunInABrightAureoleIsFound) {
+  const int w = 512, h = 256;
+  const dvec3 sun = glm::normalize(dvec3(-1, 0.4, 0.6));
+  const auto dirAt = lpt::equirectDirs(w, h);
+  float lut[256];
+  for (int v = 0; v < 256; ++v) lut[v] = lp::srgbToLinear(v / 255.0f);
+  const auto frame = [&](double plateauDeg, double aureole, double decayDeg) {
+    std::vector<std::uint8_t> bgr(std::size_t(w) * h * 3);
+    for (int i = 0; i < h; ++i)
+      for (int j = 0; j < w; ++j) {
+        const double a =
+            glm::degrees(std::acos(std::clamp(glm::dot(*dirAt(j + 0.5, i + 0.5), sun), -1.0, 1.0)));
+        const double v =
+            a <= plateauDeg ? 255.0 : 20.0 + aureole * std::exp(-(a - plateauDeg) / decayDeg);
+        for (int c = 0; c < 3; ++c)
+          bgr[(std::size_t(i) * w + j) * 3 + c] = std::uint8_t(std::min(255.0, std::round(v)));
+      }
+    return bgr;
+  };
+  const auto bright = frame(3.0, 180.0, 20.0);
+  const auto view = lp::PanoramaView::bgrU8(bright.data(), w, h, lut);
+  const auto split = lp::projectWithLights(view, {});
+  ASSERT_EQ(split.lights.size(), 1u);
+  EXPECT_TRUE(split.lights[0].clipped);
+  EXPECT_LT(angleDeg(dvec3(split.lights[0].dir), sun), 0.5);
+  EXPECT_GE(split.lights[0].share, 0.01f);
+  EXPECT_LT(split.lights[0].share, 0.05f);  // kept by the clipped rule, not the 5% one
+  const lp::Sh9 whole = lp::project(view), sum = split.residual + lp::lightsToSh(split.lights);
+  for (int k = 0; k < lp::kShCount; ++k) EXPECT_NEAR(sum.c[k].x, whole.c[k].x, 1e-4 * whole.c[0].x);
+  const auto speck = frame(0.3, 0.0, 1.0);  // a clipped glint on a dark sky
+  EXPECT_TRUE(
+      lp::projectWithLights(lp::PanoramaView::bgrU8(speck.data(), w, h, lut), {}).lights.empty());
 }
 
 // --sun everywhere the coefficients go (issue 13, part 4).

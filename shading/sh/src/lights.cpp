@@ -203,6 +203,14 @@ LightSplit LightExtractor::extract(const PanoramaView& frame, const Sh9& whole,
     const glm::vec3 d0 = samples[peak].dir;
     const float peakLum = luminance(value(peak));
     if (!(peakLum > 0.0f)) break;
+    // A clipped peak (an 8-bit frame at its maximum) has no known brightness: its core is the
+    // clipped plateau itself, not what lies above a fraction of a value that is only a bound,
+    // and its power, a lower bound, needs a smaller share.
+    const bool peakClipped = peakValue >= clipLevel;
+    const float minShare = peakClipped ? opt.minClippedShare : opt.minShare;
+    const auto inCore = [&](Rgb v) {
+      return peakClipped ? maxChannel(v) >= clipLevel : luminance(v) >= opt.coreFraction * peakLum;
+    };
     const float pixelRadius = std::sqrt(samples[peak].solidAngle / float(kPi));
     const float glare = std::max(glm::radians(opt.glareDeg), 2.0f * pixelRadius);
     const float ringWidth = std::max(glm::radians(opt.ringDeg), 3.0f * pixelRadius);
@@ -240,8 +248,8 @@ LightSplit LightExtractor::extract(const PanoramaView& frame, const Sh9& whole,
       double coreArea = 0;
       glm::dvec3 coreSum(0.0);
       for (const CapPixel& p : cap) {
+        if (!inCore(p.value)) continue;
         const float lum = luminance(p.value);
-        if (lum < opt.coreFraction * peakLum) continue;
         coreArea += double(samples[p.index].solidAngle) * stride;
         coreSum += glm::dvec3(samples[p.index].dir) * double(lum * samples[p.index].solidAngle);
       }
@@ -279,7 +287,7 @@ LightSplit LightExtractor::extract(const PanoramaView& frame, const Sh9& whole,
         if (p.cosAngle >= cosRegion)
           estimate += double(luminance(glm::max(p.value - fill, Rgb(0.0f)))) *
                       samples[p.index].solidAngle * outerStride;
-      if (estimate < 0.5 * opt.minShare * totalLum) break;        // far below the share: no light
+      if (estimate < 0.5 * minShare * totalLum) break;            // far below the share: no light
       gather(centre, coreRadius + regionGlare + pixelRadius, 1);  // the region, every pixel
     }
 
@@ -299,7 +307,7 @@ LightSplit LightExtractor::extract(const PanoramaView& frame, const Sh9& whole,
     Light light;
     light.power = Rgb(power);
     light.share = luminance(light.power) / totalLum;
-    if (!(light.share >= opt.minShare) || glm::length(centroid) <= 0.0) break;
+    if (!(light.share >= minShare) || glm::length(centroid) <= 0.0) break;
     light.dir = glm::vec3(glm::normalize(centroid));
     light.clipped = clipped;
     double halfMaxArea = 0;

@@ -10,7 +10,9 @@
 // Extraction, per light (in the R&H world frame of liveprobe/sh/sh.h; all angles are between
 // pixel directions, so it is the same for every layout):
 //   1. the peak: the pixel with the largest linear channel value (Projector::project's row peaks);
-//   2. the core: pixels near the peak whose luminance is at least coreFraction of the peak's,
+//   2. the core: pixels near the peak whose luminance is at least coreFraction of the peak's
+//      (when the peak is clipped, an 8-bit frame at its maximum, whose true brightness is
+//      unknown: the clipped pixels, those with a channel at the maximum),
 //      searched in caps of growing reach (1, 2, 4, 8 degrees, each with a 25% margin; a cap of
 //      many pixels is sampled with a stride, ~4000 samples). Its radius theta_c is that of the
 //      disc with the core's solid angle, plus the peak pixel's own radius sqrt(dw / pi) (an area,
@@ -29,7 +31,8 @@
 //      is the pixels at or above half the largest excess luminance.
 // Decision rule: a light is kept when
 //   - theta_c <= maxRadiusDeg (compact: the core's area is that of a disc no wider), and
-//   - its luminance power is at least minShare of the whole map's.
+//   - its luminance power is at least minShare of the whole map's (minClippedShare for a clipped
+//     core: its power is only a lower bound, of a source too bright for the frame).
 // Otherwise there is no (further) light and the map is left exactly as it is: a map with no
 // dominant compact source keeps its whole coefficients. Up to maxLights lights are taken, each
 // from what the previous ones left.
@@ -55,9 +58,10 @@ struct Light {
 };
 
 struct LightOptions {
-  int maxLights = 1;          ///< --lights K; 0 turns extraction off
-  float minShare = 0.05f;     ///< smallest luminance power share of a light
-  float maxRadiusDeg = 8.0f;  ///< largest core radius of a light
+  int maxLights = 1;              ///< --lights K; 0 turns extraction off
+  float minShare = 0.05f;         ///< smallest luminance power share of a light
+  float minClippedShare = 0.01f;  ///< the same for a clipped core (a lower bound)
+  float maxRadiusDeg = 8.0f;      ///< largest core radius of a light
   float coreFraction = 0.3f;  ///< core: pixels at or above this fraction of the peak's luminance
   float glareDeg = 1.0f;      ///< taken around the core with it
   float ringDeg = 1.5f;       ///< width of the ring whose median fills the source
