@@ -23,6 +23,7 @@
 #include "liveprobe/sh/executor.h"
 #include "liveprobe/sh/layout.h"
 #include "liveprobe/sh/projector.h"
+#include "liveprobe/sh/simd.h"
 #include "progress.h"
 #include "scene.h"
 
@@ -48,10 +49,18 @@ void spin(double ms) {
 
 // The calibration kernel: a fixed amount of the machine's own kind of work (projecting a fixed
 // synthetic frame, single thread), timed in the same run. Stage times are divided by it, so a
-// slower or busier machine is not a regression.
+// slower or busier machine is not a regression. It runs on the scalar path whatever the CPU
+// offers: the stages it stands for (decode, GL on llvmpipe) gain little from AVX-512, so a
+// kernel on the widest path would make a machine that has it look slower than it is (a render
+// of 14 ms read as 22 against an AVX2 baseline).
 double calibrationMs() {
   static std::vector<float> sky;
   if (sky.empty()) renderSyntheticSky(512, 256, 0.5, sky);
+  struct Path {  // the scalar path for the kernel, the best one again after it
+    std::string was = simd::current();
+    Path() { simd::select("scalar"); }
+    ~Path() { simd::select(was); }
+  } path;
   const Projector proj(Layout::Equirect, 512, 256);
   std::vector<double> t;
   for (int i = 0; i < 21; ++i) {
