@@ -632,7 +632,9 @@ void decodeCameraFrame(const CameraBuffer& in, int mjpegReduce, Frame& f) {
         break;
       }
       case V4L2_PIX_FMT_YUYV:
-        if (holds(2, rows))
+        // Y0 U Y1 V: two pixels share a macropixel, so a width must be even (OpenCV reads the
+        // whole macropixel, past the row's end for an odd one).
+        if (in.width % 2 == 0 && holds(2, rows))
           cv::cvtColor(cv::Mat(in.height, in.width, CV_8UC2, data, stride), bgr,
                        cv::COLOR_YUV2BGR_YUYV);
         break;
