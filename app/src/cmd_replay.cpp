@@ -418,7 +418,7 @@ void printSummary(const std::string& description, const PipelineStats& st, const
                  smoothSeconds, smoothSeconds);
 }
 
-RecordSinks openSinks(const Args& a, const CoeffFormat& format) {
+RecordSinks openSinks(const Args& a) {
   RecordSinks s;
   if (a.has("--serve")) {
     StreamServerOptions o;
@@ -441,7 +441,7 @@ RecordSinks openSinks(const Args& a, const CoeffFormat& format) {
     throw Error("--serve-remote, --serve-clients and --serve-idle go with --serve");
   }
   if (a.has("--publish"))
-    s.mqtt = std::make_unique<MqttPublisher>(parseMqttUrl(a.get("--publish")), format);
+    s.mqtt = std::make_unique<MqttPublisher>(parseMqttUrl(a.get("--publish")));
   return s;
 }
 
@@ -481,7 +481,7 @@ int runStream(const Args& a, std::unique_ptr<FrameSource> source, bool live) {
   opt.keepImages = true;  // the background can be switched on at any time (B), and the HUD shows it
 
   StreamOutputs out = openOutputs(a, fps, description);
-  RecordSinks sinks = openSinks(a, out.format);
+  RecordSinks sinks = openSinks(a);
   {
     // At capture, on capture's thread: --coeffs-out lines of a window or a camera, the stream
     // and MQTT. None of them waits on a reader.
@@ -491,9 +491,14 @@ int runStream(const Args& a, std::unique_ptr<FrameSource> source, bool live) {
     const CoeffFormat format = out.format;
     if (file || server || mqtt)
       opt.onCaptured = [file, server, mqtt, format](const ProcessedFrame& f) {
-        if (file) file->line(frameRecord(f, format, {}));
+        // One record for the file and the broker (both in --coeffs-format); the server
+        // serializes per client format, once per frame.
+        if (file || mqtt) {
+          const std::string record = frameRecord(f, format, {});
+          if (file) file->line(record);
+          if (mqtt) mqtt->publish(record);
+        }
         if (server) server->publish(f);
-        if (mqtt) mqtt->publish(f);
       };
   }
   if (out.record) {  // --record (live): the raw stream, finalised even when capture stops on a

@@ -5,6 +5,7 @@
 #include <chrono>
 #include <cstdio>
 #include <mutex>
+#include <string>
 #include <thread>
 
 #include "liveprobe/sh/error.h"
@@ -42,8 +43,7 @@ namespace {
 std::once_flag initOnce;
 }
 
-MqttPublisher::MqttPublisher(MqttTarget target, CoeffFormat format)
-    : target_(std::move(target)), format_(std::move(format)) {
+MqttPublisher::MqttPublisher(MqttTarget target) : target_(std::move(target)) {
   std::call_once(initOnce, [] { mosquitto_lib_init(); });
   mosq_ = mosquitto_new(nullptr, true, this);
   if (!mosq_) throw Error("--publish: cannot create an MQTT client (out of memory)");
@@ -82,14 +82,13 @@ MqttPublisher::~MqttPublisher() {
   mosquitto_destroy(mosq_);
 }
 
-void MqttPublisher::publish(const ProcessedFrame& frame) {
+void MqttPublisher::publish(const std::string& record) {
   if (!connected_) {
     ++lost_;
     return;
   }
-  const std::string msg = frameRecord(frame, format_, {});
-  const int rc = mosquitto_publish(mosq_, nullptr, target_.topic.c_str(), int(msg.size()),
-                                   msg.data(), 0, true);
+  const int rc = mosquitto_publish(mosq_, nullptr, target_.topic.c_str(), int(record.size()),
+                                   record.data(), 0, true);
   if (rc == MOSQ_ERR_SUCCESS)
     ++published_;
   else

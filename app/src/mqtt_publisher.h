@@ -8,8 +8,6 @@
 #include <cstdint>
 #include <string>
 
-#include "engine_export.h"
-
 struct mosquitto;
 
 namespace lp::cli {
@@ -33,19 +31,18 @@ struct MqttStats {
 class MqttPublisher {
  public:
   /// Starts connecting (in the background: a broker that is down is retried, not an error).
-  MqttPublisher(MqttTarget target, CoeffFormat format);
+  explicit MqttPublisher(MqttTarget target);
   ~MqttPublisher();
   MqttPublisher(const MqttPublisher&) = delete;
   MqttPublisher& operator=(const MqttPublisher&) = delete;
 
-  /// Publishes the frame's record (any thread; never waits for the broker).
-  void publish(const ProcessedFrame& frame);
+  /// Publishes a frame's record, frameRecord() (any thread; never waits for the broker).
+  void publish(const std::string& record);
   MqttStats stats() const;
   const MqttTarget& target() const { return target_; }
 
  private:
   MqttTarget target_;
-  CoeffFormat format_;
   mosquitto* mosq_ = nullptr;
   std::atomic<std::uint64_t> published_{0}, lost_{0}, connects_{0};
   std::atomic<bool> connected_{false};

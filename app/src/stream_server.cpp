@@ -8,7 +8,9 @@
 #include <atomic>
 #include <chrono>
 #include <cstring>
+#include <map>
 #include <mutex>
+#include <optional>
 #include <thread>
 
 #include "liveprobe/sh/error.h"
@@ -74,6 +76,14 @@ struct StreamServer::Impl {
   std::uint64_t latestSeq = 0;
   StreamStats stats;  // under the mutex
 
+  // The newest frame's record per format, made once for every client that asks for it (the
+  // service thread's own: no lock).
+  struct Serialized {
+    std::uint64_t seq = 0;
+    std::string text;
+  };
+  std::map<std::string, Serialized> serialized;
+
   lws_protocols protocols[2]{};
   lws_http_mount mounts[2]{};
   lws_retry_bo_t retry{};
@@ -94,17 +104,19 @@ int StreamServer::Impl::onWriteable(lws* wsi, Session& s) {
   int unsent = 0;
   if (ioctl(lws_get_socket_fd(wsi), SIOCOUTQ, &unsent) == 0 && unsent > kMaxUnsentBytes)
     return 0;  // the next publish() asks again
-  ProcessedFrame f;
   std::uint64_t seq;
+  std::optional<ProcessedFrame> f;  // copied only when this frame is new in this format
+  Serialized& cached = serialized[s.format.name];
   {
     std::lock_guard lock(mutex);
     if (latestSeq == 0 || (s.sent == latestSeq && !s.resend)) return 0;
-    f = latest;
     seq = latestSeq;
+    if (cached.seq != seq) f = latest;
     if (!s.resend && seq > s.sent + 1) stats.dropped += seq - s.sent - 1;
     s.resend = false;
   }
-  const std::string msg = frameRecord(f, s.format, {});
+  if (f) cached = {seq, frameRecord(*f, s.format, {})};
+  const std::string& msg = cached.text;
   std::vector<unsigned char> buf(LWS_PRE + msg.size());
   std::memcpy(buf.data() + LWS_PRE, msg.data(), msg.size());
   if (lws_write(wsi, buf.data() + LWS_PRE, msg.size(), LWS_WRITE_TEXT) < int(msg.size())) return -1;

@@ -51,9 +51,8 @@ class StreamServer {
   /// Closes every connection (status 1001, going away) and stops serving. Idempotent.
   void stop();
 
-  struct Impl;
-
  private:
+  struct Impl;
   std::unique_ptr<Impl> impl_;
 };
 
