@@ -375,4 +375,98 @@ TEST(Simd, EveryPathMatchesFloat64OnEveryFormat) {
   lp::simd::select(before);
 }
 
+TEST(Simd, RowPeaksAreEachRowsLargestValueOnEveryPath) {
+  // The row peaks light extraction starts from: equirect frames take them inside the projection
+  // kernel (floats) or from the row's codes (8-bit through a non-decreasing table); other layouts
+  // and a table that is not monotonic from the decoded row. Each must be the row's largest value.
+  const int w = 262, h = 131;
+  const lp::Image img = randomImage(w, h, 3.0f, 17);
+  std::mt19937 rng(23);
+  std::vector<std::uint8_t> u8(img.rgb.size());
+  for (auto& c : u8) c = std::uint8_t(rng() % 200);  // each row's largest code differs
+  std::vector<float> rising(256), falling(256);
+  for (int i = 0; i < 256; ++i) rising[i] = 0.01f * float(i), falling[i] = 0.01f * float(255 - i);
+  const std::string before = lp::simd::current();
+  for (const std::string& path : lp::simd::available()) {
+    lp::simd::select(path);
+    lp::ThreadPool two(2);
+    for (lp::Layout layout : {lp::Layout::Equirect, lp::Layout::DualFisheye}) {
+      const int width = layout == lp::Layout::DualFisheye ? 2 * h : w;
+      const lp::Projector proj(layout, width, h);
+      struct Case {
+        const char* name;
+        lp::PanoramaView view;
+        std::vector<float> truth;  // per row, the largest linear channel value
+      };
+      std::vector<Case> cases;
+      auto rowMax = [&](auto value) {
+        std::vector<float> m(std::size_t(h), -INFINITY);
+        for (int r = 0; r < h; ++r)
+          for (int q = 0; q < 3 * width; ++q) m[r] = std::max(m[r], value(3 * r * width + q));
+        return m;
+      };
+      cases.push_back({"f32", lp::PanoramaView::rgbF32(img.rgb.data(), width, h, layout),
+                       rowMax([&](int q) { return img.rgb[q]; })});
+      cases.push_back({"u8 rising",
+                       lp::PanoramaView::bgrU8(u8.data(), width, h, rising.data(), layout),
+                       rowMax([&](int q) { return rising[u8[q]]; })});
+      cases.push_back({"u8 falling",
+                       lp::PanoramaView::bgrU8(u8.data(), width, h, falling.data(), layout),
+                       rowMax([&](int q) { return falling[u8[q]]; })});
+      for (const Case& c : cases)
+        for (lp::Executor* ex :
+             {static_cast<lp::Executor*>(nullptr), static_cast<lp::Executor*>(&two)}) {
+          std::vector<float> peaks;
+          proj.project(c.view, ex, &peaks);
+          ASSERT_EQ(peaks.size(), std::size_t(h));
+          for (int r = 0; r < h; ++r)
+            ASSERT_EQ(peaks[r], c.truth[r]) << path << " " << lp::layoutName(layout) << " "
+                                            << c.name << " row " << r << (ex ? " 2 threads" : "");
+        }
+    }
+  }
+  lp::simd::select(before);
+}
+
+TEST(ShCore, AddPixelsIsWhatProjectCounts) {
+  // Projector::addPixels gives the coefficients of a few pixels with project()'s own weights:
+  // adding every row of a frame in two runs gives the frame's projection, and the float64 sum
+  // over the pixels' directions and solid angles (as ProjectionMatchesFloat64Reference).
+  const int h = 64;
+  const lp::Image img = randomImage(2 * h, h, 2.0f, 29);
+  for (lp::Layout layout : {lp::Layout::Equirect, lp::Layout::DualFisheye}) {
+    const int w = 2 * h;
+    const lp::Projector proj(layout, w, h);
+    const Sh9 whole = proj.project(lp::PanoramaView::rgbF32(img.rgb.data(), w, h, layout));
+    std::array<glm::dvec3, 9> sums{};
+    std::vector<lp::Rgb> row(static_cast<std::size_t>(w));
+    for (int r = 0; r < h; ++r) {
+      for (int j = 0; j < w; ++j)
+        row[j] = lp::Rgb(img.rgb[3 * (r * w + j)], img.rgb[3 * (r * w + j) + 1],
+                         img.rgb[3 * (r * w + j) + 2]);
+      const int split = 1 + r % (w - 1);  // two runs of varying lengths
+      proj.addPixels(std::size_t(r), 0, row.data(), std::size_t(split), sums);
+      proj.addPixels(std::size_t(r), std::size_t(split), row.data() + split, std::size_t(w - split),
+                     sums);
+    }
+    const auto& s = proj.samples();
+    std::array<glm::dvec3, 9> ref{};
+    for (std::size_t i = 0; i < s.size(); ++i) {
+      const auto y = lp::shBasis(s[i].dir);
+      const glm::dvec3 v(img.rgb[3 * i], img.rgb[3 * i + 1], img.rgb[3 * i + 2]);
+      for (int k = 0; k < 9; ++k) ref[k] += v * double(y[k]) * double(s[i].solidAngle);
+    }
+    const double l00 = whole.c[0].x;
+    // Equirect integrates the basis over each pixel, the reference samples it at the centre.
+    const double refTol = (layout == lp::Layout::Equirect ? 3e-3 : 1e-5) * l00;
+    for (int k = 0; k < 9; ++k)
+      for (int c = 0; c < 3; ++c) {
+        EXPECT_NEAR(sums[k][c], whole.c[k][c], 1e-6 * l00)
+            << lp::layoutName(layout) << " " << lp::kShNames[k];
+        EXPECT_NEAR(sums[k][c], ref[k][c], refTol)
+            << lp::layoutName(layout) << " " << lp::kShNames[k];
+      }
+  }
+}
+
 }  // namespace

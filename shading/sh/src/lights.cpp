@@ -59,73 +59,168 @@ LightSplit rotateSplit(const LightSplit& split, const glm::mat3& rotation) {
 namespace {
 constexpr int kBucketRows = 180, kBucketCols = 360;  // one degree each
 constexpr double kBucket = kPi / kBucketRows;
+constexpr double kMargin = 1e-5;  // radians: float directions against double bounds
 
+double thetaOf(glm::vec3 d) { return std::acos(std::clamp(double(d.z), -1.0, 1.0)); }
+double phiOf(glm::vec3 d) { return std::atan2(double(d.y), double(d.x)); }
 int bucketRow(double theta) { return std::clamp(int(theta / kBucket), 0, kBucketRows - 1); }
 int bucketCol(double phi) {
   const int c = int(std::floor(phi / kBucket));
   return ((c % kBucketCols) + kBucketCols) % kBucketCols;
 }
+
+/// The cap of `radius` around `d` in polar angle and azimuth: which polar angles it reaches, and
+/// at each band of polar angles the half-width of its azimuths.
+struct CapBounds {
+  double theta, phi, radius, cosR, cosC, sinC, widest;
+
+  CapBounds(glm::vec3 d, double r)
+      : theta(thetaOf(d)),
+        phi(phiOf(d)),
+        radius(r + kMargin),
+        cosR(std::cos(radius)),
+        cosC(std::cos(theta)),
+        sinC(std::sin(theta)) {
+    // Where the cap is widest: cos t = cos theta / cos R (there its half-width is
+    // asin(sin R / sin theta)).
+    widest = std::abs(cosC / cosR) <= 1.0 ? std::acos(cosC / cosR) : -1.0;
+  }
+  double lo() const { return std::max(0.0, theta - radius); }
+  double hi() const { return std::min(kPi, theta + radius); }
+  /// Half the azimuth span at polar angle t (pi: every azimuth; negative: none).
+  double halfSpan(double t) const {
+    const double st = std::sin(t);
+    if (st * sinC <= 1e-12) return std::cos(t - theta) >= cosR ? kPi : -1.0;
+    const double c = (cosR - std::cos(t) * cosC) / (st * sinC);
+    return c <= -1.0 ? kPi : c > 1.0 ? -1.0 : std::acos(c);
+  }
+  /// The half-span at polar angle t clamped to the cap's: a band's edge.
+  double edge(double t) const { return halfSpan(std::clamp(t, theta - radius, theta + radius)); }
+  /// The largest half-span over the band of polar angles [a, b] whose edges' half-spans are ea
+  /// and eb (the cap's width is unimodal in t), with the margin.
+  double band(double a, double b, double ea, double eb) const {
+    double span = std::max(ea, eb);
+    if (widest >= a && widest <= b) span = std::max(span, halfSpan(widest));
+    return span < 0.0 ? span : span + kMargin;
+  }
+  double band(double a, double b) const { return band(a, b, edge(a), edge(b)); }
+};
 }  // namespace
 
-/// Pixels (those with a solid angle) bucketed by the direction's polar angle and azimuth, as a
-/// compressed table: the pixels of bucket b are pixels[start[b] .. start[b + 1]).
+/// Which pixels lie near a direction. Equirect frames need no table: row i covers polar angles
+/// [pi i/H, pi (i+1)/H] and column j azimuths [2 pi j/W, 2 pi (j+1)/W] (liveprobe/sh/sh.h), so a
+/// cap is one run of columns per row (two where it wraps). Other layouts bucket their pixels (those
+/// with a solid angle) by polar angle and azimuth, one degree each, as runs of consecutive pixels
+/// of one row: the runs of bucket b are runs[start[b] .. start[b + 1]), in pixel order. Either
+/// way a cap is read in runs along image rows, which the prefetchers follow.
 struct LightExtractor::Index {
-  std::vector<std::uint32_t> start, pixels;
+  struct Run {
+    std::uint32_t row, col, count;
+  };
+  bool equirect;
+  std::uint32_t width, height, longest = 0;
+  std::vector<std::uint32_t> start;
+  std::vector<Run> runs;
 
-  explicit Index(const std::vector<SphereSample>& samples) {
-    std::vector<std::uint32_t> bucketOf(samples.size(), UINT32_MAX);
-    start.assign(std::size_t(kBucketRows) * kBucketCols + 1, 0);
+  explicit Index(const Projector& projector)
+      : equirect(projector.spec().layout == Layout::Equirect),
+        width(std::uint32_t(projector.width())),
+        height(std::uint32_t(projector.height())) {
+    if (equirect) {
+      longest = width;
+      return;
+    }
+    const auto& samples = projector.samples();
+    std::vector<std::uint32_t> bucketOf;  // per run, in pixel order
+    std::vector<Run> found;
     for (std::size_t i = 0; i < samples.size(); ++i) {
       if (samples[i].solidAngle <= 0.0f) continue;
       const glm::vec3 d = samples[i].dir;
-      const double theta = std::acos(std::clamp(double(d.z), -1.0, 1.0)),
-                   phi = std::atan2(double(d.y), double(d.x));
-      bucketOf[i] = std::uint32_t(bucketRow(theta) * kBucketCols + bucketCol(phi));
-      ++start[bucketOf[i] + 1];
+      const auto b = std::uint32_t(bucketRow(thetaOf(d)) * kBucketCols + bucketCol(phiOf(d)));
+      const auto row = std::uint32_t(i / width), col = std::uint32_t(i % width);
+      if (!found.empty() && bucketOf.back() == b && found.back().row == row &&
+          found.back().col + found.back().count == col)
+        ++found.back().count;
+      else
+        found.push_back({row, col, 1}), bucketOf.push_back(b);
     }
+    start.assign(std::size_t(kBucketRows) * kBucketCols + 1, 0);
+    for (const std::uint32_t b : bucketOf) ++start[b + 1];
     for (std::size_t b = 1; b < start.size(); ++b) start[b] += start[b - 1];
-    pixels.resize(start.back());
+    runs.resize(found.size());
     std::vector<std::uint32_t> fill(start.begin(), start.end() - 1);
-    for (std::size_t i = 0; i < samples.size(); ++i)
-      if (bucketOf[i] != UINT32_MAX) pixels[fill[bucketOf[i]]++] = std::uint32_t(i);
+    for (std::size_t r = 0; r < found.size(); ++r) {
+      runs[fill[bucketOf[r]]++] = found[r];
+      longest = std::max(longest, found[r].count);
+    }
   }
 
-  /// Calls f(pixel) for every pixel in buckets that may hold directions within `radius` of `d`
-  /// (a superset of the cap; the caller tests the angle).
-  template <class F>
-  void forCap(glm::vec3 d, double radius, F&& f, std::uint32_t stride = 1) const {
-    const double theta = std::acos(std::clamp(double(d.z), -1.0, 1.0)),
-                 phi = std::atan2(double(d.y), double(d.x));
-    const double lo = theta - radius, hi = theta + radius;
-    const int r0 = bucketRow(std::max(0.0, lo)), r1 = bucketRow(std::min(kPi, hi));
-    // Largest azimuth offset within the cap: asin(sin r / sin t) at the band's narrowest row;
-    // every column where the cap reaches a pole or is wider than that.
-    bool allCols = lo <= 0 || hi >= kPi;
-    double dPhi = kPi;
-    if (!allCols) {
-      const double sinMin = std::min(std::sin(lo), std::sin(hi));
-      if (std::sin(radius) >= sinMin)
-        allCols = true;
-      else
-        dPhi = std::asin(std::sin(radius) / sinMin);
+  /// The bands (image rows for equirect, bucket rows otherwise) [first, last] the cap reaches.
+  std::pair<int, int> bands(const CapBounds& cap) const {
+    if (equirect) {
+      const double perRow = double(height) / kPi;
+      return {std::clamp(int(cap.lo() * perRow), 0, int(height) - 1),
+              std::clamp(int(cap.hi() * perRow), 0, int(height) - 1)};
     }
-    const int c0 = allCols ? 0 : int(std::floor((phi - dPhi) / kBucket)) - 1;
-    const int c1 = allCols ? kBucketCols - 1 : int(std::floor((phi + dPhi) / kBucket)) + 1;
-    const int span = std::min(c1 - c0, kBucketCols - 1);
-    std::uint32_t skip = 0;  // with a stride, every stride-th pixel of the buckets in turn
-    for (int r = r0; r <= r1; ++r)
-      for (int c = c0; c <= c0 + span; ++c) {
-        const std::size_t b =
-            std::size_t(r) * kBucketCols + std::size_t(bucketCol((c + 0.5) * kBucket));
-        std::uint32_t k = start[b] + skip;
-        for (; k < start[b + 1]; k += stride) f(pixels[k]);
-        skip = k - start[b + 1];
+    return {bucketRow(cap.lo()), bucketRow(cap.hi())};
+  }
+
+  /// Calls f(run) for runs that hold every pixel whose direction lies in `cap` (and a few more
+  /// near it; the caller tests the angle), in bands [bandBegin, bandEnd) of it. With step > 1
+  /// only runs on every step-th image row (a lattice sample, with the caller taking every
+  /// step-th column).
+  template <class F>
+  void forCap(const CapBounds& cap, std::uint32_t step, F&& f, int bandBegin = 0,
+              int bandEnd = INT32_MAX) const {
+    const auto [first, last] = bands(cap);
+    const int b0 = std::max(bandBegin, first), b1 = std::min(bandEnd - 1, last);
+    if (equirect) {
+      const double rowAngle = kPi / height, colAngle = 2 * kPi / width;
+      double top = cap.edge(b0 * rowAngle);  // each row's upper edge is the last one's lower
+      for (int i = b0; i <= b1; ++i) {
+        if (step > 1 && std::uint32_t(i) % step != 0) continue;
+        if (step > 1) top = cap.edge(i * rowAngle);
+        const double bottom = cap.edge((i + 1) * rowAngle);
+        const double span = cap.band(i * rowAngle, (i + 1) * rowAngle, top, bottom);
+        top = bottom;
+        if (span < 0.0) continue;
+        const auto row = std::uint32_t(i);
+        const auto c0 = std::int64_t(std::floor((cap.phi - span) / colAngle));
+        const auto c1 = std::int64_t(std::floor((cap.phi + span) / colAngle));
+        if (span >= kPi || c1 - c0 + 1 >= std::int64_t(width)) {
+          f(Run{row, 0, width});
+          continue;
+        }
+        const auto w = std::int64_t(width);
+        const auto from = std::uint32_t(((c0 % w) + w) % w);
+        const auto count = std::uint32_t(c1 - c0 + 1);
+        if (from + count <= width) {
+          f(Run{row, from, count});
+        } else {  // wraps past the last column
+          f(Run{row, from, width - from});
+          f(Run{row, 0, from + count - width});
+        }
       }
+      return;
+    }
+    for (int r = b0; r <= b1; ++r) {
+      const double span = cap.band(r * kBucket, (r + 1) * kBucket);
+      if (span < 0.0) continue;
+      const bool all = span >= kPi;
+      const int c0 = all ? 0 : int(std::floor((cap.phi - span) / kBucket));
+      const int c1 = all ? kBucketCols - 1 : int(std::floor((cap.phi + span) / kBucket));
+      for (int c = c0; c <= std::min(c1, c0 + kBucketCols - 1); ++c) {
+        const std::size_t bucket =
+            std::size_t(r) * kBucketCols + std::size_t(bucketCol((c + 0.5) * kBucket));
+        for (std::uint32_t k = start[bucket]; k < start[bucket + 1]; ++k)
+          if (step == 1 || runs[k].row % step == 0) f(runs[k]);
+      }
+    }
   }
 };
 
 LightExtractor::LightExtractor(const Projector& projector)
-    : projector_(&projector), index_(std::make_unique<Index>(projector.samples())) {}
+    : projector_(&projector), index_(std::make_unique<Index>(projector)) {}
 LightExtractor::~LightExtractor() = default;
 LightExtractor::LightExtractor(LightExtractor&&) noexcept = default;
 LightExtractor& LightExtractor::operator=(LightExtractor&&) noexcept = default;
@@ -149,10 +244,27 @@ Rgb channelMedian(std::vector<Rgb>& values) {
   return m;
 }
 
-struct CapPixel {
-  std::uint32_t index;
-  float cosAngle;
+/// Lattice step that leaves at most about `target` samples (and more than a quarter of it) of a
+/// cap of `radius` around pixels of solid angle `pixel`: each sample stands for step^2 pixels.
+std::uint32_t latticeStep(float radius, float pixel, float target) {
+  const float s = std::sin(0.5f * radius);
+  const float pixels = 4.0f * float(kPi) * s * s / pixel;
+  return std::uint32_t(std::max(1.0f, std::ceil(std::sqrt(pixels / target))));
+}
+
+struct Sampled {
   Rgb value;
+  float weight;  ///< dw times the lattice step squared
+};
+
+/// What a part of the region gives the light.
+struct RegionSums {
+  glm::dvec3 power{0.0}, centroid{0.0};
+  std::array<glm::dvec3, kShCount> taken{};  ///< the coefficients of the light's pixels
+  float maxExcess = 0.0f;
+  bool clipped = false;
+  std::vector<std::pair<float, float>> lit;         ///< excess luminance, dw per lit pixel
+  std::vector<std::pair<std::uint32_t, Rgb>> keep;  ///< min(L, fill) per pixel, for the next light
 };
 
 }  // namespace
@@ -165,19 +277,60 @@ LightSplit LightExtractor::extract(const PanoramaView& frame, const Sh9& whole,
   if (opt.maxLights <= 0 || !(totalLum > 0.0f) || rowPeaks.size() != std::size_t(frame.height))
     return out;
   const auto& samples = projector_->samples();
+  const Index& index = *index_;
   const std::size_t width = std::size_t(frame.width);
   const bool u8 = frame.format == PanoramaFormat::BgrU8 || frame.format == PanoramaFormat::RgbU8;
   const float clipLevel = u8 ? frame.decode[255] : INFINITY;
   std::unordered_map<std::uint32_t, Rgb> filled;  // residual values of the lights' pixels
-  const auto value = [&](std::uint32_t i) {
-    if (filled.empty()) return readPixel(frame, i);
-    const auto it = filled.find(i);
-    return it != filled.end() ? it->second : readPixel(frame, i);
+  // A run's values, with the earlier lights' pixels as they left them.
+  const auto readRun = [&](const Index::Run& r, Rgb* values) {
+    readPixels(frame, r.row, r.col, r.count, values);
+    if (!filled.empty())
+      for (std::uint32_t k = 0; k < r.count; ++k)
+        if (const auto it = filled.find(std::uint32_t(r.row * width + r.col + k));
+            it != filled.end())
+          values[k] = it->second;
   };
-  std::vector<float> peaks = rowPeaks;
+  std::vector<Rgb> values(index.longest), excess(index.longest);
+  std::vector<float> lums(index.longest);
+  // Calls f(sample, cos angle to centre, value, weight) for each pixel of the cap, on a lattice
+  // of the given step (weight: the pixel's solid angle times step^2).
+  const auto forCap = [&](glm::vec3 centre, float radius, std::uint32_t step, auto&& f) {
+    const float cosRadius = std::cos(radius), area = float(step * step);
+    index.forCap(CapBounds(centre, radius), step, [&](const Index::Run& r) {
+      const std::uint32_t k0 = step == 1 ? 0 : (step - r.col % step) % step;
+      if (k0 >= r.count) return;
+      readRun(r, values.data());
+      const SphereSample* s = samples.data() + r.row * width + r.col;
+      for (std::uint32_t k = k0; k < r.count; k += step) {
+        const float c = glm::dot(s[k].dir, centre);
+        if (c >= cosRadius) f(s[k], c, values[k], s[k].solidAngle * area);
+      }
+    });
+  };
+  // A row's largest channel value among the pixels the layout sees, and where it is.
+  std::vector<Rgb> rowValues(width);
+  const auto rowPeak = [&](std::size_t row) {
+    readRun({std::uint32_t(row), 0, std::uint32_t(width)}, rowValues.data());
+    const SphereSample* s = samples.data() + row * width;
+    float best = -INFINITY;
+    std::uint32_t at = 0;
+    for (std::size_t j = 0; j < width; ++j) {
+      const float v = maxChannel(rowValues[j]);
+      if (s[j].solidAngle > 0.0f && v > best) best = v, at = std::uint32_t(row * width + j);
+    }
+    return std::pair{best, at};
+  };
+  // The row peaks, copied only once a light changes them.
+  std::vector<float> ownPeaks;
+  const std::vector<float>* peaks = &rowPeaks;
+  const auto setPeak = [&](std::size_t row, float v) {
+    if (ownPeaks.empty()) ownPeaks = rowPeaks, peaks = &ownPeaks;
+    ownPeaks[row] = v;
+  };
   const float maxRadius = glm::radians(opt.maxRadiusDeg);
-  std::vector<CapPixel> cap;
   std::vector<Rgb> ring;
+  std::vector<Sampled> region;
 
   for (int n = 0; n < opt.maxLights; ++n) {
     // 1. The peak: the brightest row, then its brightest pixel that the layout sees (a row's
@@ -185,23 +338,18 @@ LightSplit LightExtractor::extract(const PanoramaView& frame, const Sh9& whole,
     std::uint32_t peak = 0;
     float peakValue = -INFINITY;
     for (;;) {
-      const auto row = std::size_t(std::max_element(peaks.begin(), peaks.end()) - peaks.begin());
-      float best = -INFINITY;
-      for (std::size_t j = 0; j < width; ++j) {
-        const auto i = std::uint32_t(row * width + j);
-        if (samples[i].solidAngle <= 0.0f) continue;
-        const float v = maxChannel(value(i));
-        if (v > best) best = v, peak = i;
-      }
-      if (best >= peaks[row]) {
+      const auto row = std::size_t(std::max_element(peaks->begin(), peaks->end()) - peaks->begin());
+      const auto [best, at] = rowPeak(row);
+      peak = at;
+      if (best >= (*peaks)[row]) {
         peakValue = best;
         break;
       }
-      peaks[row] = best;  // the row's peak lay outside the image; rank it again
+      setPeak(row, best);  // the row's peak lay outside the image; rank it again
     }
     if (!(peakValue > 0.0f)) break;
     const glm::vec3 d0 = samples[peak].dir;
-    const float peakLum = luminance(value(peak));
+    const float peakLum = luminance(rowValues[peak % width]);  // the row last read
     if (!(peakLum > 0.0f)) break;
     // A clipped peak (an 8-bit frame at its maximum) has no known brightness: its core is the
     // clipped plateau itself, not what lies above a fraction of a value that is only a bound,
@@ -211,28 +359,17 @@ LightSplit LightExtractor::extract(const PanoramaView& frame, const Sh9& whole,
     const auto inCore = [&](Rgb v) {
       return peakClipped ? maxChannel(v) >= clipLevel : luminance(v) >= opt.coreFraction * peakLum;
     };
-    const float pixelRadius = std::sqrt(samples[peak].solidAngle / float(kPi));
+    const float pixelDw = samples[peak].solidAngle;
+    const float pixelRadius = std::sqrt(pixelDw / float(kPi));
     const float glare = std::max(glm::radians(opt.glareDeg), 2.0f * pixelRadius);
     const float ringWidth = std::max(glm::radians(opt.ringDeg), 3.0f * pixelRadius);
 
     // 2. The core, in caps of growing reach (most sources are small, and the cost is the cap's
     //    pixels): the first reach that holds it, or not compact once it is wider than the
-    //    largest. Then the cap is taken again around the core's centroid (the peak pixel may be
-    //    on a plateau's edge), wide enough for the region and its ring.
-    // `stride` > 1 takes every stride-th pixel of the index (each then stands for `stride`
-    // pixels): the core's area needs a few thousand samples, not every pixel of a 4K frame.
-    const auto gather = [&](glm::vec3 centre, float radius, std::uint32_t stride) {
-      const float cosSearch = std::cos(radius);
-      cap.clear();
-      index_->forCap(
-          centre, radius,
-          [&](std::uint32_t i) {
-            const float c = glm::dot(samples[i].dir, centre);
-            if (c >= cosSearch) cap.push_back({i, c, value(i)});
-          },
-          stride);
-    };
-    constexpr float kCoreSamples = 4000.0f;
+    //    largest. A cap of many pixels is read on a lattice of at most about kCoreSamples: the
+    //    core's area and centre need a thousand samples, not every pixel of a 4K frame (its
+    //    exact centroid and size come from the region's every pixel below).
+    constexpr float kCoreSamples = 1000.0f;
     float coreRadius = INFINITY;
     glm::vec3 centre = d0;
     // Each cap is centred on the centroid found so far; a reach that holds the core is measured
@@ -240,19 +377,15 @@ LightSplit LightExtractor::extract(const PanoramaView& frame, const Sh9& whole,
     bool again = false;
     for (float reach = glm::radians(1.0f);;) {
       const float radius = 1.25f * reach + pixelRadius;  // a margin: a wide core shows as wider
-      const float pixels = 4.0f * float(kPi) * std::sin(0.5f * radius) * std::sin(0.5f * radius) /
-                           samples[peak].solidAngle;
-      const auto stride = std::uint32_t(std::max(1.0f, pixels / kCoreSamples));
       const glm::vec3 from = centre;
-      gather(from, radius, stride);
       double coreArea = 0;
       glm::dvec3 coreSum(0.0);
-      for (const CapPixel& p : cap) {
-        if (!inCore(p.value)) continue;
-        const float lum = luminance(p.value);
-        coreArea += double(samples[p.index].solidAngle) * stride;
-        coreSum += glm::dvec3(samples[p.index].dir) * double(lum * samples[p.index].solidAngle);
-      }
+      forCap(from, radius, latticeStep(radius, pixelDw, kCoreSamples),
+             [&](const SphereSample& s, float, Rgb v, float w) {
+               if (!inCore(v)) return;
+               coreArea += w;
+               coreSum += glm::dvec3(s.dir) * double(luminance(v) * w);
+             });
       coreRadius = float(std::acos(std::max(-1.0, 1.0 - coreArea / (2 * kPi)))) + pixelRadius;
       if (glm::length(coreSum) > 0.0) centre = glm::vec3(glm::normalize(coreSum));
       if (coreRadius > maxRadius) break;                // already wider than any light
@@ -265,86 +398,96 @@ LightSplit LightExtractor::extract(const PanoramaView& frame, const Sh9& whole,
       reach = std::min(2.0f * reach, maxRadius);
     }
     if (coreRadius > maxRadius) break;  // not compact: no (further) light
-    const float regionGlare = std::max(glare, 0.5f * coreRadius);
+    const float regionRadius = coreRadius + std::max(glare, 0.5f * coreRadius);
 
     // 3-4. The region and the ring around it; the fill is the ring's median. A wide ring is
-    //    sampled (~4000 pixels), and so is a first estimate of the light's share: a source that
-    //    plainly falls short is dropped before its region is read whole.
-    const float cosRegion = std::cos(coreRadius + regionGlare),
-                cosRing = std::cos(coreRadius + regionGlare + ringWidth);
-    const float outer = coreRadius + regionGlare + ringWidth + pixelRadius;
-    const auto outerStride = std::uint32_t(
-        std::max(1.0f, 4.0f * float(kPi) * std::sin(0.5f * outer) * std::sin(0.5f * outer) /
-                           samples[peak].solidAngle / kCoreSamples));
-    gather(centre, outer, outerStride);
+    //    sampled (on a lattice of at most about kCoreSamples pixels, as the core), and so is a
+    //    first estimate of the light's share: a source that plainly falls short is dropped
+    //    before its region is read whole.
+    const float cosRegion = std::cos(regionRadius);
+    const float outer = regionRadius + ringWidth;
+    const std::uint32_t outerStep = latticeStep(outer + pixelRadius, pixelDw, kCoreSamples);
     ring.clear();
-    for (const CapPixel& p : cap)
-      if (p.cosAngle < cosRegion && p.cosAngle >= cosRing) ring.push_back(p.value);
+    region.clear();
+    forCap(centre, outer, outerStep, [&](const SphereSample&, float c, Rgb v, float w) {
+      if (c < cosRegion)
+        ring.push_back(v);
+      else if (outerStep > 1)
+        region.push_back({v, w});
+    });
     const Rgb fill = channelMedian(ring);
-    if (outerStride > 1) {
+    if (outerStep > 1) {
       double estimate = 0;
-      for (const CapPixel& p : cap)
-        if (p.cosAngle >= cosRegion)
-          estimate += double(luminance(glm::max(p.value - fill, Rgb(0.0f)))) *
-                      samples[p.index].solidAngle * outerStride;
-      if (estimate < 0.5 * minShare * totalLum) break;            // far below the share: no light
-      gather(centre, coreRadius + regionGlare + pixelRadius, 1);  // the region, every pixel
+      for (const Sampled& p : region)
+        estimate += double(luminance(glm::max(p.value - fill, Rgb(0.0f)))) * p.weight;
+      if (estimate < 0.5 * minShare * totalLum) break;  // far below the share: no light
     }
 
-    // 5. The light: what lies above the fill.
-    glm::dvec3 power(0.0), centroid(0.0);
-    float maxExcess = 0.0f;
-    bool clipped = false;
-    for (const CapPixel& p : cap) {
-      if (p.cosAngle < cosRegion) continue;
-      const Rgb excess = glm::max(p.value - fill, Rgb(0.0f));
-      const double dw = samples[p.index].solidAngle;
-      power += glm::dvec3(excess) * dw;
-      centroid += glm::dvec3(samples[p.index].dir) * (double(luminance(excess)) * dw);
-      maxExcess = std::max(maxExcess, luminance(excess));
-      clipped = clipped || maxChannel(p.value) >= clipLevel;
-    }
+    // 5. The light, from every pixel of the region: what lies above the fill, and the
+    //    coefficients it takes from the map (with the projector's own weights, summed in
+    //    double, so residual + light is the whole map).
+    const bool more = n + 1 < opt.maxLights;
+    const float regionReach = regionRadius + pixelRadius;
+    const float regionHalf = std::sin(0.5f * regionReach);
+    RegionSums got;
+    got.lit.reserve(std::size_t(8.0f * float(kPi) * regionHalf * regionHalf / pixelDw));
+    index.forCap(CapBounds(centre, regionReach), 1, [&](const Index::Run& r) {
+      readRun(r, values.data());
+      const std::size_t first = r.row * width + r.col;
+      const SphereSample* s = samples.data() + first;
+      // Branch-free, into locals (float over a run, double beyond).
+      Rgb runPower(0.0f);
+      glm::vec3 runCentroid(0.0f);
+      float runMax = 0.0f;
+      bool runClipped = false;
+      for (std::uint32_t k = 0; k < r.count; ++k) {
+        const bool in = glm::dot(s[k].dir, centre) >= cosRegion;
+        const Rgb e = in ? glm::max(values[k] - fill, Rgb(0.0f)) : Rgb(0.0f);
+        const float lum = luminance(e), dw = s[k].solidAngle;
+        excess[k] = e;
+        lums[k] = lum;
+        runPower += e * dw;
+        runCentroid += s[k].dir * (lum * dw);
+        runMax = std::max(runMax, lum);
+        runClipped = runClipped || (in && maxChannel(values[k]) >= clipLevel);
+      }
+      got.clipped = got.clipped || runClipped;
+      if (more)
+        for (std::uint32_t k = 0; k < r.count; ++k)
+          if (glm::dot(s[k].dir, centre) >= cosRegion)
+            got.keep.emplace_back(std::uint32_t(first + k), glm::min(values[k], fill));
+      if (runPower == Rgb(0.0f)) return;
+      for (std::uint32_t k = 0; k < r.count; ++k)
+        if (lums[k] > 0.0f) got.lit.emplace_back(lums[k], s[k].solidAngle);
+      got.maxExcess = std::max(got.maxExcess, runMax);
+      got.power += glm::dvec3(runPower);
+      got.centroid += glm::dvec3(runCentroid);
+      projector_->addPixels(r.row, r.col, excess.data(), r.count, got.taken);
+    });
     Light light;
-    light.power = Rgb(power);
+    light.power = Rgb(got.power);
     light.share = luminance(light.power) / totalLum;
-    if (!(light.share >= minShare) || glm::length(centroid) <= 0.0) break;
-    light.dir = glm::vec3(glm::normalize(centroid));
-    light.clipped = clipped;
+    if (!(light.share >= minShare) || glm::length(got.centroid) <= 0.0) break;
+    light.dir = glm::vec3(glm::normalize(got.centroid));
+    light.clipped = got.clipped;
     double halfMaxArea = 0;
-    for (const CapPixel& p : cap)
-      if (p.cosAngle >= cosRegion &&
-          luminance(glm::max(p.value - fill, Rgb(0.0f))) >= 0.5f * maxExcess)
-        halfMaxArea += samples[p.index].solidAngle;
+    for (const auto& [lum, dw] : got.lit)
+      if (lum >= 0.5f * got.maxExcess) halfMaxArea += dw;
     light.angularRadius = float(std::acos(std::max(-1.0, 1.0 - halfMaxArea / (2 * kPi))));
 
-    // Commit: the coefficients lose exactly what the light took (summed in double); for the
-    // next light, the region keeps min(L, fill).
-    std::array<glm::dvec3, kShCount> taken{};
-    for (const CapPixel& p : cap) {
-      if (p.cosAngle < cosRegion) continue;
-      const glm::dvec3 excess(glm::max(p.value - fill, Rgb(0.0f)));
-      const auto w = projector_->pixelWeights(p.index);
-      for (int k = 0; k < kShCount; ++k) taken[k] += excess * double(w[k]);
-    }
-    for (int k = 0; k < kShCount; ++k) out.residual.c[k] -= Rgb(taken[k]);
+    // Commit: the coefficients lose what the light took; for the next light, the region keeps
+    // min(L, fill), and the rows it touched get their peaks from what is left.
+    for (int k = 0; k < kShCount; ++k) out.residual.c[k] -= Rgb(got.taken[k]);
     out.lights.push_back(light);
-    if (n + 1 == opt.maxLights) break;
+    if (!more) break;
     std::vector<std::size_t> rows;
-    for (const CapPixel& p : cap) {
-      if (p.cosAngle < cosRegion) continue;
-      filled[p.index] = glm::min(p.value, fill);
-      rows.push_back(p.index / width);
+    for (const auto& [i, v] : got.keep) {
+      filled[i] = v;
+      rows.push_back(i / width);
     }
-    // The rows the light touched: their peaks from what is left.
     std::sort(rows.begin(), rows.end());
     rows.erase(std::unique(rows.begin(), rows.end()), rows.end());
-    for (const std::size_t r : rows) {
-      float m = 0.0f;
-      for (std::size_t j = 0; j < width; ++j)
-        if (samples[r * width + j].solidAngle > 0.0f)
-          m = std::max(m, maxChannel(value(std::uint32_t(r * width + j))));
-      peaks[r] = m;
-    }
+    for (const std::size_t r : rows) setPeak(r, std::max(0.0f, rowPeak(r).first));
   }
   return out;
 }

@@ -35,7 +35,11 @@ using VF = hn::Vec<DF>;
 // acc lanes of coefficient k, channel c.
 inline float* laneOf(LaneSums& acc, int k, int c) { return acc.v + (3 * k + c) * kMaxLanes; }
 
-void EquirectRow(const EquirectTables& t, const float* HWY_RESTRICT row, int i, LaneSums& acc) {
+// With Peak, *peak also receives the row's largest value, taken from the vectors the sums load
+// anyway (a second pass read a 3840-pixel row back from L2: 0.3 ms a frame).
+template <bool Peak>
+void EquirectRowImpl(const EquirectTables& t, const float* HWY_RESTRICT row, int i, LaneSums& acc,
+                     float* peak) {
   const DF d;
   const int n = int(hn::Lanes(d));
   const float* HWY_RESTRICT c0 = t.col[0].data();
@@ -46,16 +50,22 @@ void EquirectRow(const EquirectTables& t, const float* HWY_RESTRICT row, int i, 
   // s[k][c]: column sum k of channel c (in the row's channel order).
   VF s00 = hn::Zero(d), s01 = s00, s02 = s00, s10 = s00, s11 = s00, s12 = s00, s20 = s00, s21 = s00,
      s22 = s00, s30 = s00, s31 = s00, s32 = s00, s40 = s00, s41 = s00, s42 = s00;
+  VF m = hn::Set(d, -HUGE_VALF);
+  float tail = -HUGE_VALF;
+  const auto track = [&](VF x, VF y, VF z) HWY_ATTR {
+    if constexpr (Peak) m = hn::Max(m, hn::Max(x, hn::Max(y, z)));
+  };
   const int w = t.width;
   if (w % 2 == 0) {
     // Pixels half a turn apart (j and j + W/2) share the column integrals up to sign: 1, cos 2p
     // and sin 2p repeat after half a turn, cos p and sin p change sign. So the sum a + b takes
     // the even weights and a - b the odd ones: 15 multiply-adds per pair of pixels, not per pixel.
     const int half = w / 2;
-    auto pair = [&](const float* pa, const float* pb, int j) HWY_ATTR {
+    auto pair = [&](const float* pa, const float* pb, int j, bool whole) HWY_ATTR {
       VF ax, ay, az, bx, by, bz;
       hn::LoadInterleaved3(d, pa, ax, ay, az);
       hn::LoadInterleaved3(d, pb, bx, by, bz);
+      if (whole) track(ax, ay, az), track(bx, by, bz);
       const VF sx = hn::Add(ax, bx), sy = hn::Add(ay, by), sz = hn::Add(az, bz);
       const VF dx = hn::Sub(ax, bx), dy = hn::Sub(ay, by), dz = hn::Sub(az, bz);
       const VF w0 = hn::LoadU(d, c0 + j);
@@ -70,17 +80,20 @@ void EquirectRow(const EquirectTables& t, const float* HWY_RESTRICT row, int i, 
       s20 = hn::MulAdd(w2, dx, s20), s21 = hn::MulAdd(w2, dy, s21), s22 = hn::MulAdd(w2, dz, s22);
     };
     int j = 0;
-    for (; j + n <= half; j += n) pair(row + 3 * j, row + 3 * (j + half), j);
+    for (; j + n <= half; j += n) pair(row + 3 * j, row + 3 * (j + half), j, true);
     if (j < half) {  // the last pairs, zero-padded (zero pixels: the weights past W/2 add nothing)
       alignas(64) float ta[3 * kMaxLanes] = {}, tb[3 * kMaxLanes] = {};
       std::memcpy(ta, row + 3 * j, sizeof(float) * 3 * std::size_t(half - j));
       std::memcpy(tb, row + 3 * (j + half), sizeof(float) * 3 * std::size_t(half - j));
-      pair(ta, tb, j);
+      if constexpr (Peak)  // the padding is not the row's: these pixels one at a time
+        for (int q = 0; q < 3 * (half - j); ++q) tail = std::max({tail, ta[q], tb[q]});
+      pair(ta, tb, j, false);
     }
   } else {
-    auto step = [&](const float* px, int j) HWY_ATTR {
+    auto step = [&](const float* px, int j, bool whole) HWY_ATTR {
       VF x, y, z;
       hn::LoadInterleaved3(d, px, x, y, z);
+      if (whole) track(x, y, z);
       const VF w0 = hn::LoadU(d, c0 + j), w1 = hn::LoadU(d, c1 + j), w2 = hn::LoadU(d, c2 + j),
                w3 = hn::LoadU(d, c3 + j), w4 = hn::LoadU(d, c4 + j);
       s00 = hn::MulAdd(w0, x, s00), s01 = hn::MulAdd(w0, y, s01), s02 = hn::MulAdd(w0, z, s02);
@@ -90,11 +103,13 @@ void EquirectRow(const EquirectTables& t, const float* HWY_RESTRICT row, int i, 
       s40 = hn::MulAdd(w4, x, s40), s41 = hn::MulAdd(w4, y, s41), s42 = hn::MulAdd(w4, z, s42);
     };
     int j = 0;
-    for (; j + n <= w; j += n) step(row + 3 * j, j);
+    for (; j + n <= w; j += n) step(row + 3 * j, j, true);
     if (j < w) {  // the last pixels, zero-padded (the column tables are zero past the width)
-      alignas(64) float tail[3 * kMaxLanes] = {};
-      std::memcpy(tail, row + 3 * j, sizeof(float) * 3 * std::size_t(w - j));
-      step(tail, j);
+      alignas(64) float last[3 * kMaxLanes] = {};
+      std::memcpy(last, row + 3 * j, sizeof(float) * 3 * std::size_t(w - j));
+      if constexpr (Peak)
+        for (int q = 0; q < 3 * (w - j); ++q) tail = std::max(tail, last[q]);
+      step(last, j, false);
     }
   }
   // acc[k][c] += rowFactor(k) * s[col(k)][c], written out with constant indices so the sums stay
@@ -116,6 +131,15 @@ void EquirectRow(const EquirectTables& t, const float* HWY_RESTRICT row, int i, 
   add(6, R[5][i], s00, s01, s02);  // L20  = k3 R3 S1
   add(7, R[3][i], s10, s11, s12);  // L21  = k2 Rsc Scos
   add(8, R[4][i], s30, s31, s32);  // L22  = k4 Rs2 Scos2
+  if constexpr (Peak) *peak = std::max(tail, hn::GetLane(hn::MaxOfLanes(d, m)));
+}
+
+void EquirectRow(const EquirectTables& t, const float* HWY_RESTRICT row, int i, LaneSums& acc,
+                 float* peak) {
+  if (peak)
+    EquirectRowImpl<true>(t, row, i, acc, peak);
+  else
+    EquirectRowImpl<false>(t, row, i, acc, nullptr);
 }
 
 // Nine weights times three channels is 27 accumulators, more than 16 registers hold (32 on
@@ -174,9 +198,30 @@ void WeightedSums(const float* rgb, std::size_t n, const float* blocked, double*
 // Table lookups, one at a time: on AVX2 a gather (GatherIndex) measured slower (17.6 against
 // 13.2 ms for a 3840x1920 frame on one thread), and fusing the lookups into the projection's
 // loads stalls on store forwarding.
+// With a non-null maxCode, the largest code too: the codes of each 1 KiB chunk are read again
+// right after its lookups, from L1 (a pass over the whole row afterwards cost 60-120 us a frame,
+// and interleaving vector loads with the lookups slowed them fourfold).
 void DecodeU8(const std::uint8_t* HWY_RESTRICT src, const float* HWY_RESTRICT lut,
-              float* HWY_RESTRICT dst, std::size_t n) {
-  for (std::size_t i = 0; i < n; ++i) dst[i] = lut[src[i]];
+              float* HWY_RESTRICT dst, std::size_t n, std::uint8_t* maxCode) {
+  if (!maxCode) {
+    for (std::size_t i = 0; i < n; ++i) dst[i] = lut[src[i]];
+    return;
+  }
+  const hn::ScalableTag<std::uint8_t> d;
+  const std::size_t lanes = hn::Lanes(d);
+  constexpr std::size_t kChunk = 1024;
+  auto m = hn::Zero(d);
+  std::uint8_t out = 0;
+  for (std::size_t c0 = 0; c0 < n; c0 += kChunk) {
+    const std::size_t c1 = std::min(n, c0 + kChunk);
+    for (std::size_t i = c0; i < c1; ++i) dst[i] = lut[src[i]];
+    std::size_t i = c0;
+    for (; i + lanes <= c1; i += lanes) m = hn::Max(m, hn::LoadU(d, src + i));
+    for (; i < c1; ++i) out = std::max(out, src[i]);
+  }
+  alignas(64) std::uint8_t lane[4 * kMaxLanes];  // Highway 1.0 has no 8-bit MaxOfLanes
+  hn::Store(m, d, lane);
+  *maxCode = std::max(out, *std::max_element(lane, lane + lanes));
 }
 
 void DecodeF16(const std::uint16_t* HWY_RESTRICT src, float* HWY_RESTRICT dst, std::size_t n) {
@@ -195,13 +240,21 @@ void DecodeF16(const std::uint16_t* HWY_RESTRICT src, float* HWY_RESTRICT dst, s
   }
 }
 
+// Four independent maxima: one chain waits on Max's latency (4 cycles) for every vector, which
+// cost more than the projection's own row (0.8 ms of a 4.3 ms 3840x1920 8-bit frame).
 float MaxOf(const float* HWY_RESTRICT p, std::size_t n) {
   const DF d;
   const std::size_t lanes = hn::Lanes(d);
-  VF m = hn::Set(d, -HUGE_VALF);
+  VF m0 = hn::Set(d, -HUGE_VALF), m1 = m0, m2 = m0, m3 = m0;
   std::size_t i = 0;
-  for (; i + lanes <= n; i += lanes) m = hn::Max(m, hn::LoadU(d, p + i));
-  float out = hn::GetLane(hn::MaxOfLanes(d, m));
+  for (; i + 4 * lanes <= n; i += 4 * lanes) {
+    m0 = hn::Max(m0, hn::LoadU(d, p + i));
+    m1 = hn::Max(m1, hn::LoadU(d, p + i + lanes));
+    m2 = hn::Max(m2, hn::LoadU(d, p + i + 2 * lanes));
+    m3 = hn::Max(m3, hn::LoadU(d, p + i + 3 * lanes));
+  }
+  for (; i + lanes <= n; i += lanes) m0 = hn::Max(m0, hn::LoadU(d, p + i));
+  float out = hn::GetLane(hn::MaxOfLanes(d, hn::Max(hn::Max(m0, m1), hn::Max(m2, m3))));
   for (; i < n; ++i) out = std::max(out, p[i]);
   return out;
 }

@@ -34,14 +34,15 @@ struct alignas(64) LaneSums {
 
 struct Kernels {
   /// acc += row factors of row i times the 15 column-weighted sums of `row` (3 * width floats;
-  /// the sums keep the row's channel order).
-  void (*equirectRow)(const EquirectTables& t, const float* row, int i, LaneSums& acc);
+  /// the sums keep the row's channel order). A non-null `peak` gets the row's largest value.
+  void (*equirectRow)(const EquirectTables& t, const float* row, int i, LaneSums& acc, float* peak);
   /// out[3k + c] += sum over n pixels of rgb[3i + c] * w_k[i]. `blocked` holds the weights in
   /// blocks of 16 pixels: w_k of pixel 16 b + l at blocked[(9 b + k) * 16 + l], zero-padded to a
   /// whole block (one sequential stream, which the prefetchers follow).
   void (*weightedSums)(const float* rgb, std::size_t n, const float* blocked, double* out);
-  /// dst[i] = lut[src[i]] (a 256-entry table).
-  void (*decodeU8)(const std::uint8_t* src, const float* lut, float* dst, std::size_t n);
+  /// dst[i] = lut[src[i]] (a 256-entry table); a non-null maxCode gets the largest src[i].
+  void (*decodeU8)(const std::uint8_t* src, const float* lut, float* dst, std::size_t n,
+                   std::uint8_t* maxCode);
   /// IEEE binary16 to float.
   void (*decodeF16)(const std::uint16_t* src, float* dst, std::size_t n);
   /// The largest of n floats (-inf for none).

@@ -97,8 +97,10 @@ void addSums(Sums& into, const Sums& part) {
 class RowReader {
  public:
   RowReader(const PanoramaView& v, const kernel::Kernels& k) : v_(v), k_(k) {}
-  /// `count` pixels starting at pixel `first` of row `row`.
-  const float* read(int row, std::size_t first, std::size_t count) {
+  /// `count` pixels starting at pixel `first` of row `row`; for 8-bit frames, a non-null
+  /// `maxCode` gets their largest code value.
+  const float* read(int row, std::size_t first, std::size_t count,
+                    std::uint8_t* maxCode = nullptr) {
     const auto* base =
         static_cast<const std::uint8_t*>(v_.data) + std::size_t(row) * v_.strideBytes();
     const std::size_t n = 3 * count;
@@ -112,7 +114,7 @@ class RowReader {
       case PanoramaFormat::BgrU8:
       case PanoramaFormat::RgbU8:
         buf_.resize(n);
-        k_.decodeU8(base + 3 * first, v_.decode, buf_.data(), n);
+        k_.decodeU8(base + 3 * first, v_.decode, buf_.data(), n, maxCode);
         return buf_.data();
     }
     return nullptr;
@@ -125,6 +127,13 @@ class RowReader {
 };
 
 bool packed(const PanoramaView& v) { return v.strideBytes() == v.bytesPerPixel() * v.width; }
+
+/// An 8-bit frame through a non-decreasing table: its row peaks are the table at the row's
+/// largest code, a quarter of the bytes of the decoded row.
+bool peaksByCode(const PanoramaView& v) {
+  const bool u8 = v.format == PanoramaFormat::BgrU8 || v.format == PanoramaFormat::RgbU8;
+  return u8 && std::is_sorted(v.decode, v.decode + 256);
+}
 
 }  // namespace
 
@@ -182,29 +191,41 @@ Sh9 Projector::project(const PanoramaView& v, Executor* ex, std::vector<float>* 
   if (tables_->equirect) return toSh9(equirectSums(v, ex, rowPeaks), bgr);
   if (rowPeaks) {
     const kernel::Kernels& k = kernel::active();
+    const bool byCode = peaksByCode(v);
     parallelFor(ex, std::size_t(height_), Split{16}, [&](std::size_t r0, std::size_t r1) {
       RowReader rows(v, k);
-      for (std::size_t i = r0; i < r1; ++i)
-        (*rowPeaks)[i] =
-            k.maxOf(rows.read(int(i), 0, std::size_t(width_)), 3 * std::size_t(width_));
+      for (std::size_t i = r0; i < r1; ++i) {
+        std::uint8_t code = 0;
+        const float* row = rows.read(int(i), 0, std::size_t(width_), byCode ? &code : nullptr);
+        (*rowPeaks)[i] = byCode ? v.decode[code] : k.maxOf(row, 3 * std::size_t(width_));
+      }
     });
   }
   return toSh9(sampleSums(v, ex), bgr);
 }
 
-std::array<float, kShCount> Projector::pixelWeights(std::size_t index) const {
-  std::array<float, kShCount> w{};
+void Projector::addPixels(std::size_t row, std::size_t col, const Rgb* values, std::size_t count,
+                          std::array<glm::dvec3, kShCount>& sums) const {
+  // Float over the run (at most a row, as project() sums), double beyond.
   if (tables_->equirect) {
+    // Pixel (i, j) weighs row[kRowOf[k]][i] * col[kColOf[k]][j]: the five column sums first.
     const auto& t = *tables_->equirect;
-    const std::size_t i = index / std::size_t(width_), j = index % std::size_t(width_);
+    std::array<Rgb, 5> colSums{};
+    for (std::size_t n = 0; n < count; ++n)
+      for (int c = 0; c < 5; ++c) colSums[c] += values[n] * t.col[c][col + n];
     for (int k = 0; k < kShCount; ++k)
-      w[k] = t.row[kernel::kRowOf[k]][i] * t.col[kernel::kColOf[k]][j];
-    return w;
+      sums[k] += glm::dvec3(colSums[kernel::kColOf[k]]) * double(t.row[kernel::kRowOf[k]][row]);
+    return;
   }
+  const std::size_t first = row * std::size_t(width_) + col;
   const float* blocked = tables_->weights.data();
-  for (int k = 0; k < kShCount; ++k)
-    w[k] = blocked[((index / 16) * kShCount + k) * 16 + index % 16];
-  return w;
+  std::array<Rgb, kShCount> runSums{};
+  for (std::size_t n = 0; n < count; ++n) {
+    const std::size_t index = first + n;
+    for (int k = 0; k < kShCount; ++k)
+      runSums[k] += values[n] * blocked[((index / 16) * kShCount + k) * 16 + index % 16];
+  }
+  for (int k = 0; k < kShCount; ++k) sums[k] += glm::dvec3(runSums[k]);
 }
 
 // Equirect: bands of whole rows (at least 32 each); per row, the kernel's 15 column sums times
@@ -214,6 +235,7 @@ std::array<double, 27> Projector::equirectSums(const PanoramaView& v, Executor* 
                                                std::vector<float>* rowPeaks) const {
   const auto& t = *tables_->equirect;
   const kernel::Kernels& k = kernel::active();
+  const bool byCode = rowPeaks && peaksByCode(v);
   const auto band = [&](std::size_t r0, std::size_t r1) {
     constexpr std::size_t kFlushRows = 64;
     RowReader rows(v, k);
@@ -228,9 +250,10 @@ std::array<double, 27> Projector::equirectSums(const PanoramaView& v, Executor* 
       lanes = {};
     };
     for (std::size_t i = r0; i < r1; ++i) {
-      const float* row = rows.read(int(i), 0, std::size_t(width_));
-      k.equirectRow(t, row, int(i), lanes);
-      if (rowPeaks) (*rowPeaks)[i] = k.maxOf(row, 3 * std::size_t(width_));
+      std::uint8_t code = 0;
+      const float* row = rows.read(int(i), 0, std::size_t(width_), byCode ? &code : nullptr);
+      k.equirectRow(t, row, int(i), lanes, rowPeaks && !byCode ? &(*rowPeaks)[i] : nullptr);
+      if (byCode) (*rowPeaks)[i] = v.decode[code];
       if ((i - r0 + 1) % kFlushRows == 0) flush();
     }
     flush();
@@ -300,28 +323,40 @@ float halfToFloat(std::uint16_t h) {
 }
 }  // namespace
 
-Rgb readPixel(const PanoramaView& v, std::size_t index) {
-  const std::size_t row = index / std::size_t(v.width), col = index % std::size_t(v.width);
+void readPixels(const PanoramaView& v, std::size_t row, std::size_t col, std::size_t count,
+                Rgb* out) {
   const auto* base = static_cast<const std::uint8_t*>(v.data) + row * v.strideBytes();
   switch (v.format) {
     case PanoramaFormat::RgbF32: {
       const float* p = reinterpret_cast<const float*>(base) + 3 * col;
-      return {p[0], p[1], p[2]};
+      for (std::size_t n = 0; n < count; ++n, p += 3) out[n] = {p[0], p[1], p[2]};
+      return;
     }
     case PanoramaFormat::RgbF16: {
       const auto* p = reinterpret_cast<const std::uint16_t*>(base) + 3 * col;
-      return {halfToFloat(p[0]), halfToFloat(p[1]), halfToFloat(p[2])};
+      for (std::size_t n = 0; n < count; ++n, p += 3)
+        out[n] = {halfToFloat(p[0]), halfToFloat(p[1]), halfToFloat(p[2])};
+      return;
     }
     case PanoramaFormat::BgrU8: {
       const std::uint8_t* p = base + 3 * col;
-      return {v.decode[p[2]], v.decode[p[1]], v.decode[p[0]]};
+      for (std::size_t n = 0; n < count; ++n, p += 3)
+        out[n] = {v.decode[p[2]], v.decode[p[1]], v.decode[p[0]]};
+      return;
     }
     case PanoramaFormat::RgbU8: {
       const std::uint8_t* p = base + 3 * col;
-      return {v.decode[p[0]], v.decode[p[1]], v.decode[p[2]]};
+      for (std::size_t n = 0; n < count; ++n, p += 3)
+        out[n] = {v.decode[p[0]], v.decode[p[1]], v.decode[p[2]]};
+      return;
     }
   }
-  return Rgb(0.0f);
+}
+
+Rgb readPixel(const PanoramaView& v, std::size_t index) {
+  Rgb out;
+  readPixels(v, index / std::size_t(v.width), index % std::size_t(v.width), 1, &out);
+  return out;
 }
 
 Sh9 project(const PanoramaView& frame, Executor* executor) {

@@ -14,7 +14,8 @@
 //      (when the peak is clipped, an 8-bit frame at its maximum, whose true brightness is
 //      unknown: the clipped pixels, those with a channel at the maximum),
 //      searched in caps of growing reach (1, 2, 4, 8 degrees, each with a 25% margin; a cap of
-//      many pixels is sampled with a stride, ~4000 samples). Its radius theta_c is that of the
+//      many pixels is read on a lattice of every s-th row and column, at most ~1000 samples, each
+//      standing for s^2 pixels). Its radius theta_c is that of the
 //      disc with the core's solid angle, plus the peak pixel's own radius sqrt(dw / pi) (an area,
 //      so a few stray bright pixels do not count as a wide source); its centre the
 //      luminance-weighted centroid;
@@ -22,13 +23,15 @@
 //      glareDeg, two pixels and theta_c / 2; it takes the glare around the source too (at
 //      1024x512 a sun's glare holds 15-20% of its power);
 //   4. the fill: per channel, the median of the ring [theta_r, theta_r + ring] around it (ringDeg,
-//      at least three pixels): the sky that the source hides. A wide ring is sampled (~4000
-//      pixels), and with it an estimate of the light's share drops a source below half of
+//      at least three pixels): the sky that the source hides. A wide ring is read on a lattice
+//      (~1000 pixels), and with it an estimate of the light's share drops a source below half of
 //      minShare before its region is read whole;
 //   5. the light: per pixel of the region, max(L - fill, 0). Its power is the sum of that times
 //      dw (per channel, with the layout's exact solid angles); its direction the
 //      luminance-power-weighted centroid; its angular radius that of the disc whose solid angle
-//      is the pixels at or above half the largest excess luminance.
+//      is the pixels at or above half the largest excess luminance. What it takes from the
+//      coefficients is the excess projected with the projector's own weights
+//      (Projector::addPixels), so residual + light is exactly the whole map.
 // Decision rule: a light is kept when
 //   - theta_c <= maxRadiusDeg (compact: the core's area is that of a disc no wider), and
 //   - its luminance power is at least minShare of the whole map's (minClippedShare for a clipped
@@ -84,9 +87,10 @@ glm::vec3 lightIrradiance(const Light& light, glm::vec3 n);
 /// E(n) of coefficients and lights: evalIrradiance(residual, n) + sum of lightIrradiance.
 glm::vec3 evalIrradiance(const Sh9& residual, const std::vector<Light>& lights, glm::vec3 n);
 
-/// Finds the lights of frames of one projector's layout and size. Building it indexes the pixels
-/// by direction (a 1-degree latitude-longitude grid), so each light touches only the pixels near
-/// it: the cost is the peak search over the row peaks plus the source's neighbourhood.
+/// Finds the lights of frames of one projector's layout and size. Each light touches only the
+/// pixels near it, read in runs along image rows: an equirect cap is one run of columns per row;
+/// other layouts are indexed once, here, by direction (a 1-degree latitude-longitude grid of runs
+/// of pixels). The cost is the peak search over the row peaks plus the source's neighbourhood.
 class LightExtractor {
  public:
   explicit LightExtractor(const Projector& projector);
@@ -96,7 +100,8 @@ class LightExtractor {
 
   /// Splits `frame` (whose whole coefficients are `whole` and row peaks `rowPeaks`, both from
   /// Projector::project) into the residual coefficients and up to options.maxLights lights, in
-  /// the frame's own orientation (turn both with rotateSplit).
+  /// the frame's own orientation (turn both with rotateSplit). It runs on the calling thread:
+  /// its passes are tens of microseconds, less than handing work to a pool costs.
   LightSplit extract(const PanoramaView& frame, const Sh9& whole,
                      const std::vector<float>& rowPeaks, const LightOptions& options) const;
 

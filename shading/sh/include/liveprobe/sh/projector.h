@@ -79,10 +79,13 @@ class Projector {
   Sh9 project(const PanoramaView& frame, Executor* executor = nullptr,
               std::vector<float>* rowPeaks = nullptr) const;
 
-  /// The nine weights pixel `index` contributes with to project(): for equirect the exact pixel
-  /// integrals of the basis, for other layouts Y_lm(dir) dw. Coefficients of a change to a few
-  /// pixels are sum over them of (change x weights), exactly as project() would count it.
-  std::array<float, kShCount> pixelWeights(std::size_t index) const;
+  /// Adds to `sums` (per coefficient, R G B in double) the coefficients of `values`, radiance
+  /// given to the `count` pixels of row `row` from column `col` on, with the weights
+  /// project() counts them with: for equirect the exact pixel integrals of the basis (the row's
+  /// factor times the column sums), for other layouts Y_lm(dir) dw. So the coefficients of a
+  /// change to a few pixels are exactly those project() would see.
+  void addPixels(std::size_t row, std::size_t col, const Rgb* values, std::size_t count,
+                 std::array<glm::dvec3, kShCount>& sums) const;
 
  private:
   struct Tables;
@@ -99,6 +102,10 @@ class Projector {
 
 /// Linear RGB of pixel `index` (row-major) of `frame`, in R, G, B order whatever the format.
 Rgb readPixel(const PanoramaView& frame, std::size_t index);
+
+/// The same for the `count` pixels of row `row` from column `col` on, into `out`.
+void readPixels(const PanoramaView& frame, std::size_t row, std::size_t col, std::size_t count,
+                Rgb* out);
 
 /// One-off projection: Projector(frame.layout, frame.width, frame.height).project(frame).
 Sh9 project(const PanoramaView& frame, Executor* executor = nullptr);
