@@ -198,30 +198,9 @@ void WeightedSums(const float* rgb, std::size_t n, const float* blocked, double*
 // Table lookups, one at a time: on AVX2 a gather (GatherIndex) measured slower (17.6 against
 // 13.2 ms for a 3840x1920 frame on one thread), and fusing the lookups into the projection's
 // loads stalls on store forwarding.
-// With a non-null maxCode, the largest code too: the codes of each 1 KiB chunk are read again
-// right after its lookups, from L1 (a pass over the whole row afterwards cost 60-120 us a frame,
-// and interleaving vector loads with the lookups slowed them fourfold).
 void DecodeU8(const std::uint8_t* HWY_RESTRICT src, const float* HWY_RESTRICT lut,
-              float* HWY_RESTRICT dst, std::size_t n, std::uint8_t* maxCode) {
-  if (!maxCode) {
-    for (std::size_t i = 0; i < n; ++i) dst[i] = lut[src[i]];
-    return;
-  }
-  const hn::ScalableTag<std::uint8_t> d;
-  const std::size_t lanes = hn::Lanes(d);
-  constexpr std::size_t kChunk = 1024;
-  auto m = hn::Zero(d);
-  std::uint8_t out = 0;
-  for (std::size_t c0 = 0; c0 < n; c0 += kChunk) {
-    const std::size_t c1 = std::min(n, c0 + kChunk);
-    for (std::size_t i = c0; i < c1; ++i) dst[i] = lut[src[i]];
-    std::size_t i = c0;
-    for (; i + lanes <= c1; i += lanes) m = hn::Max(m, hn::LoadU(d, src + i));
-    for (; i < c1; ++i) out = std::max(out, src[i]);
-  }
-  alignas(64) std::uint8_t lane[4 * kMaxLanes];  // Highway 1.0 has no 8-bit MaxOfLanes
-  hn::Store(m, d, lane);
-  *maxCode = std::max(out, *std::max_element(lane, lane + lanes));
+              float* HWY_RESTRICT dst, std::size_t n) {
+  for (std::size_t i = 0; i < n; ++i) dst[i] = lut[src[i]];
 }
 
 void DecodeF16(const std::uint16_t* HWY_RESTRICT src, float* HWY_RESTRICT dst, std::size_t n) {

@@ -40,9 +40,8 @@ struct Kernels {
   /// blocks of 16 pixels: w_k of pixel 16 b + l at blocked[(9 b + k) * 16 + l], zero-padded to a
   /// whole block (one sequential stream, which the prefetchers follow).
   void (*weightedSums)(const float* rgb, std::size_t n, const float* blocked, double* out);
-  /// dst[i] = lut[src[i]] (a 256-entry table); a non-null maxCode gets the largest src[i].
-  void (*decodeU8)(const std::uint8_t* src, const float* lut, float* dst, std::size_t n,
-                   std::uint8_t* maxCode);
+  /// dst[i] = lut[src[i]] (a 256-entry table).
+  void (*decodeU8)(const std::uint8_t* src, const float* lut, float* dst, std::size_t n);
   /// IEEE binary16 to float.
   void (*decodeF16)(const std::uint16_t* src, float* dst, std::size_t n);
   /// The largest of n floats (-inf for none).

@@ -97,10 +97,8 @@ void addSums(Sums& into, const Sums& part) {
 class RowReader {
  public:
   RowReader(const PanoramaView& v, const kernel::Kernels& k) : v_(v), k_(k) {}
-  /// `count` pixels starting at pixel `first` of row `row`; for 8-bit frames, a non-null
-  /// `maxCode` gets their largest code value.
-  const float* read(int row, std::size_t first, std::size_t count,
-                    std::uint8_t* maxCode = nullptr) {
+  /// `count` pixels starting at pixel `first` of row `row`.
+  const float* read(int row, std::size_t first, std::size_t count) {
     const auto* base =
         static_cast<const std::uint8_t*>(v_.data) + std::size_t(row) * v_.strideBytes();
     const std::size_t n = 3 * count;
@@ -114,7 +112,7 @@ class RowReader {
       case PanoramaFormat::BgrU8:
       case PanoramaFormat::RgbU8:
         buf_.resize(n);
-        k_.decodeU8(base + 3 * first, v_.decode, buf_.data(), n, maxCode);
+        k_.decodeU8(base + 3 * first, v_.decode, buf_.data(), n);
         return buf_.data();
     }
     return nullptr;
@@ -127,13 +125,6 @@ class RowReader {
 };
 
 bool packed(const PanoramaView& v) { return v.strideBytes() == v.bytesPerPixel() * v.width; }
-
-/// An 8-bit frame through a non-decreasing table: its row peaks are the table at the row's
-/// largest code, a quarter of the bytes of the decoded row.
-bool peaksByCode(const PanoramaView& v) {
-  const bool u8 = v.format == PanoramaFormat::BgrU8 || v.format == PanoramaFormat::RgbU8;
-  return u8 && std::is_sorted(v.decode, v.decode + 256);
-}
 
 }  // namespace
 
@@ -191,14 +182,11 @@ Sh9 Projector::project(const PanoramaView& v, Executor* ex, std::vector<float>* 
   if (tables_->equirect) return toSh9(equirectSums(v, ex, rowPeaks), bgr);
   if (rowPeaks) {
     const kernel::Kernels& k = kernel::active();
-    const bool byCode = peaksByCode(v);
     parallelFor(ex, std::size_t(height_), Split{16}, [&](std::size_t r0, std::size_t r1) {
       RowReader rows(v, k);
-      for (std::size_t i = r0; i < r1; ++i) {
-        std::uint8_t code = 0;
-        const float* row = rows.read(int(i), 0, std::size_t(width_), byCode ? &code : nullptr);
-        (*rowPeaks)[i] = byCode ? v.decode[code] : k.maxOf(row, 3 * std::size_t(width_));
-      }
+      for (std::size_t i = r0; i < r1; ++i)
+        (*rowPeaks)[i] =
+            k.maxOf(rows.read(int(i), 0, std::size_t(width_)), 3 * std::size_t(width_));
     });
   }
   return toSh9(sampleSums(v, ex), bgr);
@@ -235,7 +223,6 @@ std::array<double, 27> Projector::equirectSums(const PanoramaView& v, Executor* 
                                                std::vector<float>* rowPeaks) const {
   const auto& t = *tables_->equirect;
   const kernel::Kernels& k = kernel::active();
-  const bool byCode = rowPeaks && peaksByCode(v);
   const auto band = [&](std::size_t r0, std::size_t r1) {
     constexpr std::size_t kFlushRows = 64;
     RowReader rows(v, k);
@@ -250,10 +237,8 @@ std::array<double, 27> Projector::equirectSums(const PanoramaView& v, Executor* 
       lanes = {};
     };
     for (std::size_t i = r0; i < r1; ++i) {
-      std::uint8_t code = 0;
-      const float* row = rows.read(int(i), 0, std::size_t(width_), byCode ? &code : nullptr);
-      k.equirectRow(t, row, int(i), lanes, rowPeaks && !byCode ? &(*rowPeaks)[i] : nullptr);
-      if (byCode) (*rowPeaks)[i] = v.decode[code];
+      const float* row = rows.read(int(i), 0, std::size_t(width_));
+      k.equirectRow(t, row, int(i), lanes, rowPeaks ? &(*rowPeaks)[i] : nullptr);
       if ((i - r0 + 1) % kFlushRows == 0) flush();
     }
     flush();
