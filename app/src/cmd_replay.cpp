@@ -583,9 +583,10 @@ const CommandSpec kRecordSpec{
     "SOURCE",
     "Saves a source for replay: FFV1 in .mkv (lossless), MJPEG in .avi or H.264 in .mp4, with a\n"
     "sidecar FILE.json holding the exposure and every frame's timestamp. Float (HDR) sources are\n"
-    "stored as sRGB 8-bit with an exposure that puts the first frame's brightest pixel at 95%.\n"
-    "Synthetic sources record 5 seconds unless --frames or --duration says otherwise. Ctrl-C\n"
-    "stops cleanly: what was recorded is finalised, exit 130.",
+    "stored as sRGB 8-bit with an exposure that puts the first frame's 99.9th percentile at 95%\n"
+    "(a sun's few pixels clip, as on a camera). Synthetic sources record 5 seconds unless\n"
+    "--frames or --duration says otherwise. Ctrl-C stops cleanly: what was recorded is\n"
+    "finalised, exit 130.",
     {{"--out", "FILE", "output video (.mkv, .avi or .mp4); required"},
      {"--frames", "N", "number of frames to record"},
      {"--duration", "SECONDS", "seconds of the source to record"},
