@@ -197,6 +197,74 @@ TEST(ReplayCli, RecordThenReplayWithOutputs) {
   EXPECT_EQ(n, 7);
 }
 
+TEST(ReplayCli, HdrSequenceRecordingKeepsTheSun) {
+  // An 8-bit video clips the synthetic sky's sun (a lower bound of a few percent); a sequence of
+  // EXR frames keeps its radiance. The truth is the synthetic source itself, replayed live: the
+  // recording's coefficients and light must be its, to the half floats' precision.
+  lpt::TempDir tmp;
+  const std::string pattern = tmp / "%03d.exr", mkv = tmp / "sky.mkv";
+  const std::string src = "synthetic:128x64@10 --frames 4";
+  auto r = runLiveprobe("record " + src + " --out " + pattern);
+  ASSERT_EQ(r.exitCode, 0) << r.output;
+  ASSERT_EQ(runLiveprobe("record " + src + " --out " + mkv).exitCode, 0);
+  int files = 0;
+  for (const auto& e : std::filesystem::directory_iterator(tmp.path))
+    files += e.path().extension() == ".exr";
+  EXPECT_EQ(files, 4);  // 000 .. 003, and no hidden folder of partial frames left
+  for (int i = 0; i < 4; ++i)
+    EXPECT_TRUE(std::filesystem::exists(tmp / ("00" + std::to_string(i) + ".exr"))) << i;
+  const auto replay = [&](const std::string& source, const std::string& name) {
+    const std::string out = tmp / name;
+    const auto rr = runLiveprobe("replay " + source +
+                                 " --fps 10 --headless --size 32x18 --sun "
+                                 "--coeffs-out " +
+                                 out);
+    EXPECT_EQ(rr.exitCode, 0) << rr.output;
+    return readJsonl(out);
+  };
+  const auto truth = replay(src, "truth.jsonl"), exr = replay(pattern, "exr.jsonl"),
+             video = replay(mkv, "mkv.jsonl");
+  ASSERT_EQ(truth.size(), 4u);
+  ASSERT_EQ(exr.size(), 4u);
+  ASSERT_EQ(video.size(), 4u);
+  for (std::size_t f = 0; f < 4; ++f) {
+    const auto& t = truth[f]["coefficients"];
+    const double l00 = t["L00"][1].get<double>();
+    for (const auto& [name, v] : t.items())
+      for (int c = 0; c < 3; ++c)
+        EXPECT_NEAR(exr[f]["coefficients"][name][c].get<double>(), v[c].get<double>(), 2e-3 * l00)
+            << "frame " << f << " " << name;
+    ASSERT_EQ(truth[f]["lights"].size(), 1u);
+    ASSERT_EQ(exr[f]["lights"].size(), 1u) << "frame " << f;
+    const auto &tl = truth[f]["lights"][0], el = exr[f]["lights"][0];
+    EXPECT_GT(tl["share"].get<double>(), 0.3);
+    EXPECT_NEAR(el["share"].get<double>(), tl["share"].get<double>(), 0.01) << "frame " << f;
+    EXPECT_FALSE(el["clipped"].get<bool>());
+    // The 8-bit recording's sun is clipped and holds a small part of it.
+    ASSERT_EQ(video[f]["lights"].size(), 1u) << "frame " << f;
+    for (const auto& vl : video[f]["lights"]) {
+      EXPECT_TRUE(vl["clipped"].get<bool>());
+      EXPECT_LT(vl["share"].get<double>(), 0.5 * tl["share"].get<double>());
+    }
+  }
+  // A shorter recording under the same pattern leaves no frames of the longer one behind.
+  r = runLiveprobe("record synthetic:128x64@10 --frames 2 --out " + pattern);
+  ASSERT_EQ(r.exitCode, 0) << r.output;
+  EXPECT_TRUE(std::filesystem::exists(tmp / "001.exr"));
+  EXPECT_FALSE(std::filesystem::exists(tmp / "002.exr"));
+}
+
+TEST(ReplayCli, HdrSequenceRecordingRefusesWhatItCannotKeep) {
+  lpt::TempDir tmp;
+  expectOneLineError("record synthetic:64x32 --frames 2 --out " + (tmp / "sky.exr"), "sky.exr",
+                     "need a frame-number pattern");
+  expectOneLineError("record synthetic:64x32 --frames 2 --out " + (tmp / "%04d.png"), "%04d.png",
+                     "unsupported extension");
+  expectOneLineError("record synthetic:64x32 --frames 2 --out " + (tmp / "no/%04d.exr"), "%04d.exr",
+                     "no folder");
+  EXPECT_TRUE(std::filesystem::is_empty(tmp.path));
+}
+
 TEST(ReplayCli, DefaultRecordingPlays) {
   lpt::TempDir tmp;
   const std::string out = tmp / "c.jsonl";

@@ -206,7 +206,7 @@ StreamOutputs openOutputs(const Args& a, double fps, const std::string& descript
                                               "liveprobe replay of " + description);
   }
   if (a.has("--record")) {
-    requireExtension(a.get("--record"), "--record", {".mkv", ".avi", ".mp4"});
+    requireExtension(a.get("--record"), "--record", {".mkv", ".avi", ".mp4", ".exr", ".hdr"});
     o.record = std::make_unique<VideoRecorder>(a.get("--record"), fps, description);
   }
   return o;
@@ -587,7 +587,9 @@ const CommandSpec kRecordSpec{
     "(a sun's few pixels clip, as on a camera). Synthetic sources record 5 seconds unless\n"
     "--frames or --duration says otherwise. Ctrl-C stops cleanly: what was recorded is\n"
     "finalised, exit 130.",
-    {{"--out", "FILE", "output video (.mkv, .avi or .mp4); required"},
+    {{"--out", "FILE",
+      "output video (.mkv, .avi or .mp4), or a frame-number pattern of .exr or .hdr frames "
+      "(frames/%04d.exr: linear radiance, a sun unclipped); required"},
      {"--frames", "N", "number of frames to record"},
      {"--duration", "SECONDS", "seconds of the source to record"},
      {"--fps", "F",
@@ -600,7 +602,7 @@ const CommandSpec kRecordSpec{
 int runRecord(const Args& a) {
   installStopHandlers();
   if (!a.has("--out")) throw Error("--out FILE.mkv is required");
-  requireExtension(a.get("--out"), "--out", {".mkv", ".avi", ".mp4"});
+  requireExtension(a.get("--out"), "--out", {".mkv", ".avi", ".mp4", ".exr", ".hdr"});
   SourceOptions so;
   so.fps = a.numberIn("--fps", 30.0, 1.0, 1000.0);
   std::int64_t frames = a.integerIn("--frames", -1, 1, 1000000000);

@@ -243,14 +243,16 @@ Image loadImage(const std::string& path) {
 
 namespace {
 
-void writeAtomically(const std::string& path, const cv::Mat& m) {
+void writeAtomically(const std::string& path, const cv::Mat& m,
+                     const std::vector<int>& params = {}) {
   const std::string ext = lower(fs::path(path).extension().string());
   if (ext.empty()) throw Error(path + ": output needs an extension (.png, .hdr, .exr, .jpg)");
   // Encoded in memory first, so that an encoder's refusal and a failed write (a full disk) are
   // told apart, and the write goes through the one checked, atomic writer.
   std::vector<std::uint8_t> bytes;
   try {
-    if (!cv::imencode(ext, m, bytes)) throw Error(path + ": cannot encode an image as " + ext);
+    if (!cv::imencode(ext, m, bytes, params))
+      throw Error(path + ": cannot encode an image as " + ext);
   } catch (const cv::Exception& e) {
     throw Error(path + ": cannot encode an image as " + ext + " (" + e.err + ")");
   } catch (const std::bad_alloc&) {
@@ -261,13 +263,16 @@ void writeAtomically(const std::string& path, const cv::Mat& m) {
 
 }  // namespace
 
-void saveImage(const std::string& path, const Image& img) {
+void saveImage(const std::string& path, const Image& img, bool halfFloat) {
   const std::string ext = lower(fs::path(path).extension().string());
   cv::Mat rgb(img.height, img.width, CV_32FC3, const_cast<float*>(img.rgb.data()));
   cv::Mat bgr;
   cv::cvtColor(rgb, bgr, cv::COLOR_RGB2BGR);
   if (ext == ".hdr" || ext == ".exr") {
-    writeAtomically(path, bgr);
+    if (ext == ".exr" && halfFloat)
+      writeAtomically(path, bgr, {cv::IMWRITE_EXR_TYPE, cv::IMWRITE_EXR_TYPE_HALF});
+    else
+      writeAtomically(path, bgr);
     return;
   }
   cv::Mat out(bgr.rows, bgr.cols, CV_8UC3);

@@ -1,5 +1,7 @@
 #include "liveprobe/capture/recorder.h"
 
+#include <unistd.h>
+
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
@@ -9,7 +11,9 @@
 
 #include "liveprobe/capture/atomic_file.h"
 #include "liveprobe/capture/image.h"
+#include "liveprobe/capture/photometry.h"
 #include "liveprobe/sh/error.h"
+#include "sources.h"
 
 namespace lp {
 
@@ -19,6 +23,11 @@ struct VideoRecorder::Impl {
   cv::VideoWriter writer;
   int fourcc = 0;
   cv::Mat bgr;
+  // An image sequence: the frames go to a hidden folder beside them, renamed into place by
+  // finish().
+  std::optional<SequencePattern> pattern;
+  fs::path partial;
+  Image image;
 };
 
 VideoRecorder::VideoRecorder(std::string path, double fps, std::string sourceDescription)
@@ -26,9 +35,29 @@ VideoRecorder::VideoRecorder(std::string path, double fps, std::string sourceDes
       path_(std::move(path)),
       source_(std::move(sourceDescription)),
       fps_(fps > 0 ? fps : 30.0) {
-  const fs::path p(path_);
-  std::string ext = p.extension().string();
-  for (auto& c : ext) c = char(std::tolower(static_cast<unsigned char>(c)));
+  auto lower = [](std::string e) {
+    for (auto& c : e) c = char(std::tolower(static_cast<unsigned char>(c)));
+    return e;
+  };
+  if (auto pattern = parseSequencePattern(path_)) {
+    const auto dot = pattern->suffix.rfind('.');  // the suffix may be ".exr" alone
+    const std::string ext = lower(dot == std::string::npos ? "" : pattern->suffix.substr(dot));
+    if (ext != ".exr" && ext != ".hdr")
+      throw Error(path_ +
+                  ": an image-sequence recording keeps linear radiance: .exr or .hdr "
+                  "frames (like frames/%04d.exr)");
+    const fs::path dir = fs::path(pattern->at(0)).parent_path();
+    std::error_code ec;
+    if (!dir.empty() && !fs::is_directory(dir, ec))
+      throw Error(path_ + ": no folder " + dir.string() + " to record into");
+    impl_->pattern = std::move(pattern);
+    impl_->partial = (dir.empty() ? fs::path(".") : dir) /
+                     (".liveprobe-recording." + std::to_string(::getpid()));
+    return;
+  }
+  const std::string ext = lower(fs::path(path_).extension().string());
+  if (ext == ".exr" || ext == ".hdr")
+    throw Error(path_ + ": " + ext + " frames need a frame-number pattern, like frames/%04d" + ext);
   if (ext == ".mkv")
     impl_->fourcc = cv::VideoWriter::fourcc('F', 'F', 'V', '1');
   else if (ext == ".avi")
@@ -36,9 +65,10 @@ VideoRecorder::VideoRecorder(std::string path, double fps, std::string sourceDes
   else if (ext == ".mp4")
     impl_->fourcc = cv::VideoWriter::fourcc('a', 'v', 'c', '1');  // H.264
   else
-    throw Error(
-        path_ +
-        ": unsupported extension (expected .mkv: FFV1, lossless; .avi: MJPEG; .mp4: H.264)");
+    throw Error(path_ +
+                ": unsupported extension (expected .mkv: FFV1, lossless; .avi: MJPEG; .mp4: "
+                "H.264; or an image-sequence pattern of .exr or .hdr frames, like "
+                "frames/%04d.exr)");
   video_ = std::make_unique<AtomicOutput>(path_);
   sidecar_ = std::make_unique<AtomicTextFile>(path_ + ".json");
 }
@@ -60,6 +90,10 @@ void VideoRecorder::write(const Frame& f) {
   }
   width_ = f.width;
   height_ = f.height;
+  if (impl_->pattern) {
+    writeSequenceFrame(f);
+    return;
+  }
   cv::Mat& bgr = impl_->bgr;
   double exposure = 0;
   if (f.format == PixelFormat::Bgr8) {
@@ -105,9 +139,30 @@ void VideoRecorder::write(const Frame& f) {
   exposures_.push_back(exposure);
 }
 
+void VideoRecorder::writeSequenceFrame(const Frame& f) {
+  // Linear radiance as the replay would see it: 8-bit frames decoded from sRGB, every frame
+  // times its radiance scale, so the files need no exposure of their own.
+  Image& img = impl_->image;
+  Linearizer().convert(f, img);
+  if (f.radianceScale != 1.0)
+    for (float& v : img.rgb) v *= float(f.radianceScale);
+  std::error_code ec;
+  if (stamps_.empty() && !fs::create_directory(impl_->partial, ec) && ec)
+    throw Error(path_ + ": cannot create " + impl_->partial.string() + " (" + ec.message() + ")");
+  const int n = int(stamps_.size());
+  saveImage((impl_->partial / fs::path(impl_->pattern->at(n)).filename()).string(), img, true);
+  stamps_.push_back(f.timestamp);
+  exposures_.push_back(1.0);
+}
+
 void VideoRecorder::discard() {
   if (finished_) return;
   finished_ = true;
+  if (impl_->pattern) {
+    std::error_code ec;
+    fs::remove_all(impl_->partial, ec);
+    return;
+  }
   impl_->writer.release();
   video_->discard();
   sidecar_.reset();  // its destructor removes the temporary
@@ -119,6 +174,10 @@ void VideoRecorder::finish() {
     throw Error(path_ + ": not written (a frame was refused)");
   }
   if (finished_) return;
+  if (impl_->pattern) {
+    finishSequence();
+    return;
+  }
   finished_ = true;
   if (!impl_->writer.isOpened()) {  // nothing was recorded: nothing is left behind
     video_->discard();
@@ -157,6 +216,24 @@ void VideoRecorder::finish() {
   sidecar_->line(j.dump());
   sidecar_->commit();  // the sidecar first: a video in place always has its timing beside it
   video_->commit();
+}
+
+void VideoRecorder::finishSequence() {
+  finished_ = true;
+  const SequencePattern& pattern = *impl_->pattern;
+  const int count = int(stamps_.size());
+  std::error_code ec;
+  for (int n = 0; n < count; ++n) {
+    fs::rename(impl_->partial / fs::path(pattern.at(n)).filename(), pattern.at(n), ec);
+    if (ec) {
+      fs::remove_all(impl_->partial, ec);
+      throw Error(pattern.at(n) + ": cannot put the recorded frame in place (" + ec.message() +
+                  ")");
+    }
+  }
+  // Frames of an earlier, longer recording under the same pattern would replay after these.
+  for (int n = count; fs::exists(pattern.at(n), ec); ++n) fs::remove(pattern.at(n), ec);
+  fs::remove_all(impl_->partial, ec);
 }
 
 RecordingSidecar parseRecordingSidecar(std::string_view text, const std::string& name) {

@@ -226,17 +226,11 @@ std::unique_ptr<FrameSource> openCubeFaces(const std::string& dir, double fps) {
   return std::make_unique<CubeFacesSource>(faces, dir, fps);
 }
 
-// A frame-number pattern: exactly one %d or %0Nd (N from 1 to 9) and no other '%'. Parsed here:
-// a path is never handed to printf as a format.
-struct SequencePattern {
-  std::string prefix, suffix;
-  int width = 0;  ///< zero-padded to this many digits (0: no padding)
-  std::string at(int i) const {
-    std::string n = std::to_string(i);
-    if (int(n.size()) < width) n.insert(0, std::size_t(width) - n.size(), '0');
-    return prefix + n + suffix;
-  }
-};
+std::string SequencePattern::at(int i) const {
+  std::string n = std::to_string(i);
+  if (int(n.size()) < width) n.insert(0, std::size_t(width) - n.size(), '0');
+  return prefix + n + suffix;
+}
 
 std::optional<SequencePattern> parseSequencePattern(const std::string& spec) {
   const auto pos = spec.find('%');

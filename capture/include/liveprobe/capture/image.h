@@ -33,8 +33,9 @@ Image loadImage(const std::string& path);
 
 /// Writes `img` to `path` (.hdr, .exr: linear float; .png, .jpg: 8-bit sRGB of the clamped
 /// linear values). Written to a temporary file beside `path`, then renamed, so a failure never
-/// leaves a half-written file. Throws lp::Error.
-void saveImage(const std::string& path, const Image& img);
+/// leaves a half-written file. Throws lp::Error. `halfFloat`: an .exr holds 16-bit floats
+/// (11 significant bits, a quarter of the size after compression; a recording's frames).
+void saveImage(const std::string& path, const Image& img, bool halfFloat = false);
 
 /// Writes 8-bit sRGB RGB pixels (rows top to bottom) atomically, as saveImage does.
 void saveRgb8(const std::string& path, int width, int height, const std::uint8_t* rgb);

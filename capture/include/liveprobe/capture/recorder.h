@@ -4,10 +4,14 @@
 // frame's timestamp. 8-bit frames are stored as they came; float (HDR) frames are stored as sRGB
 // of radiance * exposure, the exposure chosen on the first frame so that 99.9% of its pixels are at
 // or below 95% (a sun's few pixels clip, as on a camera).
-// The video is written under a temporary name and renamed, with its sidecar, only by finish():
-// a caller that keeps what was recorded up to a fault (a camera unplugged mid-stream) says so.
-// Otherwise (an error, an exception) the destructor discards it, and so it does when a write was
-// refused (a frame of another size): nothing half-made is ever put in place.
+// Or an image sequence (a frame-number pattern, like frames/%04d.exr: .exr frames as 16-bit
+// floats, or .hdr), which keeps linear radiance whole, a sun included: frames numbered from 0,
+// replayed at --fps (no sidecar).
+// The video is written under a temporary name and renamed, with its sidecar, only by finish()
+// (a sequence's frames go to a hidden folder beside them first): a caller that keeps what was
+// recorded up to a fault (a camera unplugged mid-stream) says so. Otherwise (an error, an
+// exception) the destructor discards it, and so it does when a write was refused (a frame of
+// another size): nothing half-made is ever put in place.
 #include <memory>
 #include <string>
 #include <string_view>
@@ -23,7 +27,8 @@ class AtomicTextFile;
 class VideoRecorder {
  public:
   /// Throws lp::Error on an unsupported extension or an unwritable folder. 8-bit frames are
-  /// stored as they came, each with its own exposure (1 / Frame::radianceScale) in the sidecar.
+  /// stored as they came, each with its own exposure (1 / Frame::radianceScale) in the sidecar;
+  /// in a sequence, every frame is linear radiance (8-bit frames decoded from sRGB).
   VideoRecorder(std::string path, double fps, std::string sourceDescription);
   ~VideoRecorder();
   VideoRecorder(const VideoRecorder&) = delete;
@@ -40,6 +45,8 @@ class VideoRecorder {
   const std::string& path() const { return path_; }
 
  private:
+  void writeSequenceFrame(const Frame& frame);
+  void finishSequence();
   struct Impl;
   std::unique_ptr<Impl> impl_;
   std::string path_, source_;
