@@ -457,12 +457,14 @@ LightSplit LightExtractor::extract(const PanoramaView& frame, const Sh9& whole,
           if (glm::dot(s[k].dir, centre) >= cosRegion)
             got.keep.emplace_back(std::uint32_t(first + k), glm::min(values[k], fill));
       if (runPower == Rgb(0.0f)) return;
+      std::uint32_t lo = r.count, hi = 0;  // the pixels with an excess (lum > 0: some channel)
       for (std::uint32_t k = 0; k < r.count; ++k)
-        if (lums[k] > 0.0f) got.lit.emplace_back(lums[k], s[k].solidAngle);
+        if (lums[k] > 0.0f)
+          got.lit.emplace_back(lums[k], s[k].solidAngle), lo = std::min(lo, k), hi = k;
       got.maxExcess = std::max(got.maxExcess, runMax);
       got.power += glm::dvec3(runPower);
       got.centroid += glm::dvec3(runCentroid);
-      projector_->addPixels(r.row, r.col, excess.data(), r.count, got.taken);
+      projector_->addPixels(r.row, r.col + lo, excess.data() + lo, hi - lo + 1, got.taken);
     });
     Light light;
     light.power = Rgb(got.power);

@@ -21,7 +21,8 @@
 //      luminance-weighted centroid;
 //   3. the region: the cap of radius theta_c + glare around that centre, glare = the larger of
 //      glareDeg, two pixels and theta_c / 2; it takes the glare around the source too (at
-//      1024x512 a sun's glare holds 15-20% of its power);
+//      1024x512 a sun's glare holds 15-20% of its power; 3 degrees rather than 1 also take a hazy
+//      sun's aureole, and lower every sunlit map's error in README's table);
 //   4. the fill: per channel, the median of the ring [theta_r, theta_r + ring] around it (ringDeg,
 //      at least three pixels): the sky that the source hides. A wide ring is read on a lattice
 //      (~1000 pixels), and with it an estimate of the light's share drops a source below half of
@@ -66,7 +67,7 @@ struct LightOptions {
   float minClippedShare = 0.01f;  ///< the same for a clipped core (a lower bound)
   float maxRadiusDeg = 8.0f;      ///< largest core radius of a light
   float coreFraction = 0.3f;  ///< core: pixels at or above this fraction of the peak's luminance
-  float glareDeg = 1.0f;      ///< taken around the core with it
+  float glareDeg = 3.0f;      ///< taken around the core with it
   float ringDeg = 1.5f;       ///< width of the ring whose median fills the source
 };
 
