@@ -1,10 +1,10 @@
 #!/usr/bin/env python3
 """A timing check for CI, as a ratio measured in one run: liveprobe-bench's benchmarks matching
-FILTER come in pairs named .../BASE and .../BASE+EXTRA; with the repetitions randomly interleaved
-(so a slow moment of the machine falls on both), the median real time of each +EXTRA benchmark
-must be at most LIMIT times its base's.
+FILTER come in families .../BASE and .../OTHER; with the repetitions randomly interleaved (so a
+slow moment of the machine falls on both), the median real time of each OTHER must be at most
+LIMIT times its BASE's.
 
-usage: bench_ratio.py LIVEPROBE_BENCH FILTER BASE EXTRA LIMIT [REPETITIONS]
+usage: bench_ratio.py LIVEPROBE_BENCH FILTER BASE OTHER LIMIT [REPETITIONS]
 """
 import json
 import statistics
@@ -13,7 +13,7 @@ import sys
 
 
 def main():
-    bench, pattern, base, extra, limit = sys.argv[1:6]
+    bench, pattern, base, other, limit = sys.argv[1:6]
     reps = sys.argv[6] if len(sys.argv) > 6 else "7"
     out = subprocess.run(
         [bench, "--benchmark_filter=" + pattern, "--benchmark_repetitions=" + reps,
@@ -25,10 +25,10 @@ def main():
         if b.get("run_type") == "iteration":
             name = b["run_name"].removesuffix("/real_time")  # UseRealTime() names
             times.setdefault(name, []).append(b["real_time"])
-    suffix = "/" + base + "+" + extra
+    suffix = "/" + other
     pairs = [(name[: -len(suffix)] + "/" + base, name) for name in times if name.endswith(suffix)]
     if not pairs:
-        sys.exit(f"bench_ratio: no benchmark pairs .../{base} and ...{suffix} match {pattern}")
+        sys.exit(f"bench_ratio: no benchmarks .../{other} match {pattern}")
     failed = False
     for plain, more in sorted(pairs):
         if plain not in times:
@@ -36,7 +36,7 @@ def main():
         a, b = statistics.median(times[plain]), statistics.median(times[more])
         ok = b <= float(limit) * a
         failed |= not ok
-        print(f"{'ok  ' if ok else 'FAIL'} {more}: {b:.0f} against {a:.0f} us, "
+        print(f"{'ok  ' if ok else 'FAIL'} {more}: {b:.0f} against {base} {a:.0f} us, "
               f"x{b / a:.3f} (limit x{float(limit):.2f})")
     sys.exit(1 if failed else 0)
 
