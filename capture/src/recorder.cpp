@@ -27,6 +27,7 @@ struct VideoRecorder::Impl {
   // finish().
   std::optional<SequencePattern> pattern;
   fs::path partial;
+  Linearizer linearizer;  ///< sRGB, for 8-bit frames
   Image image;
 };
 
@@ -143,7 +144,7 @@ void VideoRecorder::writeSequenceFrame(const Frame& f) {
   // Linear radiance as the replay would see it: 8-bit frames decoded from sRGB, every frame
   // times its radiance scale, so the files need no exposure of their own.
   Image& img = impl_->image;
-  Linearizer().convert(f, img);
+  impl_->linearizer.convert(f, img);
   if (f.radianceScale != 1.0)
     for (float& v : img.rgb) v *= float(f.radianceScale);
   std::error_code ec;

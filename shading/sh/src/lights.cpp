@@ -166,14 +166,11 @@ struct LightExtractor::Index {
   }
 
   /// Calls f(run) for runs that hold every pixel whose direction lies in `cap` (and a few more
-  /// near it; the caller tests the angle), in bands [bandBegin, bandEnd) of it. With step > 1
-  /// only runs on every step-th image row (a lattice sample, with the caller taking every
-  /// step-th column).
+  /// near it; the caller tests the angle). With step > 1 only runs on every step-th image row (a
+  /// lattice sample, with the caller taking every step-th column).
   template <class F>
-  void forCap(const CapBounds& cap, std::uint32_t step, F&& f, int bandBegin = 0,
-              int bandEnd = INT32_MAX) const {
-    const auto [first, last] = bands(cap);
-    const int b0 = std::max(bandBegin, first), b1 = std::min(bandEnd - 1, last);
+  void forCap(const CapBounds& cap, std::uint32_t step, F&& f) const {
+    const auto [b0, b1] = bands(cap);
     if (equirect) {
       const double rowAngle = kPi / height, colAngle = 2 * kPi / width;
       double top = cap.edge(b0 * rowAngle);  // each row's upper edge is the last one's lower
@@ -257,7 +254,7 @@ struct Sampled {
   float weight;  ///< dw times the lattice step squared
 };
 
-/// What a part of the region gives the light.
+/// What the region gives the light.
 struct RegionSums {
   glm::dvec3 power{0.0}, centroid{0.0};
   std::array<glm::dvec3, kShCount> taken{};  ///< the coefficients of the light's pixels
@@ -430,7 +427,7 @@ LightSplit LightExtractor::extract(const PanoramaView& frame, const Sh9& whole,
     const float regionReach = regionRadius + pixelRadius;
     const float regionHalf = std::sin(0.5f * regionReach);
     RegionSums got;
-    got.lit.reserve(std::size_t(8.0f * float(kPi) * regionHalf * regionHalf / pixelDw));
+    got.lit.reserve(std::size_t(8.0f * float(kPi) * regionHalf * regionHalf / pixelDw));  // 2x
     index.forCap(CapBounds(centre, regionReach), 1, [&](const Index::Run& r) {
       readRun(r, values.data());
       const std::size_t first = r.row * width + r.col;
