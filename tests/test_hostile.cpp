@@ -1,4 +1,4 @@
-// Hostile input (issue 12): what a user types or feeds never crashes, hangs or leaves debris.
+// Hostile input: what a user types or feeds never crashes, hangs or leaves debris.
 // Each case asserts the three things: exit status 1, one line that names the input and the
 // fault, and nothing left behind in the output folder. Commands run under `timeout`, so a hang
 // fails the test (exit 124) instead of stalling the suite.
@@ -10,6 +10,7 @@
 #include <fstream>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/videoio.hpp>
+#include <regex>
 #include <set>
 #include <string>
 #include <vector>
@@ -278,4 +279,145 @@ TEST(Hostile, ImageWriteFailureSaysWhy) {
   EXPECT_EQ(lpt::lineCount(r.output), 1) << r.output;
   EXPECT_NE(r.output.find("r.png: cannot write (file too large"), std::string::npos) << r.output;
   EXPECT_EQ(listing(tmp.path), before) << "left files behind";
+}
+
+namespace {
+
+// `liveprobe ARGS` in `dir` under a file-size limit of `kb` KiB, with SIGXFSZ at its default
+// action (a shell's `ulimit -f` leaves it so), and OpenCV's temporary folder pointed into `dir`.
+lpt::RunResult runUnderSizeLimit(const lpt::TempDir& dir, int kb, const std::string& args) {
+  return lpt::runCommand("cd " + lpt::shellQuote(dir.path.string()) +
+                         " && mkdir -p cvtmp && export OPENCV_TEMP_PATH=$PWD/cvtmp && trap - XFSZ "
+                         "&& ulimit -f " +
+                         std::to_string(kb) + " && timeout 60 " + LIVEPROBE_BIN + " " + args);
+}
+
+void writeTruncatedCopy(const std::string& from, const std::string& to, std::size_t bytes) {
+  std::ifstream in(from, std::ios::binary);
+  std::string data(bytes, '\0');
+  in.read(data.data(), std::streamsize(bytes));
+  std::ofstream(to, std::ios::binary).write(data.data(), in.gcount());
+}
+
+}  // namespace
+
+// Every writer stopped by a file-size limit says so in one line, naming the limit, and leaves
+// nothing behind: not its own temporary, and not OpenCV's (the process is never killed by
+// SIGXFSZ, which would leave both).
+TEST(Hostile, WritesPastTheFileSizeLimitAreOneLineAndClean) {
+  lpt::TempDir tmp;
+  const std::string map = lpt::dataPath("probes/latlong_256x128/grace.hdr");
+  const std::vector<std::string> writers = {
+      "irradiance " + map + " --size 256x128 --out e.exr",
+      "irradiance " + map + " --size 256x128 --out e.hdr",
+      "irradiance " + map + " --size 256x128 --out e.png",
+      "replay synthetic:256x128@30 --frames 400 --headless --size 64x36 --quiet --coeffs-out "
+      "c.jsonl",
+      "record synthetic:256x128@30 --frames 300 --quiet --out r.mkv"};
+  for (const std::string& args : writers) {
+    fs::create_directories(tmp.path / "cvtmp");
+    const auto before = listing(tmp.path);
+    const auto r = runUnderSizeLimit(tmp, 20, args);
+    EXPECT_EQ(r.exitCode, 1) << args << "\n" << r.output;
+    EXPECT_EQ(lpt::lineCount(r.output), 1) << args << "\n" << r.output;
+    EXPECT_TRUE(std::regex_search(r.output,
+                                  std::regex(R"(file-size limit \(ulimit -f\) (is|of) \d+ bytes)")))
+        << args << "\n"
+        << r.output;
+    EXPECT_EQ(listing(tmp.path), before) << args << ": left files behind";
+    EXPECT_TRUE(fs::is_empty(tmp.path / "cvtmp")) << args << ": OpenCV's temporary was left";
+  }
+}
+
+// The case of an extension never changes what is written: .HDR and .Exr hold irradiance as .hdr
+// and .exr do (not the 8-bit formats' irradiance / pi).
+TEST(Hostile, ExtensionCaseDoesNotChangeWhatIsWritten) {
+  lpt::TempDir tmp;
+  const std::string map = lpt::dataPath("probes/latlong_256x128/grace.hdr");
+  auto l00 = [&](const std::string& name) {
+    const auto w = lpt::runLiveprobe("irradiance " + map + " --size 64x32 --out " + (tmp / name));
+    EXPECT_EQ(w.exitCode, 0) << w.output;
+    const auto r = lpt::runLiveprobe("coeffs " + (tmp / name));
+    EXPECT_EQ(r.exitCode, 0) << r.output;
+    const auto at = r.output.find("\"L00\":[");
+    return at == std::string::npos ? -1.0 : std::stod(r.output.substr(at + 7));
+  };
+  const double hdr = l00("e.hdr"), exr = l00("e.exr");
+  EXPECT_GT(hdr, 2.5);  // E, not E / pi (about 0.95)
+  EXPECT_DOUBLE_EQ(l00("E.HDR"), hdr);
+  EXPECT_DOUBLE_EQ(l00("e.Exr"), exr);
+}
+
+// A sequence recording checks every frame's place before it moves any frame there, refuses a
+// pattern in the folder part, and never removes what is not a frame file.
+TEST(Hostile, RecordingPatternIsCheckedBeforeAnythingMoves) {
+  lpt::TempDir tmp;
+  fs::create_directory(tmp.path / "d0");
+  expectRefused(tmp, "record synthetic:64x32@30 --frames 3 --quiet --out 'd%d/x.exr'", "d%d/x.exr",
+                "pattern goes in the file name");
+  EXPECT_TRUE(fs::is_empty(tmp.path / "d0"));
+  fs::create_directories(tmp.path / "r/0002.exr");
+  const auto r = lpt::runCommand(
+      "cd " + lpt::shellQuote(tmp.path.string()) + " && timeout 60 " + LIVEPROBE_BIN +
+      " record synthetic:64x32@30 --frames 5 --quiet --out 'r/%04d.exr'");
+  EXPECT_EQ(r.exitCode, 1) << r.output;
+  EXPECT_EQ(lpt::lineCount(r.output), 1) << r.output;
+  EXPECT_NE(r.output.find("r/0002.exr: cannot put the recorded frame in place"), std::string::npos)
+      << r.output;
+  EXPECT_EQ(r.output.find("(Success)"), std::string::npos) << r.output;
+  EXPECT_EQ(listing(tmp.path / "r"), std::set<std::string>{"0002.exr"}) << "frames were moved";
+  // An empty folder named like a later frame is not liveprobe's to remove.
+  fs::remove(tmp.path / "r/0002.exr");
+  fs::create_directories(tmp.path / "r/0004.exr");
+  const auto ok = lpt::runCommand(
+      "cd " + lpt::shellQuote(tmp.path.string()) + " && timeout 60 " + LIVEPROBE_BIN +
+      " record synthetic:64x32@30 --frames 3 --quiet --out 'r/%04d.exr'");
+  EXPECT_EQ(ok.exitCode, 0) << ok.output;
+  EXPECT_EQ(listing(tmp.path / "r"),
+            (std::set<std::string>{"0000.exr", "0001.exr", "0002.exr", "0004.exr"}));
+}
+
+// A replay that fails part-way keeps no frames in --out-dir (and removes the folder it made, but
+// nothing that was there before); two missing frames inside a sequence are an error, never a
+// silent early end.
+TEST(Hostile, FailedReplayKeepsNoFramesAndGapsAreErrors) {
+  lpt::TempDir tmp;
+  const std::string map = lpt::dataPath("probes/latlong_256x128/grace.hdr");
+  fs::create_directory(tmp.path / "s");
+  for (int i = 0; i < 8; ++i) fs::copy_file(map, tmp / ("s/f" + std::to_string(i) + ".hdr"));
+  writeTruncatedCopy(map, tmp / "s/f6.hdr", 3000);
+  const std::string replay = "replay 's/f%d.hdr' --headless --size 64x36 --quiet ";
+  expectRefused(tmp, replay + "--out-dir od", "s/f6.hdr", "truncated");
+  fs::create_directory(tmp.path / "mine");
+  std::ofstream(tmp / "mine/notes.txt") << "mine\n";
+  expectRefused(tmp, replay + "--out-dir mine --coeffs-out c.jsonl", "s/f6.hdr", "truncated");
+  EXPECT_EQ(listing(tmp.path / "mine"), std::set<std::string>{"notes.txt"});
+  fs::copy_file(map, tmp / "s/f6.hdr", fs::copy_options::overwrite_existing);
+  fs::remove(tmp.path / "s/f3.hdr");
+  fs::remove(tmp.path / "s/f4.hdr");
+  expectRefused(tmp, replay, "s/f3.hdr and s/f4.hdr are missing", "s/f5.hdr");
+}
+
+// A truncated EXR is one line from liveprobe: OpenCV's own "imread_" line is not printed.
+TEST(Hostile, TruncatedExrIsOneLine) {
+  lpt::TempDir tmp;
+  writeTruncatedCopy(lpt::dataPath("probes/latlong_full/grace_latlong.exr"), tmp / "t.exr", 5000);
+  for (const char* args : {"coeffs t.exr", "irradiance t.exr --out i.png",
+                           "record t.exr --out "
+                           "r.mkv --frames 2",
+                           "replay t.exr --headless --frames 2", "bench t.exr --frames 2"})
+    expectRefused(tmp, args, "t.exr", "not a readable image");
+}
+
+// Links that loop or lead nowhere, as the input or among a folder's frames: one line, exit 1.
+TEST(Hostile, LoopingLinksAreOneLine) {
+  lpt::TempDir tmp;
+  fs::create_directory_symlink("loop", tmp.path / "loop");
+  expectRefused(tmp, "coeffs loop", "loop", "Too many levels of symbolic links");
+  fs::create_symlink("nothing.hdr", tmp.path / "dangling.hdr");
+  expectRefused(tmp, "coeffs dangling.hdr", "dangling.hdr", "a symbolic link to nothing");
+  fs::create_directory(tmp.path / "frames");
+  fs::copy_file(lpt::dataPath("probes/latlong_256x128/grace.hdr"), tmp / "frames/a.hdr");
+  fs::create_symlink("b.hdr", tmp.path / "frames/b.hdr");
+  expectRefused(tmp, "coeffs frames", "frames/b.hdr", "Too many levels of symbolic links");
 }

@@ -261,6 +261,54 @@ TEST(Stops, SigintDuringHeadlessReplayLeavesCompleteOutputs) {
     EXPECT_NE(e.path().filename().string()[0], '.') << "left behind: " << e.path();
 }
 
+// A paced replay waits for each frame's time on the capture thread: a signal ends that wait at
+// once (a still at 0.02 frames/s waits 50 s a frame; served replays are paced too).
+TEST(Stops, SignalDuringAPacedWaitEndsTheRunAtOnce) {
+  lpt::TempDir tmp;
+  const std::string d = tmp.path.string();
+  const std::string still = lpt::dataPath("probes/latlong_256x128/grace.hdr");
+  for (const char* sig : {"INT", "TERM"}) {
+    const auto r = runShell("cd " + lpt::shellQuote(d) + "; \"$LP\" replay " + still +
+                            " --fps 0.02 --loop --headless --realtime --msaa 1 --size 96x54 "
+                            "--coeffs-out c.jsonl 2>err.txt & pid=$!; for i in $(seq 200); do "
+                            "grep -q Ctrl-C err.txt && break; sleep 0.1; done; sleep 1; "
+                            "rm err.txt; t0=$(date +%s%N); kill -" +
+                            sig +
+                            " $pid; wait $pid; echo rc=$? ms=$(( ($(date +%s%N) - t0) / "
+                            "1000000 ))");
+    EXPECT_NE(r.output.find("rc=130"), std::string::npos) << sig << ": " << r.output;
+    std::smatch m;
+    ASSERT_TRUE(std::regex_search(r.output, m, std::regex("ms=(\\d+)"))) << r.output;
+    // The wait polls every 20 ms; the rest is the summary and finalising (a loaded machine).
+    EXPECT_LT(std::stoi(m[1]), 2000) << sig << ": the paced wait did not end: " << r.output;
+    std::ifstream in(d + "/c.jsonl");
+    EXPECT_TRUE(in) << "--coeffs-out was not finalised";
+    for (const auto& e : fs::directory_iterator(d))
+      EXPECT_NE(e.path().filename().string()[0], '.') << "left behind: " << e.path();
+  }
+}
+
+// A recording whose sidecar timestamps jump by days is played with the gap shortened to one
+// frame interval, and says so, instead of waiting the days out.
+TEST(Stops, ATimestampGapBeyondReasonIsShortenedWithAWarning) {
+  lpt::TempDir tmp;
+  const std::string rec = tmp / "r.mkv";
+  ASSERT_EQ(lpt::runLiveprobe("record synthetic:64x32@30 --frames 4 --quiet --out " + rec).exitCode,
+            0);
+  std::ifstream in(rec + ".json");
+  auto j = nlohmann::json::parse(in);
+  in.close();
+  j["timestamps"] = {0.0, 1e6, 2e6, 2e6 + 1.0 / 30};
+  std::ofstream(rec + ".json") << j.dump();
+  const auto r = lpt::runCommand("timeout 20 " + std::string(LIVEPROBE_BIN) + " replay " + rec +
+                                 " --headless --realtime --msaa 1 --size 96x54");
+  EXPECT_EQ(r.exitCode, 0) << r.output;
+  EXPECT_NE(r.output.find("warning: 2 gap(s) in the source's timestamps over 10 s"),
+            std::string::npos)
+      << r.output;
+  EXPECT_NE(r.output.find("4 frames captured"), std::string::npos) << r.output;
+}
+
 TEST(Stops, SigintDuringRecordFinalisesTheRecording) {
   lpt::TempDir tmp;
   const std::string out = tmp / "rec.mkv";

@@ -186,13 +186,13 @@ std::vector<double> parseNumberList(const std::string& text, const std::string& 
   return v;
 }
 
-void requireExtension(const std::string& path, const std::string& what,
-                      const std::vector<std::string>& allowed) {
+std::string requireExtension(const std::string& path, const std::string& what,
+                             const std::vector<std::string>& allowed) {
   const auto dot = path.find_last_of('.');
   std::string ext = dot == std::string::npos ? "" : path.substr(dot);
   std::transform(ext.begin(), ext.end(), ext.begin(),
                  [](unsigned char c) { return char(std::tolower(c)); });
-  if (std::find(allowed.begin(), allowed.end(), ext) != allowed.end()) return;
+  if (std::find(allowed.begin(), allowed.end(), ext) != allowed.end()) return ext;
   std::string list;
   for (const auto& a : allowed) list += (list.empty() ? "" : ", ") + a;
   throw Error(what + " " + path + ": unsupported extension (expected " + list + ")");

@@ -71,8 +71,9 @@ double parseNumber(const std::string& text, const std::string& what);
 std::vector<double> parseNumberList(const std::string& text, const std::string& what,
                                     std::size_t count, const std::string& expected);
 
-/// Refuses an output path whose extension is not one of `allowed` (".png", ...), naming `what`.
-void requireExtension(const std::string& path, const std::string& what,
-                      const std::vector<std::string>& allowed);
+/// Refuses an output path whose extension is not one of `allowed` (".png", ...), naming `what`;
+/// returns the extension in lower case (the case of a file name never changes what is written).
+std::string requireExtension(const std::string& path, const std::string& what,
+                             const std::vector<std::string>& allowed);
 
 }  // namespace lp::cli

@@ -11,6 +11,7 @@
 #include "commands.h"
 #include "liveprobe/capture/v4l2.h"
 #include "liveprobe/sh/error.h"
+#include "progress.h"
 #include "scene.h"
 
 namespace lp::cli {
@@ -117,14 +118,14 @@ int runDevices(const Args& a) {
     try {
       info = queryCamera(p);
     } catch (const Error& e) {
-      std::cerr << "liveprobe devices: " << e.what() << "\n";
+      errs() << "liveprobe devices: " << e.what() << "\n";
       ++failures;
       continue;
     }
     if (!info.videoCapture) {  // a UVC camera's metadata node, an output device, ...
       if (!a.positional().empty())
-        std::cerr << "liveprobe: " << p << ": " << info.card << ": a " << info.kind
-                  << " node, not a camera; skipped\n";
+        errs() << "liveprobe: " << p << ": " << info.card << ": a " << info.kind
+               << " node, not a camera; skipped\n";
       continue;
     }
     std::cout << p << ": " << info.card << " (" << info.driver << ", " << info.bus << ")\n";

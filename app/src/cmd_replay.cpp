@@ -6,6 +6,8 @@
 #include <filesystem>
 #include <fstream>
 #include <iostream>
+#include <map>
+#include <mutex>
 #include <sstream>
 
 #include "coeffs_io.h"
@@ -13,6 +15,7 @@
 #include "engine_export.h"
 #include "hud.h"
 #include "liveprobe/capture/atomic_file.h"
+#include "liveprobe/capture/input_file.h"
 #include "liveprobe/capture/pipeline.h"
 #include "liveprobe/capture/recorder.h"
 #include "liveprobe/sh/error.h"
@@ -93,8 +96,14 @@ std::vector<OptionSpec> streamOptions() {
        {"--serve-idle", "SECONDS",
         "--serve: close a client that answers no ping for this long, 2 to 3600 (default 30)", false,
         false, g},
-       {"--publish", "mqtt://HOST[:PORT]/TOPIC",
-        "publish every frame's record to an MQTT broker, retained (in --coeffs-format)", false,
+       {"--publish", "mqtt[s]://[USER@]HOST[:PORT]/TOPIC",
+        "publish every frame's record to an MQTT broker, retained (in --coeffs-format); the "
+        "password from USER:PASSWORD@, LIVEPROBE_MQTT_PASSWORD or --mqtt-password-file; mqtts:// "
+        "checks the broker against the system's CAs",
+        false, false, g},
+       {"--mqtt-cafile", "FILE", "mqtts://: trust the CAs in FILE (PEM) instead of the system's",
+        false, false, g},
+       {"--mqtt-password-file", "FILE", "the MQTT user's password, the file's first line", false,
         false, g},
        {"--sun", "",
         "take the dominant compact source (sun, lamp, window) out of the coefficients and light "
@@ -156,24 +165,83 @@ PipelineOptions pipelineOptionsFromArgs(const Args& a) {
   opt.lights = chooseLights(a);
   opt.threads = unsigned(a.integerIn("--threads", 2, 1, 64));
   opt.maxFrames = a.integerIn("--frames", -1, 1, 1000000000);
+  opt.interrupted = stopRequested;  // a paced wait ends within kStopPollSeconds of Ctrl-C
   return opt;
 }
+
+/// --out-dir: the frames this run wrote, removed again (with the folder, if the run made it)
+/// unless the run kept them: a replay that fails part-way leaves no outputs.
+class FrameFolder {
+ public:
+  explicit FrameFolder(std::string dir) : dir_(std::move(dir)) {
+    std::error_code ec;
+    made_ = !fs::exists(dir_, ec);
+    fs::create_directories(dir_, ec);
+    if (!fs::is_directory(dir_, ec))
+      throw Error("--out-dir " + dir_ + ": cannot create the folder");
+  }
+  ~FrameFolder() {
+    if (kept_) return;
+    std::error_code ec;
+    for (const auto& f : written_) fs::remove(f, ec);
+    if (made_) fs::remove(dir_, ec);  // only if empty: nothing of anyone else's goes
+  }
+  FrameFolder(const FrameFolder&) = delete;
+  FrameFolder& operator=(const FrameFolder&) = delete;
+
+  void write(std::uint64_t index, glm::ivec2 size, const std::vector<std::uint8_t>& rgb) {
+    char name[32];
+    std::snprintf(name, sizeof name, "frame_%06llu.png", static_cast<unsigned long long>(index));
+    const std::string path = (fs::path(dir_) / name).string();
+    saveRgb8(path, size.x, size.y, rgb.data());
+    written_.push_back(path);
+  }
+  void keep() { kept_ = true; }
+
+ private:
+  std::string dir_;
+  std::vector<std::string> written_;
+  bool made_ = false, kept_ = false;
+};
+
+/// Headless replay writes --coeffs-out as frames are drawn, but the stream and the broker get each
+/// record at capture: the records sent and not yet drawn are held here, so that a run stopped
+/// between the two still logs every record that left the program (with render time null).
+class SentRecords {
+ public:
+  void sent(std::uint64_t index, std::string record) {
+    std::lock_guard lock(mutex_);
+    pending_.emplace(index, std::move(record));
+  }
+  void drawn(std::uint64_t index) {
+    std::lock_guard lock(mutex_);
+    pending_.erase(pending_.begin(), pending_.upper_bound(index));
+  }
+  /// The records sent and never drawn, in frame order.
+  std::vector<std::string> undrawn() {
+    std::lock_guard lock(mutex_);
+    std::vector<std::string> out;
+    for (auto& [index, record] : pending_) out.push_back(std::move(record));
+    pending_.clear();
+    return out;
+  }
+
+ private:
+  std::mutex mutex_;
+  std::map<std::uint64_t, std::string> pending_;
+};
 
 /// Where the frames go besides the screen: --coeffs-out, --out-dir, --out-video, --record.
 struct StreamOutputs {
   std::unique_ptr<AtomicTextFile> coeffs;
   CoeffFormat format;  ///< --coeffs-format
-  std::string outDir;
+  std::unique_ptr<FrameFolder> frames;
   std::unique_ptr<VideoRecorder> video, record;
+  std::unique_ptr<SentRecords> sent;  ///< headless replay with a stream or a broker
 
   void writeFrame(const ProcessedFrame& f, glm::ivec2 fb,
                   const std::vector<std::uint8_t>& rgb) const {
-    if (!outDir.empty()) {
-      char name[32];
-      std::snprintf(name, sizeof name, "frame_%06llu.png",
-                    static_cast<unsigned long long>(f.index));
-      saveRgb8((fs::path(outDir) / name).string(), fb.x, fb.y, rgb.data());
-    }
+    if (frames) frames->write(f.index, fb, rgb);
     if (video) {
       Frame out;
       out.format = PixelFormat::Bgr8;
@@ -193,13 +261,7 @@ StreamOutputs openOutputs(const Args& a, double fps, const std::string& descript
     throw Error("give --out-dir or --out-video, not both");
   o.format = parseCoeffFormat(a.get("--coeffs-format", "json"), "--coeffs-format", true);
   if (a.has("--coeffs-out")) o.coeffs = std::make_unique<AtomicTextFile>(a.get("--coeffs-out"));
-  o.outDir = a.get("--out-dir");
-  if (!o.outDir.empty()) {
-    std::error_code ec;
-    fs::create_directories(o.outDir, ec);
-    if (!fs::is_directory(o.outDir))
-      throw Error("--out-dir " + o.outDir + ": cannot create the folder");
-  }
+  if (a.has("--out-dir")) o.frames = std::make_unique<FrameFolder>(a.get("--out-dir"));
   if (a.has("--out-video")) {
     requireExtension(a.get("--out-video"), "--out-video", {".mkv", ".avi", ".mp4"});
     o.video = std::make_unique<VideoRecorder>(a.get("--out-video"), fps,
@@ -319,6 +381,7 @@ void runOffline(CapturePipeline& pipeline, StreamView& view, const StreamOutputs
     ++tally.drawn;
     recordSample(tally, *f, uploadMs, ms, latency, view.hud.get(), pipeline.stats(), &sinks);
     if (out.coeffs) out.coeffs->line(frameRecord(*f, out.format, {ms, latency}));
+    if (out.sent) out.sent->drawn(f->index);
     out.writeFrame(*f, fb, px);
     lastMs = ms;
     progress.update(std::int64_t(tally.drawn));
@@ -398,20 +461,23 @@ void printSummary(const std::string& description, const PipelineStats& st, const
     const StreamStats s = sinks.server->stats();
     std::fprintf(stderr,
                  "  stream: %llu clients served, %llu messages sent, %llu dropped for slow "
-                 "clients, %llu refused (client limit), %llu closed (bad message or idle)\n",
+                 "clients, %llu refused (client limit), %llu closed (bad message or idle), %llu "
+                 "connections closed before their handshake\n",
                  (unsigned long long)s.connected, (unsigned long long)s.sent,
                  (unsigned long long)s.dropped, (unsigned long long)s.refused,
-                 (unsigned long long)s.closed);
+                 (unsigned long long)s.closed, (unsigned long long)s.evicted);
   }
   if (sinks.mqtt) {
     const MqttStats m = sinks.mqtt->stats();
     std::fprintf(stderr,
-                 "  mqtt %s:%d/%s: %llu published, %llu lost (no broker connection), %llu "
-                 "reconnects\n",
-                 sinks.mqtt->target().host.c_str(), sinks.mqtt->target().port,
-                 sinks.mqtt->target().topic.c_str(), (unsigned long long)m.published,
-                 (unsigned long long)m.lost, (unsigned long long)m.reconnects);
+                 "  %s: %llu published, %llu lost (no broker connection), %llu reconnects%s\n",
+                 sinks.mqtt->target().describe().c_str(), (unsigned long long)m.published,
+                 (unsigned long long)m.lost, (unsigned long long)m.reconnects,
+                 m.published == 0 && st.captured > 0 ? "; no message reached the broker" : "");
   }
+  if (st.gapsShortened > 0)
+    warn(std::to_string(st.gapsShortened) + " gap(s) in the source's timestamps over " +
+         formatNumber(PipelineOptions{}.maxGapSeconds) + " s were played as one frame interval");
   if (smoothSeconds > 0)
     std::fprintf(stderr,
                  "  --smooth %.3g s: lighting lags a step change by %.3g s (63%% of the step)\n",
@@ -440,8 +506,25 @@ RecordSinks openSinks(const Args& a) {
   } else if (a.has("--serve-remote") || a.has("--serve-clients") || a.has("--serve-idle")) {
     throw Error("--serve-remote, --serve-clients and --serve-idle go with --serve");
   }
-  if (a.has("--publish"))
-    s.mqtt = std::make_unique<MqttPublisher>(parseMqttUrl(a.get("--publish")));
+  if (a.has("--publish")) {
+    MqttTarget t = parseMqttUrl(a.get("--publish"));
+    if (a.has("--mqtt-cafile")) {
+      if (!t.tls) throw Error("--mqtt-cafile goes with an mqtts:// broker");
+      t.cafile = a.get("--mqtt-cafile");
+      readInputFile(t.cafile);  // a missing or unreadable file is one line, now
+    }
+    if (t.password.empty() && !t.username.empty()) {
+      if (a.has("--mqtt-password-file")) {
+        const std::string text = readInputFile(a.get("--mqtt-password-file"));
+        t.password = text.substr(0, text.find_first_of("\r\n"));  // its first line
+      } else if (const char* pw = std::getenv("LIVEPROBE_MQTT_PASSWORD")) {
+        t.password = pw;
+      }
+    }
+    s.mqtt = std::make_unique<MqttPublisher>(std::move(t));
+  } else if (a.has("--mqtt-cafile") || a.has("--mqtt-password-file")) {
+    throw Error("--mqtt-cafile and --mqtt-password-file go with --publish");
+  }
   return s;
 }
 
@@ -488,17 +571,18 @@ int runStream(const Args& a, std::unique_ptr<FrameSource> source, bool live) {
     AtomicTextFile* file = (!headless || live) ? out.coeffs.get() : nullptr;
     StreamServer* server = sinks.server.get();
     MqttPublisher* mqtt = sinks.mqtt.get();
+    if (out.coeffs && !file && (server || mqtt)) out.sent = std::make_unique<SentRecords>();
+    SentRecords* sent = out.sent.get();
     const CoeffFormat format = out.format;
     if (file || server || mqtt)
-      opt.onCaptured = [file, server, mqtt, format](const ProcessedFrame& f) {
+      opt.onCaptured = [file, server, mqtt, sent, format](const ProcessedFrame& f) {
         // One record for the file and the broker (both in --coeffs-format); the server
         // serializes per client format, once per frame.
-        if (file || mqtt) {
-          const std::string record = frameRecord(f, format, {});
-          if (file) file->line(record);
-          if (mqtt) mqtt->publish(record);
-        }
+        const std::string record = frameRecord(f, format, {});
+        if (file) file->line(record);
+        if (mqtt) mqtt->publish(record);
         if (server) server->publish(f);
+        if (sent) sent->sent(f.index, record);
       };
   }
   if (out.record) {  // --record (live): the raw stream, finalised even when capture stops on a
@@ -552,11 +636,17 @@ int runStream(const Args& a, std::unique_ptr<FrameSource> source, bool live) {
     std::fprintf(stderr, "liveprobe: recorded %zu frames to %s\n", out.record->frames(),
                  out.record->path().c_str());
   }
+  if (out.sent && out.coeffs)
+    for (const auto& record : out.sent->undrawn()) out.coeffs->line(record);
   if (out.coeffs && keep) out.coeffs->commit();
   if (!st.error.empty()) throw Error(st.error);
   if (out.video) out.video->finish();
+  if (out.frames) out.frames->keep();
   printSummary(description, st, tally, opt.smoothSeconds, stopRequested(), sinks);
-  return stopRequested() ? kExitInterrupted : 0;
+  if (stopRequested()) return kExitInterrupted;
+  // Publishing was asked for and nothing at all reached the broker: the run failed its purpose.
+  if (sinks.mqtt && sinks.mqtt->stats().published == 0 && st.captured > 0) return kExitRuntime;
+  return 0;
 }
 
 }  // namespace

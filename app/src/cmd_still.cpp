@@ -40,10 +40,10 @@ BandWindow chooseWindow(const Args& a, const Sh9& radiance) {
   if (w == "auto") {
     const AutoWindow aw = autoWindow(radiance);
     if (std::isinf(aw.width))
-      std::cerr << "liveprobe: --window auto: irradiance is already non-negative, no window\n";
+      errs() << "liveprobe: --window auto: irradiance is already non-negative, no window\n";
     else
-      std::cerr << "liveprobe: --window auto: Hann width " << aw.width << " (sigma1 "
-                << aw.window.sigma1 << ", sigma2 " << aw.window.sigma2 << ")\n";
+      errs() << "liveprobe: --window auto: Hann width " << aw.width << " (sigma1 "
+             << aw.window.sigma1 << ", sigma2 " << aw.window.sigma2 << ")\n";
     return aw.window;
   }
   const double width = parseNumber(w, "--window");
@@ -134,7 +134,7 @@ const CommandSpec kIrradianceSpec{
 
 int runIrradiance(const Args& a) {
   if (!a.has("--out")) throw Error("--out FILE is required");
-  requireExtension(a.get("--out"), "--out", {".hdr", ".exr", ".png"});
+  const std::string ext = requireExtension(a.get("--out"), "--out", {".hdr", ".exr", ".png"});
   if (a.has("--cube") && a.has("--size")) throw Error("give --size or --cube, not both");
   // The equirect indexed by normal, or (--cube N) the six faces as a 4N x 3N horizontal cross in
   // OpenGL's face convention: the cube layout that liveprobe reads (liveprobe/sh/layout.h).
@@ -163,11 +163,9 @@ int runIrradiance(const Args& a) {
   Image out(w, h);
   for (std::size_t i = 0; i < e.size(); ++i)  // (cells of the cross outside the faces: black)
     if (grid[i].solidAngle > 0) std::copy_n(&e[i].x, 3, out.rgb.data() + 3 * i);
-  const std::string path = a.get("--out");
-  const std::string ext = path.size() > 4 ? path.substr(path.size() - 4) : "";
   if (ext != ".hdr" && ext != ".exr")
     for (float& v : out.rgb) v /= kA0;  // 8-bit: the radiance of a white Lambertian surface
-  saveImage(path, out);
+  saveImage(a.get("--out"), out);
   return 0;
 }
 

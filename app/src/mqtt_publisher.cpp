@@ -12,23 +12,53 @@
 
 namespace lp::cli {
 
+std::string MqttTarget::describe() const {
+  return std::string(tls ? "mqtts://" : "mqtt://") + (username.empty() ? "" : username + "@") +
+         host + ":" + std::to_string(port) + "/" + topic;
+}
+
 MqttTarget parseMqttUrl(const std::string& url) {
-  const std::string scheme = "mqtt://";
-  const std::string what = "--publish " + url;
-  if (url.rfind(scheme, 0) != 0) throw Error(what + ": expected mqtt://HOST[:PORT]/TOPIC");
-  const std::string rest = url.substr(scheme.size());
+  MqttTarget t;
+  std::string rest;
+  if (url.rfind("mqtt://", 0) == 0) {
+    rest = url.substr(7);
+  } else if (url.rfind("mqtts://", 0) == 0) {
+    rest = url.substr(8);
+    t.tls = true;
+    t.port = 8883;
+  }
   const auto slash = rest.find('/');
+  std::string authority = rest.substr(0, slash);
+  // The password is cut out before anything is quoted back.
+  std::string shown = url;
+  if (const auto at = authority.rfind('@'); at != std::string::npos) {
+    const std::string user = authority.substr(0, at);
+    const auto colon = user.find(':');
+    t.username = user.substr(0, colon);
+    if (colon != std::string::npos) t.password = user.substr(colon + 1);
+    authority = authority.substr(at + 1);
+    shown = std::string(t.tls ? "mqtts://" : "mqtt://") + t.username + "@" + authority +
+            (slash == std::string::npos ? "" : rest.substr(slash));
+    if (t.username.empty()) throw Error("--publish " + shown + ": an empty user name");
+  }
+  const std::string what = "--publish " + shown;
+  if (rest.empty() && url.rfind("mqtt", 0) != 0)
+    throw Error(what + ": expected mqtt://HOST[:PORT]/TOPIC or mqtts://...");
   if (slash == std::string::npos || slash + 1 >= rest.size())
     throw Error(what + ": no topic (expected mqtt://HOST[:PORT]/TOPIC)");
-  MqttTarget t;
-  const std::string hostPort = rest.substr(0, slash);
   t.topic = rest.substr(slash + 1);
+  if (t.topic.size() > 65535)
+    throw Error(what.substr(0, 80) + "...: the topic is " + std::to_string(t.topic.size()) +
+                " bytes; MQTT allows 65535");
+  if (t.topic.find('\0') != std::string::npos ||
+      mosquitto_validate_utf8(t.topic.data(), int(t.topic.size())) != MOSQ_ERR_SUCCESS)
+    throw Error("--publish: the topic is not valid UTF-8");
   if (t.topic.find_first_of("+#") != std::string::npos)
     throw Error(what + ": a topic to publish to has no wildcards (+, #)");
-  const auto colon = hostPort.rfind(':');
-  t.host = hostPort.substr(0, colon);
+  const auto colon = authority.rfind(':');
+  t.host = authority.substr(0, colon);
   if (colon != std::string::npos) {
-    const std::string port = hostPort.substr(colon + 1);
+    const std::string port = authority.substr(colon + 1);
     char* end = nullptr;
     const long p = std::strtol(port.c_str(), &end, 10);
     if (port.empty() || *end != '\0' || p < 1 || p > 65535)
@@ -45,13 +75,37 @@ std::once_flag initOnce;
 
 MqttPublisher::MqttPublisher(MqttTarget target) : target_(std::move(target)) {
   std::call_once(initOnce, [] { mosquitto_lib_init(); });
+  const std::string what = "--publish " + target_.describe();
   mosq_ = mosquitto_new(nullptr, true, this);
-  if (!mosq_) throw Error("--publish: cannot create an MQTT client (out of memory)");
+  if (!mosq_) throw Error(what + ": cannot create an MQTT client (out of memory)");
+  const auto fail = [&](const std::string& why) {
+    mosquitto_disconnect(mosq_);
+    mosquitto_loop_stop(mosq_, true);
+    mosquitto_destroy(mosq_);
+    throw Error(what + ": " + why);
+  };
+  if (!target_.username.empty() &&
+      mosquitto_username_pw_set(mosq_, target_.username.c_str(),
+                                target_.password.empty() ? nullptr : target_.password.c_str()) !=
+          MOSQ_ERR_SUCCESS)
+    fail("the user name or password is not valid UTF-8");
+  if (target_.tls) {
+    const int rc =
+        target_.cafile.empty()
+            ? mosquitto_int_option(mosq_, MOSQ_OPT_TLS_USE_OS_CERTS, 1)
+            : mosquitto_tls_set(mosq_, target_.cafile.c_str(), nullptr, nullptr, nullptr, nullptr);
+    if (rc != MOSQ_ERR_SUCCESS)
+      fail("cannot set up TLS" +
+           (target_.cafile.empty() ? std::string() : " with --mqtt-cafile " + target_.cafile) +
+           " (" + mosquitto_strerror(rc) + ")");
+  }
   mosquitto_connect_callback_set(mosq_, [](mosquitto*, void* obj, int rc) {
     auto* self = static_cast<MqttPublisher*>(obj);
     if (rc == 0) {
       self->connected_ = true;
       ++self->connects_;
+    } else {
+      self->refusal_ = rc;
     }
   });
   mosquitto_disconnect_callback_set(mosq_, [](mosquitto*, void* obj, int) {
@@ -61,19 +115,19 @@ MqttPublisher::MqttPublisher(MqttTarget target) : target_(std::move(target)) {
   mosquitto_reconnect_delay_set(mosq_, 1, 8, true);
   // A broker that is down now is not an error: the loop keeps trying.
   mosquitto_connect_async(mosq_, target_.host.c_str(), target_.port, 10);
-  if (mosquitto_loop_start(mosq_) != MOSQ_ERR_SUCCESS) {
-    mosquitto_destroy(mosq_);
-    throw Error("--publish: cannot start the MQTT client's thread");
-  }
+  if (mosquitto_loop_start(mosq_) != MOSQ_ERR_SUCCESS)
+    fail("cannot start the MQTT client's thread");
   // The first frames should reach a broker that is up: wait for the connection up to 3 s.
   const auto until = std::chrono::steady_clock::now() + std::chrono::seconds(3);
-  while (!connected_ && std::chrono::steady_clock::now() < until)
+  while (!connected_ && !refusal_ && std::chrono::steady_clock::now() < until)
     std::this_thread::sleep_for(std::chrono::milliseconds(5));
+  if (const int rc = refusal_)
+    fail(std::string("the broker refused the connection: ") + mosquitto_connack_string(rc));
   if (!connected_)
     std::fprintf(stderr,
-                 "liveprobe: --publish: no broker at %s:%d yet; capture goes on, retrying in the "
-                 "background\n",
-                 target_.host.c_str(), target_.port);
+                 "liveprobe: warning: %s: no broker answers yet; frames are counted as lost "
+                 "until one does (retrying in the background)\n",
+                 what.c_str());
 }
 
 MqttPublisher::~MqttPublisher() {

@@ -1,6 +1,6 @@
 #pragma once
-// Fan-out through an MQTT broker (replay/live --publish mqtt://HOST:PORT/TOPIC): every frame's
-// record (engine_export.h's frameRecord) published retained, QoS 0, with libmosquitto, so a
+// Fan-out through an MQTT broker (replay/live --publish mqtt[s]://[USER@]HOST:PORT/TOPIC): every
+// frame's record (engine_export.h's frameRecord) published retained, QoS 0, with libmosquitto, so a
 // late subscriber gets the newest frame at once. A lost broker never stalls capture: libmosquitto
 // reconnects on its own thread with exponential backoff, and what could not be handed to the
 // broker meanwhile is counted.
@@ -14,11 +14,19 @@ namespace lp::cli {
 
 struct MqttTarget {
   std::string host;
-  int port = 1883;
+  int port = 1883;  ///< 8883 for mqtts://
   std::string topic;
+  bool tls = false;      ///< mqtts://: TLS, the broker checked against the CA store or `cafile`
+  std::string cafile;    ///< --mqtt-cafile: the CAs to trust instead of the system's
+  std::string username;  ///< from the URL's user part
+  std::string password;  ///< from the URL, LIVEPROBE_MQTT_PASSWORD or --mqtt-password-file
+  /// The URL as messages may show it: never the password.
+  std::string describe() const;
 };
 
-/// Parses mqtt://HOST[:PORT]/TOPIC. Throws lp::Error naming --publish.
+/// Parses mqtt[s]://[USER[:PASSWORD]@]HOST[:PORT]/TOPIC. The topic must be one MQTT can publish
+/// to: valid UTF-8 of at most 65535 bytes, without the wildcards + and # or a NUL. Throws
+/// lp::Error naming --publish, never echoing the password.
 MqttTarget parseMqttUrl(const std::string& url);
 
 struct MqttStats {
@@ -31,6 +39,8 @@ struct MqttStats {
 class MqttPublisher {
  public:
   /// Starts connecting (in the background: a broker that is down is retried, not an error).
+  /// Waits up to 3 s for the first connection; a broker that refuses the credentials (or the
+  /// TLS handshake) in that time throws lp::Error.
   explicit MqttPublisher(MqttTarget target);
   ~MqttPublisher();
   MqttPublisher(const MqttPublisher&) = delete;
@@ -46,6 +56,7 @@ class MqttPublisher {
   mosquitto* mosq_ = nullptr;
   std::atomic<std::uint64_t> published_{0}, lost_{0}, connects_{0};
   std::atomic<bool> connected_{false};
+  std::atomic<int> refusal_{0};  ///< the broker's CONNACK code when it refused the connection
 };
 
 }  // namespace lp::cli

@@ -8,6 +8,7 @@
 #include <csignal>
 #include <cstdio>
 #include <cstdlib>
+#include <iostream>
 
 namespace lp::cli {
 
@@ -45,8 +46,30 @@ void installStopHandlers() {
   sigaction(SIGTERM, &sa, nullptr);
 }
 
+std::ostream& errs() {
+  static std::ostream out(std::cerr.rdbuf());
+  static const bool once = [] {
+    out.setf(std::ios::unitbuf);
+    out.tie(&std::cout);
+    return true;
+  }();
+  (void)once;
+  return out;
+}
+
+void silenceLibraryStderr() {
+  errs();  // bound to stderr's buffer first
+  std::cerr.rdbuf(nullptr);
+}
+
 bool stopRequested() { return gStopSignal.load(std::memory_order_relaxed) != 0; }
 int stopSignal() { return gStopSignal.load(); }
+
+std::string formatNumber(double v, int digits) {
+  char b[64];
+  std::snprintf(b, sizeof b, "%.*g", digits, v);
+  return b;
+}
 
 void warn(const std::string& text) {
   std::fprintf(stderr, "liveprobe: warning: %s\n", text.c_str());

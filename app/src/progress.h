@@ -4,15 +4,23 @@
 // its summary and exits with kExitInterrupted. A second signal ends the process at once.
 #include <chrono>
 #include <cstdint>
+#include <ostream>
 #include <string>
 #include <vector>
 
 namespace lp::cli {
 
 inline constexpr int kExitInterrupted = 130;  ///< 128 + SIGINT, as shells report it
+inline constexpr int kExitRuntime = 3;  ///< the run failed at run time (an internal error too)
 
 /// Installs the SIGINT/SIGTERM handlers (idempotent).
 void installStopHandlers();
+
+/// liveprobe's own error stream, on stderr. silenceLibraryStderr() points std::cerr nowhere, so
+/// that a library's own line (OpenCV's "imread_(...)" before it returns its failure to us) never
+/// joins the one line liveprobe prints about a bad input.
+std::ostream& errs();
+void silenceLibraryStderr();
 /// A stop was asked for by a signal.
 bool stopRequested();
 /// The signal that asked for the stop (0 if none).
@@ -39,6 +47,10 @@ class Progress {
   bool quiet_, tty_, open_ = false;
   Clock::time_point start_, last_;
 };
+
+/// A number as a person writes it: up to `digits` significant digits, no trailing zeros
+/// (30, 25.13, 0.02).
+std::string formatNumber(double v, int digits = 4);
 
 /// One warning line on stderr ("liveprobe: warning: ..."); the run goes on.
 void warn(const std::string& text);

@@ -4,10 +4,15 @@
 #include <libwebsockets.h>
 #include <linux/sockios.h>
 #include <sys/ioctl.h>
+#include <sys/socket.h>
+#include <unistd.h>
 
+#include <algorithm>
 #include <atomic>
+#include <cerrno>
 #include <chrono>
 #include <cstring>
+#include <list>
 #include <map>
 #include <mutex>
 #include <optional>
@@ -35,11 +40,58 @@ struct SessionSlot {
   Session* s;
 };
 
+/// The longest query a client may send (?format=NAME needs a few dozen bytes).
+constexpr int kMaxQuery = 256;
+
+/// The format a WebSocket client asked for with ?format=NAME; nullopt when it asked for none.
+/// Anything else in the query (another key, a repeated or empty format, an over-long query, a
+/// broken %-escape) throws lp::Error with the reason, which closes the client with 1008.
+std::optional<CoeffFormat> formatFromQuery(lws* wsi) {
+  const int total = lws_hdr_total_length(wsi, WSI_TOKEN_HTTP_URI_ARGS);
+  if (total <= 0) return std::nullopt;
+  if (total > kMaxQuery)
+    throw Error("query of " + std::to_string(total) + " bytes (at most " +
+                std::to_string(kMaxQuery) + ")");
+  std::optional<CoeffFormat> format;
+  char buf[kMaxQuery + 1];
+  for (int i = 0; lws_hdr_copy_fragment(wsi, buf, sizeof buf, WSI_TOKEN_HTTP_URI_ARGS, i) >= 0;
+       ++i) {
+    const std::string arg(buf);
+    if (arg.find('%') != std::string::npos)
+      throw Error("query argument '" + arg + "': a broken %-escape");
+    if (arg.rfind("format=", 0) != 0)
+      throw Error("query argument '" + arg + "': expected format=NAME");
+    if (format) throw Error("format given twice in the query");
+    format = parseCoeffFormat(arg.substr(7), "format", true);
+  }
+  return format;
+}
+
 bool isLoopback(const std::string& host) {
   if (host == "localhost") return true;
   in_addr a{};
   if (inet_pton(AF_INET, host.c_str(), &a) != 1) return false;
   return (ntohl(a.s_addr) >> 24) == 127;
+}
+
+/// Binds a socket to the address as the server will, and says in one line why it can't: an
+/// address this machine does not have (EADDRNOTAVAIL), a port in use, a privileged port.
+void checkBindable(const std::string& host, int port, const std::string& where) {
+  const int fd = ::socket(AF_INET, SOCK_STREAM | SOCK_CLOEXEC, 0);
+  if (fd < 0) throw Error(where + ": cannot make a socket (" + std::strerror(errno) + ")");
+  const int one = 1;
+  ::setsockopt(fd, SOL_SOCKET, SO_REUSEADDR, &one, sizeof one);  // as lws sets it
+  sockaddr_in a{};
+  a.sin_family = AF_INET;
+  a.sin_port = htons(std::uint16_t(port));
+  inet_pton(AF_INET, host.c_str(), &a.sin_addr);
+  const int rc = ::bind(fd, reinterpret_cast<const sockaddr*>(&a), sizeof a);
+  const int err = errno;
+  ::close(fd);
+  if (rc == 0) return;
+  if (err == EADDRNOTAVAIL) throw Error(where + ": " + host + " is not an address of this machine");
+  if (err == EADDRINUSE) throw Error(where + ": the port is in use");
+  throw Error(where + ": cannot listen there (" + std::strerror(err) + ")");
 }
 
 }  // namespace
@@ -84,6 +136,23 @@ struct StreamServer::Impl {
   };
   std::map<std::string, Serialized> serialized;
 
+  // Connections that have not yet sent a whole HTTP request or WebSocket upgrade, oldest first,
+  // each with its peer's address (the service thread's own: no lock). Each has a deadline
+  // (kHandshakeSeconds); over the per-address or the overall budget the oldest is closed, so a
+  // new client is always heard.
+  struct Pending {
+    lws* wsi;
+    std::string peer;
+  };
+  std::list<Pending> pending;
+  std::size_t pendingFrom(const std::string& peer) const {
+    return std::size_t(std::count_if(pending.begin(), pending.end(),
+                                     [&](const Pending& p) { return p.peer == peer; }));
+  }
+  void admit(lws* wsi);
+  void handshakeDone(lws* wsi);
+  void evictOldest(const std::string* peer);
+
   lws_protocols protocols[2]{};
   lws_http_mount mounts[2]{};
   lws_retry_bo_t retry{};
@@ -97,6 +166,36 @@ struct StreamServer::Impl {
     return -1;
   }
 };
+
+void StreamServer::Impl::evictOldest(const std::string* peer) {
+  // A connection whose request is already waiting in its socket is read in this round of the
+  // service loop: it is a client about to be served, not a silent one.
+  const auto waiting = [](lws* wsi) {
+    int unread = 0;
+    return ioctl(lws_get_socket_fd(wsi), FIONREAD, &unread) == 0 && unread > 0;
+  };
+  for (auto it = pending.begin(); it != pending.end(); ++it)
+    if ((!peer || it->peer == *peer) && !waiting(it->wsi)) {
+      lws_set_timeout(it->wsi, PENDING_TIMEOUT_USER_OK, LWS_TO_KILL_ASYNC);
+      pending.erase(it);
+      std::lock_guard lock(mutex);
+      ++stats.evicted;
+      return;
+    }
+}
+
+void StreamServer::Impl::admit(lws* wsi) {
+  char addr[64] = "";
+  if (!lws_get_peer_simple(wsi, addr, sizeof addr)) return;  // the listening socket
+  const std::string peer = addr;
+  if (pendingFrom(peer) >= opt.maxPendingPerAddress) evictOldest(&peer);
+  if (pending.size() >= opt.maxPending) evictOldest(nullptr);
+  pending.push_back({wsi, peer});
+}
+
+void StreamServer::Impl::handshakeDone(lws* wsi) {
+  pending.remove_if([wsi](const Pending& p) { return p.wsi == wsi; });
+}
 
 int StreamServer::Impl::onWriteable(lws* wsi, Session& s) {
   if (stopping) return close(wsi, LWS_CLOSE_STATUS_GOINGAWAY, "liveprobe stopped");
@@ -165,7 +264,17 @@ int StreamServer::Impl::callback(lws* wsi, lws_callback_reasons reason, void* us
   auto* slot = static_cast<SessionSlot*>(user);
   if (!self) return lws_callback_http_dummy(wsi, reason, user, in, len);
   switch (reason) {
+    case LWS_CALLBACK_WSI_CREATE:  // accepted: it has handshakeSeconds to say what it wants
+      self->admit(wsi);
+      return 0;
+    case LWS_CALLBACK_WSI_DESTROY:
+      self->handshakeDone(wsi);
+      return 0;
+    case LWS_CALLBACK_FILTER_HTTP_CONNECTION:  // a whole request came: no longer pending
+      self->handshakeDone(wsi);
+      return lws_callback_http_dummy(wsi, reason, user, in, len);
     case LWS_CALLBACK_FILTER_PROTOCOL_CONNECTION: {
+      self->handshakeDone(wsi);
       std::lock_guard lock(self->mutex);
       if (self->stopping || self->stats.clients >= std::uint64_t(self->opt.maxClients)) {
         ++self->stats.refused;
@@ -176,13 +285,10 @@ int StreamServer::Impl::callback(lws* wsi, lws_callback_reasons reason, void* us
     case LWS_CALLBACK_ESTABLISHED: {
       slot->s = new Session;
       slot->s->format = self->opt.defaultFormat;
-      char buf[64];
-      if (const char* f = lws_get_urlarg_by_name(wsi, "format=", buf, sizeof buf)) {
-        try {
-          slot->s->format = parseCoeffFormat(f, "format", true);
-        } catch (const Error& e) {
-          slot->s->refusal = e.what();  // closed once the handshake is through, with the reason
-        }
+      try {
+        if (auto f = formatFromQuery(wsi)) slot->s->format = *f;
+      } catch (const Error& e) {
+        slot->s->refusal = e.what();  // closed once the handshake is through, with the reason
       }
       {
         std::lock_guard lock(self->mutex);
@@ -248,16 +354,29 @@ StreamServer::StreamServer(StreamServerOptions options) : impl_(std::make_unique
   info.mounts = m.mounts;
   info.user = &m;
   info.retry_and_idle_policy = &m.retry;
-  info.options = LWS_SERVER_OPTION_DISABLE_IPV6 | LWS_SERVER_OPTION_VALIDATE_UTF8;
-  info.fd_limit_per_thread = unsigned(m.opt.maxClients) + 32;
-  info.timeout_secs = unsigned(m.opt.idleSeconds);
+  info.options = LWS_SERVER_OPTION_DISABLE_IPV6 | LWS_SERVER_OPTION_VALIDATE_UTF8 |
+                 LWS_SERVER_OPTION_FAIL_UPON_UNABLE_TO_BIND;
+  // Every client and every pending connection has a descriptor and a header buffer.
+  // (Twice the pending budget: a closed connection holds its descriptor until the next round.)
+  info.fd_limit_per_thread = unsigned(m.opt.maxClients) + 2 * unsigned(m.opt.maxPending) + 32;
+  info.max_http_header_pool = std::uint16_t(m.opt.maxPending + 8);
+  // Room for a request with a long query, so that it reaches formatFromQuery and is refused
+  // there with its reason (1008) instead of being cut off by lws.
+  info.max_http_header_data = 8192;
+  // The handshake deadline: lws closes a connection that has not sent its whole request (or
+  // upgrade) within timeout_secs, and frees a header buffer held idle as long.
+  info.timeout_secs = unsigned(m.opt.handshakeSeconds);
+  info.timeout_secs_ah_idle = unsigned(m.opt.handshakeSeconds);
+  const std::string where = "--serve " + m.opt.host + ":" + std::to_string(m.opt.port);
+  checkBindable(m.opt.host, m.opt.port, where);
   m.context = lws_create_context(&info);
-  if (!m.context)
-    throw Error("--serve " + m.opt.host + ":" + std::to_string(m.opt.port) +
-                ": cannot listen there (the port is in use, or the address is not this "
-                "machine's)");
+  if (!m.context) throw Error(where + ": cannot listen there");
   m.vhost = lws_get_vhost_by_name(m.context, "default");
-  m.boundPort = m.vhost ? lws_get_vhost_listen_port(m.vhost) : m.opt.port;
+  m.boundPort = m.vhost ? lws_get_vhost_listen_port(m.vhost) : 0;
+  if (m.boundPort <= 0) {
+    lws_context_destroy(m.context);
+    throw Error(where + ": cannot listen there");
+  }
   m.thread = std::thread([&m] {
     auto stopAt = std::chrono::steady_clock::time_point::max();
     while (true) {

@@ -18,9 +18,14 @@ struct StreamServerOptions {
   int maxClients = 32;
   int idleSeconds = 30;                 ///< a client that answers no ping for this long is closed
   std::size_t maxClientMessage = 4096;  ///< the largest message a client may send, bytes
-  CoeffFormat defaultFormat;            ///< for clients that ask for none (?format=)
-  std::string webDir;                   ///< the page (index.html, main.js)
-  std::string threeDir;                 ///< three.js's build folder, served at /three/
+  /// A connection must send a whole HTTP request or WebSocket upgrade within this long.
+  int handshakeSeconds = 3;
+  /// Connections still in their handshake, in all and from one address: over either limit the
+  /// oldest such connection (of that address) is closed, so a new client is always heard.
+  std::size_t maxPending = 256, maxPendingPerAddress = 64;
+  CoeffFormat defaultFormat;  ///< for clients that ask for none (?format=)
+  std::string webDir;         ///< the page (index.html, main.js)
+  std::string threeDir;       ///< three.js's build folder, served at /three/
 };
 
 /// "[ADDR:]PORT" of --serve: ADDR defaults to 127.0.0.1. An address beyond the loopback is
@@ -34,6 +39,7 @@ struct StreamStats {
   std::uint64_t dropped = 0;    ///< frames a slow client missed (it got a newer one instead)
   std::uint64_t refused = 0;    ///< connections over the client limit
   std::uint64_t closed = 0;     ///< clients closed for a bad message, or idle
+  std::uint64_t evicted = 0;    ///< connections closed before their handshake (deadline, limits)
 };
 
 class StreamServer {

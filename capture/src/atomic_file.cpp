@@ -1,5 +1,6 @@
 #include "liveprobe/capture/atomic_file.h"
 
+#include <sys/resource.h>
 #include <unistd.h>
 
 #include <cerrno>
@@ -44,20 +45,26 @@ void AtomicOutput::commit() {
   done_ = true;
 }
 
-namespace {
+std::optional<std::uintmax_t> fileSizeLimit() {
+  rlimit r{};
+  if (::getrlimit(RLIMIT_FSIZE, &r) != 0 || r.rlim_cur == RLIM_INFINITY) return std::nullopt;
+  return std::uintmax_t(r.rlim_cur);
+}
 
-// errno in the user's words: a full disk is "no space left on the device".
-std::string writeFault(int err) {
+std::string describeWriteError(int err) {
   if (err == ENOSPC) return "no space left on the device";
-  if (err == EFBIG) return "file too large for this file system or limit";
+  if (err == EFBIG) {
+    const auto limit = fileSizeLimit();
+    return limit ? "file too large: the file-size limit (ulimit -f) is " + std::to_string(*limit) +
+                       " bytes"
+                 : "file too large for this file system";
+  }
   return err ? std::strerror(err) : "write failed";
 }
 
-}  // namespace
-
 AtomicTextFile::AtomicTextFile(const std::string& path) : file_(path) {
   out_.open(file_.temporary(), std::ios::binary);
-  if (!out_) throw Error(path + ": cannot write (" + writeFault(errno) + ")");
+  if (!out_) throw Error(path + ": cannot write (" + describeWriteError(errno) + ")");
 }
 
 void AtomicTextFile::noteFault() {
@@ -87,7 +94,7 @@ void AtomicTextFile::commit() {
   noteFault();
   if (!out_ || fault_) {
     file_.discard();
-    throw Error(file_.path() + ": cannot write (" + writeFault(fault_) + ")");
+    throw Error(file_.path() + ": cannot write (" + describeWriteError(fault_) + ")");
   }
   file_.commit();
 }

@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <array>
+#include <cerrno>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
@@ -30,9 +31,6 @@ float linearToSrgb(float v) {
 }
 
 namespace {
-
-// Points fd 2 at /dev/null for its lifetime. Decoders (libpng, libjpeg, OpenCV's own logging)
-// write warnings straight to stderr; we report their failure as one line of our own instead.
 
 std::string lower(std::string s) {
   for (auto& c : s) c = char(std::tolower(static_cast<unsigned char>(c)));
@@ -247,6 +245,26 @@ void writeAtomically(const std::string& path, const cv::Mat& m,
                      const std::vector<int>& params = {}) {
   const std::string ext = lower(fs::path(path).extension().string());
   if (ext.empty()) throw Error(path + ": output needs an extension (.png, .hdr, .exr, .jpg)");
+  if (ext == ".hdr" || ext == ".exr") {
+    // OpenCV encodes these two only into a file (imencode would leave its own temporary in /tmp
+    // when a write fails): written straight to our temporary beside the target, and checked.
+    AtomicOutput out(path);
+    bool ok = false;
+    try {
+      ok = cv::imwrite(out.temporary(), m, params);
+    } catch (const cv::Exception& e) {
+      throw Error(path + ": cannot encode an image as " + ext + " (" + e.err + ")");
+    }
+    std::error_code ec;
+    const auto size = fs::file_size(out.temporary(), ec);
+    // The encoders do not all report a short write: a file cut at the size limit is one.
+    const auto limit = fileSizeLimit();
+    if (!ok || ec || size == 0 || (limit && size >= *limit))
+      throw Error(path + ": cannot write (" +
+                  describeWriteError(limit && size >= *limit ? EFBIG : 0) + ")");
+    out.commit();
+    return;
+  }
   // Encoded in memory first, so that an encoder's refusal and a failed write (a full disk) are
   // told apart, and the write goes through the one checked, atomic writer.
   std::vector<std::uint8_t> bytes;

@@ -16,6 +16,9 @@ void requireRegularFile(const std::string& path) {
     case fs::file_type::regular:
       return;
     case fs::file_type::not_found:
+      if (fs::is_symlink(fs::symlink_status(path, ec)))
+        throw Error(path + ": a symbolic link to nothing (" + fs::read_symlink(path, ec).string() +
+                    ")");
       throw Error(path + ": no such file");
     case fs::file_type::directory:
       throw Error(path + ": is a folder, not a file");

@@ -157,12 +157,13 @@ struct CapturePipeline::Loop {
   std::uint64_t index = 0;
   Clock::time_point wallStart;
   double streamStart = -1, loopOffset = 0, lastTimestamp = 0;
+  double pacedTimestamp = -1;  ///< the last frame's timestamp that pace() saw
 };
 
 bool CapturePipeline::waitForTurn(Loop& s) {
   std::unique_lock lock(mutex_);
-  cv_.wait(lock, [&] { return !paused_ || steps_ > 0 || stop_; });
-  if (stop_) return false;
+  waitPolling(lock, Clock::time_point::max(), [&] { return !paused_ || steps_ > 0; });
+  if (stop_ || interrupted_) return false;
   if (paused_) --steps_;
   if (std::exchange(resync_, false)) s.streamStart = -1;  // resumed: pace from here
   return true;
@@ -256,19 +257,46 @@ Sh9 CapturePipeline::project(Loop& s, ProcessedFrame& out) const {
   return s.smoother.update(split.residual, out.timestamp);
 }
 
+template <class Ready>
+void CapturePipeline::waitPolling(std::unique_lock<std::mutex>& lock, Clock::time_point until,
+                                  Ready ready) {
+  const auto poll =
+      std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(kStopPollSeconds));
+  while (!stop_ && !ready()) {
+    if (opt_.interrupted && opt_.interrupted()) {
+      interrupted_ = true;
+      return;
+    }
+    const auto now = Clock::now();
+    if (now >= until) return;
+    cv_.wait_until(lock, until - now > poll ? now + poll : until);
+  }
+}
+
 void CapturePipeline::pace(Loop& s, double timestamp) {
   if (!opt_.realtime) return;
   if (s.streamStart < 0) s.streamStart = timestamp, s.wallStart = Clock::now();
+  // A gap beyond reason (a sidecar's timestamps jumping by days) is not waited out: the stream's
+  // clock moves on by one frame interval instead.
+  const double gap = timestamp - s.pacedTimestamp;
+  const double interval = source_->fps() > 0 ? 1.0 / source_->fps() : 0.0;
+  if (s.pacedTimestamp >= 0 && gap > std::max(opt_.maxGapSeconds, 10 * interval)) {
+    s.streamStart += gap - interval;
+    std::lock_guard lock(mutex_);
+    ++stats_.gapsShortened;
+  }
+  s.pacedTimestamp = timestamp;
   const auto due = s.wallStart + std::chrono::duration_cast<Clock::duration>(
                                      std::chrono::duration<double>(timestamp - s.streamStart));
   std::unique_lock lock(mutex_);
-  cv_.wait_until(lock, due, [&] { return bool(stop_); });
+  waitPolling(lock, due, [] { return false; });
 }
 
 void CapturePipeline::run() {
   Loop s(opt_);
   try {
-    while (!stop_ && (opt_.maxFrames < 0 || std::int64_t(s.index) < opt_.maxFrames)) {
+    while (!stop_ && !interrupted_ &&
+           (opt_.maxFrames < 0 || std::int64_t(s.index) < opt_.maxFrames)) {
       if (!waitForTurn(s)) break;
       const auto t0 = Clock::now();
       if (!grab(s)) break;
@@ -290,6 +318,7 @@ void CapturePipeline::run() {
       out.coefficientsLatencyMs = 1000.0 * (monotonicSeconds() - out.captureTime);
       if (opt_.onCaptured) opt_.onCaptured(out);
       pace(s, out.timestamp);
+      if (interrupted_) break;  // the frame whose time had not come is not handed over
       publish(std::move(out));
     }
   } catch (const std::exception& e) {

@@ -41,6 +41,8 @@ VideoRecorder::VideoRecorder(std::string path, double fps, std::string sourceDes
     return e;
   };
   if (auto pattern = parseSequencePattern(path_)) {
+    if (const auto slash = path_.rfind('/'); slash != std::string::npos && path_.find('%') < slash)
+      throw Error(path_ + ": the frame-number pattern goes in the file name, not the folder");
     const auto dot = pattern->suffix.rfind('.');  // the suffix may be ".exr" alone
     const std::string ext = lower(dot == std::string::npos ? "" : pattern->suffix.substr(dot));
     if (ext != ".exr" && ext != ".hdr")
@@ -203,7 +205,10 @@ void VideoRecorder::finish() {
                   (count < 0 ? std::string("it cannot be read back")
                              : std::to_string(std::llround(count)) + " of " +
                                    std::to_string(stamps_.size()) + " frames") +
-                  "); is the disk full?");
+                  "); " +
+                  (fileSizeLimit() ? "is the disk full, or the file-size limit (ulimit -f) of " +
+                                         std::to_string(*fileSizeLimit()) + " bytes reached?"
+                                   : std::string("is the disk full?")));
     }
   }
   nlohmann::ordered_json j;
@@ -224,16 +229,29 @@ void VideoRecorder::finishSequence() {
   const SequencePattern& pattern = *impl_->pattern;
   const int count = int(stamps_.size());
   std::error_code ec;
+  // Every target is checked before the first rename: a folder or a device where a frame goes
+  // fails the recording with nothing moved.
+  for (int n = 0; n < count; ++n) {
+    const fs::file_status st = fs::symlink_status(pattern.at(n), ec);
+    if (fs::exists(st) && !fs::is_regular_file(st)) {
+      fs::remove_all(impl_->partial, ec);
+      throw Error(pattern.at(n) +
+                  ": cannot put the recorded frame in place (something other "
+                  "than a file is there)");
+    }
+  }
   for (int n = 0; n < count; ++n) {
     fs::rename(impl_->partial / fs::path(pattern.at(n)).filename(), pattern.at(n), ec);
     if (ec) {
+      const std::string why = ec.message();
       fs::remove_all(impl_->partial, ec);
-      throw Error(pattern.at(n) + ": cannot put the recorded frame in place (" + ec.message() +
-                  ")");
+      throw Error(pattern.at(n) + ": cannot put the recorded frame in place (" + why + ")");
     }
   }
-  // Frames of an earlier, longer recording under the same pattern would replay after these.
-  for (int n = count; fs::exists(pattern.at(n), ec); ++n) fs::remove(pattern.at(n), ec);
+  // The frames of an earlier, longer recording under the same pattern would replay after these:
+  // those files go, up to the first name that is not a plain file (which is never touched).
+  for (int n = count; fs::is_regular_file(fs::symlink_status(pattern.at(n), ec)); ++n)
+    fs::remove(pattern.at(n), ec);
   fs::remove_all(impl_->partial, ec);
 }
 

@@ -259,20 +259,48 @@ std::unique_ptr<FrameSource> openPatternSequence(const std::string& spec,
                                                  const SequencePattern& pattern, double fps) {
   std::vector<std::string> files;
   std::error_code ec;
-  for (int i = 0, misses = 0; misses < 2 && i < 10000000; ++i) {
+  int i = 0;
+  for (int misses = 0; misses < 2 && i < 10000000; ++i) {
     const std::string f = pattern.at(i);
     if (fs::is_regular_file(f, ec))
       files.push_back(f), misses = 0;
     else if (!files.empty() || i > 1)
       ++misses;  // numbering may start at 0 or 1
   }
+  // Two misses in a row end the scan; a frame numbered beyond them means frames are missing,
+  // which would otherwise end the replay early without a word.
+  const fs::path dir = fs::path(pattern.at(0)).parent_path();
+  long beyond = -1;
+  for (const auto& e : fs::directory_iterator(dir.empty() ? fs::path(".") : dir, ec)) {
+    const std::string name = dir.empty() ? e.path().filename().string() : e.path().string();
+    if (name.size() <= pattern.prefix.size() + pattern.suffix.size() ||
+        name.compare(0, pattern.prefix.size(), pattern.prefix) != 0 ||
+        name.compare(name.size() - pattern.suffix.size(), pattern.suffix.size(), pattern.suffix))
+      continue;
+    const std::string digits = name.substr(
+        pattern.prefix.size(), name.size() - pattern.prefix.size() - pattern.suffix.size());
+    if (digits.size() > 9 ||
+        !std::all_of(digits.begin(), digits.end(), [](char c) { return c >= '0' && c <= '9'; }))
+      continue;
+    const long n = std::stol(digits);
+    if (n >= i && (beyond < 0 || n < beyond)) beyond = n;
+  }
+  if (beyond >= 0 && !files.empty())
+    throw Error(spec + ": " + pattern.at(i - 2) + " and " + pattern.at(i - 1) +
+                " are missing, but the sequence goes on (" + pattern.at(int(beyond)) + ")");
   return openSequence(spec, std::move(files), fps);
 }
 
 std::unique_ptr<FrameSource> openFolderSequence(const std::string& dir, double fps) {
   std::vector<std::string> files;
-  for (const auto& e : fs::directory_iterator(dir))
-    if (e.is_regular_file() && isImageFile(e.path())) files.push_back(e.path().string());
+  for (const auto& e : fs::directory_iterator(dir)) {
+    if (!isImageFile(e.path())) continue;
+    std::error_code ec;
+    const bool regular = e.is_regular_file(ec);
+    if (ec)  // a link that loops or dangles, among the frames
+      throw Error(e.path().string() + ": cannot read (" + ec.message() + ")");
+    if (regular) files.push_back(e.path().string());
+  }
   std::sort(files.begin(), files.end());
   return openSequence(dir, std::move(files), fps);
 }

@@ -7,7 +7,7 @@ import assert from 'node:assert/strict';
 import { spawn, spawnSync } from 'node:child_process';
 import { mkdtempSync, readFileSync, writeFileSync } from 'node:fs';
 import { createServer } from 'node:net';
-import { tmpdir } from 'node:os';
+import { tmpdir, userInfo } from 'node:os';
 import { join } from 'node:path';
 import { liveprobe } from './common.mjs';
 
@@ -23,14 +23,17 @@ function freePort() {
 }
 
 /// A mosquitto listening on 127.0.0.1:port only, no persistence; resolves once it accepts.
-async function broker(port) {
+/// `extra`: more configuration lines; `pubArgs`: what mosquitto_pub needs to reach it. Started as
+/// root, mosquitto would drop to its own user, who cannot read this test's private files.
+async function broker(port, extra = '', pubArgs = ['-h', '127.0.0.1']) {
   const conf = join(dir, `mosquitto-${port}.conf`);
-  writeFileSync(conf, `listener ${port} 127.0.0.1\nallow_anonymous true\npersistence false\n`);
+  writeFileSync(conf, `listener ${port} ${extra.includes('certfile') ? '' : '127.0.0.1'}\n` +
+                      `${extra || 'allow_anonymous true\n'}persistence false\nuser ${userInfo().username}\n`);
   const proc = spawn('mosquitto', ['-c', conf], { stdio: 'ignore' });
   brokers.add(proc);
   proc.on('exit', () => brokers.delete(proc));
   for (let i = 0; i < 100; ++i) {
-    const r = spawnSync('mosquitto_pub', ['-h', '127.0.0.1', '-p', String(port), '-t', 'ping', '-m', 'x']);
+    const r = spawnSync('mosquitto_pub', [...pubArgs, '-p', String(port), '-t', 'ping', '-m', 'x']);
     if (r.status === 0) return proc;
     await sleep(50);
   }
@@ -102,4 +105,81 @@ test('a broker killed and restarted mid-run: capture goes on, publishing resumes
   assert.equal(published + lost, capturedFrames);
   assert.equal(resumed.length, 5);
   assert.ok(resumed[0].frame > 6 * 30 * 0.9, 'the frames after the restart are new ones');
+});
+
+const replayArgs = ['synthetic:64x32@30', '--headless', '--size', '64x36', '--frames', '20', '--quiet'];
+
+test('a broker that wants a user and password: from the URL, the environment or a file; refused in one line', async () => {
+  const port = await freePort();
+  const passwd = join(dir, 'passwd');
+  assert.equal(spawnSync('mosquitto_passwd', ['-c', '-b', passwd, 'studio', 's3cret']).status, 0);
+  await broker(port, `allow_anonymous false\npassword_file ${passwd}\n`,
+               ['-h', '127.0.0.1', '-u', 'studio', '-P', 's3cret']);
+  const pwFile = join(dir, 'pw.txt');
+  writeFileSync(pwFile, 's3cret\n');
+  for (const [url, extra, env] of [[`mqtt://studio:s3cret@127.0.0.1:${port}/lp/a`, [], {}],
+                                   [`mqtt://studio@127.0.0.1:${port}/lp/a`, [], { LIVEPROBE_MQTT_PASSWORD: 's3cret' }],
+                                   [`mqtt://studio@127.0.0.1:${port}/lp/a`, ['--mqtt-password-file', pwFile], {}]]) {
+    const r = spawnSync(liveprobe, ['replay', ...replayArgs, '--publish', url, ...extra],
+                        { encoding: 'utf8', env: { ...process.env, ...env } });
+    assert.equal(r.status, 0, r.stderr);
+    assert.match(r.stderr, /mqtt:\/\/studio@127\.0\.0\.1:\d+\/lp\/a: 20 published, 0 lost/);
+    assert.doesNotMatch(r.stderr, /s3cret/, 'the password is never echoed');
+  }
+  const r = spawnSync(liveprobe, ['replay', ...replayArgs, '--publish', `mqtt://studio:wrong@127.0.0.1:${port}/lp/a`],
+                      { encoding: 'utf8' });
+  assert.equal(r.status, 1, r.stderr);
+  assert.equal(r.stderr.trim().split('\n').length, 1, r.stderr);
+  assert.match(r.stderr, /mqtt:\/\/studio@127\.0\.0\.1:\d+\/lp\/a: the broker refused the connection/);
+  assert.doesNotMatch(r.stderr, /wrong/);
+});
+
+test('mqtts:// checks the broker against --mqtt-cafile; a broker it cannot trust gets nothing, exit 3', async () => {
+  const port = await freePort();
+  const ca = join(dir, 'ca'), srv = join(dir, 'srv');
+  const ssl = (args) => assert.equal(spawnSync('openssl', args, { stdio: 'ignore' }).status, 0, args.join(' '));
+  ssl(['req', '-x509', '-newkey', 'rsa:2048', '-nodes', '-days', '2', '-subj', '/CN=liveprobe test CA',
+       '-keyout', `${ca}.key`, '-out', `${ca}.pem`]);
+  ssl(['req', '-newkey', 'rsa:2048', '-nodes', '-subj', '/CN=localhost', '-keyout', `${srv}.key`, '-out', `${srv}.csr`]);
+  writeFileSync(`${srv}.ext`, 'subjectAltName=DNS:localhost,IP:127.0.0.1\n');
+  ssl(['x509', '-req', '-in', `${srv}.csr`, '-CA', `${ca}.pem`, '-CAkey', `${ca}.key`, '-CAcreateserial', '-days', '2',
+       '-extfile', `${srv}.ext`, '-out', `${srv}.pem`]);
+  await broker(port, `allow_anonymous true\ncafile ${ca}.pem\ncertfile ${srv}.pem\nkeyfile ${srv}.key\n`,
+               ['-h', 'localhost', '--cafile', `${ca}.pem`]);
+  const ok = spawnSync(liveprobe, ['replay', ...replayArgs, '--publish', `mqtts://localhost:${port}/lp/tls`,
+                                   '--mqtt-cafile', `${ca}.pem`], { encoding: 'utf8' });
+  assert.equal(ok.status, 0, ok.stderr);
+  assert.match(ok.stderr, /mqtts:\/\/localhost:\d+\/lp\/tls: 20 published, 0 lost/);
+  // Without the CA the system's store does not trust this broker: nothing is sent, and the
+  // run says so at start, in its summary and in its exit status.
+  const bad = spawnSync(liveprobe, ['replay', ...replayArgs, '--publish', `mqtts://localhost:${port}/lp/tls`],
+                        { encoding: 'utf8' });
+  assert.equal(bad.status, 3, bad.stderr);
+  assert.match(bad.stderr, /warning: --publish mqtts:\/\/localhost:\d+\/lp\/tls: no broker answers yet/);
+  assert.match(bad.stderr, /0 published, 20 lost .*; no message reached the broker/);
+});
+
+test('no broker at all: said at start, and exit 3 with nothing published', async () => {
+  const port = await freePort();
+  const r = spawnSync(liveprobe, ['replay', ...replayArgs, '--publish', `mqtt://127.0.0.1:${port}/lp/none`],
+                      { encoding: 'utf8' });
+  assert.equal(r.status, 3, r.stderr);
+  assert.match(r.stderr.split('\n')[0], /warning: --publish mqtt:\/\/127\.0\.0\.1:\d+\/lp\/none: no broker answers yet/);
+  assert.match(r.stderr, /no message reached the broker/);
+});
+
+test('topics MQTT cannot publish to are refused in one line, exit 1', () => {
+  for (const [topic, says] of [['lp/#', /wildcards/], ['lp/+/x', /wildcards/], ['x'.repeat(70000), /65535/]]) {
+    const r = spawnSync(liveprobe, ['replay', ...replayArgs, '--publish', `mqtt://127.0.0.1:1/${topic}`],
+                        { encoding: 'utf8' });
+    assert.equal(r.status, 1, r.stderr.slice(0, 200));
+    assert.equal(r.stderr.trim().split('\n').length, 1);
+    assert.match(r.stderr, says);
+  }
+  // Invalid UTF-8 cannot be a JavaScript string: the shell passes the byte.
+  const r = spawnSync('bash', ['-c', `"$LP" replay ${replayArgs.join(' ')} --publish "mqtt://127.0.0.1:1/lp/$(printf '\\xff')"`],
+                      { encoding: 'utf8', env: { ...process.env, LP: liveprobe } });
+  assert.equal(r.status, 1, r.stderr);
+  assert.match(r.stderr, /the topic is not valid UTF-8/);
+  assert.equal(r.stderr.trim().split('\n').length, 1);
 });

@@ -2,8 +2,10 @@
 // The one way liveprobe writes output: under a temporary name beside the target, renamed into
 // place only when complete, so an aborted or failed run leaves nothing half-written. Images,
 // recordings and their sidecars, coefficient streams, bench reports and plots all go through it.
+#include <cstdint>
 #include <fstream>
 #include <mutex>
+#include <optional>
 #include <string>
 
 namespace lp {
@@ -57,5 +59,13 @@ class AtomicTextFile {
 
 /// The whole of `text` to `path`, atomically.
 void writeFileAtomically(const std::string& path, const std::string& text);
+
+/// The process's file-size limit in bytes (`ulimit -f`, RLIMIT_FSIZE), if it has one. liveprobe
+/// ignores SIGXFSZ, so a write past it fails with EFBIG instead of killing the process.
+std::optional<std::uintmax_t> fileSizeLimit();
+
+/// A failed write's errno in the user's words ("no space left on the device", the size limit
+/// named with its value); 0 when the writer did not say why.
+std::string describeWriteError(int err);
 
 }  // namespace lp

@@ -5,6 +5,7 @@
 // ready is dropped and counted. With Handoff::Every (offline output) capture waits until each
 // frame is taken, so every frame is rendered.
 #include <atomic>
+#include <chrono>
 #include <condition_variable>
 #include <functional>
 #include <memory>
@@ -78,15 +79,26 @@ struct PipelineOptions {
   std::function<void(const ProcessedFrame&)> onCaptured;
   /// Called on the capture thread with every raw frame as the source gave it (for recording).
   std::function<void(const Frame&)> onFrame;
+  /// Polled while capture waits (pacing, a pause): true ends capture within kStopPollSeconds,
+  /// as stop() does. The app passes its signal flag (a signal handler cannot wake a waiter).
+  std::function<bool()> interrupted;
+  /// --realtime: a gap between two frames' timestamps beyond this many seconds (and beyond ten
+  /// frame intervals) is not waited out; the frame comes one frame interval after the previous
+  /// one (counted in PipelineStats::gapsShortened).
+  double maxGapSeconds = 10.0;
 };
 
+/// How often a waiting capture thread polls PipelineOptions::interrupted.
+inline constexpr double kStopPollSeconds = 0.02;
+
 struct PipelineStats {
-  std::size_t captured = 0;  ///< frames processed
-  std::size_t taken = 0;     ///< frames the consumer took
-  std::size_t dropped = 0;   ///< frames replaced in the slot before anyone took them
-  std::size_t skipped = 0;   ///< frames the source could not decode
-  std::string endReason;     ///< why the source ended early, if it did
-  std::string error;         ///< the fatal error that stopped capture, if any
+  std::size_t captured = 0;       ///< frames processed
+  std::size_t taken = 0;          ///< frames the consumer took
+  std::size_t dropped = 0;        ///< frames replaced in the slot before anyone took them
+  std::size_t skipped = 0;        ///< frames the source could not decode
+  std::size_t gapsShortened = 0;  ///< timestamp gaps over PipelineOptions::maxGapSeconds
+  std::string endReason;          ///< why the source ended early, if it did
+  std::string error;              ///< the fatal error that stopped capture, if any
 };
 
 /// Exponential moving average of coefficients: alpha = 1 - exp(-dt / tau). Exact on SH because
@@ -171,6 +183,10 @@ class CapturePipeline {
   void convertForDisplay(Loop& s, ProcessedFrame& out) const;
   Sh9 project(Loop& s, ProcessedFrame& out) const;
   void pace(Loop& s, double timestamp);  ///< --realtime: waits for the frame's time
+  /// Waits on cv_ until ready(), stop, `until`, or PipelineOptions::interrupted (polled).
+  template <class Ready>
+  void waitPolling(std::unique_lock<std::mutex>& lock, std::chrono::steady_clock::time_point until,
+                   Ready ready);
   void publish(ProcessedFrame&& f);
   std::optional<ProcessedFrame> takeFromSlot(std::unique_lock<std::mutex>& lock);
 
@@ -178,6 +194,7 @@ class CapturePipeline {
   PipelineOptions opt_;
   std::thread thread_;
   std::atomic<bool> stop_{false}, finished_{false};
+  std::atomic<bool> interrupted_{false};  ///< PipelineOptions::interrupted said so
   mutable std::mutex mutex_;
   std::condition_variable cv_;
   std::optional<ProcessedFrame> slot_;

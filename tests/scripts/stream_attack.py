@@ -1,0 +1,149 @@
+#!/usr/bin/env python3
+"""The stream server under a slowloris: real clients are served while silent sockets are held.
+
+Usage: stream_attack.py LIVEPROBE [SILENT]
+
+Starts `liveprobe replay synthetic --serve 127.0.0.1:0` with its default limits, opens SILENT
+(default 200) TCP connections that send nothing, or one byte of a request line a second, and
+reopens every one the server closes. Meanwhile a real client every half second asks for the page
+(GET /) and opens a WebSocket (the upgrade, then one frame). Every real client must be served,
+while the attack holds; the server must close the silent sockets (a handshake deadline), and
+answer at exit with its summary.
+"""
+import base64
+import os
+import re
+import select
+import signal
+import socket
+import subprocess
+import sys
+import time
+
+LIVEPROBE = sys.argv[1]
+SILENT = int(sys.argv[2]) if len(sys.argv) > 2 else 200
+ATTACK_SECONDS = 14
+ATTACKER = sys.argv[3] if len(sys.argv) > 3 else "127.0.0.2"
+
+
+def start_server():
+    p = subprocess.Popen(
+        [LIVEPROBE, "replay", "synthetic:64x32@30", "--headless", "--quiet", "--serve", "127.0.0.1:0"],
+        stderr=subprocess.PIPE, text=True)
+    line = p.stderr.readline()
+    m = re.search(r"serving http://127\.0\.0\.1:(\d+)/", line)
+    if not m:
+        p.kill()
+        sys.exit(f"FAIL: no 'serving' line: {line!r}")
+    return p, int(m.group(1))
+
+
+def http_get(port):
+    with socket.create_connection(("127.0.0.1", port), timeout=5) as s:
+        s.sendall(b"GET / HTTP/1.1\r\nHost: 127.0.0.1\r\nConnection: close\r\n\r\n")
+        data = b""
+        while b"</html>" not in data.lower():
+            chunk = s.recv(65536)
+            if not chunk:
+                break
+            data += chunk
+    if not (data.startswith(b"HTTP/1.1 200") and b"<html" in data.lower()):
+        print(f"# GET / answered {data[:80]!r}")
+    return data.startswith(b"HTTP/1.1 200") and b"<html" in data.lower()
+
+
+def websocket_frame(port):
+    """The upgrade and the first message (a text frame holding a JSON record)."""
+    key = base64.b64encode(os.urandom(16)).decode()
+    with socket.create_connection(("127.0.0.1", port), timeout=5) as s:
+        s.sendall((f"GET /?format=json HTTP/1.1\r\nHost: 127.0.0.1\r\nUpgrade: websocket\r\n"
+                   f"Connection: Upgrade\r\nSec-WebSocket-Key: {key}\r\n"
+                   f"Sec-WebSocket-Protocol: liveprobe\r\nSec-WebSocket-Version: 13\r\n\r\n").encode())
+        data = b""
+        while b"\r\n\r\n" not in data:
+            chunk = s.recv(4096)
+            if not chunk:
+                return False
+            data += chunk
+        head, rest = data.split(b"\r\n\r\n", 1)
+        if not head.startswith(b"HTTP/1.1 101"):
+            return False
+        while len(rest) < 2:
+            rest += s.recv(4096)
+        return rest[0] == 0x81  # FIN + text
+
+
+def main():
+    server, port = start_server()
+    silent = []
+
+    def open_silent():
+        s = socket.socket()
+        s.bind((ATTACKER, 0))
+        s.setblocking(False)
+        s.connect_ex(("127.0.0.1", port))
+        return [s, time.monotonic()]
+
+    for _ in range(SILENT):
+        silent.append(open_silent())
+    served = failed = reopened = 0
+    start = time.monotonic()
+    next_real = start + 1.0
+    while time.monotonic() - start < ATTACK_SECONDS:
+        # Slow drip: one byte of a request line from every tenth socket, once a second.
+        now = time.monotonic()
+        for i, entry in enumerate(silent):
+            s, last = entry
+            if i % 10 == 0 and now - last >= 1.0:
+                try:
+                    s.send(b"G")
+                except OSError:
+                    pass
+                entry[1] = now
+        # Reopen what the server closed.
+        readable, _, _ = select.select([e[0] for e in silent], [], [], 0.05)
+        for s in readable:
+            try:
+                closed = s.recv(1) == b""
+            except OSError:
+                closed = True
+            if closed:
+                i = next(k for k, e in enumerate(silent) if e[0] is s)
+                s.close()
+                silent[i] = open_silent()
+                reopened += 1
+        if time.monotonic() >= next_real:
+            next_real += 0.5
+            t0 = time.monotonic()
+            try:
+                ok = http_get(port)
+                if not ok:
+                    print("# real client: GET / was not answered with the page")
+                elif not websocket_frame(port):
+                    ok = False
+                    print("# real client: the WebSocket was not upgraded, or sent no frame")
+            except OSError as e:
+                print(f"# real client: {e!r} after {time.monotonic() - t0:.2f} s")
+                ok = False
+            served += ok
+            failed += not ok
+    for s, _ in silent:
+        s.close()
+    server.send_signal(signal.SIGINT)
+    try:
+        _, err = server.communicate(timeout=10)
+    except subprocess.TimeoutExpired:
+        server.kill()
+        sys.exit("FAIL: the server did not stop within 10 s of SIGINT")
+    print(f"# {SILENT} silent sockets held for {ATTACK_SECONDS} s, {reopened} reopened after the "
+          f"server closed them; real clients served {served}, failed {failed}")
+    if failed or served < 2 * (ATTACK_SECONDS - 2):
+        sys.exit(f"FAIL: real clients were not served throughout\n{err}")
+    if reopened < SILENT:
+        sys.exit("FAIL: the silent sockets were not closed by the handshake deadline")
+    if server.returncode != 130:
+        sys.exit(f"FAIL: exit {server.returncode} after SIGINT\n{err}")
+    print("OK")
+
+
+main()
