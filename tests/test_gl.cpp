@@ -122,7 +122,7 @@ TEST_F(GlTest, IrradianceMatchesCpuPerPixel) {
   }
 }
 
-// The same with disc lights beside the coefficients (issue 13): the GLSL's lightIrradiance equals
+// The same with disc lights beside the coefficients: the GLSL's lightIrradiance equals
 // the CPU's at every pixel, a sharp sun and a wide disc whose horizon band crosses the sphere.
 TEST_F(GlTest, IrradianceWithLightsMatchesCpuPerPixel) {
   lp::gl::Renderer r;
@@ -146,6 +146,33 @@ TEST_F(GlTest, IrradianceWithLightsMatchesCpuPerPixel) {
         worstAgainstCpu(cam, px, [&](glm::vec3 n) { return lp::evalIrradiance(L, lights, n); });
     EXPECT_LT(worst, 2e-3) << "trial " << trial;
   }
+}
+
+// Every light is drawn, up to lp::kMaxLights: eight lamps around the sphere (each seen by some of
+// its pixels) against the CPU; one more is refused rather than dropped without a word.
+TEST_F(GlTest, EveryLightUpToTheLimitIsDrawn) {
+  lp::gl::Renderer r;
+  r.setMesh(lp::makeUvSphere(512, 256));
+  Sh9 L;
+  L.c[0] = glm::vec3(0.2f);
+  std::vector<lp::Light> lights(lp::kMaxLights);
+  for (int i = 0; i < lp::kMaxLights; ++i) {
+    const float a = 2.0f * glm::pi<float>() * float(i) / float(lp::kMaxLights);
+    lights[i].dir = glm::normalize(glm::vec3(std::cos(a), std::sin(a), i % 2 ? 0.5f : -0.3f));
+    lights[i].angularRadius = glm::radians(2.0f);
+    lights[i].power = glm::vec3(1.0f + 0.25f * float(i));
+  }
+  r.setLighting(L, lights);
+  for (int trial = 0; trial < 4; ++trial) {
+    lp::gl::Camera cam;
+    cam.yawDeg = 90.0f * trial;
+    const auto px = pass(r, cam, OutputMode::Irradiance);
+    const double worst =
+        worstAgainstCpu(cam, px, [&](glm::vec3 n) { return lp::evalIrradiance(L, lights, n); });
+    EXPECT_LT(worst, 2e-3) << "trial " << trial;
+  }
+  lights.push_back(lights[0]);
+  EXPECT_THROW(r.setLighting(L, lights), std::invalid_argument);
 }
 
 // --shadows --ground: the shadow of a unit sphere on the ground plane falls where geometry puts

@@ -421,3 +421,32 @@ TEST(Hostile, LoopingLinksAreOneLine) {
   fs::create_symlink("b.hdr", tmp.path / "frames/b.hdr");
   expectRefused(tmp, "coeffs frames", "frames/b.hdr", "Too many levels of symbolic links");
 }
+
+// Lighting liveprobe cannot draw is refused in one line: more lights than the shaders draw, and
+// values whose products overflow float (they used to render an all-black image with exit 0).
+TEST(Hostile, LightingBeyondWhatIsDrawnIsRefused) {
+  lpt::TempDir tmp;
+  auto file = [&](const std::string& name, int lights, double l00, double power) {
+    std::ofstream f(tmp / name);
+    f << "{\"coefficients\":{\"L00\":[" << l00 << ",0.1,0.1]";
+    for (const char* k : {"L1-1", "L10", "L11", "L2-2", "L2-1", "L20", "L21", "L22"})
+      f << ",\"" << k << "\":[0,0,0]";
+    f << "},\"lights\":[";
+    for (int i = 0; i < lights; ++i)
+      f << (i ? "," : "") << "{\"direction\":[" << i << ",1,1],\"power\":[" << power << ",1,1]}";
+    f << "]}";
+  };
+  file("nine.json", 9, 0.1, 1);
+  file("eight.json", 8, 0.1, 1);
+  file("l00.json", 1, 3e38, 1);
+  file("power.json", 1, 0.1, 3e38);
+  const std::string render = "render --headless --size 32x32 --out r.png --coeffs ";
+  expectRefused(tmp, render + "nine.json", "nine.json", "9 lights; liveprobe draws at most 8");
+  expectRefused(tmp, render + "l00.json", "coefficient L00 is 3e+38", "the most liveprobe takes");
+  expectRefused(tmp, render + "power.json", "light 1 power is 3e+38", "the most liveprobe takes");
+  expectRefused(tmp, "render --headless --size 32x32 --out r.png --coeff L00=3e38", "L00=3e38",
+                "the most liveprobe takes");
+  const auto ok = lpt::runCommand("cd " + lpt::shellQuote(tmp.path.string()) + " && " +
+                                  LIVEPROBE_BIN + " " + render + "eight.json");
+  EXPECT_EQ(ok.exitCode, 0) << ok.output;
+}

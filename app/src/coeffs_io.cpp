@@ -9,6 +9,7 @@
 
 #include "liveprobe/capture/input_file.h"
 #include "liveprobe/sh/error.h"
+#include "progress.h"
 
 namespace lp::cli {
 
@@ -61,8 +62,9 @@ Sh9 coefficientsFromJson(const nlohmann::json& j, const std::string& source) {
       if (!v[ch].is_number()) throw Error(source + ": coefficient " + name + " has a non-number");
       const double x = v[ch].get<double>();
       if (!std::isfinite(x)) throw Error(source + ": coefficient " + name + " is not finite");
-      if (std::abs(x) > double(std::numeric_limits<float>::max()))
-        throw Error(source + ": coefficient " + name + " is beyond float's range");
+      if (std::abs(x) > kMaxLightingValue)
+        throw Error(source + ": coefficient " + name + " is " + formatNumber(x) +
+                    "; the most liveprobe takes is " + formatNumber(kMaxLightingValue));
       out.c[k][ch] = float(x);
     }
   }
@@ -89,8 +91,10 @@ glm::vec3 finiteTriple(const nlohmann::json& v, const std::string& what) {
   for (int i = 0; i < 3; ++i) {
     if (!v[i].is_number()) throw Error(what + " has a non-number");
     const double x = v[i].get<double>();
-    if (!std::isfinite(x) || std::abs(x) > double(std::numeric_limits<float>::max()))
-      throw Error(what + " is not a finite float");
+    if (!std::isfinite(x)) throw Error(what + " is not finite");
+    if (std::abs(x) > kMaxLightingValue)
+      throw Error(what + " is " + formatNumber(x) + "; the most liveprobe takes is " +
+                  formatNumber(kMaxLightingValue));
     out[i] = float(x);
   }
   return out;
@@ -102,6 +106,9 @@ std::vector<Light> lightsFromJson(const nlohmann::json& j, const std::string& so
   if (!j.is_object() || !j.contains("lights")) return lights;
   const auto& a = j["lights"];
   if (!a.is_array()) throw Error(source + ": \"lights\" must be an array");
+  if (a.size() > std::size_t(kMaxLights))
+    throw Error(source + ": " + std::to_string(a.size()) + " lights; liveprobe draws at most " +
+                std::to_string(kMaxLights));
   for (std::size_t i = 0; i < a.size(); ++i) {
     const std::string what = source + ": light " + std::to_string(i + 1);
     const auto& o = a[i];

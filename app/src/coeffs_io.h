@@ -9,6 +9,11 @@
 
 namespace lp::cli {
 
+/// The largest magnitude of a coefficient or a light's power that liveprobe reads: the shaders'
+/// sums of products of such values stay far inside float's range (3.4e38), where values near it
+/// overflow to infinity and draw black.
+inline constexpr double kMaxLightingValue = 1e30;
+
 /// {"L00": [r,g,b], "L1-1": [...], ..., "L22": [...]} in storage order.
 nlohmann::ordered_json coefficientsJson(const Sh9& radiance);
 

@@ -11,7 +11,8 @@ std::vector<OptionSpec> lightOptionSpecs() {
 
 LightOptions chooseLights(const Args& a) {
   LightOptions o;
-  o.maxLights = a.has("--lights") ? a.integerIn("--lights", 1, 1, 8) : (a.has("--sun") ? 1 : 0);
+  o.maxLights =
+      a.has("--lights") ? a.integerIn("--lights", 1, 1, kMaxLights) : (a.has("--sun") ? 1 : 0);
   return o;
 }
 

@@ -194,8 +194,13 @@ void applyCoeffAssignment(const std::string& text, Sh9& sh) {
     throw Error("--coeff " + text + ": unknown coefficient name " + name + " (L00 .. L22)");
   std::vector<float> v;
   std::stringstream s(text.substr(eq + 1));
-  for (std::string part; std::getline(s, part, ',');)
-    v.push_back(float(parseNumber(part, "--coeff " + name)));
+  for (std::string part; std::getline(s, part, ',');) {
+    const double x = parseNumber(part, "--coeff " + name);
+    if (std::abs(x) > kMaxLightingValue)
+      throw Error("--coeff " + text + ": the most liveprobe takes is " +
+                  formatNumber(kMaxLightingValue));
+    v.push_back(float(x));
+  }
   if (v.size() == 1) v = {v[0], v[0], v[0]};
   if (v.size() != 3) throw Error("--coeff " + text + ": expected one value or r,g,b");
   sh.c[k] = {v[0], v[1], v[2]};

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <glm/gtc/matrix_transform.hpp>
 #include <glm/gtc/type_ptr.hpp>
+#include <stdexcept>
 #include <string>
 
 #include "liveprobe/gl/context.h"
@@ -227,8 +228,10 @@ void Renderer::setLighting(const Sh9& radiance) { setLighting(radiance, {}); }
 
 void Renderer::setLighting(const Sh9& residual, const std::vector<Light>& lights) {
   sh_ = irradianceMatrices(residual);
-  lights_.assign(lights.begin(),
-                 lights.begin() + std::ptrdiff_t(std::min<std::size_t>(lights.size(), kMaxLights)));
+  if (lights.size() > std::size_t(kMaxLights))
+    throw std::invalid_argument(std::to_string(lights.size()) +
+                                " lights; the shaders draw at most " + std::to_string(kMaxLights));
+  lights_ = lights;
 }
 
 void Renderer::setIrradianceUniforms(const Program& program) const {

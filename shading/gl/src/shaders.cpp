@@ -1,5 +1,9 @@
 #include "shaders.h"
 
+#include "liveprobe/sh/lights.h"
+
+static_assert(lp::kMaxLights == 8, "MAX_LIGHTS in LP_IRRADIANCE_GLSL is lp::kMaxLights");
+
 namespace lp::gl::shaders {
 
 // Shared by every fragment shader: pi (GLSL's one statement of it), exposure, tone map, sRGB
@@ -27,7 +31,7 @@ namespace lp::gl::shaders {
 // exact clamped cosine, term for term lp::lightIrradiance() (shading/sh/src/lights.cpp).
 // clang-format off
 #define LP_IRRADIANCE_GLSL                                                                             \
-  "const int MAX_LIGHTS = 4;\n"                                                                        \
+  "const int MAX_LIGHTS = 8;\n"                                                                        \
   "uniform mat4 uShR, uShG, uShB;\n"                                                                   \
   "uniform int uLightCount;\n"                                                                         \
   "uniform vec3 uLightDir[MAX_LIGHTS];\n"                                                              \

@@ -83,9 +83,9 @@ class Renderer {
   void setAlbedoTexture(const float* rgb, int width, int height);
   void setLighting(const Sh9& radiance);
   /// The coefficients and disc lights (liveprobe/sh/lights.h) together: the shaders add each
-  /// light's exact clamped cosine to the coefficients' irradiance. At most kMaxLights are drawn.
+  /// light's exact clamped cosine to the coefficients' irradiance. Every light is drawn: more
+  /// than lp::kMaxLights is a programming error (std::invalid_argument).
   void setLighting(const Sh9& residual, const std::vector<Light>& lights);
-  static constexpr int kMaxLights = 4;
   /// Linear RGB panorama for the background (rows top to bottom). `displayScale` > 0 says it was
   /// decoded from an 8-bit (sRGB) source and multiplied by that scale: shown display-referred
   /// (ShadingSettings::displayReferredBackground), it is divided by it and encoded back, so it

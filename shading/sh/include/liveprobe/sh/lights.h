@@ -50,6 +50,10 @@
 
 namespace lp {
 
+/// The most lights one frame carries: extracted (--lights K), read from a coefficients file, and
+/// drawn (the shaders' MAX_LIGHTS).
+inline constexpr int kMaxLights = 8;
+
 /// A small disc light at infinity, in the R&H world frame.
 struct Light {
   glm::vec3 dir{0.0f, 0.0f, 1.0f};  ///< unit direction towards the light
