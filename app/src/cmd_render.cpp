@@ -91,8 +91,8 @@ int runRender(const Args& a) {
   } catch (const gl::ContextError& e) {
     throw Error(std::string("GL: ") + e.what());
   }
-  std::cerr << "liveprobe: " << out << " (" << mesh.triangleCount() << " triangles, "
-            << ctx->describe() << ")\n";
+  errs() << "liveprobe: " << out << " (" << mesh.triangleCount() << " triangles, "
+         << ctx->describe() << ")\n";
   return 0;
 }
 

@@ -113,9 +113,14 @@ std::vector<glm::vec3> halve(const std::vector<glm::vec3>& f, int n) {
   return out;
 }
 
+/// A face (rows in GL's memory order: row 0 at t = 0) as an EXT_lights_image_based image, which
+/// stores each face flipped top to bottom relative to that order (as Babylon.js's loader, the
+/// extension's reference reader, uploads it).
 std::string rgbdPngDataUri(const std::vector<glm::vec3>& face, int n) {
   std::vector<std::uint8_t> rgba(std::size_t(n) * n * 4);
-  for (std::size_t i = 0; i < face.size(); ++i) packRgbd(face[i], &rgba[i * 4]);
+  for (int i = 0; i < n; ++i)
+    for (int j = 0; j < n; ++j)
+      packRgbd(face[std::size_t(n - 1 - i) * n + j], &rgba[(std::size_t(i) * n + j) * 4]);
   return "data:image/png;base64," + base64(encodePng8(n, n, 4, rgba.data()));
 }
 
@@ -244,11 +249,19 @@ ojson gltfDocument(const Environment& env, const Sh9& radiance, const std::vecto
   ojson used = ojson::array({"EXT_lights_image_based"});
   if (!lights.empty()) used.push_back("KHR_lights_punctual");
   doc["extensionsUsed"] = used;
-  // The specular cube: faces in OpenGL's order and orientation, mips 64, 32 and 16.
+  // The specular cube: faces in OpenGL's order (+X -X +Y -Y +Z -Z), mips 64, 32 and 16.
   constexpr int kSize = 64, kMips = 3;
   ojson images = ojson::array(), mips = ojson::array();
   std::vector<std::vector<glm::vec3>> faces(6);
   for (int f = 0; f < 6; ++f) faces[std::size_t(f)] = radianceFace(env, f, kSize);
+  // RGBD holds radiance up to 255: a brighter map is stored scaled down by a power of two, with
+  // the light's intensity (which readers multiply into the cube and the coefficients) the scale.
+  float peak = 0;
+  for (const auto& face : faces)
+    for (const glm::vec3& c : face) peak = std::max({peak, c.x, c.y, c.z});
+  const float scale = peak > 255.0f ? std::exp2(std::ceil(std::log2(peak / 255.0f))) : 1.0f;
+  for (auto& face : faces)
+    for (glm::vec3& c : face) c /= scale;
   for (int m = 0, n = kSize; m < kMips; ++m, n /= 2) {
     ojson level = ojson::array();
     for (int f = 0; f < 6; ++f) {
@@ -262,8 +275,8 @@ ojson gltfDocument(const Environment& env, const Sh9& radiance, const std::vecto
   ojson light;
   light["name"] = "liveprobe";
   light["rotation"] = {0, 0, 0, 1};
-  light["intensity"] = 1;
-  light["irradianceCoefficients"] = nineTriples(condonShortley(toIrradiance(L)));
+  light["intensity"] = scale;
+  light["irradianceCoefficients"] = nineTriples(condonShortley(toIrradiance(L) * (1.0f / scale)));
   light["specularImageSize"] = kSize;
   light["specularImages"] = mips;
   ojson ext;

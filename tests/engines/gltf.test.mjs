@@ -25,6 +25,7 @@ for (const [map, extra] of [[maps[0], ['--lights', '2']], [maps[2], []]]) {
     if (extra.length) assert.equal(gltf.extensions.KHR_lights_punctual.lights.length, 2);
 
     const sh = SphericalHarmonics.FromArray(light.irradianceCoefficients);
+    sh.scaleInPlace(light.intensity);  // as the loader does: the scale of a map beyond RGBD's range
     sh.convertIrradianceToLambertianRadiance();
     sh.preScaleForRendering();
     if (!extra.length) {  // (with lights split off, the coefficients are the sky alone)
