@@ -8,9 +8,9 @@ pid=$!
 source "$(dirname "$0")/window_lib.sh"
 wait_for_window "$pid" || exit 1
 # The title is updated about once a second, after a frame is drawn: wait for what it says.
-title_until() {  # $1: a pattern the title must match (grep -E), within 15 s
-  local t=
-  for _ in $(seq 150); do
+title_until() {  # $1: a pattern the title must match (grep -E), within 45 s of wall time
+  local t= deadline=$((SECONDS + 45))
+  while ((SECONDS < deadline)); do
     t=$(xdotool getwindowname "$wid")
     grep -qE "$1" <<<"$t" && break
     sleep 0.1
