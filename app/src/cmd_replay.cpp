@@ -578,11 +578,12 @@ int runStream(const Args& a, std::unique_ptr<FrameSource> source, bool live) {
       opt.onCaptured = [file, server, mqtt, sent, format](const ProcessedFrame& f) {
         // One record for the file and the broker (both in --coeffs-format); the server
         // serializes per client format, once per frame.
-        const std::string record = frameRecord(f, format, {});
+        if (server) server->publish(f);
+        if (!file && !mqtt && !sent) return;  // the server alone: no record to make here
+        std::string record = frameRecord(f, format, {});
         if (file) file->line(record);
         if (mqtt) mqtt->publish(record);
-        if (server) server->publish(f);
-        if (sent) sent->sent(f.index, record);
+        if (sent) sent->sent(f.index, std::move(record));
       };
   }
   if (out.record) {  // --record (live): the raw stream, finalised even when capture stops on a
