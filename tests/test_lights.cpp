@@ -287,7 +287,7 @@ TEST(Lights, ClippedSunInABrightAureoleIsFound) {
       lp::projectWithLights(lp::PanoramaView::bgrU8(speck.data(), w, h, lut), {}).lights.empty());
 }
 
-// --sun everywhere the coefficients go (issue 13, part 4).
+// --sun everywhere the coefficients go.
 
 // `coeffs --sun`: the lights beside the coefficients, and the two together are the whole map's.
 TEST(LightsCli, CoeffsJsonCarriesTheLights) {

@@ -9,6 +9,7 @@
 #include <thread>
 
 #include "liveprobe/capture/frame.h"
+#include "liveprobe/capture/frame_processor.h"
 #include "liveprobe/capture/image.h"
 #include "liveprobe/capture/pipeline.h"
 #include "liveprobe/capture/recorder.h"
@@ -24,6 +25,83 @@ constexpr double kPi = std::numbers::pi;
 
 // Rotating the coefficients equals projecting the rotated panorama (resampled here), within
 // 0.5% of L00.
+// The one frame path against the core's projection of the frame's linear radiance, computed here
+// without it: the exposure (the photometry's and the frame's own) is applied exactly once for
+// 8-bit and float frames alike, a reduction projects the area average, the orientation turns
+// the result as rotateSh does, and with lights the rest plus the lights is the whole map.
+TEST(FrameProcessor, OneExposureOneProjectionEveryFormat) {
+  constexpr int w = 128, h = 64;
+  std::vector<float> sky;
+  lp::renderSyntheticSky(w, h, 0.7, sky);
+  lp::Frame hdr;
+  hdr.format = lp::PixelFormat::RgbF32;
+  hdr.width = w, hdr.height = h;
+  hdr.rgb = sky;
+  hdr.radianceScale = 3.0;
+  lp::Frame ldr;
+  ldr.format = lp::PixelFormat::Bgr8;
+  ldr.width = w, ldr.height = h;
+  ldr.bgr8.resize(std::size_t(w) * h * 3);
+  for (std::size_t p = 0; p < std::size_t(w) * h; ++p)
+    for (int c = 0; c < 3; ++c)
+      ldr.bgr8[3 * p + 2 - std::size_t(c)] =
+          std::uint8_t(std::lround(255 * lp::linearToSrgb(std::min(1.0f, sky[3 * p + c] * 0.1f))));
+  ldr.radianceScale = 3.0;
+  const lp::Photometry photometry{.gamma = 0.0f, .exposure = 2.0f};
+  for (const lp::Frame* frame : {&hdr, &ldr}) {
+    // The truth: the frame's linear radiance (sRGB decoded in double), times 2 x 3, projected.
+    lp::Image linear(w, h);
+    for (std::size_t i = 0; i < linear.rgb.size(); ++i) {
+      double v = frame == &hdr ? double(sky[i]) : 0.0;
+      if (frame == &ldr) {
+        const double code = ldr.bgr8[3 * (i / 3) + 2 - i % 3] / 255.0;
+        v = code <= 0.04045 ? code / 12.92 : std::pow((code + 0.055) / 1.055, 2.4);
+      }
+      linear.rgb[i] = float(v * 6.0);
+    }
+    const lp::Sh9 truth = lp::project(lp::PanoramaView::rgbF32(linear.rgb.data(), w, h));
+    lp::FrameProcessor plain({lp::LayoutSpec(), photometry, std::nullopt, 1, {.maxLights = 0}});
+    const lp::FrameLighting lit = plain.process(*frame);
+    for (int k = 0; k < lp::kShCount; ++k)
+      for (int c = 0; c < 3; ++c)
+        EXPECT_NEAR(lit.radiance.c[k][c], truth.c[k][c], 2e-5 * truth.c[0][c] + 1e-6)
+            << (frame == &hdr ? "float" : "8-bit") << " coefficient " << k;
+    EXPECT_EQ(lit.whole, lit.radiance);
+    EXPECT_TRUE(lit.lights.empty());
+
+    const lp::Image small = lp::reduceEquirect(linear.rgb.data(), w, h, 4);
+    const lp::Sh9 reducedTruth =
+        lp::project(lp::PanoramaView::rgbF32(small.rgb.data(), small.width, small.height));
+    lp::FrameProcessor reduced({lp::LayoutSpec(), photometry, std::nullopt, 4, {.maxLights = 0}});
+    const lp::Sh9 r = reduced.process(*frame).radiance;
+    for (int c = 0; c < 3; ++c)
+      EXPECT_NEAR(r.c[0][c], reducedTruth.c[0][c], 2e-5 * reducedTruth.c[0][c]);
+
+    const glm::mat3 turn = lp::rotationYawPitchRoll(30.0f, -20.0f, 10.0f);
+    lp::FrameProcessor turned({lp::LayoutSpec(), photometry, turn, 1, {.maxLights = 0}});
+    const lp::Sh9 t = turned.process(*frame).radiance, want = lp::rotateSh(truth, turn);
+    for (int k = 0; k < lp::kShCount; ++k)
+      EXPECT_NEAR(t.c[k][1], want.c[k][1], 2e-5 * truth.c[0][1] + 1e-6) << "turned " << k;
+
+    lp::FrameProcessor withSun({lp::LayoutSpec(), photometry, std::nullopt, 1, {.maxLights = 1}});
+    const lp::FrameLighting s = withSun.process(*frame);
+    ASSERT_EQ(s.lights.size(), 1u);
+    const lp::Sh9 sum = s.radiance + lp::lightsToSh(s.lights);
+    for (int c = 0; c < 3; ++c) EXPECT_NEAR(sum.c[0][c], truth.c[0][c], 1e-4 * truth.c[0][c]);
+  }
+  lp::FrameProcessor angular({lp::LayoutSpec(lp::Layout::Angular), photometry});
+  EXPECT_THROW(angular.process(hdr), lp::Error);  // a 2:1 frame is no angular map
+}
+
+// Sources describe their rate as a person writes it.
+TEST(Sources, FrameRatesAsAPersonWritesThem) {
+  EXPECT_EQ(lp::formatFps(30), "30 fps");
+  EXPECT_EQ(lp::formatFps(30000.0 / 1001), "29.97 fps");
+  EXPECT_EQ(lp::formatFps(25.126), "25.13 fps");
+  EXPECT_EQ(lp::formatFps(0.5), "0.5 fps");
+  EXPECT_EQ(lp::openSource("synthetic:64x32@29.97")->describe(), "synthetic sky 64x32 @ 29.97 fps");
+}
+
 TEST(ShRotation, EqualsProjectingTheRotatedPanorama) {
   const lp::Image eq = lp::loadImage(lpt::dataPath("probes/latlong_full/grace_latlong.exr"));
   const lp::Sh9 L = lp::project(lp::PanoramaView::rgbF32(eq.rgb.data(), eq.width, eq.height));

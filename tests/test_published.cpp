@@ -77,7 +77,7 @@ TEST(Published, DirectionalLightWorstCase) {
   EXPECT_LT(r.minShOverMean, 0.0);
 }
 
-// The same light taken out as a disc light (issue 13): the error drops from 9.4% to at most 0.1%.
+// The same light taken out as a disc light: the error drops from 9.4% to at most 0.1%.
 TEST(Published, DirectionalLightAsALight) {
   double power = 0;
   const lp::Image img = lpt::discEquirect(2048, 1024, glm::normalize(glm::dvec3(0.3, -0.5, 0.6)),

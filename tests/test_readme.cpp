@@ -1,6 +1,6 @@
-// Every command example in README.md runs as written, so the README cannot drift from the
-// program. An example is a line starting with `liveprobe ` inside a ```sh block (a trailing
-// backslash continues it). It runs with `liveprobe` on PATH, from a working folder where
+// Every command example in README.md and the manual (docs/*.md) runs as written, so they cannot
+// drift from the program. An example is a line starting with `liveprobe ` inside a ```sh block (a
+// trailing backslash continues it). It runs with `liveprobe` on PATH, from a working folder where
 // ../shared/data and recordings/ resolve as they do from the source tree, under Xvfb (so the
 // window path is taken, as on a desktop), and for `live` against the emulated camera
 // (tests/v4l2emu) standing in for the device it names. It must exit 0, or with the status a
@@ -8,6 +8,7 @@
 // a few seconds, and then stop cleanly on SIGINT (exit 130).
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <fstream>
 #include <opencv2/imgcodecs.hpp>
@@ -23,14 +24,25 @@ namespace {
 namespace fs = std::filesystem;
 
 struct Example {
+  std::string file;  ///< relative to the source folder: README.md, docs/NAME.md
   int line = 0;
   std::string command;
   int exitCode = 0;
   bool endless = false;
 };
 
-std::vector<Example> readmeExamples() {
-  std::ifstream in(std::string(LIVEPROBE_SOURCE_DIR) + "/README.md");
+/// README.md, then docs/*.md in name order.
+std::vector<std::string> manualFiles() {
+  std::vector<std::string> files;
+  for (const auto& f : fs::directory_iterator(std::string(LIVEPROBE_SOURCE_DIR) + "/docs"))
+    if (f.path().extension() == ".md") files.push_back("docs/" + f.path().filename().string());
+  std::sort(files.begin(), files.end());
+  files.insert(files.begin(), "README.md");
+  return files;
+}
+
+std::vector<Example> examplesIn(const std::string& file) {
+  std::ifstream in(std::string(LIVEPROBE_SOURCE_DIR) + "/" + file);
   std::vector<Example> out;
   bool sh = false;
   std::string pending;
@@ -51,6 +63,7 @@ std::vector<Example> readmeExamples() {
     pending.clear();
     if (full.rfind("liveprobe ", 0) != 0) continue;
     Example e;
+    e.file = file;
     e.line = pendingLine;
     e.command = full;
     std::smatch m;
@@ -63,8 +76,19 @@ std::vector<Example> readmeExamples() {
   return out;
 }
 
+/// Every example of the manual; a command written twice (the front page repeats the reference)
+/// runs once, under its first place.
+std::vector<Example> readmeExamples() {
+  std::vector<Example> all;
+  std::set<std::string> seen;
+  for (const auto& file : manualFiles())
+    for (const auto& e : examplesIn(file))
+      if (seen.insert(e.command).second) all.push_back(e);
+  return all;
+}
+
 void PrintTo(const Example& e, std::ostream* os) {
-  *os << "README.md:" << e.line << ": " << e.command;
+  *os << e.file << ":" << e.line << ": " << e.command;
 }
 
 class ReadmeExample : public ::testing::TestWithParam<Example> {};
@@ -84,7 +108,7 @@ TEST_P(ReadmeExample, RunsAsWritten) {
   const Example& e = GetParam();
   lpt::TempDir tmp;
   // tmp/shared -> the data's parent; tmp/work/recordings/* -> the project's recordings (links, so
-  // an example that records there replaces the link, never the file).
+  // an example that records there replaces the link, never the file, and the test sees it).
   const fs::path data = fs::path(LIVEPROBE_DATA_DIR);
   fs::create_directory_symlink(fs::absolute(data.parent_path()), tmp.path / "shared");
   const fs::path work = tmp.path / "work";
@@ -108,7 +132,7 @@ TEST_P(ReadmeExample, RunsAsWritten) {
                           " && timeout -k 10 400 xvfb-run -a -s '-screen 0 1600x1000x24' bash -c " +
                           lpt::shellQuote(run);
   const std::string out = lpt::runCommand(cmd).output;
-  const std::string where = "README.md:" + std::to_string(e.line) + ": " + e.command + "\n" + out;
+  const std::string where = e.file + ":" + std::to_string(e.line) + ": " + e.command + "\n" + out;
   ASSERT_TRUE(std::regex_search(out, m, std::regex(R"(rc=(\d+))"))) << where;
   if (e.endless) {
     EXPECT_NE(out.find("still-running"), std::string::npos)
@@ -117,6 +141,9 @@ TEST_P(ReadmeExample, RunsAsWritten) {
   } else {
     EXPECT_EQ(std::stoi(m[1]), e.exitCode) << where;
   }
+  // An example pasted into a checkout writes nothing the project tracks.
+  for (const auto& f : fs::directory_iterator(work / "recordings"))
+    EXPECT_TRUE(fs::is_symlink(f.symlink_status())) << f.path() << " was written: " << where;
 }
 
 std::string exampleName(const ::testing::TestParamInfo<Example>& info) {
@@ -124,12 +151,15 @@ std::string exampleName(const ::testing::TestParamInfo<Example>& info) {
   std::istringstream(info.param.command) >> word >> word;
   for (char& c : word)
     if (!std::isalnum(static_cast<unsigned char>(c))) c = '_';
-  return "line" + std::to_string(info.param.line) + "_" + word;
+  std::string file = fs::path(info.param.file).stem().string();  // README, commands, live-camera
+  for (char& c : file)
+    if (!std::isalnum(static_cast<unsigned char>(c))) c = '_';
+  return file + "_line" + std::to_string(info.param.line) + "_" + word;
 }
 
 INSTANTIATE_TEST_SUITE_P(Readme, ReadmeExample, ::testing::ValuesIn(readmeExamples()), exampleName);
 
-// The README has examples for every command (so a command cannot lose its example).
+// The manual has examples for every command (so a command cannot lose its example).
 TEST(Readme, EveryCommandHasAnExample) {
   std::set<std::string> seen;
   for (const auto& e : readmeExamples()) {
@@ -139,7 +169,7 @@ TEST(Readme, EveryCommandHasAnExample) {
   }
   for (const char* c : {"coeffs", "irradiance", "compare", "render", "view", "replay", "record",
                         "live", "devices", "bench"})
-    EXPECT_TRUE(seen.count(c)) << "README.md has no example of liveprobe " << c;
+    EXPECT_TRUE(seen.count(c)) << "neither README.md nor docs/ has an example of liveprobe " << c;
 }
 
 }  // namespace

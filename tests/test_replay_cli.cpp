@@ -11,6 +11,8 @@
 #include <regex>
 #include <thread>
 
+#include "liveprobe/capture/frame.h"
+#include "liveprobe/sh/projector.h"
 #include "liveprobe/sh/sh.h"
 #include "test_util.h"
 
@@ -270,8 +272,36 @@ TEST(ReplayCli, DefaultRecordingPlays) {
   const std::string out = tmp / "c.jsonl";
   const auto r = runLiveprobe("replay --headless --frames 10 --size 64x36 --coeffs-out " + out);
   ASSERT_EQ(r.exitCode, 0) << r.output;
-  EXPECT_NE(r.output.find("recordings/sky.mkv"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("recordings/sky.mkv (256x128, 30 fps)"), std::string::npos) << r.output;
   EXPECT_EQ(readJsonl(out).size(), 10u);
+}
+
+// A folder of six cube faces is a cube whether or not --layout says so: the coefficients equal the
+// core's projection of the assembled cross as a cube (read as one 4:3 equirect image, L00 would
+// be a third lower); replay reads it the same way, and a layout that contradicts it is refused.
+TEST(ReplayCli, CubeFaceFolderIsReadAsACube) {
+  const std::string dir = lpt::dataPath("cube/pisaHDR");
+  auto src = lp::openSource(dir);
+  lp::Frame f;
+  ASSERT_TRUE(src->next(f));
+  ASSERT_EQ(f.format, lp::PixelFormat::RgbF32);
+  const lp::Sh9 truth =
+      lp::project(lp::PanoramaView::rgbF32(f.rgb.data(), f.width, f.height, lp::Layout::Cube));
+  const auto r = runLiveprobe("coeffs " + dir + " --format json");
+  ASSERT_EQ(r.exitCode, 0) << r.output;
+  const auto j = nlohmann::json::parse(r.output);
+  EXPECT_EQ(j["layout"], "cube");
+  for (int ch = 0; ch < 3; ++ch)
+    EXPECT_NEAR(j["coefficients"]["L00"][ch].get<double>(), truth.c[0][ch], 1e-4 * truth.c[0][ch]);
+  lpt::TempDir tmp;
+  const auto rp = runLiveprobe("replay " + dir + " --headless --frames 1 --size 64x36 --quiet " +
+                               "--coeffs-out " + (tmp / "c.jsonl"));
+  ASSERT_EQ(rp.exitCode, 0) << rp.output;
+  const auto lines = readJsonl(tmp / "c.jsonl");
+  ASSERT_EQ(lines.size(), 1u);
+  EXPECT_NEAR(lines[0]["coefficients"]["L00"][0].get<double>(), truth.c[0][0],
+              1e-4 * truth.c[0][0]);
+  expectOneLineError("coeffs " + dir + " --layout equirect", dir, "cube");
 }
 
 TEST(ReplayCli, EveryLayoutOption) {

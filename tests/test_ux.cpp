@@ -334,6 +334,13 @@ TEST(Progress, HeadlessRunsReportFramesRateAndEta) {
       "LIVEPROBE_PROGRESS_SECONDS=0.2 \"$LP\" replay synthetic:64x32@30 --headless --msaa 1 "
       "--size 64x36 --frames 40 --quiet");
   EXPECT_EQ(q.output.find("/40 frames"), std::string::npos) << q.output;
+  // A file of known length: its total and an ETA without --frames (the recording's 150 frames).
+  const auto f = runShell("LIVEPROBE_PROGRESS_SECONDS=0.05 \"$LP\" replay " +
+                          std::string(LIVEPROBE_SOURCE_DIR) +
+                          "/recordings/sky.mkv --headless --msaa 1 --size 64x36");
+  ASSERT_EQ(f.exitCode, 0) << f.output;
+  EXPECT_TRUE(std::regex_search(f.output, std::regex(R"(replay: \d+/150 frames, [0-9.]+/s, ETA)")))
+      << f.output;
 }
 
 // ---- the command line ---------------------------------------------------------------------------
@@ -369,6 +376,23 @@ TEST(CommandLine, RefusalsAreOneLineWithExit1) {
   const auto r = runLiveprobe("render --coeff L00=1 --bogus");
   EXPECT_EQ(r.output.rfind("liveprobe render: ", 0), 0u) << "one prefix: " << r.output;
   EXPECT_EQ(r.output.find("render: render"), std::string::npos) << r.output;
+}
+
+// A misspelt command or option is named with the nearest real one; an option's value that looks
+// like an option is still its value, and a name far from every option gets no guess.
+TEST(CommandLine, MisspellingsSuggestTheNearestName) {
+  expectOneLineError("coefs x.hdr", "coefs", "did you mean coeffs?");
+  expectOneLineError("coeffs x.hdr --lihgts 2", "--lihgts", "did you mean --lights?");
+  expectOneLineError("replay --headles", "--headles", "did you mean --headless?");
+  expectOneLineError("replay --headless --hud --no-hud --frames 1", "--no-hud", "give one");
+  const auto far = runLiveprobe("coeffs x.hdr --frobnicate-everything");
+  EXPECT_EQ(far.exitCode, 1) << far.output;
+  EXPECT_NE(far.output.find("unknown option --frobnicate-everything"), std::string::npos)
+      << far.output;
+  EXPECT_EQ(far.output.find("did you mean"), std::string::npos) << far.output;
+  const auto value = runLiveprobe("coeffs " + lpt::dataPath("probes/latlong_256x128/grace.hdr") +
+                                  " --env-rotate=-30,0,0 --format text");
+  EXPECT_EQ(value.exitCode, 0) << value.output;
 }
 
 TEST(CommandLine, VersionNamesTheCommit) {

@@ -60,8 +60,8 @@ int frameInTitle(const std::string& output, const std::string& key) {
 }
 
 // The HUD in a real GLFW window under Xvfb, driven by xdotool: Space pauses (the frame index in
-// the title stops), H hides the HUD (the screenshots differ only where the HUD is), and a single
-// short tap of Esc quits.
+// the title stops), H hides the HUD (the screenshots differ only where the HUD is), the exposure
+// keys step once a press, and a single short tap of Esc quits.
 TEST(Window, HudAndKeysUnderXvfb) {
   lpt::TempDir tmp;
   const auto run = lpt::runCommand(
@@ -95,6 +95,32 @@ TEST(Window, HudAndKeysUnderXvfb) {
   cv::minMaxLoc(hud(status).reshape(1), &lo, &hi);
   EXPECT_GT(hi - lo, 100) << "the HUD region has no text";
   EXPECT_LT(meanAbsDiff(hud(model), plain(model)), 1.0) << "paused: the scene must not change";
+
+  // One press is one exposure step, whichever key types it: '=', '+' (shifted '=') and keypad '+'
+  // each brighten the paused frame by the same half stop.
+  const cv::Rect window(0, 0, 960, 540);
+  const cv::Mat equal = readXwd(tmp / "exposure_equal.xwd"),
+                plus = readXwd(tmp / "exposure_plus.xwd"),
+                keypad = readXwd(tmp / "exposure_KP_Add.xwd");
+  ASSERT_FALSE(equal.empty() || plus.empty() || keypad.empty());
+  const double base = cv::mean(plain(window))[1], brighter = cv::mean(equal(window))[1];
+  EXPECT_GT(brighter, base + 2) << "'=' did not raise the exposure";
+  EXPECT_LT(meanAbsDiff(plus(window), equal(window)), 0.5) << "'+' is not one step";
+  EXPECT_LT(meanAbsDiff(keypad(window), equal(window)), 0.5) << "keypad '+' is not one step";
+}
+
+// A replay in a window says at its start when the window will close: after the file's frames
+// (or --frames), unless --loop plays on.
+TEST(Window, ReplaySaysWhenTheWindowCloses) {
+  const std::string xvfb = "xvfb-run -a -s '-screen 0 640x480x24' ";
+  const std::string seq = std::string(LIVEPROBE_SOURCE_DIR) + "/recordings/sky-hdr";
+  const auto run = lpt::runCommand(xvfb + LIVEPROBE_BIN + " replay " + seq +
+                                   " --size 160x90 --msaa 1 --no-hud --frames 5");
+  ASSERT_EQ(run.exitCode, 0) << run.output;
+  EXPECT_NE(run.output.find("the window closes after 5 frames of image sequence"),
+            std::string::npos)
+      << run.output;
+  EXPECT_NE(run.output.find("--loop plays on"), std::string::npos) << run.output;
 }
 
 // The coefficient editor saves with Ctrl+S (in a real window) what `render --coeffs` reads.

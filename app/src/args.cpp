@@ -30,6 +30,37 @@ std::string positionalName(const std::string& s) {
 // "--env-rotate,--rotate" (a name and its aliases) is known by its first name.
 std::string optionKey(const OptionSpec& o) { return o.name.substr(0, o.name.find(',')); }
 
+// Every name of every option ("--env-rotate", "--rotate", ...), and whether it takes a value.
+std::map<std::string, bool> optionNames(const CommandSpec& spec) {
+  std::map<std::string, bool> names{{"--help", false}, {"-h", false}};
+  for (const auto& o : spec.options) {
+    std::stringstream s(o.name);
+    for (std::string n; std::getline(s, n, ',');) names[n] = !o.value.empty() && !o.optionalValue;
+  }
+  return names;
+}
+
+// An option that is not declared, named before CLI11 reads the line (which would otherwise
+// count it, or its value, as a surplus positional argument), with the nearest declared name.
+void refuseUnknownOptions(const CommandSpec& spec, const std::vector<std::string>& argv) {
+  const auto names = optionNames(spec);
+  std::vector<std::string> list;
+  for (const auto& [n, takesValue] : names) list.push_back(n);
+  for (std::size_t i = 0; i < argv.size(); ++i) {
+    const std::string& a = argv[i];
+    if (a == "--") return;  // what follows is positional
+    if (a.rfind("--", 0) != 0) continue;
+    const std::string name = a.substr(0, a.find('='));
+    const auto it = names.find(name);
+    if (it == names.end()) {
+      const std::string near = nearestName(name, list);
+      throw Error("unknown option " + name + (near.empty() ? "" : " (did you mean " + near + "?)") +
+                  " (see liveprobe " + spec.name + " --help)");
+    }
+    if (it->second && a.find('=') == std::string::npos) ++i;  // its value, whatever it looks like
+  }
+}
+
 void declare(Args::Parsed& p, const CommandSpec& spec) {
   CLI::App& app = p.app;
   app.name("liveprobe " + spec.name);
@@ -64,6 +95,7 @@ void declare(Args::Parsed& p, const CommandSpec& spec) {
 Args::Args(const CommandSpec& spec, const std::vector<std::string>& argv)
     : p_(std::make_unique<Parsed>()) {
   declare(*p_, spec);
+  refuseUnknownOptions(spec, argv);
   std::vector<std::string> reversed(argv.rbegin(), argv.rend());  // CLI11 takes them reversed
   try {
     p_->app.parse(reversed);
@@ -151,6 +183,29 @@ std::string usage(const CommandSpec& spec) {
   Args::Parsed p;
   declare(p, spec);
   return p.app.help();
+}
+
+std::string nearestName(const std::string& typed, const std::vector<std::string>& names) {
+  std::string best;
+  std::size_t bestDistance = std::string::npos;
+  for (const auto& n : names) {
+    // Levenshtein distance, one row at a time.
+    std::vector<std::size_t> row(n.size() + 1);
+    for (std::size_t j = 0; j <= n.size(); ++j) row[j] = j;
+    for (std::size_t i = 1; i <= typed.size(); ++i) {
+      std::size_t diagonal = row[0];
+      row[0] = i;
+      for (std::size_t j = 1; j <= n.size(); ++j) {
+        const std::size_t up = row[j];
+        row[j] =
+            std::min({row[j] + 1, row[j - 1] + 1, diagonal + (typed[i - 1] == n[j - 1] ? 0 : 1)});
+        diagonal = up;
+      }
+    }
+    if (row[n.size()] < bestDistance) bestDistance = row[n.size()], best = n;
+  }
+  const std::size_t allowed = std::min<std::size_t>(3, std::max<std::size_t>(1, typed.size() / 3));
+  return bestDistance <= allowed ? best : std::string();
 }
 
 std::pair<int, int> parseSize(const std::string& text, const std::string& what, int maxSide) {

@@ -258,10 +258,12 @@ struct BenchScene {
 
 /// What one run keeps from frame to frame.
 struct RunState {
+  explicit RunState(const BenchScene& scene)
+      : processor({scene.layout, scene.photometry, scene.orientation, 1, {.maxLights = 0}}) {}
   Frame frame;
   Image image;
-  std::optional<Projector> projector;
-  float exposure = 1.0f;  ///< from the first frame's irradiance
+  FrameProcessor processor;  ///< the frame path every command shares
+  float exposure = 1.0f;     ///< from the first frame's irradiance
 };
 
 /// One frame through the pipeline, stage by stage, as the replay pipeline does it: grab, convert
@@ -272,7 +274,6 @@ StageTimes timeFrame(BenchScene& scene, RunState& run, FrameSource& source,
   const Linearizer& lin = scene.lin;
   Frame& frame = run.frame;
   Image& image = run.image;
-  auto& projector = run.projector;
   StageTimes t{};
   auto t0 = Clock::now();
   auto lap = [&](int stage) {
@@ -291,12 +292,12 @@ StageTimes timeFrame(BenchScene& scene, RunState& run, FrameSource& source,
       for (float& v : image.rgb) v *= scale;
   }
   lap(1);
-  if (!projector || projector->width() != frame.width || projector->height() != frame.height) {
-    if (auto why = layoutMismatch(scene.layout, frame.width, frame.height); !why.empty())
-      throw Error(sourceName + ": " + why);
-    projector.emplace(scene.layout, frame.width, frame.height);
+  Sh9 sh;
+  try {
+    sh = run.processor.process(frame, &pool).radiance;
+  } catch (const Error& e) {
+    throw Error(sourceName + ": " + e.what());
   }
-  const Sh9 sh = rotateSh(projectFrame(*projector, frame, lin, &pool) * scale, scene.orientation);
   lap(2);
   if (first) run.exposure = autoExposure(sh);
   scene.renderer.setLighting(sh);
@@ -409,9 +410,10 @@ int runBench(const Args& a) {
   nlohmann::json baseline;
   if (a.has("--baseline"))
     baseline = parseBaseline(readInputFile(a.get("--baseline")), a.get("--baseline"));
+  layoutFromArgs(a);  // option errors before the source is opened
   BenchScene scene{openContext(gl::Backend::Headless, size),
                    {},
-                   layoutFromArgs(a),
+                   layoutFromArgs(a, openSource(sourceName).get()),
                    envOrientationFromArgs(a),
                    parseInjections(a)};
   loadModel(scene.renderer, meshFromArgs(a));
@@ -429,7 +431,7 @@ int runBench(const Args& a) {
     calibrations.push_back(calibrationMs());
     auto source = openSource(sourceName);
     description = source->describe();
-    RunState state;
+    RunState state(scene);
     std::vector<StageTimes> times;
     for (int i = 0; i < frames && !stopRequested(); ++i) {
       times.push_back(timeFrame(scene, state, *source, sourceName, pool, i == 0));

@@ -59,7 +59,11 @@ int runLive(const Args& a) {
   layoutFromArgs(a);
   CameraSettings cs;
   cs.device = a.positional()[0];
-  cs.format = parseCameraFormat(a.get("--format", "auto"));
+  try {
+    cs.format = parseCameraFormat(a.get("--format", "auto"));
+  } catch (const Error& e) {
+    throw Error("--format: " + std::string(e.what()));
+  }
   if (a.has("--size")) std::tie(cs.width, cs.height) = parseSize(a.get("--size"), "--size");
   cs.fps = a.number("--fps", 0.0);
   if (cs.fps < 0 || cs.fps > 1000)

@@ -34,9 +34,15 @@ using Clock = std::chrono::steady_clock;
 
 }  // namespace
 
+std::string shareDir() {
+  std::error_code ec;
+  const fs::path exe = fs::read_symlink("/proc/self/exe", ec);
+  return (exe.parent_path().parent_path() / "share" / "liveprobe").string();
+}
+
 std::string defaultRecording() {
   if (const char* e = std::getenv("LIVEPROBE_DEFAULT_RECORDING")) return e;
-  return std::string(LIVEPROBE_SOURCE_DIR) + "/recordings/sky.mkv";
+  return shareDir() + "/recordings/sky.mkv";
 }
 
 namespace {
@@ -71,9 +77,12 @@ std::vector<OptionSpec> streamOptions() {
        {"--smooth", "SECONDS",
         "exponential moving average of the coefficients and lights (and its latency)", false, false,
         g},
-       {"--fps", "F", "frame rate of image sequences, 0 to 1000 (default 30)", false, false, g},
-       {"--reduce", "F", "equirect: project an F x F area average, 1 to 64 (error in README)",
-        false, false, g},
+       {"--fps", "F",
+        "frame rate of image sequences and stills, above 0 and up to 1000 (default 30)", false,
+        false, g},
+       {"--reduce", "F",
+        "equirect: project an F x F area average, 1 to 64 (its error: docs/accuracy.md)", false,
+        false, g},
        {"--threads", "N", "threads for one frame's projection, 1 to 64 (default 2)", false, false,
         g},
        {"--frames", "N", "stop after N frames", false, false, g},
@@ -154,9 +163,9 @@ const CommandSpec kReplaySpec{
 namespace {
 
 /// The pipeline's options from the command line.
-PipelineOptions pipelineOptionsFromArgs(const Args& a) {
+PipelineOptions pipelineOptionsFromArgs(const Args& a, const FrameSource& source) {
   PipelineOptions opt;
-  opt.layout = layoutFromArgs(a);
+  opt.layout = layoutFromArgs(a, &source);
   opt.photometry = photometryFromArgs(a);
   if (a.has("--env-rotate") || a.has("--env-flip")) opt.rotation = envOrientationFromArgs(a);
   opt.smoothSeconds = a.numberIn("--smooth", 0.0, 0.0, 3600.0);
@@ -493,13 +502,12 @@ RecordSinks openSinks(const Args& a) {
     o.idleSeconds = int(a.integerIn("--serve-idle", 30, 2, 3600));
     o.defaultFormat = parseCoeffFormat("three", "--serve", true);
     const char* web = std::getenv("LIVEPROBE_WEB_DIR");
-    o.webDir = web ? web : LIVEPROBE_WEB_DIR;
-    o.threeDir = o.webDir + "/node_modules/three/build";
+    o.webDir = web ? web : shareDir() + "/web";
+    o.threeDir = o.webDir + "/three";
     if (!fs::exists(o.threeDir + "/three.module.js"))
-      std::fprintf(stderr,
-                   "liveprobe: --serve: three.js is not installed in %s (scripts/build installs "
-                   "it); the page will not draw\n",
-                   o.threeDir.c_str());
+      warn("--serve: three.js is not in " + o.threeDir +
+           " (the build stages it from app/web/node_modules, which scripts/build installs with "
+           "npm); the page will not draw");
     s.server = std::make_unique<StreamServer>(o);
     std::fprintf(stderr, "liveprobe: serving http://%s:%d/ (WebSocket ws://%s:%d/?format=three)\n",
                  o.host.c_str(), s.server->port(), o.host.c_str(), s.server->port());
@@ -533,7 +541,8 @@ RecordSinks openSinks(const Args& a) {
 // lines are written as frames are captured.
 int runStream(const Args& a, std::unique_ptr<FrameSource> source, bool live) {
   installStopHandlers();
-  PipelineOptions opt = pipelineOptionsFromArgs(a);
+  if (a.has("--hud") && a.has("--no-hud")) throw Error("--hud and --no-hud: give one of them");
+  PipelineOptions opt = pipelineOptionsFromArgs(a, *source);
   const gl::Camera cameraInit = cameraFromArgs(a);
   const Mesh mesh = meshFromArgs(a);
   const double fps = source->fps();
@@ -611,7 +620,15 @@ int runStream(const Args& a, std::unique_ptr<FrameSource> source, bool live) {
         stderr,
         "liveprobe: %s has no end: running until Ctrl-C (or give --frames N or --duration S)\n",
         description.c_str());
-  Progress progress(live ? "live" : "replay", opt.maxFrames, quiet || !view.ctx->isHeadless());
+  // A file of known length shows its total and an ETA without --frames.
+  const std::int64_t length = live || opt.loop ? -1 : source->frameCount();
+  const std::int64_t total =
+      length > 0 && (opt.maxFrames < 0 || length < opt.maxFrames) ? length : opt.maxFrames;
+  if (!endless && !live && !opt.loop && !view.ctx->isHeadless() && !quiet)
+    std::fprintf(stderr, "liveprobe: the window closes after %s%s (--loop plays on)\n",
+                 total > 0 ? (std::to_string(total) + " frames of ").c_str() : "the end of ",
+                 description.c_str());
+  Progress progress(live ? "live" : "replay", total, quiet || !view.ctx->isHeadless());
 
   CapturePipeline pipeline(std::move(source), opt);
   pipeline.start();

@@ -29,8 +29,8 @@ std::vector<OptionSpec> withLayout(std::vector<OptionSpec> o) {
   return o;
 }
 
-Environment loadEnvironment(const Args& a) {
-  return cli::loadEnvironment(a.positional().at(0), layoutFromArgs(a), envOrientationFromArgs(a));
+Environment loadEnvironment(const Args& a, const LightOptions& lights = {.maxLights = 0}) {
+  return cli::loadEnvironment(a.positional().at(0), a, lights);
 }
 
 /// Resolves --window against the coefficients; reports an automatic choice on stderr.
@@ -74,9 +74,8 @@ const CommandSpec kCoeffsSpec{
 int runCoeffs(const Args& a) {
   const CoeffFormat cf = parseCoeffFormat(a.get("--format", "json"), "--format", false);
   const std::string& format = cf.name;
-  Environment env = loadEnvironment(a);
   const LightOptions lights = chooseLights(a);
-  splitLights(env, lights);
+  const Environment env = loadEnvironment(a, lights);
   const Sh9 L = applyWindow(env.radiance, chooseWindow(a, env.radiance));
   if (cf.engine == Engine::Gltf) {
     std::cout << gltfDocument(env, L, env.lights).dump() << "\n";

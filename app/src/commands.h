@@ -37,7 +37,10 @@ std::vector<OptionSpec> lightOptionSpecs();
 /// The extraction asked for: maxLights = K with --lights K, 1 with --sun alone, 0 without either.
 LightOptions chooseLights(const Args& a);
 
-/// recordings/sky.mkv in the source tree, or $LIVEPROBE_DEFAULT_RECORDING.
+/// Run-time data beside the program: <the executable's folder>/../share/liveprobe, in the build
+/// tree as in an install (the build stages it there).
+std::string shareDir();
+/// $LIVEPROBE_DEFAULT_RECORDING, or the bundled recordings/sky.mkv in shareDir().
 std::string defaultRecording();
 
 extern const CommandSpec kCoeffsSpec, kIrradianceSpec, kCompareSpec, kRenderSpec, kViewSpec,

@@ -107,7 +107,11 @@ int main(int argc, char** argv) {
       return 3;
     }
   }
-  lp::cli::errs() << "liveprobe: unknown command '" << args[0]
-                  << "' (liveprobe --help lists them)\n";
+  std::vector<std::string> names;
+  for (const auto& c : lp::cli::commands()) names.push_back(c.spec.name);
+  const std::string near = lp::cli::nearestName(args[0], names);
+  lp::cli::errs() << "liveprobe: unknown command '" << args[0] << "'"
+                  << (near.empty() ? "" : " (did you mean " + near + "?)")
+                  << " (liveprobe --help lists them)\n";
   return 1;
 }

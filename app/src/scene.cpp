@@ -9,6 +9,7 @@
 #include "coeffs_io.h"
 #include "commands.h"
 #include "liveprobe/capture/frame.h"
+#include "liveprobe/capture/frame_processor.h"
 #include "liveprobe/capture/input_file.h"
 #include "liveprobe/capture/photometry.h"
 #include "liveprobe/capture/resample.h"
@@ -78,14 +79,29 @@ glm::mat3 envOrientationFromArgs(const Args& a) {
   return o;
 }
 
-LayoutSpec layoutFromArgs(const Args& a) {
-  LayoutSpec spec(parseLayout(a.get("--layout", "equirect")));
+LayoutSpec layoutFromArgs(const Args& a, const FrameSource* source) {
+  const std::optional<Layout> native = source ? source->layout() : std::nullopt;
+  LayoutSpec spec(native.value_or(Layout::Equirect));
+  if (a.has("--layout")) {
+    try {
+      spec.layout = parseLayout(a.get("--layout"));
+    } catch (const Error& e) {
+      throw Error("--layout: " + std::string(e.what()));
+    }
+    if (native && spec.layout != *native)
+      throw Error(source->describe() + ": the frames are a " + std::string(layoutName(*native)) +
+                  " layout; --layout " + a.get("--layout") + " does not apply");
+  }
   if (a.has("--circle")) {
     if (spec.layout != Layout::MirrorBall)
       throw Error("--circle applies to --layout mirrorball only");
     const auto v = parseNumberList(a.get("--circle"), "--circle", 3, "cx,cy,r with r > 0");
     if (!(v[2] > 0)) throw Error("--circle " + a.get("--circle") + ": expected cx,cy,r with r > 0");
     spec.circle = {float(v[0]), float(v[1]), float(v[2])};
+  } else if (spec.layout == Layout::MirrorBall) {
+    throw Error(
+        "--layout mirrorball needs --circle cx,cy,r: the mirror ball's centre and radius "
+        "in pixels");
   }
   if (a.has("--fov")) {
     if (spec.layout != Layout::DualFisheye) throw Error("--fov applies to --layout fisheye only");
@@ -94,36 +110,33 @@ LayoutSpec layoutFromArgs(const Args& a) {
   return spec;
 }
 
-Environment loadEnvironment(const std::string& source, const LayoutSpec& layout,
-                            const glm::mat3& orientation) {
+Environment loadEnvironment(const std::string& source, const Args& a, const LightOptions& lights) {
+  layoutFromArgs(a);  // option errors before the file is read
   auto src = openSource(source);
   Frame frame;
   if (!src->next(frame)) throw Error(source + ": no frame to read");
   Environment env;
-  env.layout = layout;
-  env.orientation = orientation;
-  Photometry photometry;
-  photometry.exposure = float(frame.radianceScale);
-  Linearizer(photometry).convert(frame, env.image);
-  if (frame.format == PixelFormat::Bgr8) env.displayScale = photometry.exposure;
-  if (auto why = layoutMismatch(layout, env.image.width, env.image.height); !why.empty())
-    throw Error(source + ": " + why);
-  warnIfLayoutLooksWrong(source, layout, env.image.width, env.image.height, env.image.rgb.data());
-  env.radiance = rotateSh(project(PanoramaView::rgbF32(env.image.rgb.data(), env.image.width,
-                                                       env.image.height, layout)),
-                          orientation);
-  if (!isFinite(env.radiance))
-    throw Error(source + ": the coefficients are not finite (radiance too large to sum in float)");
+  env.layout = layoutFromArgs(a, src.get());
+  env.orientation = envOrientationFromArgs(a);
+  FrameProcessor processor({env.layout, Photometry{}, env.orientation, 1, lights});
+  FrameLighting lit;
+  try {
+    lit = processor.process(frame);
+  } catch (const Error& e) {
+    throw Error(source + ": " + e.what());
+  }
+  env.radiance = lit.radiance;
+  env.lights = std::move(lit.lights);
+  // The linear image, for what reads pixels (the brute force, the background, the glTF cube), in
+  // the same units as the coefficients: the frame's own exposure applied.
+  const float scale = float(frame.radianceScale);
+  processor.linearizer().convert(frame, env.image);
+  if (scale != 1.0f)
+    for (float& v : env.image.rgb) v *= scale;
+  if (frame.format == PixelFormat::Bgr8) env.displayScale = scale;
+  warnIfLayoutLooksWrong(source, env.layout, env.image.width, env.image.height,
+                         env.image.rgb.data());
   return env;
-}
-
-void splitLights(Environment& env, const LightOptions& options) {
-  if (options.maxLights <= 0) return;
-  const auto view =
-      PanoramaView::rgbF32(env.image.rgb.data(), env.image.width, env.image.height, env.layout);
-  const LightSplit split = rotateSplit(projectWithLights(view, options), env.orientation);
-  env.radiance = split.residual;
-  env.lights = split.lights;
 }
 
 void warnIfLayoutLooksWrong(const std::string& source, const LayoutSpec& layout, int w, int h,
@@ -216,8 +229,7 @@ std::optional<Lighting> lightingFromArgs(const Args& a) {
         "its own)");
   Lighting l;
   if (a.has("--env")) {
-    Environment env = loadEnvironment(a.get("--env"), layoutFromArgs(a), envOrientationFromArgs(a));
-    splitLights(env, chooseLights(a));
+    Environment env = loadEnvironment(a.get("--env"), a, chooseLights(a));
     l.lights = env.lights;
     l.layout = env.layout;
     l.orientation = env.orientation;

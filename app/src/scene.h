@@ -5,6 +5,7 @@
 #include <vector>
 
 #include "args.h"
+#include "liveprobe/capture/frame.h"
 #include "liveprobe/capture/image.h"
 #include "liveprobe/gl/context.h"
 #include "liveprobe/gl/mesh.h"
@@ -29,8 +30,10 @@ std::vector<OptionSpec> layoutOptions();
 /// direction d lies in world direction O d, with O = Rz(yaw) Ry(pitch) Rx(roll) * F, F the
 /// flip z -> -z (a panorama stored upside down) or the identity. Identity when neither is given.
 glm::mat3 envOrientationFromArgs(const Args& a);
-/// The layout options as a spec (option errors are reported before any file is read).
-LayoutSpec layoutFromArgs(const Args& a);
+/// The layout options as a spec (option errors are reported before any file is read). A source
+/// that knows its own layout (six cube faces) gives the default, and a --layout that contradicts
+/// it is refused.
+LayoutSpec layoutFromArgs(const Args& a, const FrameSource* source = nullptr);
 
 /// A still environment in any layout: FILE is an image, or a folder of six cube faces.
 struct Environment {
@@ -38,19 +41,15 @@ struct Environment {
   LayoutSpec layout;
   glm::mat3 orientation{1.0f};  ///< world from file (envOrientationFromArgs)
   Sh9 radiance;                 ///< unwindowed, turned by `orientation` (with lights: the rest)
-  std::vector<Light> lights;    ///< splitLights: the dominant compact lights, turned likewise
+  std::vector<Light> lights;    ///< the dominant compact lights, when asked, turned likewise
   float displayScale = 0.0f;    ///< an 8-bit file: the scale its decoded values carry; 0 for HDR
 };
-/// Reads the first frame of `source` through the capture path (photometry, layout check) and
-/// projects it, turned by `orientation`. Warns (one line) about a likely layout mistake. Throws
-/// lp::Error naming the source.
-Environment loadEnvironment(const std::string& source, const LayoutSpec& layout,
-                            const glm::mat3& orientation = glm::mat3(1.0f));
-
-/// Splits the environment's lights out of its coefficients (liveprobe/sh/lights.h): `radiance`
-/// becomes the rest and `lights` the lights, both turned by the orientation. No-op for
-/// options.maxLights = 0.
-void splitLights(Environment& env, const LightOptions& options);
+/// Reads the first frame of `source` and takes it through the frame path (FrameProcessor: one
+/// projection, the lights split out when `lights` asks), in the layout and orientation the
+/// options give (layoutFromArgs, envOrientationFromArgs). Warns (one line) about a likely layout
+/// mistake. Throws lp::Error naming the source.
+Environment loadEnvironment(const std::string& source, const Args& a,
+                            const LightOptions& lights = {.maxLights = 0});
 
 /// One warning line when the frame's shape suggests another layout than the one given: a square
 /// image or a 16:9 frame taken as equirect, or an angular map whose corners are not black.
@@ -72,7 +71,7 @@ struct Lighting {
 void setBackground(gl::Renderer& r, const Image& frame, const LayoutSpec& layout,
                    float displayScale = 0.0f);
 /// The background from an 8-bit sRGB frame the display takes as it is
-/// (capture/pipeline.h, displayTakesFrameAsIs), its decoded values times `scale`.
+/// (liveprobe/capture/frame_processor.h, displayTakesFrameAsIs), its decoded values times `scale`.
 void setBackground(gl::Renderer& r, const Frame& frame, const LayoutSpec& layout, float scale);
 
 /// From --env FILE [--layout], --coeffs FILE.json or --coeff NAME=VALUE...; nullopt if none given.

@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstdio>
 #include <utility>
 
 #include "liveprobe/capture/resample.h"
@@ -19,49 +20,18 @@ double monotonicSeconds() {
   return double(t.tv_sec) + 1e-9 * double(t.tv_nsec);
 }
 
+std::string formatFps(double fps) {
+  char text[64];
+  std::snprintf(text, sizeof text, "%.4g fps", fps);
+  return text;
+}
+
 namespace {
 using Clock = std::chrono::steady_clock;
 double msBetween(Clock::time_point a, Clock::time_point b) {
   return std::chrono::duration<double, std::milli>(b - a).count();
 }
 }  // namespace
-
-bool displayTakesFrameAsIs(const Frame& frame, const Photometry& photometry,
-                           const LayoutSpec& layout) {
-  return frame.format == PixelFormat::Bgr8 && photometry.gamma == 0.0f &&
-         (layout.layout == Layout::Equirect || layout.layout == Layout::Angular);
-}
-
-Sh9 projectFrame(const Projector& projector, const Frame& frame, const Linearizer& linearizer,
-                 Executor* executor) {
-  if (frame.format == PixelFormat::Bgr8)
-    return projector.project(PanoramaView::bgrU8(frame.bgr8.data(), frame.width, frame.height,
-                                                 linearizer.table().data(), projector.spec()),
-                             executor);
-  return projector.project(
-             PanoramaView::rgbF32(frame.rgb.data(), frame.width, frame.height, projector.spec()),
-             executor) *
-         linearizer.exposure();
-}
-
-LightSplit projectFrameWithLights(const Projector& projector, const LightExtractor& extractor,
-                                  const Frame& frame, const Linearizer& linearizer,
-                                  Executor* executor, const LightOptions& options) {
-  std::vector<float> peaks;
-  if (frame.format == PixelFormat::Bgr8) {
-    const auto view = PanoramaView::bgrU8(frame.bgr8.data(), frame.width, frame.height,
-                                          linearizer.table().data(), projector.spec());
-    return extractor.extract(view, projector.project(view, executor, &peaks), peaks, options);
-  }
-  const auto view =
-      PanoramaView::rgbF32(frame.rgb.data(), frame.width, frame.height, projector.spec());
-  LightSplit split =
-      extractor.extract(view, projector.project(view, executor, &peaks), peaks, options);
-  const float k = linearizer.exposure();
-  split.residual *= k;
-  for (Light& l : split.lights) l.power *= k;
-  return split;
-}
 
 glm::vec3 slerp(glm::vec3 a, glm::vec3 b, float t) {
   const float c = std::clamp(glm::dot(a, b), -1.0f, 1.0f);
@@ -140,15 +110,13 @@ void CapturePipeline::publish(ProcessedFrame&& f) {
 // The capture thread's state from frame to frame.
 struct CapturePipeline::Loop {
   explicit Loop(const PipelineOptions& o)
-      : linearizer(o.photometry),
+      : processor({o.layout, o.photometry, o.rotation, o.reduce, o.lights}),
         smoother(o.smoothSeconds),
         lightSmoother(o.smoothSeconds),
         wallStart(Clock::now()) {
     if (o.threads > 1) pool = std::make_unique<ThreadPool>(o.threads);
   }
-  const Linearizer linearizer;
-  std::optional<Projector> projector;
-  std::optional<LightExtractor> extractor;  ///< for `projector`, when lights are asked for
+  FrameProcessor processor;  ///< the frame's lighting (liveprobe/capture/frame_processor.h)
   ShSmoother smoother;
   LightSmoother lightSmoother;
   std::unique_ptr<ThreadPool> pool;
@@ -179,24 +147,6 @@ bool CapturePipeline::grab(Loop& s) {
   return true;
 }
 
-void CapturePipeline::fitProjector(Loop& s) const {
-  const Frame& frame = s.frame;
-  const int reduce = opt_.reduce;
-  if (s.projector && s.projector->width() * reduce == frame.width &&
-      s.projector->height() * reduce == frame.height)
-    return;
-  if (auto why = layoutMismatch(opt_.layout, frame.width, frame.height); !why.empty())
-    throw Error(source_->describe() + ": " + std::string(layoutName(opt_.layout.layout)) +
-                " layout: " + why);
-  if (reduce > 1 &&
-      (opt_.layout.layout != Layout::Equirect || frame.width % reduce || frame.height % reduce))
-    throw Error(source_->describe() + ": --reduce " + std::to_string(reduce) +
-                " needs an equirect frame whose size is a multiple of it");
-  s.projector.emplace(opt_.layout, frame.width / reduce, frame.height / reduce);
-  s.extractor.reset();
-  if (opt_.lights.maxLights > 0) s.extractor.emplace(*s.projector);
-}
-
 void CapturePipeline::convertForDisplay(Loop& s, ProcessedFrame& out) const {
   // A linear copy only for display; the projection reads the frame itself.
   const Frame& frame = s.frame;
@@ -205,56 +155,30 @@ void CapturePipeline::convertForDisplay(Loop& s, ProcessedFrame& out) const {
     out.saturated = countSaturated(frame);
   } else if (opt_.keepImages) {
     s.image = std::make_shared<Image>();
-    out.saturated = s.linearizer.convert(frame, *s.image);
+    out.saturated = s.processor.linearizer().convert(frame, *s.image);
   } else {
     out.saturated = countSaturated(frame);
   }
 }
 
 Sh9 CapturePipeline::project(Loop& s, ProcessedFrame& out) const {
-  // 8-bit frames through the lookup table inside the projection, float ones scaled afterwards
-  // (projection is linear); --reduce projects an area-averaged copy.
-  LightSplit split;
-  if (opt_.reduce > 1) {
-    if (!s.image) {
-      s.image = std::make_shared<Image>();
-      s.linearizer.convert(s.frame, *s.image);
-    }
-    const Image small =
-        reduceEquirect(s.image->rgb.data(), s.image->width, s.image->height, opt_.reduce);
-    const auto view = PanoramaView::rgbF32(small.rgb.data(), small.width, small.height);
-    if (s.extractor) {
-      std::vector<float> peaks;
-      split = s.extractor->extract(view, s.projector->project(view, s.pool.get(), &peaks), peaks,
-                                   opt_.lights);
-    } else {
-      split.residual = s.projector->project(view, s.pool.get());
-    }
-  } else if (s.extractor) {
-    split = projectFrameWithLights(*s.projector, *s.extractor, s.frame, s.linearizer, s.pool.get(),
-                                   opt_.lights);
-  } else {
-    split.residual = projectFrame(*s.projector, s.frame, s.linearizer, s.pool.get());
+  // A reduction reads the display's linear copy when there is one.
+  FrameLighting lit;
+  try {
+    lit = s.processor.process(s.frame, s.pool.get(), s.image.get());
+  } catch (const Error& e) {
+    throw Error(source_->describe() + ": frame " + std::to_string(out.index + 1) + ": " + e.what());
   }
-  Sh9& sh = split.residual;
   // The exposure in force for this frame (a recording's stored exposure, a camera's exposure
-  // time) scales the coefficients and the display copy.
+  // time) scaled the coefficients; it scales the display copy too.
   const double scale = s.frame.radianceScale;
-  if (scale != 1.0) {
-    sh *= float(scale);
-    for (Light& l : split.lights) l.power *= float(scale);
-    if (s.image)
-      for (float& v : s.image->rgb) v *= float(scale);
-  }
+  if (scale != 1.0 && s.image)
+    for (float& v : s.image->rgb) v *= float(scale);
   out.rawScale = float(scale) * opt_.photometry.exposure;
   out.displayScale = s.frame.format == PixelFormat::Bgr8 ? out.rawScale : 0.0f;
-  if (!isFinite(sh))
-    throw Error(source_->describe() + ": frame " + std::to_string(out.index + 1) +
-                ": the coefficients are not finite (radiance too large to sum in float)");
-  if (opt_.rotation) split = rotateSplit(split, *opt_.rotation);
-  out.unsmoothed = split.residual;
-  out.lights = s.lightSmoother.update(split.lights, out.timestamp);
-  return s.smoother.update(split.residual, out.timestamp);
+  out.unsmoothed = lit.radiance;
+  out.lights = s.lightSmoother.update(lit.lights, out.timestamp);
+  return s.smoother.update(lit.radiance, out.timestamp);
 }
 
 template <class Ready>
@@ -302,7 +226,6 @@ void CapturePipeline::run() {
       if (!grab(s)) break;
       const auto t1 = Clock::now();
       const double grabbed = monotonicSeconds();
-      fitProjector(s);
       ProcessedFrame out;
       out.index = s.index++;
       out.sequence = s.frame.sequence;

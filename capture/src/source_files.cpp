@@ -54,6 +54,7 @@ class ListSource : public FrameSource {
   }
   std::string describe() const override { return what_; }
   double fps() const override { return fps_; }
+  std::int64_t frameCount() const override { return std::int64_t(files_.size()); }
 
  private:
   std::vector<std::string> files_;
@@ -102,6 +103,8 @@ class CubeFacesSource final : public FrameSource {
   }
   std::string describe() const override { return "cube faces in " + dir_; }
   double fps() const override { return fps_; }
+  std::optional<Layout> layout() const override { return Layout::Cube; }
+  std::int64_t frameCount() const override { return 1; }
 
  private:
   std::array<std::string, 6> faces_;
@@ -173,8 +176,7 @@ class VideoSource final : public FrameSource {
   }
   std::string describe() const override {
     return "video " + path_ + " (" + std::to_string(int(cap_.get(cv::CAP_PROP_FRAME_WIDTH))) + "x" +
-           std::to_string(int(cap_.get(cv::CAP_PROP_FRAME_HEIGHT))) + ", " + std::to_string(fps()) +
-           " fps)";
+           std::to_string(int(cap_.get(cv::CAP_PROP_FRAME_HEIGHT))) + ", " + formatFps(fps()) + ")";
   }
   double fps() const override {
     const double f = cap_.get(cv::CAP_PROP_FPS);
@@ -182,6 +184,11 @@ class VideoSource final : public FrameSource {
   }
   std::size_t skippedFrames() const override { return skipped_; }
   std::string endReason() const override { return endReason_; }
+  std::int64_t frameCount() const override {  // the sidecar's, or the container's estimate
+    if (!stamps_.empty()) return std::int64_t(stamps_.size());
+    const double count = cap_.get(cv::CAP_PROP_FRAME_COUNT);
+    return count >= 1 ? std::int64_t(count) : -1;
+  }
 
  private:
   static constexpr int kMaxBadRun = 32;

@@ -83,7 +83,7 @@ class SyntheticSource final : public FrameSource {
   }
   std::string describe() const override {
     return "synthetic sky " + std::to_string(w_) + "x" + std::to_string(h_) + " @ " +
-           std::to_string(int(fps_)) + " fps";
+           formatFps(fps_);
   }
   double fps() const override { return fps_; }
 

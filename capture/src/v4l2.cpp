@@ -78,7 +78,8 @@ CameraFormat parseCameraFormat(std::string_view name) {
   for (CameraFormat f : {CameraFormat::Auto, CameraFormat::Mjpeg, CameraFormat::Yuyv,
                          CameraFormat::Nv12, CameraFormat::Rgb24})
     if (cameraFormatName(f) == name) return f;
-  throw Error("--format " + std::string(name) + ": expected mjpeg, yuyv, nv12, rgb24 or auto");
+  throw Error("unknown camera format " + std::string(name) +
+              " (expected mjpeg, yuyv, nv12, rgb24 or auto)");
 }
 
 // One memory-mapped buffer; unmapped when destroyed.
@@ -484,8 +485,7 @@ LockedExposure V4l2Source::lockExposure(double seconds) {
 
 std::string V4l2Source::describe() const {
   return "camera " + settings_.device + " (" + card_ + ", " + fourccText(fourcc_) + " " +
-         std::to_string(width_) + "x" + std::to_string(height_) + " @ " +
-         std::to_string(fps_).substr(0, 5) + " fps)";
+         std::to_string(width_) + "x" + std::to_string(height_) + " @ " + formatFps(fps_) + ")";
 }
 
 CameraInfo queryCamera(const std::string& path) {

@@ -97,10 +97,10 @@ void projectBench(benchmark::State& state, lp::Layout layout, bool u8, Size s, i
 }
 
 // Projection alone, and projection with light extraction (the row peaks taken during the
-// projection, then the sun's neighbourhood), on the same frame in the same run: issue 13's cost
-// budget is the ratio of the two (at most 1.2 at 1920x1080 and 3840x1920).
-// mode 0: projection alone; 1: projection plus extraction; 2: the extraction alone, timed after
-// an untimed projection of the same frame each iteration (the caches as a frame leaves them).
+// projection, then the sun's neighbourhood), on the same frame in the same run: the extraction's
+// cost budget is the ratio of the two (at most 1.2 at 1920x1080 and 3840x1920). mode 0: projection
+// alone; 1: projection plus extraction; 2: the extraction alone, timed after an untimed projection
+// of the same frame each iteration (the caches as a frame leaves them).
 void lightsBench(benchmark::State& state, bool u8, Size s, int mode) {
   const lp::Projector proj(lp::Layout::Equirect, s.w, s.h);
   const lp::LightExtractor extractor(proj);

@@ -29,6 +29,15 @@ xdotool key h  # hide the HUD: the same paused frame without it
 sleep 1.5
 xwd -root -silent >"$out/nohud.xwd"
 echo "paused_b: $(title_until 'paused$')"
+# Exposure keys, paused and without the HUD: '=', shifted '=' ('+') and keypad '+' are each one
+# half-stop step ('-' takes it back), so the three screenshots after them are the same.
+for k in equal plus KP_Add; do
+  xdotool key "$k"
+  sleep 2
+  xwd -root -silent >"$out/exposure_$k.xwd"
+  xdotool key minus
+  sleep 1
+done
 xdotool key h space  # HUD back, resume
 title_until 'frames/s$' >/dev/null
 sleep 2

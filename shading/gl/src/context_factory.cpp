@@ -79,14 +79,6 @@ class GlfwContext final : public GlContext {
         case GLFW_KEY_H:
           keys.push_back(KeyAction::ToggleHud);
           break;
-        case GLFW_KEY_EQUAL:
-        case GLFW_KEY_KP_ADD:
-          keys.push_back(KeyAction::ExposureUp);
-          break;
-        case GLFW_KEY_MINUS:
-        case GLFW_KEY_KP_SUBTRACT:
-          keys.push_back(KeyAction::ExposureDown);
-          break;
         case GLFW_KEY_F1:
           keys.push_back(KeyAction::Help);
           break;
@@ -94,12 +86,14 @@ class GlfwContext final : public GlContext {
           break;
       }
     });
-    glfwSetCharCallback(
-        window_, [](GLFWwindow* w, unsigned codepoint) {  // layout-independent '?' and '+'
-          auto& keys = static_cast<GlfwContext*>(glfwGetWindowUserPointer(w))->input_.keys;
-          if (codepoint == '?') keys.push_back(KeyAction::Help);
-          if (codepoint == '+') keys.push_back(KeyAction::ExposureUp);
-        });
+    // The keys that are characters, whatever the keyboard layout: one press is one character
+    // (shifted = and keypad + both type '+'; as keys as well they would count twice).
+    glfwSetCharCallback(window_, [](GLFWwindow* w, unsigned codepoint) {
+      auto& keys = static_cast<GlfwContext*>(glfwGetWindowUserPointer(w))->input_.keys;
+      if (codepoint == '?') keys.push_back(KeyAction::Help);
+      if (codepoint == '+' || codepoint == '=') keys.push_back(KeyAction::ExposureUp);
+      if (codepoint == '-') keys.push_back(KeyAction::ExposureDown);
+    });
     glfwGetCursorPos(window_, &lastX_, &lastY_);
   }
   ~GlfwContext() override {

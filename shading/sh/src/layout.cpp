@@ -30,8 +30,8 @@ Layout parseLayout(std::string_view name) {
   if (name == "mirrorball" || name == "ball") return Layout::MirrorBall;
   if (name == "cube" || name == "cross") return Layout::Cube;
   if (name == "fisheye" || name == "dual-fisheye") return Layout::DualFisheye;
-  throw Error("--layout " + std::string(name) +
-              ": unknown layout (expected equirect, angular, mirrorball, cube or fisheye)");
+  throw Error("unknown layout " + std::string(name) +
+              " (expected equirect, angular, mirrorball, cube or fisheye)");
 }
 
 std::string layoutMismatch(const LayoutSpec& spec, int width, int height) {
@@ -46,7 +46,7 @@ std::string layoutMismatch(const LayoutSpec& spec, int width, int height) {
       return {};
     case Layout::MirrorBall: {
       const auto c = spec.circle;
-      if (!(c.z > 1.0f)) return "a mirror ball needs its circle: --circle cx,cy,r (pixels)";
+      if (!(c.z > 1.0f)) return "a mirror ball needs its circle (centre and radius in pixels)";
       if (c.x - c.z < -0.5f || c.y - c.z < -0.5f || c.x + c.z > width + 0.5f ||
           c.y + c.z > height + 0.5f)
         return "the mirror ball's circle does not fit in the " + size + " frame";

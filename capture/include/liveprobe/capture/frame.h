@@ -1,6 +1,6 @@
 #pragma once
 // Frames and the sources that produce them: still images, image sequences, cube-face sets, video
-// files (OpenCV videoio with FFmpeg), a synthetic sky, and (issue 5) V4L2 cameras. One small
+// files (OpenCV videoio with FFmpeg), a synthetic sky, and V4L2 cameras. One small
 // interface; one factory, openSource().
 #include <cstdint>
 #include <glm/glm.hpp>
@@ -8,6 +8,8 @@
 #include <optional>
 #include <string>
 #include <vector>
+
+#include "liveprobe/sh/layout.h"
 
 namespace lp {
 
@@ -38,6 +40,10 @@ struct Frame {
 /// Now on CLOCK_MONOTONIC, in seconds: the clock of Frame::captureTime.
 double monotonicSeconds();
 
+/// A frame rate as a person writes it: "30 fps", "29.97 fps", "0.5 fps" (four significant digits
+/// at most, no trailing zeros).
+std::string formatFps(double fps);
+
 class FrameSource {
  public:
   virtual ~FrameSource() = default;
@@ -52,6 +58,12 @@ class FrameSource {
   virtual std::size_t skippedFrames() const { return 0; }
   /// Why the stream ended, when it ended early (a truncated file); empty otherwise.
   virtual std::string endReason() const { return {}; }
+  /// The layout the source's frames are in, where the source itself knows it (six cube faces
+  /// make a horizontal cross); empty where only the user can say (any single image or video).
+  virtual std::optional<Layout> layout() const { return std::nullopt; }
+  /// Frames from the first to the end, where the source knows it (a file: a video's own count,
+  /// a sequence's files); -1 for an endless source (synthetic, a camera) or an unknown length.
+  virtual std::int64_t frameCount() const { return -1; }
 };
 
 struct SourceOptions {

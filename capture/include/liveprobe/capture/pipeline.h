@@ -15,6 +15,7 @@
 #include <thread>
 
 #include "liveprobe/capture/frame.h"
+#include "liveprobe/capture/frame_processor.h"
 #include "liveprobe/capture/image.h"
 #include "liveprobe/capture/photometry.h"
 #include "liveprobe/sh/executor.h"
@@ -133,22 +134,6 @@ class LightSmoother {
 /// Spherical linear interpolation between unit vectors a and b (t in [0, 1]).
 glm::vec3 slerp(glm::vec3 a, glm::vec3 b, float t);
 
-/// Whether the display takes this frame as it is: 8-bit sRGB in a layout the background shader
-/// draws directly (equirect, angular). Then no linear copy is made for it; the GPU decodes sRGB.
-bool displayTakesFrameAsIs(const Frame& frame, const Photometry& photometry,
-                           const LayoutSpec& layout);
-
-/// The radiance coefficients of one frame, as every stage of liveprobe computes them: 8-bit frames
-/// through the linearizer's table inside the projection, float frames scaled after (projection
-/// is linear). The projector must have the frame's size.
-Sh9 projectFrame(const Projector& projector, const Frame& frame, const Linearizer& linearizer,
-                 Executor* executor);
-/// The same, split into the residual coefficients and the lights (in the frame's orientation and
-/// the same radiance units as projectFrame's).
-LightSplit projectFrameWithLights(const Projector& projector, const LightExtractor& extractor,
-                                  const Frame& frame, const Linearizer& linearizer,
-                                  Executor* executor, const LightOptions& options);
-
 class CapturePipeline {
  public:
   CapturePipeline(std::unique_ptr<FrameSource> source, PipelineOptions options);
@@ -179,10 +164,9 @@ class CapturePipeline {
   void run();
   bool waitForTurn(Loop& s);  ///< the pause / step gate; false when stopping
   bool grab(Loop& s);         ///< the next frame (looping if asked); false at the end
-  void fitProjector(Loop& s) const;
   void convertForDisplay(Loop& s, ProcessedFrame& out) const;
-  Sh9 project(Loop& s, ProcessedFrame& out) const;
-  void pace(Loop& s, double timestamp);  ///< --realtime: waits for the frame's time
+  Sh9 project(Loop& s, ProcessedFrame& out) const;  ///< the frame through its FrameProcessor
+  void pace(Loop& s, double timestamp);             ///< --realtime: waits for the frame's time
   /// Waits on cv_ until ready(), stop, `until`, or PipelineOptions::interrupted (polled).
   template <class Ready>
   void waitPolling(std::unique_lock<std::mutex>& lock, std::chrono::steady_clock::time_point until,

@@ -1,0 +1,74 @@
+#pragma once
+// The one frame path: a Frame in, the frame's lighting out. Every caller (the capture pipeline,
+// bench, the still commands, the accuracy evaluation) goes through it, so a frame's lighting is
+// computed one way: the frame as a panorama view, the exposure applied once (an 8-bit frame's
+// lookup table carries the photometry's exposure, a float frame is scaled after the projection,
+// which is linear, and Frame::radianceScale scales both), an optional area-averaged reduction,
+// the coefficients and the lights, then the orientation.
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "liveprobe/capture/frame.h"
+#include "liveprobe/capture/image.h"
+#include "liveprobe/capture/photometry.h"
+#include "liveprobe/sh/executor.h"
+#include "liveprobe/sh/layout.h"
+#include "liveprobe/sh/lights.h"
+#include "liveprobe/sh/projector.h"
+#include "liveprobe/sh/sh.h"
+
+namespace lp {
+
+struct FrameProcessorOptions {
+  LayoutSpec layout;
+  Photometry photometry;
+  /// World from file (the environment's orientation); none: the identity.
+  std::optional<glm::mat3> rotation;
+  int reduce = 1;  ///< equirect: project an F x F area average of the frame (1: the frame)
+  LightOptions lights{.maxLights = 0};  ///< maxLights = 0 (the default): coefficients only
+};
+
+/// One frame's lighting in the world frame, in linear radiance units.
+struct FrameLighting {
+  Sh9 radiance;               ///< with lights: the rest of the map (the lights' pixels filled)
+  std::vector<Light> lights;  ///< the dominant compact lights, when asked for
+  Sh9 whole;                  ///< the whole map's coefficients, lights included
+};
+
+class FrameProcessor {
+ public:
+  explicit FrameProcessor(FrameProcessorOptions options);
+  ~FrameProcessor();
+  FrameProcessor(FrameProcessor&&) noexcept;
+  FrameProcessor& operator=(FrameProcessor&&) noexcept;
+
+  /// The lighting of `frame`. `linear`, when the caller has it, is the frame already converted by
+  /// linearizer() (a reduction reads it instead of converting again). Throws lp::Error (without
+  /// a source name: the caller adds it) when the frame does not fit the layout or the reduction,
+  /// or when its coefficients are not finite.
+  FrameLighting process(const Frame& frame, Executor* executor = nullptr,
+                        const Image* linear = nullptr);
+
+  /// The projector of the last frame's size (nullptr before the first frame).
+  const Projector* projector() const;
+  const Linearizer& linearizer() const { return linearizer_; }
+  const FrameProcessorOptions& options() const { return opt_; }
+
+ private:
+  void fit(const Frame& frame);
+
+  FrameProcessorOptions opt_;
+  Linearizer linearizer_;
+  // On the heap: the extractor points at the projector, and both survive a move.
+  std::unique_ptr<Projector> projector_;
+  std::unique_ptr<LightExtractor> extractor_;
+};
+
+/// Whether the display takes this frame as it is: 8-bit sRGB in a layout the background shader
+/// draws directly (equirect, angular). Then no linear copy is made for it; the GPU decodes sRGB.
+bool displayTakesFrameAsIs(const Frame& frame, const Photometry& photometry,
+                           const LayoutSpec& layout);
+
+}  // namespace lp

@@ -1,0 +1,85 @@
+#include "liveprobe/capture/frame_processor.h"
+
+#include "liveprobe/capture/resample.h"
+#include "liveprobe/sh/error.h"
+
+namespace lp {
+
+bool displayTakesFrameAsIs(const Frame& frame, const Photometry& photometry,
+                           const LayoutSpec& layout) {
+  return frame.format == PixelFormat::Bgr8 && photometry.gamma == 0.0f &&
+         (layout.layout == Layout::Equirect || layout.layout == Layout::Angular);
+}
+
+FrameProcessor::FrameProcessor(FrameProcessorOptions options)
+    : opt_(std::move(options)), linearizer_(opt_.photometry) {}
+FrameProcessor::~FrameProcessor() = default;
+FrameProcessor::FrameProcessor(FrameProcessor&&) noexcept = default;
+FrameProcessor& FrameProcessor::operator=(FrameProcessor&&) noexcept = default;
+
+const Projector* FrameProcessor::projector() const { return projector_.get(); }
+
+void FrameProcessor::fit(const Frame& frame) {
+  const int reduce = opt_.reduce;
+  if (projector_ && projector_->width() * reduce == frame.width &&
+      projector_->height() * reduce == frame.height)
+    return;
+  if (auto why = layoutMismatch(opt_.layout, frame.width, frame.height); !why.empty())
+    throw Error(std::string(layoutName(opt_.layout.layout)) + " layout: " + why);
+  if (reduce > 1 &&
+      (opt_.layout.layout != Layout::Equirect || frame.width % reduce || frame.height % reduce))
+    throw Error("a reduction by " + std::to_string(reduce) +
+                " needs an equirect frame whose size is a multiple of it");
+  extractor_.reset();
+  projector_ =
+      std::make_unique<Projector>(opt_.layout, frame.width / reduce, frame.height / reduce);
+  if (opt_.lights.maxLights > 0) extractor_ = std::make_unique<LightExtractor>(*projector_);
+}
+
+FrameLighting FrameProcessor::process(const Frame& frame, Executor* executor, const Image* linear) {
+  fit(frame);
+  // The view: an 8-bit frame through the lookup table (the photometry's exposure in it) inside
+  // the projection; a float frame as it is, scaled after; a reduction reads the linear copy.
+  Image small;
+  PanoramaView view;
+  float scale = float(frame.radianceScale);
+  if (opt_.reduce > 1) {
+    Image converted;
+    if (!linear) {
+      linearizer_.convert(frame, converted);
+      linear = &converted;
+    }
+    small = reduceEquirect(linear->rgb.data(), linear->width, linear->height, opt_.reduce);
+    view = PanoramaView::rgbF32(small.rgb.data(), small.width, small.height, projector_->spec());
+  } else if (frame.format == PixelFormat::Bgr8) {
+    view = PanoramaView::bgrU8(frame.bgr8.data(), frame.width, frame.height,
+                               linearizer_.table().data(), projector_->spec());
+  } else {
+    view = PanoramaView::rgbF32(frame.rgb.data(), frame.width, frame.height, projector_->spec());
+    scale *= linearizer_.exposure();
+  }
+  std::vector<float> peaks;
+  FrameLighting out;
+  LightSplit split;
+  out.whole = projector_->project(view, executor, extractor_ ? &peaks : nullptr);
+  if (extractor_)
+    split = extractor_->extract(view, out.whole, peaks, opt_.lights);
+  else
+    split.residual = out.whole;
+  if (scale != 1.0f) {
+    out.whole *= scale;
+    split.residual *= scale;
+    for (Light& l : split.lights) l.power *= scale;
+  }
+  if (!isFinite(out.whole) || !isFinite(split.residual))
+    throw Error("the coefficients are not finite (radiance too large to sum in float)");
+  if (opt_.rotation) {
+    split = rotateSplit(split, *opt_.rotation);
+    out.whole = rotateSh(out.whole, *opt_.rotation);
+  }
+  out.radiance = split.residual;
+  out.lights = std::move(split.lights);
+  return out;
+}
+
+}  // namespace lp
