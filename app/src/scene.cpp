@@ -80,16 +80,17 @@ glm::mat3 envOrientationFromArgs(const Args& a) {
 }
 
 LayoutSpec layoutFromArgs(const Args& a, const FrameSource* source) {
-  const std::optional<Layout> native = source ? source->layout() : std::nullopt;
-  LayoutSpec spec(native.value_or(Layout::Equirect));
+  const bool known = source && source->layout();
+  const Layout native = known ? *source->layout() : Layout::Equirect;
+  LayoutSpec spec(native);
   if (a.has("--layout")) {
     try {
       spec.layout = parseLayout(a.get("--layout"));
     } catch (const Error& e) {
       throw Error("--layout: " + std::string(e.what()));
     }
-    if (native && spec.layout != *native)
-      throw Error(source->describe() + ": the frames are a " + std::string(layoutName(*native)) +
+    if (known && spec.layout != native)
+      throw Error(source->describe() + ": the frames are a " + std::string(layoutName(native)) +
                   " layout; --layout " + a.get("--layout") + " does not apply");
   }
   if (a.has("--circle")) {
