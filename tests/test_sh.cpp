@@ -265,6 +265,46 @@ TEST(ShCore, AutoWindowIsMildestNonNegative) {
   EXPECT_TRUE(std::isinf(lp::autoWindow(c).width));
 }
 
+// cmgen's window against cmgen's own formula on a case solved in closed form. An ideal
+// directional light has the zonal irradiance E(t) = 1/4 + (s1 / 2) t + (5 s2 / 32) (3 t^2 - 1)
+// at cos angle t; its minimum is at t = -8 s1 / (15 s2), or at t = -1 when that lies beyond.
+// cmgen's cutoff is the largest whose sinc^4 window makes it >= 0, less up to 0.1 band per
+// channel: each channel's bisection starts below the last one's result and stops within 0.1.
+TEST(ShCore, CmgenWindowMatchesCmgensFormula) {
+  auto sinc4 = [](int l, double c) {
+    const double x = kPi * l / c;
+    return std::pow(std::sin(x) / x, 4.0);
+  };
+  const auto w = lp::sincWindow(6.0f);
+  EXPECT_NEAR(w.sigma1, sinc4(1, 6.0), 1e-6);
+  EXPECT_NEAR(w.sigma2, sinc4(2, 6.0), 1e-6);
+  EXPECT_EQ(lp::sincWindow(2.0f).sigma2, 0.0f);  // l >= cutoff: 0
+
+  auto zonalMin = [&](double c) {
+    const double s1 = sinc4(1, c), s2 = sinc4(2, c);
+    const double t = std::max(-1.0, -8.0 * s1 / (15.0 * s2));
+    return 0.25 + 0.5 * s1 * t + 5.0 / 32.0 * s2 * (3 * t * t - 1);
+  };
+  double lo = 3, hi = 13;  // the closed form's root, to 1e-9
+  while (hi - lo > 1e-9) ((zonalMin(0.5 * (lo + hi)) < 0) ? hi : lo) = 0.5 * (lo + hi);
+  const glm::vec3 dir = glm::normalize(glm::vec3(-0.4f, 0.5f, 0.6f));
+  Sh9 L;
+  const auto y = lp::shBasis(dir);
+  for (int k = 0; k < 9; ++k) L.c[k] = glm::vec3(y[k]);
+  const lp::CmgenWindow cw = lp::cmgenWindow(L);
+  EXPECT_LE(cw.cutoff, lo + 1e-4);
+  EXPECT_GT(cw.cutoff, lo - 0.3);
+  EXPECT_GE(lp::minIrradiance(lp::applyWindow(L, cw.window)).minOfChannels(), -1e-6f);
+
+  // Already non-negative: cmgen still windows, each channel a step below 13 bands; cmgen's own
+  // output on such a map (Grace) is band 1 x0.960 and band 2 x0.850.
+  Sh9 c;
+  c.c[0] = glm::vec3(1.0f);
+  const lp::CmgenWindow none = lp::cmgenWindow(c);
+  EXPECT_NEAR(none.window.sigma1, 0.960, 5e-4);
+  EXPECT_NEAR(none.window.sigma2, 0.850, 5e-4);
+}
+
 }  // namespace
 
 namespace {

@@ -91,7 +91,7 @@ std::vector<OptionSpec> streamOptions() {
         false, false, g},
        {"--coeffs-format", "FORMAT",
         "the coefficients in --coeffs-out lines: json (default), three, babylon, filament, "
-        "unity or webxr (README: Lighting your engine)",
+        "unity or webxr (docs/engines.md)",
         false, false, g},
        {"--hud", "", "draw the HUD into headless frames too", false, false, g},
        {"--serve", "[ADDR:]PORT",

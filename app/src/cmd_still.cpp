@@ -20,8 +20,9 @@ namespace lp::cli {
 namespace {
 
 const OptionSpec kWindowOpt{
-    "--window", "none|auto|W",
-    "Hann window of width W against ringing; auto = mildest keeping E >= 0"};
+    "--window", "none|auto|cmgen|W",
+    "Hann window of width W against ringing; auto = mildest keeping E >= 0; cmgen = Filament "
+    "cmgen's default (--sh-window=auto: sinc^4, its cutoff search)"};
 
 std::vector<OptionSpec> withLayout(std::vector<OptionSpec> o) {
   const auto l = layoutOptions();
@@ -46,6 +47,12 @@ BandWindow chooseWindow(const Args& a, const Sh9& radiance) {
              << aw.window.sigma1 << ", sigma2 " << aw.window.sigma2 << ")\n";
     return aw.window;
   }
+  if (w == "cmgen") {
+    const CmgenWindow cw = cmgenWindow(radiance);
+    errs() << "liveprobe: --window cmgen: cutoff " << cw.cutoff << " bands (sigma1 "
+           << cw.window.sigma1 << ", sigma2 " << cw.window.sigma2 << ")\n";
+    return cw.window;
+  }
   const double width = parseNumber(w, "--window");
   if (width <= 2.0) throw Error("--window " + w + ": the Hann width must be greater than 2");
   return hannWindow(float(width));
@@ -62,7 +69,7 @@ const CommandSpec kCoeffsSpec{
       auto o = withLayout(
           {{"--format", "FORMAT",
             "json (default), text, glsl, or an engine's: three, babylon, filament, unity, gltf, "
-            "webxr (README: Lighting your engine)"},
+            "webxr (docs/engines.md)"},
            kWindowOpt});
       for (auto& l : lightOptionSpecs()) o.push_back(l);
       return o;

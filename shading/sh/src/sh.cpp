@@ -189,6 +189,30 @@ AutoWindow autoWindow(const Sh9& radiance) {
   return {lo, hannWindow(lo)};
 }
 
+BandWindow sincWindow(float cutoff) {
+  auto sigma = [cutoff](int l) {
+    if (!(cutoff > float(l))) return 0.0f;
+    const double x = kPi * l / double(cutoff);
+    return float(std::pow(std::sin(x) / x, 4.0));
+  };
+  return {sigma(1), sigma(2)};
+}
+
+CmgenWindow cmgenWindow(const Sh9& radiance) {
+  constexpr float kBands = 3.0f;
+  float cutoff = kBands * 4.0f + 1.0f;
+  for (int ch = 0; ch < 3; ++ch) {
+    float lo = kBands, hi = cutoff;
+    for (int i = 0; i < 16 && lo + 0.1f < hi; ++i) {
+      const float mid = 0.5f * (lo + hi);
+      const float e = minIrradiance(applyWindow(radiance, sincWindow(mid))).value[ch];
+      (e < 0.0f ? hi : lo) = mid;
+    }
+    cutoff = std::min(cutoff, lo);
+  }
+  return {cutoff, sincWindow(cutoff)};
+}
+
 glm::mat3 rotationYawPitchRoll(float yawDeg, float pitchDeg, float rollDeg) {
   const float y = glm::radians(yawDeg), p = glm::radians(pitchDeg), r = glm::radians(rollDeg);
   const glm::mat3 rz(glm::vec3(std::cos(y), std::sin(y), 0),
