@@ -60,7 +60,7 @@ int frameInTitle(const std::string& output, const std::string& key) {
 }
 
 // The HUD in a real GLFW window under Xvfb, driven by xdotool: Space pauses (the frame index in
-// the title stops), H hides the HUD (the screenshots differ only where the HUD is), the exposure
+// the title stops), H hides the HUD (and the model takes the whole frame), the exposure
 // keys step once a press, and a single short tap of Esc quits.
 TEST(Window, HudAndKeysUnderXvfb) {
   lpt::TempDir tmp;
@@ -89,12 +89,11 @@ TEST(Window, HudAndKeysUnderXvfb) {
   ASSERT_EQ(hud.size(), plain.size());
   cv::imwrite(std::string(LIVEPROBE_TEST_OUTPUT) + "/window_hud.png",
               hud(cv::Rect(0, 0, 960, 540)));
-  const cv::Rect status(12, 12, 300, 200), model(400, 200, 160, 140);
+  const cv::Rect status(12, 12, 200, 150);
   EXPECT_GT(meanAbsDiff(hud(status), plain(status)), 10) << "the HUD region is empty";
   double lo, hi;
   cv::minMaxLoc(hud(status).reshape(1), &lo, &hi);
   EXPECT_GT(hi - lo, 100) << "the HUD region has no text";
-  EXPECT_LT(meanAbsDiff(hud(model), plain(model)), 1.0) << "paused: the scene must not change";
 
   // One press is one exposure step, whichever key types it: '=', '+' (shifted '=') and keypad '+'
   // each brighten the paused frame by the same half stop.
@@ -107,6 +106,34 @@ TEST(Window, HudAndKeysUnderXvfb) {
   EXPECT_GT(brighter, base + 2) << "'=' did not raise the exposure";
   EXPECT_LT(meanAbsDiff(plus(window), equal(window)), 0.5) << "'+' is not one step";
   EXPECT_LT(meanAbsDiff(keypad(window), equal(window)), 0.5) << "keypad '+' is not one step";
+}
+
+// A window on llvmpipe keeps its rate by itself: the bundled 30 frames/s recording on the bunny
+// with the sun and ground, at 1280x720, for 8 s each way. With dynamic resolution it draws at
+// least 1.5 times the frames it draws at full resolution with MSAA (a ratio within one run, so a
+// busy machine slows both), and the summary says at what scale it ended.
+TEST(Window, DynamicResolutionKeepsTheRate) {
+  const std::string xvfb = "xvfb-run -a -s '-screen 0 1280x720x24' ";
+  const std::string cmd = xvfb + LIVEPROBE_BIN + " replay " + LIVEPROBE_SOURCE_DIR +
+                          "/recordings/sky.mkv --sun --ground --model " +
+                          lpt::dataPath("models/stanford-bunny.obj") +
+                          " --size 1280x720 --loop --duration 8";
+  auto drawn = [](const std::string& out) {
+    std::smatch m;
+    return std::regex_search(out, m, std::regex(R"((\d+) frames captured, (\d+) drawn)"))
+               ? std::stoi(m[2])
+               : -1;
+  };
+  const auto dynamic = lpt::runCommand(cmd);
+  ASSERT_EQ(dynamic.exitCode, 0) << dynamic.output;
+  const auto full = lpt::runCommand(cmd + " --full-resolution");
+  ASSERT_EQ(full.exitCode, 0) << full.output;
+  EXPECT_NE(dynamic.output.find("software GL: 3D view at"), std::string::npos) << dynamic.output;
+  EXPECT_EQ(full.output.find("software GL: 3D view at"), std::string::npos) << full.output;
+  const int a = drawn(dynamic.output), b = drawn(full.output);
+  ASSERT_GT(b, 0) << full.output;
+  std::printf("drawn in 10 s: %d with dynamic resolution, %d at full resolution\n", a, b);
+  EXPECT_GE(a, 3 * b / 2) << dynamic.output << full.output;
 }
 
 // A replay in a window says at its start when the window will close: after the file's frames

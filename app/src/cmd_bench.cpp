@@ -130,8 +130,8 @@ void drawPlot(const std::string& path, const std::vector<std::array<double, kSta
     << "]\nset xrange [0:" << std::max<std::size_t>(1, frames.size() - 1) << "]\n";
   for (std::size_t start = 0, k = 1; start < frames.size(); start += std::size_t(framesPerRun), ++k)
     g << "set object " << k << " rect from " << start << ",0 to " << start + kWarmup - 1 << ","
-      << top << " fc rgb '#ffb000' fs solid 0.45 noborder behind\n";
-  g << "set label 1 'orange: warm-up frames of each run' at graph 0.01, graph 0.96\n";
+      << top << " fc rgb '#909090' fs solid 0.35 noborder behind\n";
+  g << "set label 1 'grey bands: the warm-up frames of each run' at graph 0.01, graph 0.96\n";
   const char* colours[kStageCount] = {"#1f77b4", "#ff7f0e", "#2ca02c",
                                       "#d62728", "#9467bd", "#8c564b"};
   g << "plot ";

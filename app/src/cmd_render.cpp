@@ -5,6 +5,7 @@
 #include <iostream>
 
 #include "commands.h"
+#include "dynamic_resolution.h"
 #include "hud.h"
 #include "liveprobe/sh/error.h"
 #include "progress.h"
@@ -80,7 +81,7 @@ int runRender(const Args& a) {
     gl::Renderer renderer;
     loadScene(renderer, mesh, lighting);
     const glm::ivec2 fb = ctx->framebufferSize();
-    renderer.draw(fb, camera, state.shading);
+    renderer.draw(fb, framedBesideHud(camera, fb, a.has("--hud")), state.shading);
     if (a.has("--hud")) {
       Hud hud(*ctx);
       showStill(hud, a, lighting);
@@ -146,6 +147,10 @@ int runView(const Args& a) {
       hud->enableEditor(&lighting.radiance, a.get("--save-coeffs", "coeffs-edited.json"));
       state.hud = ctx->isHeadless() || !a.has("--no-hud");
     }
+    // A screenshot is drawn as asked; an interactive window keeps its rate (dynamic_resolution.h).
+    DynamicResolution dynamicResolution(!ctx->isHeadless() && !screenshot &&
+                                        isSoftwareGl(ctx->describe()) &&
+                                        !a.has("--full-resolution"));
     auto t0 = std::chrono::steady_clock::now();
     std::vector<double> frameMs;
     std::size_t fpsFrames = 0;
@@ -156,8 +161,10 @@ int runView(const Args& a) {
       if (hud && std::count(keys.begin(), keys.end(), gl::KeyAction::Save))
         std::fprintf(stderr, "liveprobe: %s\n", hud->saveCoefficients().c_str());
       const glm::ivec2 fb = ctx->framebufferSize();
-      renderer.draw(fb, state.camera, state.shading);
+      renderer.draw(fb, framedBesideHud(state.camera, fb, hud && state.hud),
+                    dynamicResolution.apply(state.shading));
       if (hud && (state.hud || state.help)) {
+        hud->setNote(dynamicResolution.describe());
         hud->draw(fb, renderer, state, lastMs);
         if (hud->edited()) {
           renderer.setLighting(lighting.radiance, lighting.lights);
@@ -171,6 +178,7 @@ int runView(const Args& a) {
       lastMs = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start)
                    .count();
       frameMs.push_back(lastMs);
+      dynamicResolution.update(lastMs);
       ++fpsFrames;
       if (screenshot && frame + 1 >= frames) {
         const auto px = gl::Renderer::readRgb8(fb);

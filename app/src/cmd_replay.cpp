@@ -12,6 +12,7 @@
 
 #include "coeffs_io.h"
 #include "commands.h"
+#include "dynamic_resolution.h"
 #include "engine_export.h"
 #include "hud.h"
 #include "liveprobe/capture/atomic_file.h"
@@ -297,6 +298,7 @@ struct StreamView {
   std::unique_ptr<gl::Renderer> renderer;
   std::unique_ptr<Hud> hud;
   ViewState state;
+  DynamicResolution dynamicResolution;
   bool autoExposure = true, haveLighting = false;
   LayoutSpec layout;
   std::string source;
@@ -326,7 +328,9 @@ struct StreamView {
   }
   void draw(double lastFrameMs) {
     const glm::ivec2 fb = ctx->framebufferSize();
-    renderer->draw(fb, state.camera, state.shading);
+    renderer->draw(fb, framedBesideHud(state.camera, fb, hud && state.hud),
+                   dynamicResolution.apply(state.shading));
+    if (hud) hud->setNote(dynamicResolution.describe());
     if (hud && (state.hud || state.help)) hud->draw(fb, *renderer, state, lastFrameMs);
   }
 };
@@ -425,6 +429,7 @@ void runInteractive(CapturePipeline& pipeline, StreamView& view, StreamTally& ta
     view.draw(lastMs);
     view.ctx->present();
     lastMs = std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
+    view.dynamicResolution.update(lastMs);
     const PipelineStats st = pipeline.stats();  // once a frame, for the HUD, progress and title
     if (f) {
       ++tally.drawn;
@@ -602,6 +607,8 @@ int runStream(const Args& a, std::unique_ptr<FrameSource> source, bool live) {
   }
 
   view.ctx = openContext(headless ? gl::Backend::Headless : gl::Backend::Auto, size);
+  view.dynamicResolution = DynamicResolution(
+      !view.ctx->isHeadless() && isSoftwareGl(view.ctx->describe()) && !a.has("--full-resolution"));
   view.state.camera = view.state.initialCamera = cameraInit;
   view.renderer = std::make_unique<gl::Renderer>();
   loadModel(*view.renderer, mesh);
@@ -661,6 +668,9 @@ int runStream(const Args& a, std::unique_ptr<FrameSource> source, bool live) {
   if (out.video) out.video->finish();
   if (out.frames) out.frames->keep();
   printSummary(description, st, tally, opt.smoothSeconds, stopRequested(), sinks);
+  if (view.dynamicResolution.active())
+    std::fprintf(stderr, "  %s at the end (dynamic resolution; --full-resolution turns it off)\n",
+                 view.dynamicResolution.describe().c_str());
   if (stopRequested()) return kExitInterrupted;
   // Publishing was asked for and nothing at all reached the broker: the run failed its purpose.
   if (sinks.mqtt && sinks.mqtt->stats().published == 0 && st.captured > 0) return kExitRuntime;

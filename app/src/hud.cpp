@@ -25,29 +25,50 @@ const ImU32 kStageColour[5] = {IM_COL32(100, 180, 255, 255), IM_COL32(255, 160, 
                                IM_COL32(200, 150, 255, 255)};
 const char* const kStageName[5] = {"grab", "convert", "project", "upload", "render"};
 
-/// Several series on one set of axes (ImGui's PlotLines draws one), scaled to [lo, hi].
+/// Several series on one set of axes (ImGui's PlotLines draws one), scaled to [lo, hi], clipped
+/// to their box, with `label` (if any) in its top left corner.
 void plotSeries(const char* id, const std::vector<std::vector<float>>& series,
-                const std::vector<ImU32>& colours, ImVec2 size, float lo, float hi) {
+                const std::vector<ImU32>& colours, ImVec2 size, float lo, float hi,
+                const char* label = nullptr) {
   ImGui::PushID(id);
   const ImVec2 p0 = ImGui::GetCursorScreenPos(), p1(p0.x + size.x, p0.y + size.y);
   ImDrawList* dl = ImGui::GetWindowDrawList();
   dl->AddRectFilled(p0, p1, IM_COL32(20, 20, 24, 200));
+  dl->PushClipRect(p0, p1, true);
   if (lo < 0 && hi > 0) {
     const float y0 = p1.y - size.y * (0 - lo) / (hi - lo);
     dl->AddLine({p0.x, y0}, {p1.x, y0}, IM_COL32(90, 90, 90, 255));
   }
+  const float inset = 1.5f;  // the line's width stays inside the box
   for (std::size_t s = 0; s < series.size(); ++s) {
     const auto& v = series[s];
     if (v.size() < 2) continue;
     std::vector<ImVec2> pts(v.size());
     for (std::size_t i = 0; i < v.size(); ++i) {
       const float t = std::clamp((v[i] - lo) / std::max(1e-12f, hi - lo), 0.0f, 1.0f);
-      pts[i] = {p0.x + size.x * float(i) / float(kHistory - 1), p1.y - size.y * t};
+      const float age = float(v.size() - 1 - i);  // the newest frame at the right edge
+      pts[i] = {p1.x - size.x * age / float(kHistory - 1), p1.y - inset - (size.y - 2 * inset) * t};
     }
     dl->AddPolyline(pts.data(), int(pts.size()), colours[s], 0, 1.5f);
   }
+  if (label) dl->AddText({p0.x + 2, p0.y + 1}, IM_COL32(220, 220, 220, 255), label);
+  dl->PopClipRect();
   ImGui::Dummy(size);
   ImGui::PopID();
+}
+
+/// Dear ImGui's dark style as the HUD uses it, before scaling.
+ImGuiStyle baseStyle() {
+  ImGuiStyle style;
+  ImGui::StyleColorsDark(&style);
+  style.WindowRounding = 4.0f;
+  style.Alpha = 0.95f;
+  return style;
+}
+
+/// Whether `height` more pixels fit in the current panel below its cursor.
+bool fits(float height, float maxHeight) {
+  return ImGui::GetCursorPosY() + height + ImGui::GetStyle().WindowPadding.y <= maxHeight;
 }
 
 void applyKeys(const std::vector<gl::KeyAction>& keys, ViewState& s, bool canPause) {
@@ -83,6 +104,31 @@ void applyKeys(const std::vector<gl::KeyAction>& keys, ViewState& s, bool canPau
 
 }  // namespace
 
+HudLayout hudLayout(glm::ivec2 size) {
+  HudLayout l;
+  const float w = float(std::max(1, size.x)), h = float(std::max(1, size.y));
+  l.scale = std::clamp(std::min(w / 1280.0f, h / 720.0f), 0.75f, 2.0f);
+  l.margin = 8.0f * l.scale;
+  l.statusWidth = 330.0f * l.scale;
+  l.lightWidth = 290.0f * l.scale;
+  for (const auto& [status, light] : {std::pair{true, true}, {true, false}, {false, false}}) {
+    const float x0 = status ? 2 * l.margin + l.statusWidth : 0.0f;
+    const float x1 = w - (light ? 2 * l.margin + l.lightWidth : 0.0f);
+    if (x1 - x0 >= 0.2f * w || !status) {
+      l.status = status;
+      l.light = light;
+      l.modelFrame = {x0 / w, 0.0f, x1 / w, 1.0f};
+      break;
+    }
+  }
+  return l;
+}
+
+gl::Camera framedBesideHud(gl::Camera camera, glm::ivec2 size, bool hudShown) {
+  if (hudShown) camera.frame = hudLayout(size).modelFrame;
+  return camera;
+}
+
 std::vector<gl::KeyAction> handleInput(gl::GlContext& ctx, const Hud* hud, ViewState& state,
                                        bool canPause) {
   gl::InputDelta input = ctx.pollEvents();
@@ -101,9 +147,7 @@ Hud::Hud(gl::GlContext& ctx) : window_(ctx.nativeWindow() != nullptr) {
   ImGui::CreateContext();
   ImGuiIO& io = ImGui::GetIO();
   io.IniFilename = nullptr;  // no imgui.ini left in the user's folder
-  ImGui::StyleColorsDark();
-  ImGui::GetStyle().WindowRounding = 4.0f;
-  ImGui::GetStyle().Alpha = 0.95f;
+  ImGui::GetStyle() = baseStyle();
   if (window_ && !ImGui_ImplGlfw_InitForOpenGL(static_cast<GLFWwindow*>(ctx.nativeWindow()), true))
     throw Error("HUD: cannot attach Dear ImGui to the window");
   if (!ImGui_ImplOpenGL3_Init("#version 330 core")) {
@@ -153,6 +197,23 @@ std::string Hud::saveCoefficients() {
 bool Hud::wantsMouse() const { return ImGui::GetIO().WantCaptureMouse; }
 bool Hud::wantsKeyboard() const { return ImGui::GetIO().WantCaptureKeyboard; }
 
+void Hud::applyScale(float scale) {
+  if (scale == scale_) return;
+  ImGui::GetStyle() = baseStyle();
+  ImGui::GetStyle().ScaleAllSizes(scale);
+  ImGui::GetIO().FontGlobalScale = scale;
+  scale_ = scale;
+}
+
+void Hud::recordPanel(const char* name) {
+  const ImVec2 pos = ImGui::GetWindowPos(), size = ImGui::GetWindowSize();
+  panels_.push_back({name,
+                     {pos.x, pos.y},
+                     {pos.x + size.x, pos.y + size.y},
+                     ImGui::GetCursorPosY() - ImGui::GetStyle().ItemSpacing.y +
+                         ImGui::GetStyle().WindowPadding.y});
+}
+
 void Hud::draw(glm::ivec2 fb, gl::Renderer& renderer, ViewState& state, double frameMs) {
   edited_ = false;
   ImGuiIO& io = ImGui::GetIO();
@@ -163,16 +224,20 @@ void Hud::draw(glm::ivec2 fb, gl::Renderer& renderer, ViewState& state, double f
     io.DisplaySize = ImVec2(float(fb.x), float(fb.y));
     io.DeltaTime = 1.0f / 30.0f;
   }
+  const HudLayout layout = hudLayout(fb);
+  applyScale(layout.scale);
+  const float maxHeight = io.DisplaySize.y - 2 * layout.margin;
   fpsSmoothed_ = fpsSmoothed_ == 0 ? frameMs : 0.9 * fpsSmoothed_ + 0.1 * frameMs;
-  if (state.hud) renderer.drawProbeViews(state.camera, state.shading);
+  if (state.hud && layout.light) renderer.drawProbeViews(state.camera, state.shading);
   // ImGui sizes auto-fitting windows on their first frame and shows them from the second: a
   // headless still has only one, so lay the HUD out once unseen first.
   for (int pass = laidOut_ ? 1 : 0; pass < 2; ++pass) {
     ImGui::NewFrame();
+    panels_.clear();
     if (state.hud) {
-      drawStatus(state, frameMs);
-      drawLight(renderer);
-      if (editing_) drawEditor();
+      if (layout.status) drawStatus(state, frameMs, layout, maxHeight);
+      if (layout.light) drawLight(renderer, layout, maxHeight);
+      if (editing_) drawEditor(layout);
     }
     if (state.help) drawHelp(state);
     if (pass == 0) ImGui::EndFrame();
@@ -182,13 +247,24 @@ void Hud::draw(glm::ivec2 fb, gl::Renderer& renderer, ViewState& state, double f
   ImGui_ImplOpenGL3_RenderDrawData(ImGui::GetDrawData());
 }
 
-void Hud::drawStatus(ViewState& state, double frameMs) {
-  ImGui::SetNextWindowPos({8, 8}, ImGuiCond_Always);
-  ImGui::SetNextWindowSize({330, 0}, ImGuiCond_Always);
+namespace {
+
+/// A fixed-width panel at `pos` (pivot `pivot`), as tall as its content up to `maxHeight`.
+void beginPanel(const char* name, ImVec2 pos, ImVec2 pivot, float width, float maxHeight) {
+  ImGui::SetNextWindowPos(pos, ImGuiCond_Always, pivot);
+  ImGui::SetNextWindowSizeConstraints({width, 0}, {width, maxHeight});
+  ImGui::SetNextWindowSize({width, 0}, ImGuiCond_Always);
   ImGui::SetNextWindowBgAlpha(0.6f);
-  ImGui::Begin("liveprobe", nullptr,
+  ImGui::Begin(name, nullptr,
                ImGuiWindowFlags_NoMove | ImGuiWindowFlags_NoResize |
-                   ImGuiWindowFlags_NoSavedSettings | ImGuiWindowFlags_NoFocusOnAppearing);
+                   ImGuiWindowFlags_NoSavedSettings | ImGuiWindowFlags_NoFocusOnAppearing |
+                   ImGuiWindowFlags_NoScrollbar | ImGuiWindowFlags_NoScrollWithMouse);
+}
+
+}  // namespace
+
+void Hud::drawStatus(ViewState& state, double frameMs, const HudLayout& layout, float maxHeight) {
+  beginPanel("liveprobe", {layout.margin, layout.margin}, {0, 0}, layout.statusWidth, maxHeight);
   ImGui::TextWrapped("%s", source_.c_str());
   ImGui::Text("layout %s%s", layout_.c_str(), state.paused ? "   [PAUSED]" : "");
   if (!still_ && !history_.empty())
@@ -196,38 +272,19 @@ void Hud::drawStatus(ViewState& state, double frameMs) {
                 history_.back().time);
   ImGui::Text("%.1f frames/s   %.2f ms/frame", fpsSmoothed_ > 0 ? 1000.0 / fpsSmoothed_ : 0.0,
               frameMs);
+  if (!note_.empty()) ImGui::TextColored({1.0f, 0.85f, 0.45f, 1.0f}, "%s", note_.c_str());
   if (!still_ && !history_.empty()) {
     std::vector<double> latency;
     for (const auto& h : history_) latency.push_back(h.latencyMs);
     ImGui::Text("latency p50 %.1f  p95 %.1f  p99 %.1f ms", percentile(latency, 0.5),
                 percentile(latency, 0.95), percentile(latency, 0.99));
   }
-  if (!still_ && !history_.empty()) {
-    std::vector<std::vector<float>> series(5);
-    std::vector<float> all;
-    for (const auto& h : history_) {
-      const double v[5] = {h.grabMs, h.convertMs, h.projectMs, h.uploadMs, h.renderMs};
-      for (int k = 0; k < 5; ++k) {
-        series[std::size_t(k)].push_back(float(v[k]));
-        all.push_back(float(v[k]));
-      }
-    }
-    // The scale follows the 95th percentile: a warm-up spike does not flatten everything else.
-    std::nth_element(all.begin(), all.begin() + std::ptrdiff_t(all.size() * 95 / 100), all.end());
-    const float top = std::max(1.0f, 1.3f * all[all.size() * 95 / 100]);
-    ImGui::Text("stage times, last %zu frames (0 .. %.1f ms)", history_.size(), top);
-    plotSeries("stages", series, {std::begin(kStageColour), std::end(kStageColour)}, {310, 70}, 0,
-               top);
-    const auto& b = history_.back();
-    const double now[5] = {b.grabMs, b.convertMs, b.projectMs, b.uploadMs, b.renderMs};
-    if (ImGui::BeginTable("stages", 3)) {
-      for (int k = 0; k < 5; ++k) {
-        ImGui::TableNextColumn();
-        ImGui::TextColored(ImColor(kStageColour[k]), "%s %.1f ms", kStageName[k], now[k]);
-      }
-      ImGui::EndTable();
-    }
-  }
+  const float line = ImGui::GetTextLineHeightWithSpacing();
+  const int counterLines =
+      still_ ? 0 : 2 + (counters_.streamClients >= 0) + (counters_.mqttLost >= 0);
+  // What must stay: the counters and the exposure; the stage times go first when short of room.
+  const float reserved = float(counterLines + (window_ ? 2 : 1)) * line;
+  if (!still_ && !history_.empty()) drawStatusTimes(maxHeight - reserved);
   if (!still_) {
     ImGui::Text("captured %zu  drawn %zu  dropped %zu", counters_.captured, counters_.drawn,
                 counters_.dropped);
@@ -239,36 +296,73 @@ void Hud::drawStatus(ViewState& state, double frameMs) {
     if (counters_.mqttLost >= 0) ImGui::Text("mqtt: %lld lost", (long long)counters_.mqttLost);
   }
   float ev = std::log2(state.shading.exposure);
-  if (ImGui::SliderFloat("exposure (EV)", &ev, -16.0f, 16.0f, "%.2f"))
-    state.shading.exposure = std::exp2(ev);
-  ImGui::Checkbox("background", &state.shading.background);
-  ImGui::SameLine();
-  ImGui::TextDisabled("F1: help");
+  if (window_) {  // the window's controls; a headless frame only says the exposure
+    ImGui::SetNextItemWidth(0.5f * layout.statusWidth);
+    if (ImGui::DragFloat("exposure (EV)", &ev, 0.05f, -16.0f, 16.0f, "%+.2f"))
+      state.shading.exposure = std::exp2(ev);
+    ImGui::Checkbox("background", &state.shading.background);
+    ImGui::SameLine();
+    ImGui::TextDisabled("F1: help");
+  } else {
+    ImGui::Text("exposure %+.2f EV", ev);
+  }
+  recordPanel("liveprobe");
   ImGui::End();
 }
 
-void Hud::drawLight(gl::Renderer& renderer) {
+void Hud::drawStatusTimes(float maxHeight) {
+  const float s = scale_, line = ImGui::GetTextLineHeightWithSpacing();
+  const float plotHeight = 70.0f * s;
+  if (!fits(line + plotHeight + 2 * line, maxHeight)) return;
+  std::vector<std::vector<float>> series(5);
+  std::vector<float> all;
+  for (const auto& h : history_) {
+    const double v[5] = {h.grabMs, h.convertMs, h.projectMs, h.uploadMs, h.renderMs};
+    for (int k = 0; k < 5; ++k) {
+      series[std::size_t(k)].push_back(float(v[k]));
+      all.push_back(float(v[k]));
+    }
+  }
+  // The scale follows the 95th percentile: a warm-up spike does not flatten everything else.
+  std::nth_element(all.begin(), all.begin() + std::ptrdiff_t(all.size() * 95 / 100), all.end());
+  const float top = std::max(1.0f, 1.3f * all[all.size() * 95 / 100]);
+  ImGui::TextWrapped("stage times, last %zu frames (0 .. %.1f ms)", history_.size(), top);
+  plotSeries("stages", series, {std::begin(kStageColour), std::end(kStageColour)},
+             {ImGui::GetContentRegionAvail().x, plotHeight}, 0, top);
+  const auto& b = history_.back();
+  const double now[5] = {b.grabMs, b.convertMs, b.projectMs, b.uploadMs, b.renderMs};
+  if (ImGui::BeginTable("stages", 3)) {
+    for (int k = 0; k < 5; ++k) {
+      ImGui::TableNextColumn();
+      ImGui::TextColored(ImColor(kStageColour[k]), "%s %.1f ms", kStageName[k], now[k]);
+    }
+    ImGui::EndTable();
+  }
+}
+
+void Hud::drawLight(gl::Renderer& renderer, const HudLayout& layout, float maxHeight) {
   const ImGuiIO& io = ImGui::GetIO();
-  ImGui::SetNextWindowPos({io.DisplaySize.x - 8, 8}, ImGuiCond_Always, {1, 0});
-  ImGui::SetNextWindowSize({290, 0}, ImGuiCond_Always);
-  ImGui::SetNextWindowBgAlpha(0.6f);
-  ImGui::Begin("light", nullptr,
-               ImGuiWindowFlags_NoMove | ImGuiWindowFlags_NoResize |
-                   ImGuiWindowFlags_NoSavedSettings | ImGuiWindowFlags_NoFocusOnAppearing);
+  const float s = layout.scale;
+  beginPanel("light", {io.DisplaySize.x - layout.margin, layout.margin}, {1, 0}, layout.lightWidth,
+             maxHeight);
+  auto imageSize = [&](gl::ProbeView v, float scale) {
+    const glm::ivec2 size = renderer.probeSize(v);
+    return ImVec2{float(size.x) * scale * s, float(size.y) * scale * s};
+  };
   auto image = [&](gl::ProbeView v, float scale) {
-    const glm::ivec2 s = renderer.probeSize(v);
     // The textures are rendered bottom-up (GL): flip v.
     ImGui::Image(
         reinterpret_cast<ImTextureID>(static_cast<std::uintptr_t>(renderer.probeTexture(v))),
-        {float(s.x) * scale, float(s.y) * scale}, {0, 1}, {1, 0});
+        imageSize(v, scale), {0, 1}, {1, 0});
   };
-  image(gl::ProbeView::Panorama, 1.05f);
-  {
+  const float line = ImGui::GetTextLineHeightWithSpacing();
+  const std::vector<Light> none;
+  const auto& lights = history_.empty() ? none : history_.back().lights;
+  if (fits(imageSize(gl::ProbeView::Panorama, 1.05f).y + float(lights.size()) * line, maxHeight)) {
+    image(gl::ProbeView::Panorama, 1.05f);
     // The lights (--sun) marked where they are on the panorama: the inset is the world's equirect
     // (azimuth left to right from +x, the zenith at the top; shaders.cpp, kProbeFs mode 0).
     const ImVec2 lo = ImGui::GetItemRectMin(), hi = ImGui::GetItemRectMax();
-    const std::vector<Light> none;
-    const auto& lights = history_.empty() ? none : history_.back().lights;
     ImDrawList* marks = ImGui::GetWindowDrawList();
     for (const Light& l : lights) {
       float p = std::atan2(l.dir.y, l.dir.x);
@@ -276,41 +370,58 @@ void Hud::drawLight(gl::Renderer& renderer) {
       const float t = std::acos(std::clamp(l.dir.z, -1.0f, 1.0f));
       const ImVec2 c{lo.x + (hi.x - lo.x) * p / (2 * float(kPi)),
                      lo.y + (hi.y - lo.y) * t / float(kPi)};
-      marks->AddCircle(c, 7.0f, IM_COL32(255, 60, 40, 255), 16, 2.0f);
-      marks->AddCircle(c, 8.5f, IM_COL32(0, 0, 0, 200), 16, 1.0f);
+      marks->AddCircle(c, 7.0f * s, IM_COL32(255, 60, 40, 255), 16, 2.0f * s);
+      marks->AddCircle(c, 8.5f * s, IM_COL32(0, 0, 0, 200), 16, 1.0f * s);
     }
     for (const Light& l : lights)
-      ImGui::Text("light %.0f%%  r %.2f deg  E %.3g%s", 100 * l.share,
-                  glm::degrees(l.angularRadius), luminance(l.power), l.clipped ? " clipped" : "");
+      ImGui::TextWrapped("light %.0f%%  r %.2f deg  E %.3g%s", 100 * l.share,
+                         glm::degrees(l.angularRadius), luminance(l.power),
+                         l.clipped ? " clipped" : "");
   }
-  image(gl::ProbeView::DiffuseBall, 1.0f);
-  ImGui::SameLine();
-  image(gl::ProbeView::ChromeBall, 1.0f);
-  ImGui::TextDisabled("grey 50%% diffuse      chrome");
+  if (fits(imageSize(gl::ProbeView::DiffuseBall, 1.0f).y + line, maxHeight)) {
+    image(gl::ProbeView::DiffuseBall, 1.0f);
+    ImGui::SameLine();
+    image(gl::ProbeView::ChromeBall, 1.0f);
+    ImGui::TextDisabled("grey 50%% diffuse");
+    ImGui::SameLine(imageSize(gl::ProbeView::DiffuseBall, 1.0f).x +
+                    ImGui::GetStyle().WindowPadding.x + ImGui::GetStyle().ItemSpacing.x);
+    ImGui::TextDisabled("chrome");
+  }
 
   // The nine coefficients: bars per channel, scaled to the largest magnitude.
   const Sh9& L = history_.empty() ? Sh9{} : history_.back().radiance;
   float scale = 1e-12f;
   for (const auto& c : L.c) scale = std::max({scale, std::abs(c.x), std::abs(c.y), std::abs(c.z)});
   ImDrawList* dl = ImGui::GetWindowDrawList();
-  for (int k = 0; k < kShCount; ++k) {
-    ImGui::Text("%-4s", std::string(kShNames[std::size_t(k)]).c_str());
-    ImGui::SameLine(44);
-    const ImVec2 p = ImGui::GetCursorScreenPos();
-    const float w = 120, h = 4, mid = p.x + w / 2;
-    dl->AddLine({mid, p.y}, {mid, p.y + 3 * h}, IM_COL32(120, 120, 120, 255));
-    for (int ch = 0; ch < 3; ++ch) {
-      const float v = L.c[std::size_t(k)][ch] / scale * (w / 2);
-      dl->AddRectFilled({std::min(mid, mid + v), p.y + float(ch) * h},
-                        {std::max(mid, mid + v), p.y + float(ch + 1) * h - 1}, kChannel[ch]);
+  const float barW = 120.0f * s, barH = 4.0f * s;
+  if (fits(9 * std::max(line, 3 * barH + ImGui::GetStyle().ItemSpacing.y), maxHeight))
+    for (int k = 0; k < kShCount; ++k) {
+      ImGui::Text("%-4s", std::string(kShNames[std::size_t(k)]).c_str());
+      ImGui::SameLine(44.0f * s);
+      const ImVec2 p = ImGui::GetCursorScreenPos();
+      const float mid = p.x + barW / 2;
+      dl->AddLine({mid, p.y}, {mid, p.y + 3 * barH}, IM_COL32(120, 120, 120, 255));
+      for (int ch = 0; ch < 3; ++ch) {
+        const float v = L.c[std::size_t(k)][ch] / scale * (barW / 2);
+        dl->AddRectFilled({std::min(mid, mid + v), p.y + float(ch) * barH},
+                          {std::max(mid, mid + v), p.y + float(ch + 1) * barH - 1}, kChannel[ch]);
+      }
+      ImGui::Dummy({barW, 3 * barH});
+      ImGui::SameLine();
+      ImGui::Text("%+.3f", luminance(L.c[std::size_t(k)]));
     }
-    ImGui::Dummy({w, 3 * h});
-    ImGui::SameLine();
-    ImGui::Text("%+.3f", luminance(L.c[std::size_t(k)]));
-  }
-  // Each coefficient's luminance over time; with --smooth the raw value is drawn in grey.
-  if (!still_) ImGui::Text("luminance over time%s", smoothing_ ? " (grey: before --smooth)" : "");
-  for (int k = 0; k < kShCount && !still_; ++k) {
+  if (!still_) drawLightPlots(maxHeight);
+  recordPanel("light");
+  ImGui::End();
+}
+
+void Hud::drawLightPlots(float maxHeight) {
+  // Each coefficient's luminance over time, labelled; with --smooth the raw value is in grey.
+  const float line = ImGui::GetTextLineHeightWithSpacing(), gap = ImGui::GetStyle().ItemSpacing.x;
+  const ImVec2 size{(ImGui::GetContentRegionAvail().x - 2 * gap) / 3, 26.0f * scale_};
+  if (!fits(2 * line + 3 * (size.y + ImGui::GetStyle().ItemSpacing.y), maxHeight)) return;
+  ImGui::TextWrapped("luminance over time%s", smoothing_ ? " (grey: before --smooth)" : "");
+  for (int k = 0; k < kShCount; ++k) {
     std::vector<std::vector<float>> series(2);
     float lo = 0, hi = 0;
     for (const auto& h : history_) {
@@ -327,16 +438,16 @@ void Hud::drawLight(gl::Renderer& renderer) {
     const std::vector<ImU32> colours =
         smoothing_ ? std::vector<ImU32>{IM_COL32(150, 150, 150, 255), IM_COL32(250, 210, 80, 255)}
                    : std::vector<ImU32>{IM_COL32(250, 210, 80, 255)};
-    plotSeries(std::string(kShNames[std::size_t(k)]).c_str(), series, colours, {88, 26}, lo - pad,
-               hi + pad);
+    const std::string name(kShNames[std::size_t(k)]);
+    plotSeries(name.c_str(), series, colours, size, lo - pad, hi + pad, name.c_str());
   }
-  ImGui::End();
 }
 
-void Hud::drawEditor() {
+void Hud::drawEditor(const HudLayout& layout) {
   const ImGuiIO& io = ImGui::GetIO();
-  ImGui::SetNextWindowPos({8, io.DisplaySize.y - 8}, ImGuiCond_Always, {0, 1});
-  ImGui::SetNextWindowSize({330, 0}, ImGuiCond_Always);
+  ImGui::SetNextWindowPos({layout.margin, io.DisplaySize.y - layout.margin}, ImGuiCond_Always,
+                          {0, 1});
+  ImGui::SetNextWindowSize({layout.statusWidth, 0}, ImGuiCond_Always);
   ImGui::SetNextWindowBgAlpha(0.6f);
   ImGui::Begin(
       "coefficients", nullptr,
@@ -379,7 +490,7 @@ void Hud::drawHelp(ViewState& state) {
       {"Esc or Q", "quit"}};
   for (const auto& r : rows) {
     ImGui::Text("%-10s", r[0]);
-    ImGui::SameLine(90);
+    ImGui::SameLine(90.0f * scale_);
     ImGui::TextUnformatted(r[1]);
   }
   ImGui::End();

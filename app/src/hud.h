@@ -44,6 +44,29 @@ struct ViewState {
   int steps = 0;  ///< single-frame steps asked for while paused
 };
 
+/// Where the HUD's panels go in a frame of `size` pixels, and the part of it left for the model.
+/// The panels scale with the frame (from 0.75 to 2 times their size at 1280x720); where the part
+/// between them would be narrower than a fifth of the frame, the light panel is left out, then
+/// the status panel too: the HUD never covers the model.
+struct HudLayout {
+  float scale = 1.0f;
+  bool status = false, light = false;  ///< which panels are drawn
+  float margin = 0, statusWidth = 0, lightWidth = 0;
+  glm::vec4 modelFrame{0.0f, 0.0f, 1.0f, 1.0f};  ///< as gl::Camera::frame
+};
+HudLayout hudLayout(glm::ivec2 size);
+
+/// `camera` framed in the part of the frame the HUD leaves, when the HUD is shown.
+gl::Camera framedBesideHud(gl::Camera camera, glm::ivec2 size, bool hudShown);
+
+/// A panel as the last draw() laid it out, in pixels from the top left, and the height its
+/// content took.
+struct HudPanel {
+  std::string name;
+  glm::vec2 min{0.0f}, max{0.0f};
+  float contentHeight = 0;
+};
+
 class Hud;
 
 /// Polls the window's input and applies it to `state`: keys, orbit (left drag) and zoom (wheel),
@@ -65,6 +88,8 @@ class Hud {
   void setSource(std::string source, std::string layout, bool smoothing, bool still = false);
   void push(const HudSample& s);
   void setCounters(const HudCounters& c) { counters_ = c; }
+  /// A line under the rate (dynamic resolution's state); empty for none.
+  void setNote(std::string note) { note_ = std::move(note); }
   /// Turns on the coefficient editor (view): sliders edit `*radiance`; Save writes `savePath`.
   void enableEditor(Sh9* radiance, std::string savePath);
   /// Writes the edited coefficients as `liveprobe coeffs` JSON (atomically); returns what it did.
@@ -76,17 +101,26 @@ class Hud {
   bool wantsMouse() const;
   bool wantsKeyboard() const;
 
-  /// Draws the HUD (and the help overlay) over the bound framebuffer, after the scene.
+  /// The panels of the last draw().
+  const std::vector<HudPanel>& panels() const { return panels_; }
+
+  /// Draws the HUD (and the help overlay) over the bound framebuffer, after the scene (drawn with
+  /// framedBesideHud). Headless, the window's controls (exposure, background, help) are left
+  /// out: the exposure is written instead.
   void draw(glm::ivec2 framebuffer, gl::Renderer& renderer, ViewState& state, double frameMs);
 
  private:
-  void drawStatus(ViewState& state, double frameMs);
-  void drawLight(gl::Renderer& renderer);
-  void drawEditor();
+  void drawStatus(ViewState& state, double frameMs, const HudLayout& layout, float maxHeight);
+  void drawStatusTimes(float maxHeight);
+  void drawLight(gl::Renderer& renderer, const HudLayout& layout, float maxHeight);
+  void drawLightPlots(float maxHeight);
+  void drawEditor(const HudLayout& layout);
+  void recordPanel(const char* name);
+  void applyScale(float scale);
   void drawHelp(ViewState& state);
 
   bool window_ = false;
-  std::string source_, layout_;
+  std::string source_, layout_, note_;
   bool smoothing_ = false, still_ = false;
   std::deque<HudSample> history_;
   HudCounters counters_;
@@ -95,6 +129,8 @@ class Hud {
   bool edited_ = false;
   double fpsSmoothed_ = 0;
   bool laidOut_ = false;
+  float scale_ = 0;  ///< the scale the style was last set to
+  std::vector<HudPanel> panels_;
 };
 
 }  // namespace lp::cli

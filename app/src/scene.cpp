@@ -42,6 +42,10 @@ std::vector<OptionSpec> sceneOptions() {
           {"--no-background", "", "do not draw the panorama behind the model", false, false, l},
           {"--msaa", "1|2|4|8", "multisample anti-aliasing, samples per pixel (default 4)", false,
            false, l},
+          {"--full-resolution", "",
+           "a window on a software GL (llvmpipe) keeps its full resolution and MSAA, however slow "
+           "(default: dynamic resolution keeps about 30 frames/s)",
+           false, false, l},
           {"--shadows", "",
            "the first light (--sun) casts the model's shadow, sharp or soft as its angular radius",
            false, false, l},

@@ -2,22 +2,25 @@
 // SwiftShader), driven by playwright-core. It loads three.js from liveprobe's own server (no
 // network), receives frames, and the colour at the centre of the lit white sphere (normal
 // towards the camera, three's +z) is albedo * E / pi of the frame it shows, E from three.js's
-// own getIrradianceAt of that frame's LightProbe plus its DirectionalLight. The screenshot is
-// README's picture of the page.
+// own getIrradianceAt of that frame's LightProbe plus its DirectionalLight; and the sun's shadow
+// on the ground is darker than the ground it lights. The screenshot is docs/engines.md's picture
+// of the page.
 import { test } from 'node:test';
 import assert from 'node:assert/strict';
 import { mkdirSync } from 'node:fs';
 import { join } from 'node:path';
 import { chromium } from 'playwright-core';
 import { SphericalHarmonics3, Vector3 } from 'three';
-import { data } from './common.mjs';
+import { fileURLToPath } from 'node:url';
 import { serve } from './serve.mjs';
 
 const srgb = (v) => (v <= 0.0031308 ? 12.92 * v : 1.055 * Math.pow(v, 1 / 2.4) - 0.055);
 
 test('the page draws the model lit by the stream', async () => {
-  const s = serve([join(data, 'equirect/pedestrian_overpass_1k.hdr'), '--loop', '--headless', '--size', '64x36',
-                   '--duration', '60', '--serve', '0', '--sun', '--quiet']);
+  // The bundled HDR sky: a sun 30 degrees up, whose shadow falls on the ground beside the sphere.
+  const sky = fileURLToPath(new URL('../../recordings/sky-hdr', import.meta.url));
+  const s = serve([sky, '--loop', '--headless', '--size', '64x36', '--duration', '60', '--serve', '0',
+                   '--sun', '--quiet']);
   const port = await s.port;
   const browser = await chromium.launch({
     executablePath: process.env.LIVEPROBE_CHROMIUM || '/usr/bin/chromium',
@@ -35,19 +38,15 @@ test('the page draws the model lit by the stream', async () => {
     }, null, { timeout: 30000 });
     await page.waitForTimeout(500);  // a few more animation frames of the frozen frame
     const state = JSON.parse(await page.textContent('#state'));
-    const pixel = await page.evaluate(() => {
-      const c = document.querySelector('canvas');
+    const at = (x, y) => page.evaluate(([x, y]) => {
+      const c = document.querySelector('body > canvas');  // three's, not the panel's plot
       const g = document.createElement('canvas');
       g.width = c.width, g.height = c.height;
       const ctx = g.getContext('2d');
       ctx.drawImage(c, 0, 0);
-      return Array.from(ctx.getImageData(c.width / 2, c.height / 2, 1, 1).data);
-    });
-    const out = process.env.LIVEPROBE_TEST_OUTPUT;
-    if (out) {
-      mkdirSync(out, { recursive: true });
-      await page.screenshot({ path: join(out, 'web_page.png') });
-    }
+      return Array.from(ctx.getImageData(x, y, 1, 1).data);
+    }, [x, y]);
+    const pixel = await at(320, 180);
     assert.deepEqual(failed, [], 'every request the page made was answered');
     // E at the sphere's centre, normal (0, 0, 1) in three's frame, from three's own code.
     const c = state.coefficients;
@@ -62,6 +61,20 @@ test('the page draws the model lit by the stream', async () => {
                 `expected ${expected.map((v) => v.toFixed(1)).join(', ')}`);
     // Tolerance: 3 codes of 255 (8-bit output and the sphere's tessellation at the centre).
     for (let ch = 0; ch < 3; ++ch) assert.ok(Math.abs(pixel[ch] - expected[ch]) <= 3, `channel ${ch}`);
+    // The sun's shadow: the ground where the sphere hides the sun against the ground beside it.
+    assert.ok(state.shadow, 'the sun is high enough to cast a shadow on the ground');
+    const dark = await at(...state.shadow.inShadow), lit = await at(...state.shadow.lit);
+    const luma = (p) => 0.2126 * p[0] + 0.7152 * p[1] + 0.0722 * p[2];
+    console.log(`ground in shadow ${dark.slice(0, 3).join(', ')}, lit ${lit.slice(0, 3).join(', ')}`);
+    assert.ok(luma(dark) < 0.7 * luma(lit), 'the shadow is darker than the lit ground');
+    // The picture of the page: live (not frozen), after a few seconds of the stream's plot.
+    const out = process.env.LIVEPROBE_TEST_OUTPUT;
+    if (out) {
+      mkdirSync(out, { recursive: true });
+      await page.goto(`http://127.0.0.1:${port}/`);
+      await page.waitForTimeout(4000);
+      await page.screenshot({ path: join(out, 'web_page.png') });
+    }
   } finally {
     await browser.close();
     s.proc.kill('SIGINT');

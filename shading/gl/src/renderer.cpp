@@ -1,6 +1,7 @@
 #include "liveprobe/gl/renderer.h"
 
 #include <algorithm>
+#include <cmath>
 #include <glm/gtc/matrix_transform.hpp>
 #include <glm/gtc/type_ptr.hpp>
 #include <stdexcept>
@@ -28,7 +29,18 @@ glm::vec3 Camera::eye() const {
 }
 glm::mat4 Camera::view() const { return glm::lookAt(eye(), glm::vec3(0.0f), glm::vec3(0, 1, 0)); }
 glm::mat4 Camera::projection(float aspect) const {
-  return glm::perspective(glm::radians(fovYDeg), aspect, 0.05f, 100.0f);
+  const float w = frame.z - frame.x, h = frame.w - frame.y;
+  if (w >= 1.0f && h >= 1.0f) return glm::perspective(glm::radians(fovYDeg), aspect, 0.05f, 100.0f);
+  const float partAspect = aspect * w / h;
+  float fovY = glm::radians(fovYDeg);
+  if (partAspect < 1.0f) fovY = 2.0f * std::atan(std::tan(fovY / 2) / partAspect);
+  // The part's clip space into the frame's: x' = w x + (x0 + x1 - 1) w_clip, likewise y.
+  glm::mat4 toFrame(1.0f);
+  toFrame[0][0] = w;
+  toFrame[1][1] = h;
+  toFrame[3][0] = frame.x + frame.z - 1.0f;
+  toFrame[3][1] = frame.y + frame.w - 1.0f;
+  return toFrame * glm::perspective(fovY, partAspect, 0.05f, 100.0f);
 }
 
 namespace {
@@ -323,7 +335,53 @@ void Renderer::ensureMultisample(glm::ivec2 size, int samples) {
   checkGl("Renderer: multisample target");
 }
 
+void Renderer::ensureScaled(glm::ivec2 size) {
+  if (scaled_.fbo.isValid() && scaled_.size == size) return;
+  scaled_ = Target{};
+  GLuint id = 0;
+  glGenFramebuffers(1, &id);
+  scaled_.fbo.reset(id);
+  glGenRenderbuffers(1, &id);
+  scaled_.colourMs.reset(id);
+  glBindRenderbuffer(GL_RENDERBUFFER, id);
+  glRenderbufferStorage(GL_RENDERBUFFER, GL_RGBA8, size.x, size.y);
+  glGenRenderbuffers(1, &id);
+  scaled_.depth.reset(id);
+  glBindRenderbuffer(GL_RENDERBUFFER, id);
+  glRenderbufferStorage(GL_RENDERBUFFER, GL_DEPTH_COMPONENT24, size.x, size.y);
+  glBindFramebuffer(GL_FRAMEBUFFER, scaled_.fbo.get());
+  glFramebufferRenderbuffer(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_RENDERBUFFER,
+                            scaled_.colourMs.get());
+  glFramebufferRenderbuffer(GL_FRAMEBUFFER, GL_DEPTH_ATTACHMENT, GL_RENDERBUFFER,
+                            scaled_.depth.get());
+  if (glCheckFramebufferStatus(GL_FRAMEBUFFER) != GL_FRAMEBUFFER_COMPLETE)
+    throw ContextError("scaled framebuffer (" + std::to_string(size.x) + "x" +
+                       std::to_string(size.y) + ") is incomplete");
+  scaled_.size = size;
+  checkGl("Renderer: scaled target");
+}
+
 void Renderer::draw(glm::ivec2 size, const Camera& camera, const ShadingSettings& s) {
+  if (!(s.renderScale < 1.0f) || s.output != OutputMode::Display) {
+    drawView(size, camera, s);
+    return;
+  }
+  // Dynamic resolution: the view at a fraction of the size, scaled up into the bound target.
+  GLint out = 0;
+  glGetIntegerv(GL_DRAW_FRAMEBUFFER_BINDING, &out);
+  const float scale = std::max(0.05f, s.renderScale);
+  const glm::ivec2 inner = glm::max(glm::ivec2(1), glm::ivec2(glm::round(glm::vec2(size) * scale)));
+  ensureScaled(inner);
+  glBindFramebuffer(GL_FRAMEBUFFER, scaled_.fbo.get());
+  drawView(inner, camera, s);
+  glBindFramebuffer(GL_READ_FRAMEBUFFER, scaled_.fbo.get());
+  glBindFramebuffer(GL_DRAW_FRAMEBUFFER, GLuint(out));
+  glBlitFramebuffer(0, 0, inner.x, inner.y, 0, 0, size.x, size.y, GL_COLOR_BUFFER_BIT, GL_LINEAR);
+  glBindFramebuffer(GL_FRAMEBUFFER, GLuint(out));
+  checkGl("Renderer::draw (scaled)");
+}
+
+void Renderer::drawView(glm::ivec2 size, const Camera& camera, const ShadingSettings& s) {
   GLint target = 0;
   const bool shadows = s.shadows && !lights_.empty() && indexCount_ > 0;
   if (shadows) {
@@ -388,7 +446,7 @@ void Renderer::draw(glm::ivec2 size, const Camera& camera, const ShadingSettings
     glBlitFramebuffer(0, 0, size.x, size.y, 0, 0, size.x, size.y, GL_COLOR_BUFFER_BIT, GL_NEAREST);
     glBindFramebuffer(GL_FRAMEBUFFER, GLuint(target));
   }
-  checkGl("Renderer::draw");
+  checkGl("Renderer::drawView");
 }
 
 void Renderer::renderShadowMap() {

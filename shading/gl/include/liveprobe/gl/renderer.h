@@ -29,6 +29,11 @@ struct Camera {
   float pitchDeg = 0.0f;
   float distance = 3.2f;
   float fovYDeg = 40.0f;
+  /// The part of the frame the model is framed in (x0, y0, x1, y1 as fractions of the frame,
+  /// y up): beside a HUD's panels, say. The projection is shifted and scaled so that the view
+  /// the whole frame would show fits this part (by its height, or by its width where the part is
+  /// narrower than square); the background still fills the frame, in the same projection.
+  glm::vec4 frame{0.0f, 0.0f, 1.0f, 1.0f};
 
   glm::vec3 eye() const;
   glm::mat4 view() const;
@@ -51,6 +56,10 @@ struct ShadingSettings {
   /// --ground: a shadow catcher plane under the model (the background, darkened by the model's
   /// shadow and ambient occlusion).
   bool ground = false;
+  /// The 3D view drawn at this fraction of the frame's width and height (into an offscreen
+  /// target, then scaled up with linear filtering): a window on a software rasterizer keeps its
+  /// frame rate this way (dynamic resolution). 1 draws at full size.
+  float renderScale = 1.0f;
 };
 
 /// The small views the HUD shows (Renderer::drawProbeViews).
@@ -129,6 +138,9 @@ class Renderer {
     int samples = 0;
   };
   void ensureMultisample(glm::ivec2 size, int samples);
+  void ensureScaled(glm::ivec2 size);
+  /// The 3D view at `size` into the bound framebuffer.
+  void drawView(glm::ivec2 size, const Camera& camera, const ShadingSettings& s);
   /// The first light's depth map of the mesh; sets the shadow uniforms' values.
   void renderShadowMap();
   void setShadowUniforms(const Program& program, bool on) const;
@@ -148,7 +160,7 @@ class Renderer {
   float groundY_ = -1.0f;                     ///< the mesh's lowest point
   VertexArray groundVao_;
   Buffer groundVertices_;
-  Target msaa_;
+  Target msaa_, scaled_;
   std::array<Target, 3> probes_;
   glm::mat3 fileFromWorld_{1.0f};
   VertexArray meshVao_, emptyVao_;
