@@ -308,57 +308,51 @@ void Renderer::bindPanorama(const Program& p, const ShadingSettings& s) const {
   glUniform1i(loc(p, "uPanorama"), 0);
 }
 
+namespace {
+
+/// An offscreen framebuffer of `size`: an RGBA8 colour and a 24-bit depth renderbuffer, with
+/// `samples` samples per pixel (1: single-sampled). `what` names it in an error.
+void makeRenderTarget(Framebuffer& fbo, Renderbuffer& colour, Renderbuffer& depth, glm::ivec2 size,
+                      int samples, const std::string& what) {
+  GLuint id = 0;
+  glGenFramebuffers(1, &id);
+  fbo.reset(id);
+  auto storage = [&](Renderbuffer& rb, GLenum format) {
+    glGenRenderbuffers(1, &id);
+    rb.reset(id);
+    glBindRenderbuffer(GL_RENDERBUFFER, id);
+    if (samples > 1)
+      glRenderbufferStorageMultisample(GL_RENDERBUFFER, samples, format, size.x, size.y);
+    else
+      glRenderbufferStorage(GL_RENDERBUFFER, format, size.x, size.y);
+  };
+  storage(colour, GL_RGBA8);
+  storage(depth, GL_DEPTH_COMPONENT24);
+  glBindFramebuffer(GL_FRAMEBUFFER, fbo.get());
+  glFramebufferRenderbuffer(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_RENDERBUFFER, colour.get());
+  glFramebufferRenderbuffer(GL_FRAMEBUFFER, GL_DEPTH_ATTACHMENT, GL_RENDERBUFFER, depth.get());
+  if (glCheckFramebufferStatus(GL_FRAMEBUFFER) != GL_FRAMEBUFFER_COMPLETE)
+    throw ContextError(what + " framebuffer is incomplete");
+  checkGl(("Renderer: " + what + " target").c_str());
+}
+
+}  // namespace
+
 void Renderer::ensureMultisample(glm::ivec2 size, int samples) {
   if (msaa_.fbo.isValid() && msaa_.size == size && msaa_.samples == samples) return;
   msaa_ = Target{};
-  GLuint id = 0;
-  glGenFramebuffers(1, &id);
-  msaa_.fbo.reset(id);
-  glGenRenderbuffers(1, &id);
-  msaa_.colourMs.reset(id);
-  glBindRenderbuffer(GL_RENDERBUFFER, id);
-  glRenderbufferStorageMultisample(GL_RENDERBUFFER, samples, GL_RGBA8, size.x, size.y);
-  glGenRenderbuffers(1, &id);
-  msaa_.depth.reset(id);
-  glBindRenderbuffer(GL_RENDERBUFFER, id);
-  glRenderbufferStorageMultisample(GL_RENDERBUFFER, samples, GL_DEPTH_COMPONENT24, size.x, size.y);
-  glBindFramebuffer(GL_FRAMEBUFFER, msaa_.fbo.get());
-  glFramebufferRenderbuffer(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_RENDERBUFFER,
-                            msaa_.colourMs.get());
-  glFramebufferRenderbuffer(GL_FRAMEBUFFER, GL_DEPTH_ATTACHMENT, GL_RENDERBUFFER,
-                            msaa_.depth.get());
-  if (glCheckFramebufferStatus(GL_FRAMEBUFFER) != GL_FRAMEBUFFER_COMPLETE)
-    throw ContextError("multisample framebuffer (" + std::to_string(samples) +
-                       " samples) is incomplete");
+  makeRenderTarget(msaa_.fbo, msaa_.colourMs, msaa_.depth, size, samples,
+                   "multisample (" + std::to_string(samples) + " samples)");
   msaa_.size = size;
   msaa_.samples = samples;
-  checkGl("Renderer: multisample target");
 }
 
 void Renderer::ensureScaled(glm::ivec2 size) {
   if (scaled_.fbo.isValid() && scaled_.size == size) return;
   scaled_ = Target{};
-  GLuint id = 0;
-  glGenFramebuffers(1, &id);
-  scaled_.fbo.reset(id);
-  glGenRenderbuffers(1, &id);
-  scaled_.colourMs.reset(id);
-  glBindRenderbuffer(GL_RENDERBUFFER, id);
-  glRenderbufferStorage(GL_RENDERBUFFER, GL_RGBA8, size.x, size.y);
-  glGenRenderbuffers(1, &id);
-  scaled_.depth.reset(id);
-  glBindRenderbuffer(GL_RENDERBUFFER, id);
-  glRenderbufferStorage(GL_RENDERBUFFER, GL_DEPTH_COMPONENT24, size.x, size.y);
-  glBindFramebuffer(GL_FRAMEBUFFER, scaled_.fbo.get());
-  glFramebufferRenderbuffer(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_RENDERBUFFER,
-                            scaled_.colourMs.get());
-  glFramebufferRenderbuffer(GL_FRAMEBUFFER, GL_DEPTH_ATTACHMENT, GL_RENDERBUFFER,
-                            scaled_.depth.get());
-  if (glCheckFramebufferStatus(GL_FRAMEBUFFER) != GL_FRAMEBUFFER_COMPLETE)
-    throw ContextError("scaled framebuffer (" + std::to_string(size.x) + "x" +
-                       std::to_string(size.y) + ") is incomplete");
+  makeRenderTarget(scaled_.fbo, scaled_.colourMs, scaled_.depth, size, 1,
+                   "scaled (" + std::to_string(size.x) + "x" + std::to_string(size.y) + ")");
   scaled_.size = size;
-  checkGl("Renderer: scaled target");
 }
 
 void Renderer::draw(glm::ivec2 size, const Camera& camera, const ShadingSettings& s) {
