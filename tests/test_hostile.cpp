@@ -42,8 +42,8 @@ void expectRefused(const lpt::TempDir& dir, const std::string& args, const std::
   EXPECT_EQ(listing(dir.path), before) << args << ": left files behind";
 }
 
-// A path is never a printf format: %s and %n used to crash the sequence opener, %% listed one
-// file millions of times. Only %d and %0Nd make a sequence, parsed by liveprobe itself.
+// A path is never a printf format: %s and %n in it crash nothing, %% does not list one file
+// millions of times. Only %d and %0Nd make a sequence, parsed by liveprobe itself.
 TEST(Hostile, PathsAreNeverFormatStrings) {
   lpt::TempDir tmp;
   for (const char* name : {"%s.png", "%n%n%n.png", "%%.png", "f_%5$d.png", "f_%d_%d.png"})
@@ -188,7 +188,7 @@ TEST(Hostile, OverflowingPixelsAreAnError) {
 }
 
 // A recording of a run that fails (a sequence whose second frame has another size) is discarded:
-// no video, sidecar or temporary is left, where it used to be finalised with one frame.
+// no video, sidecar or temporary is left (not a video finalised with one frame).
 TEST(Hostile, FailedRecordingIsDiscarded) {
   lpt::TempDir tmp;
   fs::create_directory(tmp.path / "seq");
@@ -211,8 +211,8 @@ lp::Frame decodeMjpeg(const std::vector<std::uint8_t>& jpeg, int width, int heig
 }  // namespace
 
 // A camera frame is decoded only when its JPEG header declares the negotiated size: a corrupt
-// header that declares 65535x65535 used to make the decoder allocate gigabytes (found by the
-// camera_frame fuzz target; its input is in tests/fuzz/corpus/camera_frame/).
+// header that declares 65535x65535 would make the decoder allocate gigabytes (an input of the
+// camera_frame fuzz target, kept in tests/fuzz/corpus/camera_frame/).
 TEST(Hostile, CameraFrameOfAnotherSizeIsDropped) {
   cv::Mat img(16, 32, CV_8UC3, cv::Scalar(40, 80, 120));
   std::vector<std::uint8_t> jpeg;
@@ -423,7 +423,7 @@ TEST(Hostile, LoopingLinksAreOneLine) {
 }
 
 // Lighting liveprobe cannot draw is refused in one line: more lights than the shaders draw, and
-// values whose products overflow float (they used to render an all-black image with exit 0).
+// values whose products overflow float (which would render an all-black image with exit 0).
 TEST(Hostile, LightingBeyondWhatIsDrawnIsRefused) {
   lpt::TempDir tmp;
   auto file = [&](const std::string& name, int lights, double l00, double power) {
