@@ -13,6 +13,7 @@ add_custom_command(OUTPUT ${doc_dir}/changelog.gz
   COMMAND gzip -9n -c ${doc_dir}/changelog > ${doc_dir}/changelog.gz
   DEPENDS ${doc_dir}/changelog)
 add_custom_target(liveprobe_package_doc ALL DEPENDS ${doc_dir}/changelog.gz)
+add_dependencies(liveprobe liveprobe_package_doc)
 install(FILES ${CMAKE_SOURCE_DIR}/cmake/package/copyright ${doc_dir}/changelog.gz
         DESTINATION ${CMAKE_INSTALL_DOCDIR} COMPONENT runtime)
 

@@ -2,12 +2,17 @@
 # An install stands alone: installed into a prefix that is then moved, liveprobe names neither the
 # source tree nor the build tree, replays its bundled recording with no source given, and serves
 # its web page and three.js (GET / and /three/three.module.js). Usage: moved_install.sh BUILD
+# (Consumer.BuildsAgainstAnInstall installs the same build: the two never run at once.)
 set -euo pipefail
 build=$(cd "$1" && pwd)
 src=$(cd "$(dirname "$0")/../.." && pwd)
 work=$(mktemp -d)
 pid=
 trap '[[ -n $pid ]] && kill "$pid" 2>/dev/null; rm -rf "$work"' EXIT
+# Building the program alone (as scripts/demo does) makes all its install takes: the generated
+# man page and package changelog, removed here, come back with it.
+rm -f "$build/share/man/man1/liveprobe.1.gz" "$build/package-doc/changelog.gz"
+cmake --build "$build" --target liveprobe >/dev/null
 cmake --install "$build" --prefix "$work/first" >/dev/null
 mv "$work/first" "$work/moved"
 lp=$work/moved/bin/liveprobe
