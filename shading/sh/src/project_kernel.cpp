@@ -195,9 +195,15 @@ void WeightedSums(const float* rgb, std::size_t n, const float* blocked, double*
   }
 }
 
-// Table lookups, one at a time: on AVX2 a gather (GatherIndex) measured slower (17.6 against
-// 13.2 ms for a 3840x1920 frame on one thread), and fusing the lookups into the projection's
-// loads stalls on store forwarding.
+// Table lookups, one at a time, each a scalar load and store: on AVX2 a gather (GatherIndex)
+// measured slower (17.6 against 13.2 ms for a 3840x1920 frame on one thread), fusing the lookups
+// into the projection's loads stalls on store forwarding. On AVX-512 the compiler's own
+// vectorisation (scalar loads inserted lane by lane into a 16-lane vector) made the 8-bit
+// projection a fifth slower than AVX2's in the same run (liveprobe-bench, u8 3840x1920 one
+// thread: 10.4 against 8.2 ms on an Intel Xeon); plain scalar stores put it level.
+#if HWY_COMPILER_GCC_ACTUAL && HWY_ARCH_X86 && HWY_TARGET <= HWY_AVX3
+__attribute__((optimize("no-tree-vectorize")))
+#endif
 void DecodeU8(const std::uint8_t* HWY_RESTRICT src, const float* HWY_RESTRICT lut,
               float* HWY_RESTRICT dst, std::size_t n) {
   for (std::size_t i = 0; i < n; ++i) dst[i] = lut[src[i]];
