@@ -34,8 +34,7 @@ std::string optionKey(const OptionSpec& o) { return o.name.substr(0, o.name.find
 std::map<std::string, bool> optionNames(const CommandSpec& spec) {
   std::map<std::string, bool> names{{"--help", false}, {"-h", false}};
   for (const auto& o : spec.options) {
-    std::stringstream s(o.name);
-    for (std::string n; std::getline(s, n, ',');) names[n] = !o.value.empty() && !o.optionalValue;
+    for (const auto& n : namesOf(o)) names[n] = !o.value.empty() && !o.optionalValue;
   }
   return names;
 }
@@ -177,6 +176,13 @@ int Args::integerIn(const std::string& name, int fallback, int lo, int hi) const
   if (has(name) && (v < lo || v > hi))
     throw Error(name + " " + get(name) + ": expected an integer from " + rangeText(lo, hi));
   return v;
+}
+
+std::vector<std::string> namesOf(const OptionSpec& option) {
+  std::vector<std::string> names;
+  std::stringstream s(option.name);
+  for (std::string n; std::getline(s, n, ',');) names.push_back(n);
+  return names;
 }
 
 std::string usage(const CommandSpec& spec) {

@@ -82,8 +82,7 @@ std::vector<std::pair<std::string, std::vector<const OptionSpec*>>> groups(const
 
 std::string optionLabel(const OptionSpec& o) {
   std::string names;
-  std::stringstream s(o.name);
-  for (std::string n; std::getline(s, n, ',');) names += (names.empty() ? "" : ", ") + n;
+  for (const auto& n : namesOf(o)) names += (names.empty() ? "" : ", ") + n;
   if (o.value.empty()) return names;
   return names + (o.optionalValue ? " [" + o.value + "]" : " " + o.value);
 }
@@ -198,10 +197,8 @@ std::string bashCompletion() {
        "  case ${COMP_WORDS[1]} in\n";
   for (const auto& c : commands()) {
     b << "    " << c.spec.name << ") opts=\"";
-    for (const auto& o : c.spec.options) {
-      std::stringstream s(o.name);
-      for (std::string n; std::getline(s, n, ',');) b << n << " ";
-    }
+    for (const auto& o : c.spec.options)
+      for (const auto& n : namesOf(o)) b << n << " ";
     b << "--help\" ;;\n";
   }
   b << "    *) return ;;\n"
