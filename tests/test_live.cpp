@@ -14,6 +14,7 @@
 #include <regex>
 #include <set>
 
+#include "emulator.h"
 #include "liveprobe/capture/frame.h"
 #include "liveprobe/capture/image.h"
 #include "liveprobe/sh/sh.h"
@@ -23,44 +24,9 @@
 namespace {
 
 namespace fs = std::filesystem;
+using lpt::Emulator;
+using lpt::readJsonl;
 constexpr int kFrames = 10;
-
-struct Emulator {
-  lpt::TempDir tmp;
-  std::string faults;
-  explicit Emulator(const std::vector<std::string>& modes, std::string f = "")
-      : faults(std::move(f)) {
-    lpt::makeModes(tmp.path / "modes", modes);
-  }
-  std::string log() const { return tmp / "emu.log"; }
-  lpt::RunResult run(const std::string& args) const {
-    const std::string env =
-        "LD_PRELOAD=" + std::string(LIVEPROBE_EMU) +
-        " LPEMU_DEVICE=/dev/video7 LPEMU_SOURCE=" + (tmp.path / "modes").string() +
-        " LPEMU_META_DEVICE=/dev/video8 LPEMU_LOG=" + log() + " LPEMU_FAULTS=" + faults + " ";
-    return lpt::runCommand(env + LIVEPROBE_BIN + " " + args);
-  }
-  std::string logText() const {
-    std::ifstream in(log());
-    return std::string((std::istreambuf_iterator<char>(in)), {});
-  }
-  // Every buffer was unmapped and released before the device was closed. (Once a device is
-  // unplugged its ioctls fail with ENODEV and the kernel frees its buffers at close: then only
-  // the mappings are ours to undo.)
-  void expectNoLeak(bool unplugged = false) const {
-    const std::string l = logText();
-    EXPECT_NE(l.find(unplugged ? "close mapped=0" : "close mapped=0 buffers=0 streaming=0"),
-              std::string::npos)
-        << l;
-  }
-};
-
-std::vector<nlohmann::json> readJsonl(const std::string& path) {
-  std::vector<nlohmann::json> out;
-  std::ifstream in(path);
-  for (std::string line; std::getline(in, line);) out.push_back(nlohmann::json::parse(line));
-  return out;
-}
 
 const std::string kCommon = " --headless --view-size 64x36 --no-background ";
 const std::string kReplay = " --headless --size 64x36 --no-background ";

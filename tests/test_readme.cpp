@@ -2,10 +2,11 @@
 // drift from the program. An example is a line starting with `liveprobe ` inside a ```sh block (a
 // trailing backslash continues it). It runs with `liveprobe` on PATH, from a working folder where
 // ../shared/data and recordings/ resolve as they do from the source tree, under Xvfb (so the
-// window path is taken, as on a desktop), and for `live` against the emulated camera
-// (tests/v4l2emu) standing in for the device it names. It must exit 0, or with the status a
-// trailing "# exits N" gives; one marked "# runs until Esc or Ctrl-C" must still be running after
-// a few seconds, and then stop cleanly on SIGINT (exit 130).
+// window path is taken, as on a desktop), and for `live` and `calibrate` against the emulated
+// camera (tests/v4l2emu) standing in for the device it names (bracketing and calibration with
+// its metadata node, a control delay of two frames, and the synthetic sky's HDR frames). It must
+// exit 0, or with the status a trailing "# exits N" gives; one marked "# runs until Esc or Ctrl-C"
+// must still be running after a few seconds, and then stop cleanly on SIGINT (exit 130).
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -104,6 +105,18 @@ void makeCameraModes(const fs::path& dir) {
   }
 }
 
+// For bracketing and calibration: the synthetic sky's HDR frames (the camera renders them as an
+// 8-bit sensor would), all of them, or one for a still scene.
+void makeHdrModes(const fs::path& dir, bool still) {
+  const fs::path m = dir / "MJPG_256x128";
+  fs::create_directories(m);
+  for (int i = still ? 30 : 0; i < (still ? 31 : 75); ++i) {
+    char name[16];
+    std::snprintf(name, sizeof name, "%04d.exr", i);
+    fs::create_symlink(fs::path(LIVEPROBE_SOURCE_DIR) / "recordings/sky-hdr" / name, m / name);
+  }
+}
+
 TEST_P(ReadmeExample, RunsAsWritten) {
   const Example& e = GetParam();
   lpt::TempDir tmp;
@@ -119,10 +132,19 @@ TEST_P(ReadmeExample, RunsAsWritten) {
 
   std::string env = "export PATH=" + fs::path(LIVEPROBE_BIN).parent_path().string() + ":$PATH; ";
   std::smatch m;
-  if (std::regex_search(e.command, m, std::regex(R"(^liveprobe live (/dev/video\d+))"))) {
-    makeCameraModes(tmp.path / "modes");
-    env += "export LD_PRELOAD=" + std::string(LIVEPROBE_EMU) + " LPEMU_DEVICE=" + m[1].str() +
-           " LPEMU_SOURCE=" + (tmp.path / "modes").string() + "; ";
+  if (std::regex_search(e.command, m,
+                        std::regex(R"(^liveprobe (live|calibrate) /dev/video(\d+))"))) {
+    const bool hdr = m[1] == "calibrate" || e.command.find("--bracket") != std::string::npos;
+    if (hdr)
+      makeHdrModes(tmp.path / "modes", m[1] == "calibrate");
+    else
+      makeCameraModes(tmp.path / "modes");
+    env += "export LD_PRELOAD=" + std::string(LIVEPROBE_EMU) + " LPEMU_DEVICE=/dev/video" +
+           m[2].str() + " LPEMU_SOURCE=" + (tmp.path / "modes").string() +
+           (hdr ? " LPEMU_META_DEVICE=/dev/video" + std::to_string(std::stoi(m[2]) + 1) +
+                      " LPEMU_FAULTS=control_delay=2"
+                : std::string()) +
+           "; ";
   }
   const std::string run = e.endless ? env + e.command +
                                           " & pid=$!; sleep 6; kill -0 $pid 2>/dev/null && echo "
@@ -168,7 +190,7 @@ TEST(Readme, EveryCommandHasAnExample) {
     seen.insert(word);
   }
   for (const char* c : {"coeffs", "irradiance", "compare", "render", "view", "replay", "record",
-                        "live", "devices", "bench"})
+                        "live", "devices", "calibrate", "bench"})
     EXPECT_TRUE(seen.count(c)) << "neither README.md nor docs/ has an example of liveprobe " << c;
 }
 

@@ -18,13 +18,15 @@ inline std::string dataPath(const std::string& rel) {
   return p;
 }
 
-/// A fresh folder under the system temp dir, removed with the object.
+/// A fresh folder under the system temp dir, removed with the object; each of a test's own.
 struct TempDir {
   std::filesystem::path path;
   TempDir() {
+    static int made = 0;
     path = std::filesystem::temp_directory_path() /
            ("liveprobe-test-" + std::to_string(::testing::UnitTest::GetInstance()->random_seed()) +
-            "-" + ::testing::UnitTest::GetInstance()->current_test_info()->name());
+            "-" + ::testing::UnitTest::GetInstance()->current_test_info()->name() +
+            (made++ ? "-" + std::to_string(made) : std::string()));
     std::filesystem::remove_all(path);
     std::filesystem::create_directories(path);
   }

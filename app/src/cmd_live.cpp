@@ -3,12 +3,16 @@
 #include <linux/videodev2.h>
 
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <iostream>
+#include <sstream>
 #include <tuple>
 
 #include "commands.h"
+#include "liveprobe/capture/atomic_file.h"
+#include "liveprobe/capture/hdr_merge.h"
 #include "liveprobe/capture/v4l2.h"
 #include "liveprobe/sh/error.h"
 #include "progress.h"
@@ -16,47 +20,31 @@
 
 namespace lp::cli {
 
-const CommandSpec kLiveSpec{
-    "live",
-    "DEVICE",
-    "A live light probe: streams a V4L2 camera (a 360 camera over UVC, or a webcam looking at a\n"
-    "chrome ball with --layout mirrorball --circle cx,cy,r), re-projects the nine coefficients "
-    "every\n"
-    "frame and lights the model with them. Capture runs on its own thread and is never held back\n"
-    "by drawing. --record saves the stream as it runs, for replay.",
-    [] {
-      std::vector<OptionSpec> o;
-      for (const auto& opt : streamOptions())
-        if (opt.name != "--fps") o.push_back(opt);  // --fps is the camera's here
-      const std::string g = "Camera";
-      o.insert(o.end(),
-               {{"--format", "mjpeg|yuyv|nv12|rgb24|auto",
-                 "pixel format (default auto: MJPEG first)", false, false, g},
-                {"--size", "WxH", "capture size asked of the camera (default: its largest)", false,
-                 false, g},
-                {"--fps", "N", "frame rate asked of the camera, up to 1000", false, false, g},
-                {"--lock-exposure", "SECONDS",
-                 "let auto exposure settle (default 2 s), then lock exposure, gain, white balance",
-                 false, true, g},
-                {"--mjpeg-reduce", "1|2|4|8", "decode MJPEG at a reduced scale (default 1)", false,
-                 false, g},
-                {"--timeout", "SECONDS", "stop when no frame arrives for this long (default 2)",
-                 false, false, g},
-                {"--record", "FILE",
-                 "save the camera stream (.mkv FFV1, .avi MJPEG, .mp4 H.264) while it runs", false,
-                 false, g},
-                {"--view-size", "WxH", "window or frame size (default 1280x720; headless 640x360)",
-                 false, false, "Output"}});
-      auto scene = sceneOptions();
-      o.insert(o.end(), scene.begin(), scene.end());
-      return o;
-    }(),
-    1,
-    1,
-    "a V4L2 video-capture node, e.g. /dev/video0"};
+namespace {
 
-int runLive(const Args& a) {
-  layoutFromArgs(a);
+const std::string kCameraGroup = "Camera";
+
+/// What every command that opens a camera takes.
+std::vector<OptionSpec> cameraOptions() {
+  const std::string g = kCameraGroup;
+  return {
+      {"--format", "mjpeg|yuyv|nv12|rgb24|auto", "pixel format (default auto: MJPEG first)", false,
+       false, g},
+      {"--size", "WxH", "capture size asked of the camera (default: its largest)", false, false, g},
+      {"--fps", "N", "frame rate asked of the camera, up to 1000", false, false, g},
+      {"--lock-exposure", "SECONDS",
+       "let auto exposure settle (default 2 s), then lock exposure, gain, white balance", false,
+       true, g},
+      {"--mjpeg-reduce", "1|2|4|8", "decode MJPEG at a reduced scale (default 1)", false, false, g},
+      {"--timeout", "SECONDS", "stop when no frame arrives for this long (default 2)", false, false,
+       g},
+      {"--metadata", "DEVICE",
+       "the camera's UVC metadata node, which says each frame's exposure (default: the node "
+       "after DEVICE, as uvcvideo numbers them)",
+       false, false, g}};
+}
+
+CameraSettings cameraSettingsFromArgs(const Args& a) {
   CameraSettings cs;
   cs.device = a.positional()[0];
   try {
@@ -73,6 +61,101 @@ int runLive(const Args& a) {
     throw Error("--mjpeg-reduce " + a.get("--mjpeg-reduce") + ": expected 1, 2, 4 or 8");
   cs.timeoutMs = int(1000 * a.number("--timeout", 2.0));
   if (cs.timeoutMs < 10) throw Error("--timeout " + a.get("--timeout") + ": too short");
+  return cs;
+}
+
+/// Settles auto exposure for --lock-exposure's seconds (default 2), locks, and says what it locked.
+LockedExposure lockFromArgs(const Args& a, V4l2Source& camera, const char* command) {
+  const double settle = a.get("--lock-exposure").empty() ? 2.0 : a.number("--lock-exposure", 2.0);
+  const LockedExposure l = camera.lockExposure(settle);
+  auto show = [](const std::optional<std::int32_t>& v) {
+    return v ? std::to_string(*v) : std::string("n/a");
+  };
+  std::fprintf(stderr,
+               "liveprobe %s: locked after %.1f s: exposure %s x 100 us, gain %s, white "
+               "balance %s K\n",
+               command, settle, show(l.exposure100us).c_str(), show(l.gain).c_str(),
+               show(l.whiteBalanceK).c_str());
+  return l;
+}
+
+/// --bracket EV,EV,...: 2 to 5 distinct stops in [-20, 20].
+std::vector<double> bracketStops(const std::string& text) {
+  std::vector<double> stops;
+  std::stringstream in(text);
+  for (std::string item; std::getline(in, item, ',');) {
+    const double ev = parseNumber(item, "--bracket");
+    if (!(ev >= -20 && ev <= 20))
+      throw Error("--bracket " + text + ": " + item + " is not a stop in -20..20");
+    if (std::find(stops.begin(), stops.end(), ev) != stops.end())
+      throw Error("--bracket " + text + ": " + item + " is given twice");
+    stops.push_back(ev);
+  }
+  if (stops.size() < 2 || stops.size() > std::size_t(kMaxBracket))
+    throw Error("--bracket " + text + ": expected 2 to " + std::to_string(kMaxBracket) +
+                " stops, e.g. -12,-6,0");
+  return stops;
+}
+
+void startBracket(V4l2Source& camera, const std::vector<double>& stops) {
+  const std::vector<std::int32_t> asked = camera.bracket(stops);
+  // The locked exposure the stops are counted from.
+  const double base = double(asked.back()) / std::exp2(stops.back());
+  std::string plan, clamped;
+  for (std::size_t i = 0; i < stops.size(); ++i) {
+    plan += (i ? ", " : "") + formatNumber(stops[i]) + " EV " + std::to_string(asked[i]);
+    const double actual = std::log2(double(asked[i]) / base);
+    if (std::abs(actual - stops[i]) > 0.1)
+      clamped += " " + formatNumber(stops[i]) + " EV is " + formatNumber(actual, 3) +
+                 " EV, the control's limit;";
+  }
+  std::fprintf(stderr, "liveprobe live: bracket %s (x 100 us)%s\n", plan.c_str(),
+               clamped.empty() ? "" : (";" + clamped).c_str());
+}
+
+}  // namespace
+
+const CommandSpec kLiveSpec{
+    "live",
+    "DEVICE",
+    "A live light probe: streams a V4L2 camera (a 360 camera over UVC, or a webcam looking at a\n"
+    "chrome ball with --layout mirrorball --circle cx,cy,r), re-projects the nine coefficients "
+    "every\n"
+    "frame and lights the model with them. Capture runs on its own thread and is never held back\n"
+    "by drawing. --record saves the stream as it runs, for replay. --bracket makes HDR from an\n"
+    "8-bit camera (docs/hdr.md).",
+    [] {
+      std::vector<OptionSpec> o;
+      for (const auto& opt : streamOptions())
+        if (opt.name != "--fps") o.push_back(opt);  // --fps is the camera's here
+      const auto camera = cameraOptions();
+      o.insert(o.end(), camera.begin(), camera.end());
+      const std::string g = kCameraGroup;
+      o.insert(o.end(),
+               {{"--bracket", "EV,EV,...",
+                 "HDR from an 8-bit camera: cycle 2 to 5 exposures, in stops from the locked one "
+                 "(e.g. -12,-6,0), and merge the newest of each into radiance every frame",
+                 false, false, g},
+                {"--record", "FILE",
+                 "save the camera stream (.mkv FFV1, .avi MJPEG, .mp4 H.264) while it runs", false,
+                 false, g},
+                {"--view-size", "WxH", "window or frame size (default 1280x720; headless 640x360)",
+                 false, false, "Output"}});
+      auto scene = sceneOptions();
+      o.insert(o.end(), scene.begin(), scene.end());
+      return o;
+    }(),
+    1,
+    1,
+    "a V4L2 video-capture node, e.g. /dev/video0"};
+
+int runLive(const Args& a) {
+  layoutFromArgs(a);
+  CameraSettings cs = cameraSettingsFromArgs(a);
+  const std::vector<double> stops =
+      a.has("--bracket") ? bracketStops(a.get("--bracket")) : std::vector<double>{};
+  if (a.has("--metadata") && stops.empty()) throw Error("--metadata goes with --bracket");
+  if (!stops.empty()) cs.metadataDevice = a.get("--metadata", siblingMetadataNode(cs.device));
   auto camera = std::make_unique<V4l2Source>(cs);
   camera->start();
   const bool headless =
@@ -80,18 +163,98 @@ int runLive(const Args& a) {
   std::fprintf(
       stderr, "liveprobe live: %s%s\n", camera->describe().c_str(),
       headless && !a.has("--frames") && !a.has("--duration") ? "; running until Ctrl-C" : "");
-  if (a.has("--lock-exposure")) {
-    const double settle = a.get("--lock-exposure").empty() ? 2.0 : a.number("--lock-exposure", 2.0);
-    const LockedExposure l = camera->lockExposure(settle);
-    auto show = [](const std::optional<std::int32_t>& v) {
-      return v ? std::to_string(*v) : std::string("n/a");
-    };
-    std::fprintf(
-        stderr,
-        "liveprobe live: locked after %.1f s: exposure %s x 100 us, gain %s, white balance %s K\n",
-        settle, show(l.exposure100us).c_str(), show(l.gain).c_str(), show(l.whiteBalanceK).c_str());
-  }
+  // Bracketing counts its stops from a locked exposure.
+  if (a.has("--lock-exposure") || !stops.empty()) lockFromArgs(a, *camera, "live");
+  if (!stops.empty()) startBracket(*camera, stops);
   return runStreamForLive(a, std::move(camera));
+}
+
+const CommandSpec kCalibrateSpec{
+    "calibrate",
+    "DEVICE",
+    "Recovers a camera's response curve (code value to linear light) for --response: locks the\n"
+    "exposure, sweeps it over a static scene in whole stops, and solves for the curve with\n"
+    "Debevec and Malik's method (OpenCV's CalibrateDebevec). The curve must rise with the code.\n"
+    "Point the camera at a still scene with both shadows and highlights, and keep it still.",
+    [] {
+      auto o = cameraOptions();
+      o.insert(
+          o.end(),
+          {{"--out", "FILE.json", "where the response goes (required)", false, false, "Output"},
+           {"--stops", "LO,HI", "the sweep, in whole stops from the locked exposure (default -6,3)",
+            false, false, kCameraGroup},
+           {"--settle", "N",
+            "frames to let pass after each change before one is kept, 1 to 60 (default 8; "
+            "a camera whose metadata reports exposures keeps the first that shows the new "
+            "one)",
+            false, false, kCameraGroup}});
+      return o;
+    }(),
+    1,
+    1,
+    "a V4L2 video-capture node, e.g. /dev/video0"};
+
+int runCalibrate(const Args& a) {
+  if (!a.has("--out")) throw Error("--out FILE.json is required");
+  requireExtension(a.get("--out"), "--out", {".json"});
+  CameraSettings cs = cameraSettingsFromArgs(a);
+  const auto range = parseNumberList(a.get("--stops", "-6,3"), "--stops", 2, "LO,HI");
+  if (!(range[0] < range[1]) || range[0] < -20 || range[1] > 20)
+    throw Error("--stops " + a.get("--stops") + ": expected LO,HI with -20 <= LO < HI <= 20");
+  const int settle = a.integerIn("--settle", 8, 1, 60);
+  // The metadata node when there is one (frames then say their exposure); the settle otherwise.
+  cs.metadataDevice = a.get("--metadata", siblingMetadataNode(cs.device));
+  auto camera = std::make_unique<V4l2Source>(cs);
+  try {
+    camera->start();
+  } catch (const Error&) {
+    if (a.has("--metadata")) throw;
+    cs.metadataDevice.clear();
+    camera = std::make_unique<V4l2Source>(cs);
+    camera->start();
+  }
+  std::fprintf(stderr, "liveprobe calibrate: %s%s\n", camera->describe().c_str(),
+               camera->reportsExposure() ? "; frames report their exposure" : "");
+  const LockedExposure locked = lockFromArgs(a, *camera, "calibrate");
+  if (!locked.exposure100us)
+    throw Error(cs.device + ": the camera has no exposure time control " +
+                "(V4L2_CID_EXPOSURE_ABSOLUTE): it cannot be calibrated");
+  // One frame per stop, after the camera has taken the new exposure.
+  std::vector<Frame> frames;
+  std::vector<double> brightness;
+  std::int32_t previous = -1;
+  for (int stop = int(std::ceil(range[0])); stop <= int(std::floor(range[1])); ++stop) {
+    const std::int32_t asked =
+        camera->setExposure(std::int32_t(std::lround(*locked.exposure100us * std::exp2(stop))));
+    if (asked == previous) continue;  // clamped to the control's limit: already taken
+    previous = asked;
+    Frame f;
+    for (int i = 0; i < settle; ++i) {
+      if (!camera->next(f)) throw Error(cs.device + ": the stream ended");
+      if (camera->reportsExposure() && std::lround(1e4 / f.radianceScale) == asked) break;
+    }
+    double sum = 0;
+    for (const std::uint8_t v : f.bgr8) sum += v;
+    brightness.push_back(sum / double(std::max<std::size_t>(1, f.bgr8.size())));
+    std::fprintf(stderr, "  %+d EV: %d x 100 us, mean code %.1f\n", stop,
+                 int(std::lround(1e4 / f.radianceScale)), brightness.back());
+    frames.push_back(std::move(f));
+  }
+  // A camera that takes the control but not the exposure shows one brightness at every stop.
+  const auto [lo, hi] = std::minmax_element(brightness.begin(), brightness.end());
+  if (frames.size() < 3 || *hi - *lo < 8.0)
+    throw Error(cs.device + ": the camera ignores its exposure control (mean code " +
+                formatNumber(*lo, 3) + " to " + formatNumber(*hi, 3) + " across the sweep)");
+  CameraResponse r = calibrateResponse(frames);
+  AtomicTextFile out(a.get("--out"));
+  out.line(r.json());
+  out.commit();
+  const PowerLaw like = fitPowerLaw([&](int i) { return r.linear[1][std::size_t(i)]; });
+  std::fprintf(stderr,
+               "liveprobe calibrate: %zu exposures; the response rises with the code (green is "
+               "like a gamma of %.2f over codes 32-240); written to %s\n",
+               frames.size(), like.gamma, a.get("--out").c_str());
+  return 0;
 }
 
 const CommandSpec kDevicesSpec{

@@ -120,6 +120,14 @@ std::vector<OptionSpec> streamOptions() {
         "the model with it as a disc light",
         false, false, g},
        {"--lights", "K", "up to K such lights (implies --sun; 1..8)", false, false, g},
+       {"--response", "FILE",
+        "8-bit frames: the camera's response, from `liveprobe calibrate` (default: sRGB); a "
+        "bracketed recording's own response otherwise",
+        false, false, g},
+       {"--hold-below", "C",
+        "keep the last good lighting while a frame's confidence is below C, 0 to 1 (a hand over "
+        "the lens, a flash)",
+        false, false, g},
        {"--no-hud", "", "hide the HUD (H toggles it in a window)", false, false, g},
        {"--quiet", "", "no progress on stderr", false, false, g}});
   return o;
@@ -176,6 +184,22 @@ PipelineOptions pipelineOptionsFromArgs(const Args& a, const FrameSource& source
   opt.threads = unsigned(a.integerIn("--threads", 2, 1, 64));
   opt.maxFrames = a.integerIn("--frames", -1, 1, 1000000000);
   opt.interrupted = stopRequested;  // a paced wait ends within kStopPollSeconds of Ctrl-C
+  opt.holdBelow = a.numberIn("--hold-below", 0.0, 0.0, 1.0);
+  // A bracketed source is merged; so is any 8-bit stream with its own response (a bracket of one
+  // frame: the response's three curves decode it).
+  if (source.bracketFrames() > 0 || a.has("--response")) {
+    if (a.has("--response") && a.has("--gamma"))
+      throw Error("--response and --gamma: give one of them (a response replaces the curve)");
+    MergeOptions m;
+    m.frames = std::max(1, source.bracketFrames());
+    if (a.has("--response"))
+      m.response = CameraResponse::load(a.get("--response"));
+    else if (!source.bracketResponse().empty())
+      m.response =
+          CameraResponse::parse(source.bracketResponse(), source.describe() + ": response");
+    m.equirect = opt.layout.layout == Layout::Equirect;
+    opt.bracket = m;
+  }
   return opt;
 }
 
@@ -290,6 +314,8 @@ struct StreamTally {
   std::vector<double> latency;  ///< capture to shown, ms
   std::size_t drawn = 0, saturated = 0;
   std::size_t withLight = 0, clippedLight = 0;  ///< frames with a light; of them, clipped
+  std::vector<double> merge, confidence;        ///< bracket merge ms; each frame's confidence
+  std::size_t brightestMeasured = 0;            ///< frames whose brightest pixel was measured
 };
 
 /// Everything the render loop holds: GL, the HUD, the interactive state.
@@ -360,6 +386,9 @@ void recordSample(StreamTally& t, const ProcessedFrame& f, double uploadMs, doub
   t.upload.push_back(uploadMs);
   t.render.push_back(renderMs);
   t.saturated += f.saturated;
+  t.merge.push_back(f.times.mergeMs);
+  t.confidence.push_back(f.confidence.value());
+  t.brightestMeasured += f.confidence.brightestMeasured;
   if (!f.lights.empty()) ++t.withLight;
   if (std::any_of(f.lights.begin(), f.lights.end(), [](const Light& l) { return l.clipped; }))
     ++t.clippedLight;
@@ -372,6 +401,8 @@ void recordSample(StreamTally& t, const ProcessedFrame& f, double uploadMs, doub
   s.radiance = f.radiance;
   s.unsmoothed = f.unsmoothed;
   s.lights = f.lights;
+  s.confidence = f.confidence;
+  s.held = f.held;
   hud->push(s);
   HudCounters c{st.captured, t.drawn, st.dropped, st.skipped,
                 t.grab.empty() ? 0.0 : double(t.saturated) / double(t.grab.size())};
@@ -489,6 +520,16 @@ void printSummary(const std::string& description, const PipelineStats& st, const
                  (unsigned long long)m.lost, (unsigned long long)m.reconnects,
                  m.published == 0 && st.captured > 0 ? "; no message reached the broker" : "");
   }
+  if (!t.confidence.empty() &&
+      (st.held > 0 || median(t.merge) > 0 || percentile(t.confidence, 0.0) < 1.0))
+    std::fprintf(stderr,
+                 "  confidence: median %.3f, lowest %.3f; brightest source measured unclipped in "
+                 "%zu of %zu frames; %zu held (last good lighting)%s\n",
+                 median(t.confidence), percentile(t.confidence, 0.0), t.brightestMeasured,
+                 t.confidence.size(), st.held,
+                 median(t.merge) > 0
+                     ? ("; bracket merge " + formatNumber(median(t.merge)) + " ms median").c_str()
+                     : "");
   if (st.gapsShortened > 0)
     warn(std::to_string(st.gapsShortened) + " gap(s) in the source's timestamps over " +
          formatNumber(PipelineOptions{}.maxGapSeconds) + " s were played as one frame interval");
@@ -603,6 +644,8 @@ int runStream(const Args& a, std::unique_ptr<FrameSource> source, bool live) {
   if (out.record) {  // --record (live): the raw stream, finalised even when capture stops on a
                      // fault
     VideoRecorder* rec = out.record.get();
+    if (source->bracketFrames() > 0)  // replayed through the same merge
+      rec->setBracket(source->bracketFrames(), opt.bracket->response.json());
     opt.onFrame = [rec](const Frame& f) { rec->write(f); };
   }
 

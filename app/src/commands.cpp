@@ -29,6 +29,7 @@ const std::vector<Command>& commands() {
       {kRecordSpec, runRecord, "save a source for replay (FFV1 or MJPEG, with timestamps)"},
       {kLiveSpec, runLive, "a live light probe from a V4L2 camera"},
       {kDevicesSpec, runDevices, "list cameras: formats, sizes, frame rates, controls"},
+      {kCalibrateSpec, runCalibrate, "a camera's response curve, for --response"},
       {kBenchSpec, runBench, "frame-time regression run against a baseline"},
   };
   return all;

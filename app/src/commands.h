@@ -29,6 +29,7 @@ int runRecord(const Args&);
 int runBench(const Args&);
 int runLive(const Args&);
 int runDevices(const Args&);
+int runCalibrate(const Args&);
 /// The replay pipeline with an opened camera as its source (cmd_replay.cpp).
 int runStreamForLive(const Args& a, std::unique_ptr<FrameSource> camera);
 std::vector<OptionSpec> streamOptions();
@@ -44,6 +45,6 @@ std::string shareDir();
 std::string defaultRecording();
 
 extern const CommandSpec kCoeffsSpec, kIrradianceSpec, kCompareSpec, kRenderSpec, kViewSpec,
-    kReplaySpec, kRecordSpec, kBenchSpec, kLiveSpec, kDevicesSpec;
+    kReplaySpec, kRecordSpec, kBenchSpec, kLiveSpec, kDevicesSpec, kCalibrateSpec;
 
 }  // namespace lp::cli

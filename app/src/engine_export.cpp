@@ -323,6 +323,7 @@ ojson gltfDocument(const Environment& env, const Sh9& radiance, const std::vecto
 std::string frameRecord(const ProcessedFrame& f, const CoeffFormat& format, RecordTimes t) {
   ojson j;
   j["frame"] = f.index;
+  j["sequence"] = f.sequence;
   j["time"] = f.timestamp;
   if (format.engine) {
     j["format"] = format.name;
@@ -336,7 +337,16 @@ std::string frameRecord(const ProcessedFrame& f, const CoeffFormat& format, Reco
   tm["convert"] = f.times.convertMs;
   tm["project"] = f.times.projectMs;
   tm["render"] = t.renderMs < 0 ? ojson(nullptr) : ojson(t.renderMs);
+  if (f.times.mergeMs > 0) tm["merge"] = f.times.mergeMs;
   j["timings_ms"] = tm;
+  const FrameConfidence& c = f.confidence;
+  j["confidence"] = {{"value", c.value()},
+                     {"clipped_share", c.clippedShare},
+                     {"dark_share", c.darkShare},
+                     {"brightest_measured", c.brightestMeasured},
+                     {"agreement", c.agreement},
+                     {"exposures", c.exposures},
+                     {"held", f.held}};
   // Glass-to-light latency from the capture time (a camera's driver timestamp, or the grab of a
   // file's frame): to the coefficients, and to the frame that shows them.
   ojson l;

@@ -278,6 +278,13 @@ void Hud::drawStatus(ViewState& state, double frameMs, const HudLayout& layout, 
     for (const auto& h : history_) latency.push_back(h.latencyMs);
     ImGui::Text("latency p50 %.1f  p95 %.1f  p99 %.1f ms", percentile(latency, 0.5),
                 percentile(latency, 0.95), percentile(latency, 0.99));
+    const HudSample& h = history_.back();
+    const FrameConfidence& c = h.confidence;
+    const ImVec4 colour = h.held || !c.brightestMeasured ? ImVec4{1.0f, 0.7f, 0.3f, 1.0f}
+                                                         : ImVec4{0.75f, 0.9f, 0.75f, 1.0f};
+    ImGui::TextColored(colour, "confidence %.2f  clipped %.1f%%%s%s", c.value(),
+                       100.0 * c.clippedShare, c.exposures > 1 ? "  bracket" : "",
+                       h.held ? "  HELD" : "");
   }
   const float line = ImGui::GetTextLineHeightWithSpacing();
   const int counterLines =

@@ -9,6 +9,7 @@
 #include <string>
 #include <vector>
 
+#include "liveprobe/capture/hdr_merge.h"
 #include "liveprobe/gl/context.h"
 #include "liveprobe/gl/renderer.h"
 #include "liveprobe/sh/lights.h"
@@ -25,6 +26,8 @@ struct HudSample {
   Sh9 radiance;               ///< as lit (after rotation and smoothing)
   Sh9 unsmoothed;             ///< before smoothing (equal to radiance without --smooth)
   std::vector<Light> lights;  ///< as lit (--sun): marked on the panorama inset
+  FrameConfidence confidence;
+  bool held = false;  ///< the lighting is the last good frame's (--hold-below)
 };
 
 struct HudCounters {

@@ -115,8 +115,16 @@ struct CapturePipeline::Loop {
         lightSmoother(o.smoothSeconds),
         wallStart(Clock::now()) {
     if (o.threads > 1) pool = std::make_unique<ThreadPool>(o.threads);
+    if (o.bracket) merger.emplace(*o.bracket);
   }
   FrameProcessor processor;  ///< the frame's lighting (liveprobe/capture/frame_processor.h)
+  std::optional<BracketMerger> merger;
+  Frame merged;  ///< the merger's output, swapped into `frame`
+  struct Lit {
+    Sh9 radiance, unsmoothed;
+    std::vector<Light> lights;
+  };
+  std::optional<Lit> lastGood;  ///< the last frame over PipelineOptions::holdBelow
   ShSmoother smoother;
   LightSmoother lightSmoother;
   std::unique_ptr<ThreadPool> pool;
@@ -147,9 +155,37 @@ bool CapturePipeline::grab(Loop& s) {
   return true;
 }
 
+void CapturePipeline::merge(Loop& s, ProcessedFrame& out) const {
+  if (s.merger) {
+    out.confidence = s.merger->add(s.frame, s.merged, s.pool.get());
+    std::swap(s.frame, s.merged);
+  } else if (s.frame.format == PixelFormat::Bgr8 && countSaturated(s.frame) > 0) {
+    out.confidence = singleFrameConfidence(s.frame, s.processor.linearizer().table(),
+                                           opt_.layout.layout == Layout::Equirect);
+  }
+}
+
+bool CapturePipeline::hold(Loop& s, ProcessedFrame& out) {
+  if (opt_.holdBelow > 0 && out.confidence.value() < opt_.holdBelow && s.lastGood) {
+    out.radiance = s.lastGood->radiance;
+    out.unsmoothed = s.lastGood->unsmoothed;
+    out.lights = s.lastGood->lights;
+    out.held = true;
+    std::lock_guard lock(mutex_);
+    ++stats_.held;
+    return true;
+  }
+  return false;
+}
+
 void CapturePipeline::convertForDisplay(Loop& s, ProcessedFrame& out) const {
-  // A linear copy only for display; the projection reads the frame itself.
+  // A linear copy only for display; the projection reads the frame itself (a reduction reads the
+  // copy, before run() scales it by the exposure in force: a recording's stored exposure, a
+  // camera's exposure time).
   const Frame& frame = s.frame;
+  const double scale = frame.radianceScale;
+  out.rawScale = float(scale) * opt_.photometry.exposure;
+  out.displayScale = frame.format == PixelFormat::Bgr8 ? out.rawScale : 0.0f;
   if (opt_.keepImages && displayTakesFrameAsIs(frame, opt_.photometry, opt_.layout)) {
     out.raw = std::make_shared<Frame>(frame);  // the display decodes it: no linear copy
     out.saturated = countSaturated(frame);
@@ -169,13 +205,6 @@ Sh9 CapturePipeline::project(Loop& s, ProcessedFrame& out) const {
   } catch (const Error& e) {
     throw Error(source_->describe() + ": frame " + std::to_string(out.index + 1) + ": " + e.what());
   }
-  // The exposure in force for this frame (a recording's stored exposure, a camera's exposure
-  // time) scaled the coefficients; it scales the display copy too.
-  const double scale = s.frame.radianceScale;
-  if (scale != 1.0 && s.image)
-    for (float& v : s.image->rgb) v *= float(scale);
-  out.rawScale = float(scale) * opt_.photometry.exposure;
-  out.displayScale = s.frame.format == PixelFormat::Bgr8 ? out.rawScale : 0.0f;
   out.unsmoothed = lit.radiance;
   out.lights = s.lightSmoother.update(lit.lights, out.timestamp);
   return s.smoother.update(lit.radiance, out.timestamp);
@@ -230,13 +259,22 @@ void CapturePipeline::run() {
       out.index = s.index++;
       out.sequence = s.frame.sequence;
       out.timestamp = s.lastTimestamp;
+      merge(s, out);
+      const auto tm = Clock::now();
       convertForDisplay(s, out);
       const auto t2 = Clock::now();
-      out.radiance = project(s, out);
+      if (!hold(s, out)) {
+        out.radiance = project(s, out);
+        if (opt_.holdBelow > 0 && out.confidence.value() >= opt_.holdBelow)
+          s.lastGood = Loop::Lit{out.radiance, out.unsmoothed, out.lights};
+      }
+      if (s.image && s.frame.radianceScale != 1.0)
+        for (float& v : s.image->rgb) v *= float(s.frame.radianceScale);
       const auto t3 = Clock::now();
       if (opt_.keepImages && !out.raw) out.image = std::move(s.image);  // one background a frame
       s.image.reset();
-      out.times = {msBetween(t0, t1), msBetween(t1, t2), msBetween(t2, t3)};
+      out.times = {msBetween(t0, t1), msBetween(tm, t2), msBetween(t2, t3),
+                   s.merger ? msBetween(t1, tm) : 0.0};
       out.captureTime = s.frame.captureTime >= 0 ? s.frame.captureTime : grabbed;
       out.coefficientsLatencyMs = 1000.0 * (monotonicSeconds() - out.captureTime);
       if (opt_.onCaptured) opt_.onCaptured(out);

@@ -171,6 +171,11 @@ void VideoRecorder::discard() {
   sidecar_.reset();  // its destructor removes the temporary
 }
 
+void VideoRecorder::setBracket(int frames, std::string responseJson) {
+  bracket_ = frames;
+  response_ = std::move(responseJson);
+}
+
 void VideoRecorder::finish() {
   if (failed_) {
     discard();
@@ -219,6 +224,10 @@ void VideoRecorder::finish() {
   j["frames"] = stamps_.size();
   j["timestamps"] = stamps_;
   j["exposures"] = exposures_;
+  if (bracket_ > 0) {
+    j["bracket"] = bracket_;
+    j["response"] = nlohmann::json::parse(response_).at("response");
+  }
   sidecar_->line(j.dump());
   sidecar_->commit();  // the sidecar first: a video in place always has its timing beside it
   video_->commit();
@@ -275,6 +284,13 @@ RecordingSidecar parseRecordingSidecar(std::string_view text, const std::string&
     // Recordings since the per-frame metadata keep every frame's exposure.
     if (j.contains("exposures"))
       for (const auto& e : j.at("exposures")) out.scales.push_back(scaleOf(e));
+    if (j.contains("bracket")) {
+      out.bracket = j.at("bracket").get<int>();
+      if (out.bracket < 1 || out.bracket > 5)
+        throw Error(name + ": bracket " + j.at("bracket").dump() + " is not 1 to 5 frames");
+      if (j.contains("response"))
+        out.response = nlohmann::json{{"response", j.at("response")}}.dump();
+    }
   } catch (const Error&) {
     throw;
   } catch (const std::exception& e) {

@@ -126,8 +126,12 @@ class VideoSource final : public FrameSource {
       scale_ = sc.scale;
       stamps_ = std::move(sc.stamps);
       scales_ = std::move(sc.scales);
+      bracket_ = sc.bracket;
+      response_ = std::move(sc.response);
     }
   }
+  int bracketFrames() const override { return bracket_; }
+  std::string bracketResponse() const override { return response_; }
   bool next(Frame& f) override {
     cv::Mat m;
     int badRun = 0;
@@ -203,6 +207,8 @@ class VideoSource final : public FrameSource {
   std::string endReason_;
   double scale_ = 1.0;
   std::vector<double> stamps_, scales_;
+  int bracket_ = 0;
+  std::string response_;
 };
 
 bool hasVideoExtension(const std::string& path) {

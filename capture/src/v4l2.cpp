@@ -16,6 +16,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "liveprobe/sh/error.h"
+#include "uvc_metadata.h"
 
 namespace lp {
 
@@ -132,6 +133,11 @@ void V4l2Source::start() {
     open();
     setFormat();
     allocateBuffers();
+    if (!settings_.metadataDevice.empty()) try {
+        metadata_ = std::make_unique<UvcMetadata>(settings_.metadataDevice, bus_);
+      } catch (const Error& e) {
+        throw Error(settings_.device + ": no per-frame exposure times: " + e.what());
+      }
     streamOn();
   } catch (...) {
     close();
@@ -156,6 +162,7 @@ void V4l2Source::open() {
                 " (not a V4L2 video device)");
   }
   card_ = reinterpret_cast<const char*>(cap.card);
+  bus_ = reinterpret_cast<const char*>(cap.bus_info);
   const std::uint32_t caps =
       (cap.capabilities & V4L2_CAP_DEVICE_CAPS) ? cap.device_caps : cap.capabilities;
   std::string missing;
@@ -345,6 +352,7 @@ void V4l2Source::streamOff() {
 }
 
 void V4l2Source::close() {
+  metadata_.reset();
   streamOff();
   if (state_ == State::Ready) releaseBuffers();
   fd_.reset();
@@ -417,8 +425,92 @@ bool V4l2Source::next(Frame& frame) {
     // and runs with different exposures.
     frame.radianceScale =
         frame.exposure100us && *frame.exposure100us > 0 ? 1.0 / (*frame.exposure100us * 1e-4) : 1.0;
+    // What the camera says this frame was taken with, where it says it: always wins.
+    if (!readFrameExposure(frame, sequence) && !bracket_.empty()) {
+      ++dropped_;  // a bracketed frame of unknown exposure cannot be merged
+      continue;
+    }
+    if (!bracket_.empty()) nextBracketExposure(frame);
     return true;
   }
+}
+
+bool V4l2Source::readFrameExposure(Frame& frame, std::uint32_t sequence) {
+  if (!metadata_) return false;
+  const auto t = metadata_->exposureOf(sequence, 100);
+  if (!t) return false;
+  frame.radianceScale = 1.0 / *t;
+  frame.exposure100us = std::int32_t(std::lround(*t * 1e4));
+  return true;
+}
+
+std::vector<std::int32_t> V4l2Source::bracket(const std::vector<double>& stops) {
+  require(State::Streaming, "bracket");
+  if (!metadata_)
+    throw Error(settings_.device + ": bracketing needs each frame's exposure time, from the " +
+                "camera's metadata node");
+  v4l2_queryctrl q{};
+  q.id = V4L2_CID_EXPOSURE_ABSOLUTE;
+  if (xioctl(VIDIOC_QUERYCTRL, &q) < 0 || (q.flags & V4L2_CTRL_FLAG_DISABLED))
+    throw Error(settings_.device + ": the camera has no exposure time control " +
+                "(V4L2_CID_EXPOSURE_ABSOLUTE): it cannot bracket");
+  if (!locked_ || !lockedExposure_)
+    throw Error(settings_.device + ": bracketing needs a locked exposure (lockExposure)");
+  bracket_.clear();
+  for (double stop : stops) {
+    const double want = *lockedExposure_ * std::exp2(stop);
+    bracket_.push_back(std::int32_t(std::clamp<double>(std::lround(want), q.minimum, q.maximum)));
+  }
+  bracketAt_ = 0, bracketFrames_ = 0;
+  reported_.clear();
+  v4l2_control c{V4L2_CID_EXPOSURE_ABSOLUTE, bracket_[0]};
+  if (xioctl(VIDIOC_S_CTRL, &c) < 0)
+    fail("VIDIOC_S_CTRL " + controlName(V4L2_CID_EXPOSURE_ABSOLUTE) + " = " +
+             std::to_string(bracket_[0]) + " (the camera refuses exposure changes)",
+         errno);
+  return bracket_;
+}
+
+std::int32_t V4l2Source::setExposure(std::int32_t exposure100us) {
+  require(State::Streaming, "setExposure");
+  v4l2_queryctrl q{};
+  q.id = V4L2_CID_EXPOSURE_ABSOLUTE;
+  if (xioctl(VIDIOC_QUERYCTRL, &q) < 0 || (q.flags & V4L2_CTRL_FLAG_DISABLED))
+    throw Error(settings_.device + ": the camera has no exposure time control " +
+                "(V4L2_CID_EXPOSURE_ABSOLUTE)");
+  const std::int32_t value = std::clamp(exposure100us, q.minimum, q.maximum);
+  v4l2_control c{V4L2_CID_EXPOSURE_ABSOLUTE, value};
+  if (xioctl(VIDIOC_S_CTRL, &c) < 0)
+    fail("VIDIOC_S_CTRL " + controlName(V4L2_CID_EXPOSURE_ABSOLUTE) + " = " +
+             std::to_string(value) + " (the camera refuses exposure changes)",
+         errno);
+  lockedExposure_ = value;  // frames without metadata carry what was asked
+  return value;
+}
+
+void V4l2Source::nextBracketExposure(const Frame& frame) {
+  // A camera that ignores the control reports one exposure, frame after frame.
+  const double t = 1.0 / frame.radianceScale;
+  if (std::none_of(reported_.begin(), reported_.end(),
+                   [&](double r) { return std::abs(r - t) <= 0.02 * r; }))
+    reported_.push_back(t);
+  if (++bracketFrames_ == 4 * bracket_.size() + 10 && reported_.size() < 2)
+    throw Error(settings_.device +
+                ": the camera ignores its exposure control: " + std::to_string(bracketFrames_) +
+                " frames all report " + std::to_string(std::lround(t * 1e4)) + " x 100 us");
+  bracketAt_ = (bracketAt_ + 1) % bracket_.size();
+  v4l2_control c{V4L2_CID_EXPOSURE_ABSOLUTE, bracket_[bracketAt_]};
+  if (xioctl(VIDIOC_S_CTRL, &c) < 0)
+    fail("VIDIOC_S_CTRL " + controlName(V4L2_CID_EXPOSURE_ABSOLUTE) + " = " +
+             std::to_string(bracket_[bracketAt_]),
+         errno);
+}
+
+std::string siblingMetadataNode(const std::string& videoNode) {
+  std::size_t digits = videoNode.size();
+  while (digits > 0 && std::isdigit(static_cast<unsigned char>(videoNode[digits - 1]))) --digits;
+  if (digits == videoNode.size()) return {};
+  return videoNode.substr(0, digits) + std::to_string(std::stoul(videoNode.substr(digits)) + 1);
 }
 
 std::optional<std::int32_t> V4l2Source::getControl(std::uint32_t id) {

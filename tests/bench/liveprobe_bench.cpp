@@ -17,6 +17,7 @@
 #endif
 
 #include "liveprobe/capture/frame.h"
+#include "liveprobe/capture/hdr_merge.h"
 #include "liveprobe/capture/image.h"
 #include "liveprobe/capture/photometry.h"
 #include "liveprobe/gl/context.h"
@@ -356,6 +357,36 @@ void pipelineBench(benchmark::State& state, int stage) {
   }
 }
 
+// An exposure bracket's merge: the synthetic sky (its sun about 11 stops over the sky) seen by an
+// 8-bit sRGB camera at -12, -6 and 0 EV, merged into radiance as live --bracket does each frame.
+// The same frame's projection is Lights/equirect/u8/1920x1080/threads:2/project.
+void mergeBench(benchmark::State& state, Size s, int threads) {
+  const auto& radiance = skyF32(s);
+  std::vector<lp::Frame> bracket;
+  for (const double stops : {-12.0, -6.0, 0.0}) {
+    lp::Frame f;
+    f.format = lp::PixelFormat::Bgr8;
+    f.width = s.w, f.height = s.h;
+    const double t = 0.1 * std::exp2(stops);  // 0 EV: the sky's median near mid-grey
+    f.radianceScale = 1.0 / t;
+    f.bgr8.resize(radiance.size());
+    for (std::size_t i = 0; i < radiance.size(); i += 3)
+      for (int c = 0; c < 3; ++c)
+        f.bgr8[i + 2 - std::size_t(c)] = std::uint8_t(std::lround(
+            255 * lp::linearToSrgb(std::min(1.0f, float(radiance[i + std::size_t(c)] * t)))));
+    bracket.push_back(std::move(f));
+  }
+  lp::BracketMerger merger({.frames = 3});
+  lp::Frame out;
+  lp::ThreadPool* workers = pool(threads);
+  std::size_t next = 0;
+  for (int i = 0; i < 3; ++i) merger.add(bracket[std::size_t(i)], out, workers);  // untimed: full
+  for (auto _ : state) {
+    benchmark::DoNotOptimize(merger.add(bracket[next], out, workers));
+    next = (next + 1) % bracket.size();
+  }
+}
+
 void registerAll() {
   // Angular maps are square: their sizes keep the equirect's pixel counts roughly.
   const std::vector<std::pair<lp::Layout, std::vector<Size>>> layouts = {
@@ -418,6 +449,13 @@ void registerAll() {
   benchmark::RegisterBenchmark("Render/bunny/1280x720/osmesa", renderBench)
       ->UseRealTime()
       ->Unit(benchmark::kMillisecond);
+  for (Size s : {Size{1920, 1080}, Size{3840, 1920}})
+    for (int threads : {1, 2})
+      benchmark::RegisterBenchmark(
+          ("Merge/bracket:3/u8/" + sizeName(s) + "/threads:" + std::to_string(threads)).c_str(),
+          [=](benchmark::State& st) { mergeBench(st, s, threads); })
+          ->UseRealTime()
+          ->Unit(benchmark::kMillisecond);
   const char* stages[] = {"grab", "convert", "project"};
   for (int i = 0; i < 3; ++i)
     benchmark::RegisterBenchmark(

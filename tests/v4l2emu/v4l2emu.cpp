@@ -11,8 +11,16 @@
 //   LPEMU_DEVICE   the path it answers (default /dev/video7)
 //   LPEMU_SOURCE   a folder of modes: subfolders FOURCC_WxH (MJPG_640x320, YUYV_320x160, ...)
 //                  holding the frames in name order (.jpg served verbatim for MJPG; other images
-//                  converted to the mode's format)
-//   LPEMU_META_DEVICE  a second path that answers as the camera's UVC metadata node
+//                  converted to the mode's format). Float frames (.exr, .hdr) are radiance: each
+//                  is rendered as an 8-bit sensor would see it, radiance x exposure time in force
+//                  x gain / 64 x LPEMU_SENSITIVITY, through the response, clipped at 255; auto
+//                  exposure then puts the frame's median luminance at mid-grey (0.18).
+//   LPEMU_RESPONSE srgb (default) or gamma=G: the sensor's response for float sources
+//   LPEMU_SENSITIVITY  float sources: sensor units per radiance x second (default 1)
+//   LPEMU_META_DEVICE  a second path that answers as the camera's UVC metadata node: it streams
+//                  V4L2_META_FMT_UVC (the standard payload header) or, once chosen with S_FMT,
+//                  V4L2_META_FMT_UVC_MSXU_1_5 (the whole header, with Microsoft's capture
+//                  statistics: the exposure time each frame was actually taken with)
 //   LPEMU_FPS      frame rate (default 30)
 //   LPEMU_FAULTS   comma list: busy_open, busy_reqbufs, grant=N, einval_fmt, stop_after=N,
 //                  eintr, unplug_after=N, exposure_walk (auto exposure changes every frame),
@@ -20,11 +28,18 @@
 //                  frame's timestamp is MS before its dequeue); faults that recur, for soak
 //                  tests: corrupt_every=N (every Nth frame carries V4L2_BUF_FLAG_ERROR),
 //                  garbage_every=N (every Nth frame is 1 byte of garbage), gap_every=N (the
-//                  sequence skips a number every N frames: a frame lost before the reader)
+//                  sequence skips a number every N frames: a frame lost before the reader);
+//                  exposure: control_delay=N (a new exposure takes effect N frames after S_CTRL;
+//                  G_CTRL reads the value written at once, as UVC's cache does),
+//                  exposure_pow2 (the sensor applies the nearest power of two of what was asked),
+//                  no_exposure (no V4L2_CID_EXPOSURE_ABSOLUTE), ignore_exposure (written values
+//                  are taken and read back but never reach the sensor); occlusion: occlude_from=N,
+//                  occlude_frames=K (default 10), occlude_white (white, not dark, frames)
 //   LPEMU_LOG      file to which each call is appended as one line (for assertions)
 // What it cannot prove about real drivers: README, "Testing without a camera".
 #include <dlfcn.h>
 #include <fcntl.h>
+#include <linux/uvcvideo.h>
 #include <linux/videodev2.h>
 #include <poll.h>
 #include <sys/eventfd.h>
@@ -34,10 +49,12 @@
 #include <algorithm>
 #include <cerrno>
 #include <chrono>
+#include <cmath>
 #include <cstdarg>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <deque>
 #include <filesystem>
 #include <fstream>
 #include <map>
@@ -50,6 +67,10 @@
 #include <vector>
 
 namespace fs = std::filesystem;
+
+#ifndef V4L2_META_FMT_UVC_MSXU_1_5
+#define V4L2_META_FMT_UVC_MSXU_1_5 v4l2_fourcc('U', 'V', 'C', 'M')
+#endif
 
 namespace {
 
@@ -76,10 +97,22 @@ struct Control {
   std::int32_t min, max, step, def, value;
 };
 
+// A metadata node's buffers (LPEMU_META_DEVICE), streamed beside the video's.
+struct MetaNode {
+  int fd = -1;
+  std::uint32_t format = V4L2_META_FMT_UVC;
+  std::vector<std::vector<std::uint8_t>> store;
+  std::vector<void*> maps;
+  std::vector<bool> queued, done;
+  std::vector<std::uint32_t> used, sequence;
+  bool streaming = false;
+  static constexpr std::uint32_t kBufferSize = 10240;  // UVC_METADATA_BUF_SIZE
+};
+
 struct Emu {
   std::mutex m;
   int fd = -1;
-  bool meta = false;  ///< the open node is the metadata node (LPEMU_META_DEVICE)
+  MetaNode metaNode;
   std::vector<Mode> modes;
   int mode = 0;
   double fps = 30;
@@ -87,7 +120,7 @@ struct Emu {
   std::vector<void*> maps;  // per buffer, the mapping handed out (nullptr if unmapped)
   std::vector<std::vector<std::uint8_t>> store;
   std::vector<bool> queued, done;
-  std::vector<std::uint32_t> bytesused;
+  std::vector<std::uint32_t> bytesused, seqOf;  // per buffer: bytes and sequence of its frame
   bool streaming = false, unplugged = false;
   std::uint32_t sequence = 0, served = 0;
   int frameIndex = 0;
@@ -104,9 +137,22 @@ struct Emu {
       {V4L2_CID_WHITE_BALANCE_TEMPERATURE, "White Balance Temperature", V4L2_CTRL_TYPE_INTEGER,
        2800, 6500, 10, 4600, 4600}};
   std::ofstream log;
+  // The exposure the sensor integrates with (100 us units), and writes still on their way to it.
+  int inForce = 156;
+  std::deque<std::pair<std::uint32_t, int>> pendingExposure;  // (first frame, value)
+  // Float sources: radiance per file, its median luminance, and the sensor's response.
+  std::map<std::string, cv::Mat> radiance;
+  std::map<std::string, double> medians;
+  float responseGamma = 0;  // 0: sRGB
+  double sensitivity = 1;
+  std::string lastFile;
 
   Emu() {
+    setenv("OPENCV_IO_ENABLE_OPENEXR", "1", 0);
     fps = std::atof(env("LPEMU_FPS", "30").c_str());
+    sensitivity = std::atof(env("LPEMU_SENSITIVITY", "1").c_str());
+    if (env("LPEMU_RESPONSE").rfind("gamma=", 0) == 0)
+      responseGamma = float(std::atof(env("LPEMU_RESPONSE").c_str() + 6));
     std::stringstream fl(env("LPEMU_FAULTS"));
     for (std::string f; std::getline(fl, f, ',');) {
       const auto eq = f.find('=');
@@ -129,6 +175,11 @@ struct Emu {
       return a.fourcc != b.fourcc ? a.fourcc < b.fourcc : a.w * a.h < b.w * b.h;
     });
     if (!env("LPEMU_LOG").empty()) log.open(env("LPEMU_LOG"), std::ios::app);
+    if (fault("no_exposure"))
+      controls.erase(
+          std::remove_if(controls.begin(), controls.end(),
+                         [](const Control& c) { return c.id == V4L2_CID_EXPOSURE_ABSOLUTE; }),
+          controls.end());
   }
   bool fault(const char* k) const { return faults.count(k) > 0; }
   void say(const std::string& s) {
@@ -149,12 +200,68 @@ struct Emu {
   // The next frame of the current mode, in its pixel format. Each is made once and kept, so a
   // long session opens no files (a soak test counts the process's descriptors).
   std::map<std::pair<int, std::string>, std::vector<std::uint8_t>> madeFrames;
+  static bool isRadiance(const std::string& file) {
+    return file.ends_with(".exr") || file.ends_with(".hdr");
+  }
+  // The next frame of the current mode, in its pixel format: a float source rendered with the
+  // exposure in force; occlude_from: a hand over the lens.
+  std::vector<std::uint8_t> rendered;
   const std::vector<std::uint8_t>& frameToServe() {
     const Mode& md = modes[std::size_t(mode)];
     const std::string& file = md.files[std::size_t(frameIndex++) % md.files.size()];
+    lastFile = file;
+    const long from = fault("occlude_from") ? faults["occlude_from"] : -1;
+    const long count = fault("occlude_frames") ? faults["occlude_frames"] : 10;
+    if (from >= 0 && long(served) >= from && long(served) < from + count) {
+      cv::Mat flat(md.h, md.w, CV_8UC3, cv::Scalar::all(fault("occlude_white") ? 255 : 2));
+      return rendered = encode(md, flat);
+    }
+    if (isRadiance(file)) return rendered = encode(md, sensor(md, file));
     auto& made = madeFrames[{mode, file}];
     if (made.empty()) made = makeFrame(md, file);
     return made;
+  }
+  const cv::Mat& radianceOf(const Mode& md, const std::string& file) {
+    cv::Mat& r = radiance[file];
+    if (r.empty()) {
+      r = cv::imread(file, cv::IMREAD_UNCHANGED);
+      if (r.channels() == 4) cv::cvtColor(r, r, cv::COLOR_BGRA2BGR);
+      r.convertTo(r, CV_32FC3);
+      if (r.cols != md.w || r.rows != md.h) cv::resize(r, r, {md.w, md.h}, 0, 0, cv::INTER_AREA);
+      std::vector<float> lum;
+      for (int y = 0; y < r.rows; ++y)
+        for (int x = 0; x < r.cols; ++x) {
+          const auto& p = r.at<cv::Vec3f>(y, x);
+          lum.push_back(0.2126f * p[2] + 0.7152f * p[1] + 0.0722f * p[0]);
+        }
+      std::nth_element(lum.begin(), lum.begin() + long(lum.size() / 2), lum.end());
+      medians[file] = lum[lum.size() / 2];
+    }
+    return r;
+  }
+  double gainFactor() { return control(V4L2_CID_GAIN)->value / 64.0; }
+  // What the sensor reads: radiance x exposure x gain x sensitivity, through the response.
+  cv::Mat sensor(const Mode& md, const std::string& file) {
+    const cv::Mat& r = radianceOf(md, file);
+    const float k = float(inForce * 1e-4 * gainFactor() * sensitivity);
+    cv::Mat out(r.rows, r.cols, CV_8UC3);
+    for (int y = 0; y < r.rows; ++y)
+      for (int x = 0; x < r.cols; ++x)
+        for (int c = 0; c < 3; ++c) {
+          const float v = std::clamp(r.at<cv::Vec3f>(y, x)[c] * k, 0.0f, 1.0f);
+          const float e = responseGamma > 0 ? std::pow(v, 1.0f / responseGamma)
+                          : v <= 0.0031308f ? 12.92f * v
+                                            : 1.055f * std::pow(v, 1.0f / 2.4f) - 0.055f;
+          out.at<cv::Vec3b>(y, x)[c] = std::uint8_t(std::lround(255.0f * e));
+        }
+    return out;
+  }
+  // Auto exposure on a float source: the median luminance at mid-grey.
+  int autoExposure(const std::string& file) {
+    const double median = medians.count(file) ? medians[file] : 0.0;
+    if (median <= 0) return 333;
+    const double t = 0.18 / (median * gainFactor() * sensitivity);
+    return int(std::clamp(std::lround(t / 1e-4), 1L, 10000L));
   }
   std::vector<std::uint8_t> makeFrame(const Mode& md, const std::string& file) {
     if (md.fourcc == V4L2_PIX_FMT_MJPEG && (file.ends_with(".jpg") || file.ends_with(".jpeg"))) {
@@ -164,6 +271,9 @@ struct Emu {
     cv::Mat bgr = cv::imread(file, cv::IMREAD_COLOR);
     if (bgr.cols != md.w || bgr.rows != md.h)
       cv::resize(bgr, bgr, {md.w, md.h}, 0, 0, cv::INTER_AREA);
+    return encode(md, bgr);
+  }
+  std::vector<std::uint8_t> encode(const Mode& md, const cv::Mat& bgr) {
     std::vector<std::uint8_t> out;
     if (md.fourcc == V4L2_PIX_FMT_MJPEG) {
       cv::imencode(".jpg", bgr, out, {cv::IMWRITE_JPEG_QUALITY, 95});
@@ -202,8 +312,22 @@ struct Emu {
     errno = e;
     return -1;
   }
+  // VIDIOC_QUERYCAP of one of the camera's nodes (both on one bus, as a UVC camera's are).
+  static int capability(v4l2_capability* c, std::uint32_t kind) {
+    *c = {};
+    std::strcpy(reinterpret_cast<char*>(c->driver), "lpemu");
+    std::strcpy(reinterpret_cast<char*>(c->card), "liveprobe emulated camera");
+    std::strcpy(reinterpret_cast<char*>(c->bus_info), "platform:lpemu");
+    c->version = 0x060100;
+    c->device_caps = kind | V4L2_CAP_STREAMING;
+    c->capabilities =
+        V4L2_CAP_VIDEO_CAPTURE | V4L2_CAP_META_CAPTURE | V4L2_CAP_STREAMING | V4L2_CAP_DEVICE_CAPS;
+    return 0;
+  }
 
   int handle(unsigned long req, void* arg);
+  int handleMeta(unsigned long req, void* arg);
+  void fillMeta(std::uint32_t seq);
 };
 
 // Never destroyed: munmap, close and poll still arrive after static destructors have run (from
@@ -216,21 +340,11 @@ Emu& emu() {
 int Emu::handle(unsigned long req, void* arg) {
   if (unplugged) return fail(ENODEV);
   switch (req) {
-    case VIDIOC_QUERYCAP: {
-      auto* c = static_cast<v4l2_capability*>(arg);
-      *c = {};
-      std::strcpy(reinterpret_cast<char*>(c->driver), "lpemu");
-      std::strcpy(reinterpret_cast<char*>(c->card), "liveprobe emulated camera");
-      std::strcpy(reinterpret_cast<char*>(c->bus_info), "platform:lpemu");
-      c->version = 0x060100;
+    case VIDIOC_QUERYCAP:
       // A UVC camera's second node carries metadata, not video.
-      c->device_caps = (meta ? V4L2_CAP_META_CAPTURE : V4L2_CAP_VIDEO_CAPTURE) | V4L2_CAP_STREAMING;
-      c->capabilities = c->device_caps | V4L2_CAP_DEVICE_CAPS;
-      return 0;
-    }
+      return capability(static_cast<v4l2_capability*>(arg), V4L2_CAP_VIDEO_CAPTURE);
     case VIDIOC_ENUM_FMT: {
       auto* d = static_cast<v4l2_fmtdesc*>(arg);
-      if (meta && d->type == V4L2_BUF_TYPE_VIDEO_CAPTURE) return fail(EINVAL);
       std::vector<std::uint32_t> fcc;
       for (const auto& md : modes)
         if (std::find(fcc.begin(), fcc.end(), md.fourcc) == fcc.end()) fcc.push_back(md.fourcc);
@@ -325,7 +439,7 @@ int Emu::handle(unsigned long req, void* arg) {
       if (fault("grant")) n = std::min<std::uint32_t>(n, std::uint32_t(faults["grant"]));
       r->count = n;
       store.assign(n, std::vector<std::uint8_t>(frameBytes(modes[std::size_t(mode)])));
-      queued.assign(n, false), done.assign(n, false), bytesused.assign(n, 0);
+      queued.assign(n, false), done.assign(n, false), bytesused.assign(n, 0), seqOf.assign(n, 0);
       maps.assign(n, nullptr);
       return 0;
     }
@@ -343,10 +457,7 @@ int Emu::handle(unsigned long req, void* arg) {
         done[i] = false;
         b->index = std::uint32_t(i);
         b->bytesused = bytesused[i];
-        // gap_every: the driver lost a frame before this one (its sequence number is skipped).
-        if (fault("gap_every") && (sequence + 1) % std::uint32_t(faults["gap_every"]) == 0)
-          ++sequence;
-        b->sequence = sequence++;
+        b->sequence = seqOf[i];
         // CLOCK_MONOTONIC, as the flag says (the kernel's contract for UVC). latency=MS: the
         // frame was exposed MS before it is dequeued (a slow sensor or USB transfer).
         timespec now{};
@@ -427,6 +538,13 @@ int Emu::handle(unsigned long req, void* arg) {
       if (blocked) return fail(EACCES);
       if (refused) return fail(EBUSY);
       c->value = v->value;
+      if (c->id == V4L2_CID_EXPOSURE_ABSOLUTE && !fault("ignore_exposure")) {
+        // The sensor takes it some frames later, and exposure_pow2 rounds it to a power of two.
+        int applied = v->value;
+        if (fault("exposure_pow2"))
+          applied = 1 << int(std::lround(std::log2(std::max(1, applied))));
+        pendingExposure.emplace_back(served + std::uint32_t(faults["control_delay"]), applied);
+      }
       return 0;
     }
     default:
@@ -434,12 +552,136 @@ int Emu::handle(unsigned long req, void* arg) {
   }
 }
 
+// The metadata node (LPEMU_META_DEVICE): the ioctls of a V4L2 metadata-capture node.
+int Emu::handleMeta(unsigned long req, void* arg) {
+  if (unplugged) return fail(ENODEV);
+  MetaNode& n = metaNode;
+  const auto type = V4L2_BUF_TYPE_META_CAPTURE;
+  switch (req) {
+    case VIDIOC_QUERYCAP:
+      return capability(static_cast<v4l2_capability*>(arg), V4L2_CAP_META_CAPTURE);
+    case VIDIOC_ENUM_FMT: {
+      auto* d = static_cast<v4l2_fmtdesc*>(arg);
+      const std::uint32_t offered[] = {V4L2_META_FMT_UVC, V4L2_META_FMT_UVC_MSXU_1_5};
+      if (d->type != type || d->index >= 2) return fail(EINVAL);
+      d->pixelformat = offered[d->index];
+      d->flags = 0;
+      std::snprintf(reinterpret_cast<char*>(d->description), sizeof d->description, "%.4s",
+                    reinterpret_cast<char*>(&d->pixelformat));
+      return 0;
+    }
+    case VIDIOC_G_FMT:
+    case VIDIOC_S_FMT:
+    case VIDIOC_TRY_FMT: {
+      auto* f = static_cast<v4l2_format*>(arg);
+      if (f->type != type) return fail(EINVAL);
+      if (req == VIDIOC_S_FMT && (n.streaming || !n.store.empty())) return fail(EBUSY);
+      std::uint32_t want = req == VIDIOC_G_FMT ? n.format : f->fmt.meta.dataformat;
+      if (want != V4L2_META_FMT_UVC && want != V4L2_META_FMT_UVC_MSXU_1_5) want = V4L2_META_FMT_UVC;
+      if (req == VIDIOC_S_FMT) n.format = want;
+      f->fmt.meta.dataformat = want;
+      f->fmt.meta.buffersize = MetaNode::kBufferSize;
+      return 0;
+    }
+    case VIDIOC_REQBUFS: {
+      auto* r = static_cast<v4l2_requestbuffers*>(arg);
+      if (r->memory != V4L2_MEMORY_MMAP || r->type != type) return fail(EINVAL);
+      if (n.streaming || std::any_of(n.maps.begin(), n.maps.end(), [](void* p) { return p; }))
+        return fail(EBUSY);
+      const std::uint32_t count = std::min<std::uint32_t>(r->count, 8);
+      r->count = count;
+      n.store.assign(count, std::vector<std::uint8_t>(MetaNode::kBufferSize));
+      n.maps.assign(count, nullptr), n.queued.assign(count, false), n.done.assign(count, false);
+      n.used.assign(count, 0), n.sequence.assign(count, 0);
+      return 0;
+    }
+    case VIDIOC_QUERYBUF:
+    case VIDIOC_QBUF:
+    case VIDIOC_DQBUF: {
+      auto* b = static_cast<v4l2_buffer*>(arg);
+      if (b->type != type || b->memory != V4L2_MEMORY_MMAP) return fail(EINVAL);
+      if (req == VIDIOC_DQBUF) {
+        std::size_t i = 0;
+        while (i < n.done.size() && !n.done[i]) ++i;
+        if (i == n.done.size()) return fail(EAGAIN);
+        n.done[i] = false;
+        b->index = std::uint32_t(i);
+        b->bytesused = n.used[i];
+        b->sequence = n.sequence[i];
+        b->flags = V4L2_BUF_FLAG_MAPPED | V4L2_BUF_FLAG_TIMESTAMP_MONOTONIC;
+        b->length = MetaNode::kBufferSize;
+        return 0;
+      }
+      if (b->index >= n.store.size()) return fail(EINVAL);
+      b->length = MetaNode::kBufferSize;
+      b->m.offset = b->index * 0x100000u;
+      if (req == VIDIOC_QBUF) {
+        if (n.queued[b->index]) return fail(EINVAL);
+        n.queued[b->index] = true;
+      }
+      b->flags = V4L2_BUF_FLAG_MAPPED | (n.queued[b->index] ? V4L2_BUF_FLAG_QUEUED : 0);
+      return 0;
+    }
+    case VIDIOC_STREAMON:
+      if (n.store.empty()) return fail(EINVAL);
+      n.streaming = true;
+      say("meta STREAMON");
+      return 0;
+    case VIDIOC_STREAMOFF:
+      n.streaming = false;
+      std::fill(n.queued.begin(), n.queued.end(), false);
+      std::fill(n.done.begin(), n.done.end(), false);
+      return 0;
+    default:
+      return fail(ENOTTY);
+  }
+}
+
+// One uvc_meta_buf block for the frame with sequence `seq`: the payload header with PTS and SCR,
+// then (V4L2_META_FMT_UVC_MSXU_1_5 only) Microsoft's capture statistics item with the exposure
+// time in force, in 100 ns units (Microsoft's UVC 1.5 extensions, MetadataId_CaptureStats).
+void Emu::fillMeta(std::uint32_t seq) {
+  MetaNode& n = metaNode;
+  if (!n.streaming) return;
+  std::size_t i = 0;
+  while (i < n.queued.size() && !n.queued[i]) ++i;
+  if (i == n.queued.size()) return;  // the reader fell behind: this frame's block is lost
+  std::vector<std::uint8_t> block(sizeof(uvc_meta_buf));
+  timespec now{};
+  clock_gettime(CLOCK_MONOTONIC, &now);
+  uvc_meta_buf head{};
+  head.ns = std::uint64_t(now.tv_sec) * 1000000000ULL + std::uint64_t(now.tv_nsec);
+  head.sof = std::uint16_t(seq & 0x7ff);
+  head.flags = 0x80 | 0x08 | 0x04 | 0x02;    // end of header, SCR, PTS, end of frame
+  std::vector<std::uint8_t> rest(4 + 6, 0);  // PTS, SCR
+  if (n.format == V4L2_META_FMT_UVC_MSXU_1_5) {
+    std::uint8_t stats[80] = {};
+    const std::uint32_t id = 3, size = sizeof stats, flags = 1;  // EXPOSURETIME valid
+    const std::uint64_t exposure100ns = std::uint64_t(inForce) * 1000;
+    std::memcpy(stats, &id, 4), std::memcpy(stats + 4, &size, 4);
+    std::memcpy(stats + 8, &flags, 4), std::memcpy(stats + 16, &exposure100ns, 8);
+    rest.insert(rest.end(), stats, stats + sizeof stats);
+  }
+  head.length = std::uint8_t(2 + rest.size());
+  std::memcpy(block.data(), &head, sizeof head);
+  block.insert(block.end(), rest.begin(), rest.end());
+  auto* dst = static_cast<std::uint8_t*>(n.maps[i]);
+  if (dst) std::memcpy(dst, block.data(), block.size());
+  n.used[i] = std::uint32_t(block.size());
+  n.sequence[i] = seq;
+  n.queued[i] = false;
+  n.done[i] = true;
+}
+
 // Auto modes "converge" while frames flow: the values they settle on.
 void settle(Emu& e) {
   // exposure_walk: auto exposure keeps adjusting, frame after frame (200..440 x 100 us).
-  if (e.control(V4L2_CID_EXPOSURE_AUTO)->value != V4L2_EXPOSURE_MANUAL)
-    e.control(V4L2_CID_EXPOSURE_ABSOLUTE)->value =
-        e.fault("exposure_walk") ? 200 + 40 * int(e.served % 7) : 333;
+  if (e.control(V4L2_CID_EXPOSURE_AUTO)->value != V4L2_EXPOSURE_MANUAL) {
+    e.inForce = e.fault("exposure_walk")      ? 200 + 40 * int(e.served % 7)
+                : Emu::isRadiance(e.lastFile) ? e.autoExposure(e.lastFile)
+                                              : 333;
+    if (Control* c = e.control(V4L2_CID_EXPOSURE_ABSOLUTE)) c->value = e.inForce;
+  }
   if (e.control(V4L2_CID_AUTOGAIN)->value) e.control(V4L2_CID_GAIN)->value = 96;
   if (e.control(V4L2_CID_AUTO_WHITE_BALANCE)->value)
     e.control(V4L2_CID_WHITE_BALANCE_TEMPERATURE)->value = 5200;
@@ -450,18 +692,18 @@ int emuOpen(const char* path) {
   std::lock_guard lock(e.m);
   e.say(std::string("open ") + path);
   if (e.fault("busy_open")) return e.fail(EBUSY);
-  if (e.fd >= 0) return e.fail(EBUSY);
   if (e.modes.empty()) return e.fail(ENODEV);
-  e.fd = eventfd(0, EFD_CLOEXEC | EFD_NONBLOCK);
-  e.meta = env("LPEMU_META_DEVICE") == path;
-  return e.fd;
+  int& fd = env("LPEMU_META_DEVICE") == path ? e.metaNode.fd : e.fd;
+  if (fd >= 0) return e.fail(EBUSY);
+  fd = eventfd(0, EFD_CLOEXEC | EFD_NONBLOCK);
+  return fd;
 }
 
 bool isDevice(const char* path) {
   return path && (env("LPEMU_DEVICE", "/dev/video7") == path ||
                   (!env("LPEMU_META_DEVICE").empty() && env("LPEMU_META_DEVICE") == path));
 }
-bool isFake(int fd) { return fd >= 0 && fd == emu().fd; }
+bool isFake(int fd) { return fd >= 0 && (fd == emu().fd || fd == emu().metaNode.fd); }
 
 }  // namespace
 
@@ -501,7 +743,11 @@ int __open64_2(const char* path, int flags) {
 }
 
 int close(int fd) {
-  if (isFake(fd)) {
+  if (isFake(fd) && fd == emu().metaNode.fd) {
+    Emu& e = emu();
+    std::lock_guard lock(e.m);
+    e.metaNode = MetaNode{};
+  } else if (isFake(fd)) {
     Emu& e = emu();
     std::lock_guard lock(e.m);
     std::size_t mapped = 0;
@@ -522,7 +768,7 @@ int ioctl(int fd, unsigned long req, ...) {
   if (!isFake(fd)) return real<int (*)(int, unsigned long, void*)>("ioctl")(fd, req, arg);
   Emu& e = emu();
   std::lock_guard lock(e.m);
-  return e.handle(req, arg);
+  return fd == e.metaNode.fd ? e.handleMeta(req, arg) : e.handle(req, arg);
 }
 
 void* mmap(void* addr, size_t len, int prot, int flags, int fd, off_t off) {
@@ -531,14 +777,16 @@ void* mmap(void* addr, size_t len, int prot, int flags, int fd, off_t off) {
                                                                         off);
   Emu& e = emu();
   std::lock_guard lock(e.m);
+  const bool meta = fd == e.metaNode.fd;
+  auto& store = meta ? e.metaNode.store : e.store;
   const std::size_t i = std::size_t(off) / 0x100000u;
-  if (i >= e.store.size() || len > e.store[i].size()) {
+  if (i >= store.size() || len > store[i].size()) {
     errno = EINVAL;
     return MAP_FAILED;
   }
   void* p = real<void* (*)(void*, size_t, int, int, int, off_t)>("mmap")(
       nullptr, len, PROT_READ | PROT_WRITE, MAP_SHARED | MAP_ANONYMOUS, -1, 0);
-  e.maps[i] = p;
+  (meta ? e.metaNode.maps : e.maps)[i] = p;
   e.say("mmap " + std::to_string(i));
   return p;
 }
@@ -555,6 +803,8 @@ int munmap(void* addr, size_t len) {
         e.maps[i] = nullptr;
         e.say("munmap " + std::to_string(i));
       }
+    for (void*& p : e.metaNode.maps)
+      if (p == addr) p = nullptr;
   }
   return real<int (*)(void*, size_t)>("munmap")(addr, len);
 }
@@ -565,6 +815,12 @@ int poll(struct pollfd* fds, nfds_t n, int timeout) {
   Emu& e = emu();
   std::unique_lock lock(e.m);
   fds[0].revents = 0;
+  if (fds[0].fd == e.metaNode.fd) {  // the metadata node: ready when a block waits
+    const bool ready =
+        std::find(e.metaNode.done.begin(), e.metaNode.done.end(), true) != e.metaNode.done.end();
+    if (ready) fds[0].revents = POLLIN | POLLRDNORM;
+    return ready ? 1 : 0;
+  }
   if (e.unplugged) {
     fds[0].revents = POLLERR;
     return 1;
@@ -593,6 +849,16 @@ int poll(struct pollfd* fds, nfds_t n, int timeout) {
   // Fill the first queued buffer with the next frame.
   for (std::size_t i = 0; i < e.queued.size(); ++i)
     if (e.queued[i]) {
+      // The exposure the sensor has by now; the frame's sequence number (gap_every: the driver
+      // lost a frame before this one, its number is skipped).
+      while (!e.pendingExposure.empty() && e.pendingExposure.front().first <= e.served) {
+        e.inForce = e.pendingExposure.front().second;
+        e.pendingExposure.pop_front();
+      }
+      if (e.fault("gap_every") && (e.sequence + 1) % std::uint32_t(e.faults["gap_every"]) == 0)
+        ++e.sequence;
+      e.seqOf[i] = e.sequence++;
+      e.fillMeta(e.seqOf[i]);
       const auto& frame = e.frameToServe();
       auto* dst = static_cast<std::uint8_t*>(e.maps[i]);
       if (dst) std::memcpy(dst, frame.data(), std::min(frame.size(), e.store[i].size()));

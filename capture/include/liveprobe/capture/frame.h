@@ -64,6 +64,12 @@ class FrameSource {
   /// Frames from the first to the end, where the source knows it (a file: a video's own count,
   /// a sequence's files); -1 for an endless source (synthetic, a camera) or an unknown length.
   virtual std::int64_t frameCount() const { return -1; }
+  /// An exposure-bracketed source (a bracketing camera, a recording of one): the frames in one
+  /// bracket, each with its own exposure, to be merged (liveprobe/capture/hdr_merge.h); 0: none.
+  virtual int bracketFrames() const { return 0; }
+  /// The camera response the bracket was recorded with (CameraResponse::json()); empty: none
+  /// recorded.
+  virtual std::string bracketResponse() const { return {}; }
 };
 
 struct SourceOptions {

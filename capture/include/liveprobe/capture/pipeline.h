@@ -16,6 +16,7 @@
 
 #include "liveprobe/capture/frame.h"
 #include "liveprobe/capture/frame_processor.h"
+#include "liveprobe/capture/hdr_merge.h"
 #include "liveprobe/capture/image.h"
 #include "liveprobe/capture/photometry.h"
 #include "liveprobe/sh/executor.h"
@@ -30,6 +31,7 @@ namespace lp {
 /// (its lookup table fused in), so `convertMs` is only the linear copy kept for display.
 struct StageTimes {
   double grabMs = 0, convertMs = 0, projectMs = 0;
+  double mergeMs = 0;  ///< an exposure bracket's merge (0 without one)
 };
 
 struct ProcessedFrame {
@@ -51,6 +53,10 @@ struct ProcessedFrame {
   float displayScale = 0.0f;
   StageTimes times;
   std::size_t saturated = 0;
+  /// How far this frame's lighting can be trusted (clipped power, the bracket's agreement).
+  FrameConfidence confidence;
+  /// The confidence was below PipelineOptions::holdBelow: the lighting is the last good frame's.
+  bool held = false;
   /// Where glass-to-light latency starts, CLOCK_MONOTONIC seconds: the driver's capture time
   /// for a camera, the moment the frame was grabbed for a file.
   double captureTime = 0;
@@ -76,6 +82,11 @@ struct PipelineOptions {
   int reduce = 1;          ///< equirect: project an f x f area average (reduceEquirect)
   /// Light extraction (--sun, --lights K); maxLights = 0 (the default) leaves it off.
   LightOptions lights{.maxLights = 0};
+  /// Exposure bracketing: each frame is merged with the ones before it into radiance
+  /// (liveprobe/capture/hdr_merge.h) before anything else sees it (onFrame sees each as it came).
+  std::optional<MergeOptions> bracket;
+  /// A frame whose confidence is below this keeps the last good frame's lighting (0: off).
+  double holdBelow = 0;
   /// Called on the capture thread for every processed frame, before the handoff.
   std::function<void(const ProcessedFrame&)> onCaptured;
   /// Called on the capture thread with every raw frame as the source gave it (for recording).
@@ -98,6 +109,7 @@ struct PipelineStats {
   std::size_t dropped = 0;        ///< frames replaced in the slot before anyone took them
   std::size_t skipped = 0;        ///< frames the source could not decode
   std::size_t gapsShortened = 0;  ///< timestamp gaps over PipelineOptions::maxGapSeconds
+  std::size_t held = 0;           ///< frames that kept the last good lighting (holdBelow)
   std::string endReason;          ///< why the source ended early, if it did
   std::string error;              ///< the fatal error that stopped capture, if any
 };
@@ -164,6 +176,8 @@ class CapturePipeline {
   void run();
   bool waitForTurn(Loop& s);  ///< the pause / step gate; false when stopping
   bool grab(Loop& s);         ///< the next frame (looping if asked); false at the end
+  void merge(Loop& s, ProcessedFrame& out) const;  ///< a bracket into radiance; the confidence
+  bool hold(Loop& s, ProcessedFrame& out);         ///< below holdBelow: the last good lighting
   void convertForDisplay(Loop& s, ProcessedFrame& out) const;
   Sh9 project(Loop& s, ProcessedFrame& out) const;  ///< the frame through its FrameProcessor
   void pace(Loop& s, double timestamp);             ///< --realtime: waits for the frame's time

@@ -36,6 +36,9 @@ class VideoRecorder {
 
   /// Appends a frame (its timestamp goes to the sidecar). Throws lp::Error on a write failure.
   void write(const Frame& frame);
+  /// The frames come in exposure brackets of `frames`, from a camera with this response
+  /// (CameraResponse::json()): the sidecar says so, and a replay merges them as live did.
+  void setBracket(int frames, std::string responseJson);
   /// Closes the video, writes the sidecar, renames both into place. Idempotent. After a refused
   /// write it discards instead and throws lp::Error.
   void finish();
@@ -55,6 +58,8 @@ class VideoRecorder {
   double fps_, exposure_ = 0;                ///< float frames: the one exposure chosen on the first
   std::vector<double> stamps_, exposures_;   ///< per frame
   int width_ = 0, height_ = 0;
+  int bracket_ = 0;
+  std::string response_;
   bool finished_ = false, failed_ = false;  ///< failed: a write was refused; never finalised
 };
 
@@ -62,6 +67,8 @@ class VideoRecorder {
 struct RecordingSidecar {
   double scale = 1.0;                  ///< radiance scale (1 / exposure) of every frame
   std::vector<double> stamps, scales;  ///< per frame; scales only in recordings that keep them
+  int bracket = 0;                     ///< frames per exposure bracket (0: not bracketed)
+  std::string response;                ///< the bracket's camera response (CameraResponse::json())
 };
 
 /// Parses a sidecar's text (the whole of it: trailing text is an error). Exposures must be

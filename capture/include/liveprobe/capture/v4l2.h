@@ -74,7 +74,20 @@ struct CameraSettings {
   int buffers = 4;                           ///< asked for; at least 3 must be granted
   int timeoutMs = 2000;                      ///< no frame for this long: the camera stopped sending
   int mjpegReduce = 1;  ///< decode MJPEG at 1/2, 1/4 or 1/8 scale (libjpeg's DCT scaling)
+  /// The camera's UVC metadata node, streamed beside the video for each frame's exposure time
+  /// (empty: none). Frames then carry the exposure the camera reports, not the one asked for.
+  std::string metadataDevice;
 };
+
+/// The exposure time, in seconds, in one buffer of a UVC metadata node
+/// (V4L2_META_FMT_UVC_MSXU_1_5: uvc_meta_buf blocks whose payload headers hold Microsoft's
+/// capture statistics); nullopt when no block carries one. Torn blocks end the parse.
+std::optional<double> parseUvcExposure(const std::uint8_t* data, std::size_t bytes);
+
+/// The metadata node uvcvideo creates beside a video node: /dev/videoN -> /dev/video(N+1).
+std::string siblingMetadataNode(const std::string& videoNode);
+
+class UvcMetadata;
 
 struct CameraControl {
   std::uint32_t id = 0;
@@ -150,11 +163,28 @@ class V4l2Source final : public FrameSource {
   /// balance), in that order: a driver ignores manual values while its auto mode is on.
   LockedExposure lockExposure(double seconds);
 
+  /// Exposure bracketing: from the next frame on, cycles V4L2_CID_EXPOSURE_ABSOLUTE through the
+  /// locked exposure times 2^stop (one frame each, clamped to the control's range), and delivers
+  /// only frames whose exposure the metadata node reported. Needs lockExposure() and
+  /// CameraSettings::metadataDevice. Returns the exposures asked for, in 100 us. Throws lp::Error
+  /// (one line) when the camera has no exposure control or refuses it; next() throws when every
+  /// frame reports the same exposure (the camera ignores the control).
+  std::vector<std::int32_t> bracket(const std::vector<double>& stops);
+
+  /// After lockExposure(): asks for an exposure time (100 us), clamped to the control's range;
+  /// returns what was asked. The camera may apply it some frames later, or round it: frames say
+  /// what they were taken with where the metadata node reports it. Throws lp::Error when the
+  /// camera has no exposure control or refuses the value.
+  std::int32_t setExposure(std::int32_t exposure100us);
+  /// Whether frames carry the exposure the camera reports (a metadata node is streaming).
+  bool reportsExposure() const { return metadata_ != nullptr; }
+
   bool next(Frame& frame) override;
   bool rewind() override { return false; }
   std::string describe() const override;
   double fps() const override { return fps_; }
   std::size_t skippedFrames() const override { return dropped_; }
+  int bracketFrames() const override { return int(bracket_.size()); }
 
   /// What the driver actually set.
   std::uint32_t fourcc() const { return fourcc_; }
@@ -173,6 +203,10 @@ class V4l2Source final : public FrameSource {
   std::uint32_t chooseFourcc();
   std::pair<int, int> largestSize(std::uint32_t fourcc);
   void setRate();
+  /// The exposure this frame was taken with, from the metadata node; false: unreported.
+  bool readFrameExposure(Frame& frame, std::uint32_t sequence);
+  /// Bracketing: asks for the next exposure of the cycle; checks that the camera follows.
+  void nextBracketExposure(const Frame& frame);
   std::optional<std::int32_t> getControl(std::uint32_t id);
   /// Writes a control and reads it back. Returns false when the camera has no such control
   /// (VIDIOC_QUERYCTRL: EINVAL); a refused write, or a value that does not read back, is an
@@ -195,7 +229,11 @@ class V4l2Source final : public FrameSource {
   /// After lockExposure() the exposure and gain no longer change: no per-frame control reads.
   std::optional<std::int32_t> lockedExposure_, lockedGain_;
   bool locked_ = false;
-  std::string card_;
+  std::string card_, bus_;
+  std::unique_ptr<UvcMetadata> metadata_;
+  std::vector<std::int32_t> bracket_;  ///< the cycle, in 100 us (empty: not bracketing)
+  std::size_t bracketAt_ = 0, bracketFrames_ = 0;
+  std::vector<double> reported_;  ///< distinct exposures seen while bracketing (seconds)
 };
 
 }  // namespace lp

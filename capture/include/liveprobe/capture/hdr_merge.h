@@ -1,0 +1,134 @@
+#pragma once
+// High dynamic range from an 8-bit camera: the last N frames, each taken with its own exposure
+// time, merged into one radiance frame (Debevec and Malik, SIGGRAPH 1997). Per pixel, a weighted
+// average of response^-1(code) / exposure over the frames where the pixel is neither clipped nor
+// in the noise floor, weighted by the hat (mid-range codes count most) times the exposure time (a
+// longer exposure gathers more light for the same code noise); a pixel clipped in every frame
+// keeps the shortest exposure's value, a lower bound, and is counted as clipped.
+//
+// Motion between the frames of a set (the newest frame is the truth of now): where an older
+// reading and the newest contradict each other (radiances 25% apart where both are well exposed,
+// or one dark or clipped where the other's reading says it cannot be), the older one is dropped,
+// and what it saw counts as lost light; where both agree, the older one is weighed by how closely
+// (exp(-d^2 / (2 sigma^2)), d the log ratio). A frame that contradicts the newest on most of the
+// picture (a hand over the lens, a flash) is left out whole. A source the newest frame clips (the
+// sun at 0 EV) can only come from an older, shorter exposure: it lags by up to N - 1 frames.
+//
+// Each merge also says how far it can be trusted (FrameConfidence).
+#include <array>
+#include <cstddef>
+#include <cstdint>
+#include <deque>
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "liveprobe/capture/frame.h"
+#include "liveprobe/sh/executor.h"
+
+namespace lp {
+
+/// A camera's response, inverted: the linear exposure (1 at the sensor's clip) each 8-bit code
+/// stands for, per channel in R, G, B order. Monotonic non-decreasing in the code.
+struct CameraResponse {
+  std::array<std::array<float, 256>, 3> linear{};
+  std::string name;  ///< "sRGB", "gamma 2.6", or the file it came from
+
+  static CameraResponse srgb();
+  static CameraResponse gamma(float g);
+  /// Reads a response written by json(). Throws lp::Error naming `path` when it is missing, is not
+  /// a response, or is not monotonic.
+  static CameraResponse load(const std::string& path);
+  /// Parses json() text; `name` is what errors call it.
+  static CameraResponse parse(const std::string& text, const std::string& name);
+  /// {"response": [[256 R], [256 G], [256 B]]}: linear exposure per code, normalised so that
+  /// code 255 of the green channel is 1.
+  std::string json() const;
+  /// The first code (and channel) at which the curve falls, or -1 when it never does.
+  int firstDecrease(int* channel = nullptr) const;
+};
+
+/// The power law linear = atClip (code / 255)^gamma nearest to a curve over codes 32..240 (least
+/// squares in log-log): what a response is like, and where it reaches code 255.
+struct PowerLaw {
+  double gamma = 1, atClip = 1;
+};
+PowerLaw fitPowerLaw(const std::function<double(int)>& linear);
+
+/// A camera's response recovered from 8-bit frames of one static scene, each with its own
+/// exposure time (Frame::radianceScale = 1 / exposure), by OpenCV's CalibrateDebevec (Debevec and
+/// Malik's least squares with a smoothness term), normalised so that green's code 255 is 1. Throws
+/// lp::Error with fewer than 3 distinct exposures, or when the recovered curve falls somewhere
+/// (too few tones in the scene, or a scene that moved).
+CameraResponse calibrateResponse(const std::vector<Frame>& frames);
+
+/// How far a frame's lighting can be trusted.
+struct FrameConfidence {
+  /// Fraction of the map's power in pixels clipped in every exposure: a lower bound, since their
+  /// true radiance is unknown (weighted by solid angle for equirect frames, by pixel otherwise).
+  double clippedShare = 0;
+  /// Fraction of pixels no exposure read at a well-exposed code (16 and up): in the noise floor,
+  /// or measured only in the few lowest codes (a covered lens, a bracket missing its longest).
+  double darkShare = 0;
+  /// The brightest pixel was measured unclipped in at least one exposure.
+  bool brightestMeasured = true;
+  /// 1 minus the share of the power that older frames of the bracket saw and the newest
+  /// contradicts (radiances more than 25% apart, or dark or clipped where the other predicts
+  /// otherwise: motion, flicker, a hand over the lens); 1 for a single frame.
+  double agreement = 1;
+  int exposures = 1;  ///< distinct exposure times merged
+
+  /// One number in [0, 1]: (1 - clippedShare) (1 - darkShare) agreement.
+  double value() const { return (1.0 - clippedShare) * (1.0 - darkShare) * agreement; }
+};
+
+struct BracketView;
+struct MergeTally;
+
+/// The most frames one merge takes.
+inline constexpr int kMaxBracket = 5;
+
+struct MergeOptions {
+  int frames = 3;  ///< the window: each merge uses the last `frames` frames (1 to kMaxBracket)
+  CameraResponse response = CameraResponse::srgb();
+  int noiseFloor = 6;   ///< a pixel whose largest channel is at or below this is noise
+  int clipLevel = 250;  ///< a pixel with a channel at or above this is clipped
+  /// Solid-angle weights for clippedShare: rows of an equirect frame weigh sin(theta).
+  bool equirect = true;
+  double ghostSigma = 0.3;  ///< motion weighting: sigma of the log radiance ratio
+};
+
+/// The confidence of one 8-bit frame on its own (no bracket): pixels with a channel at 255 are
+/// clipped. `linear` decodes a code (the photometry's table). Float frames: full confidence.
+FrameConfidence singleFrameConfidence(const Frame& frame, const std::array<float, 256>& linear,
+                                      bool equirect);
+
+class BracketMerger {
+ public:
+  explicit BracketMerger(MergeOptions options);
+
+  /// Adds an 8-bit frame, whose Frame::radianceScale is 1 / its exposure time (what the camera
+  /// reported for it), and merges the window into `out`: RgbF32 radiance in the same units,
+  /// radianceScale 1, the newest frame's sequence and timestamp, and the oldest frame's capture
+  /// time (the latency of the merge starts there). Throws lp::Error on a float frame. A frame of
+  /// another size starts the window afresh.
+  FrameConfidence add(const Frame& in, Frame& out, Executor* executor = nullptr);
+
+  const MergeOptions& options() const { return opt_; }
+  std::size_t held() const { return window_.size(); }
+
+ private:
+  void push(const Frame& in);
+  /// The window as the pixel loop reads it; `exposures`: the distinct exposure times in use.
+  BracketView prepare(int& exposures) const;
+  /// The frames of the window that do not contradict the newest as a whole.
+  std::array<bool, kMaxBracket> usableFrames(const BracketView& view) const;
+  /// One row merged into `out` (RGB) and its luminance into `previous`; the row's sums.
+  MergeTally mergeRow(const BracketView& view, std::size_t y, float* out, float* previous,
+                      bool fresh) const;
+  MergeOptions opt_;
+  std::deque<Frame> window_;     ///< oldest first
+  std::vector<float> previous_;  ///< the last merge's luminance, per pixel
+};
+
+}  // namespace lp

@@ -1,0 +1,465 @@
+#include "liveprobe/capture/hdr_merge.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <nlohmann/json.hpp>
+#include <opencv2/photo.hpp>
+#include <utility>
+#include <vector>
+
+#include "liveprobe/capture/image.h"
+#include "liveprobe/capture/input_file.h"
+#include "liveprobe/sh/error.h"
+
+namespace lp {
+
+CameraResponse CameraResponse::srgb() {
+  CameraResponse r;
+  r.name = "sRGB";
+  for (auto& ch : r.linear)
+    for (int i = 0; i < 256; ++i) ch[std::size_t(i)] = srgbToLinear(float(i) / 255.0f);
+  return r;
+}
+
+CameraResponse CameraResponse::gamma(float g) {
+  CameraResponse r;
+  char name[32];
+  std::snprintf(name, sizeof name, "gamma %g", double(g));
+  r.name = name;
+  for (auto& ch : r.linear)
+    for (int i = 0; i < 256; ++i) ch[std::size_t(i)] = std::pow(float(i) / 255.0f, g);
+  return r;
+}
+
+int CameraResponse::firstDecrease(int* channel) const {
+  for (int c = 0; c < 3; ++c)
+    for (int i = 1; i < 256; ++i)
+      if (!(linear[std::size_t(c)][std::size_t(i)] >= linear[std::size_t(c)][std::size_t(i - 1)])) {
+        if (channel) *channel = c;
+        return i;
+      }
+  return -1;
+}
+
+std::string CameraResponse::json() const {
+  nlohmann::json j;
+  j["response"] = nlohmann::json::array();
+  for (const auto& ch : linear) j["response"].push_back(std::vector<float>(ch.begin(), ch.end()));
+  return j.dump();
+}
+
+CameraResponse CameraResponse::parse(const std::string& text, const std::string& name) {
+  CameraResponse r;
+  r.name = name;
+  try {
+    const auto j = nlohmann::json::parse(text);
+    const auto& a = j.at("response");
+    if (!a.is_array() || a.size() != 3) throw Error("\"response\" must hold 3 curves (R, G, B)");
+    for (std::size_t c = 0; c < 3; ++c) {
+      if (!a[c].is_array() || a[c].size() != 256)
+        throw Error("each curve must hold 256 values, one per 8-bit code");
+      for (std::size_t i = 0; i < 256; ++i) {
+        const double v = a[c][i].get<double>();
+        if (!std::isfinite(v) || v < 0) throw Error("a value is negative or not finite");
+        r.linear[c][i] = float(v);
+      }
+    }
+  } catch (const nlohmann::json::exception& e) {
+    throw Error(name + ": not a camera response (" + e.what() + ")");
+  } catch (const Error& e) {
+    throw Error(name + ": not a camera response: " + e.what());
+  }
+  int c = 0;
+  if (const int at = r.firstDecrease(&c); at >= 0)
+    throw Error(name + ": the response falls at code " + std::to_string(at) + " of channel " +
+                "RGB"[c] + ": a response must not decrease");
+  if (!(r.linear[1][255] > 0)) throw Error(name + ": the response is zero at code 255");
+  return r;
+}
+
+CameraResponse CameraResponse::load(const std::string& path) {
+  return parse(readInputFile(path), path);
+}
+
+PowerLaw fitPowerLaw(const std::function<double(int)>& linear) {
+  // Least squares of log(linear) = log(atClip) + gamma log(code / 255) over codes 32..240.
+  double sx = 0, sy = 0, sxx = 0, sxy = 0;
+  int n = 0;
+  for (int i = 32; i <= 240; ++i, ++n) {
+    const double x = std::log(i / 255.0), y = std::log(std::max(linear(i), 1e-30));
+    sx += x, sy += y, sxx += x * x, sxy += x * y;
+  }
+  PowerLaw p;
+  p.gamma = (n * sxy - sx * sy) / (n * sxx - sx * sx);
+  p.atClip = std::exp((sy - p.gamma * sx) / n);
+  return p;
+}
+
+CameraResponse calibrateResponse(const std::vector<Frame>& frames) {
+  std::vector<cv::Mat> images;
+  std::vector<float> times;
+  for (const Frame& f : frames) {
+    if (f.format != PixelFormat::Bgr8) throw Error("calibration takes 8-bit frames");
+    if (f.width != frames.front().width || f.height != frames.front().height)
+      throw Error("calibration frames differ in size");
+    images.emplace_back(f.height, f.width, CV_8UC3, const_cast<std::uint8_t*>(f.bgr8.data()));
+    times.push_back(float(1.0 / f.radianceScale));
+  }
+  std::vector<float> distinct = times;
+  std::sort(distinct.begin(), distinct.end());
+  distinct.erase(std::unique(distinct.begin(), distinct.end(),
+                             [](float a, float b) { return std::abs(a - b) <= 0.02f * b; }),
+                 distinct.end());
+  if (distinct.size() < 3)
+    throw Error("calibration needs frames at 3 or more exposure times; got " +
+                std::to_string(distinct.size()));
+  cv::Mat curve;
+  cv::createCalibrateDebevec(120, 10.0f, false)->process(images, curve, times);
+  CameraResponse r;
+  r.name = "calibrated";
+  // The curve is known up to one scale (OpenCV makes each channel 1 at code 128: equal codes are
+  // grey). The clip is where green's power law over the well-determined codes reaches code 255:
+  // the very top codes are the least constrained by the solve.
+  const PowerLaw fit = fitPowerLaw([&](int i) { return curve.at<cv::Vec3f>(i)[1]; });
+  const float norm = float(fit.atClip);
+  if (!(norm > 0) || !std::isfinite(norm)) throw Error("the recovered response is not positive");
+  for (int i = 0; i < 256; ++i)
+    for (int c = 0; c < 3; ++c)  // OpenCV's channels are B, G, R
+      r.linear[std::size_t(c)][std::size_t(i)] = curve.at<cv::Vec3f>(i)[2 - c] / norm;
+  int channel = 0;
+  if (const int at = r.firstDecrease(&channel); at >= 0)
+    throw Error(std::string("the recovered response falls at code ") + std::to_string(at) +
+                " of channel " + "RGB"[channel] +
+                ": the scene needs more tones, or it moved during the sweep");
+  return r;
+}
+
+// Sums over a merged frame, for its confidence.
+struct MergeTally {
+  double power = 0, clippedPower = 0;
+  double disagreedPower = 0;
+  std::size_t dark = 0;
+  float brightest = -1;
+  bool brightestClipped = false;
+  void add(const MergeTally& o) {
+    power += o.power, clippedPower += o.clippedPower;
+    dark += o.dark, disagreedPower += o.disagreedPower;
+    if (o.brightest > brightest) brightest = o.brightest, brightestClipped = o.brightestClipped;
+  }
+  FrameConfidence confidence(std::size_t pixels, int exposures) const {
+    FrameConfidence c;
+    c.clippedShare = power > 0 ? clippedPower / power : 0.0;
+    c.darkShare = pixels ? double(dark) / double(pixels) : 0.0;
+    c.brightestMeasured = !brightestClipped;
+    c.agreement = 1.0 - disagreedPower / std::max(power + disagreedPower, 1e-30);
+    c.exposures = exposures;
+    return c;
+  }
+};
+
+namespace {
+
+// Codes from here up are compared for motion: half an 8-bit step is under 5% of the value.
+constexpr int kWellExposed = 16;
+// Codes from here down are surely below the clip, even after a JPEG's ringing.
+constexpr int kSurelyUnclipped = 200;
+
+// The hat weight of Debevec and Malik, 0 at the noise floor and at the clip.
+float hat(int code, int floor, int clip) {
+  if (code <= floor || code >= clip) return 0.0f;
+  return float(std::min(code - floor, clip - code));
+}
+
+float luminance(float r, float g, float b) { return 0.2126f * r + 0.7152f * g + 0.0722f * b; }
+
+// Solid angle of an equirect row (sin theta), or 1.
+float rowWeight(int y, int h, bool equirect) {
+  return equirect ? std::sin(float(M_PI) * (float(y) + 0.5f) / float(h)) : 1.0f;
+}
+
+}  // namespace
+
+FrameConfidence singleFrameConfidence(const Frame& frame, const std::array<float, 256>& linear,
+                                      bool equirect) {
+  if (frame.format != PixelFormat::Bgr8) return {};
+  MergeTally t;
+  for (int y = 0; y < frame.height; ++y) {
+    const float w = rowWeight(y, frame.height, equirect);
+    const std::uint8_t* p = frame.bgr8.data() + std::size_t(y) * frame.width * 3;
+    for (int x = 0; x < frame.width; ++x, p += 3) {
+      const float l = luminance(linear[p[2]], linear[p[1]], linear[p[0]]);
+      const bool clipped = p[0] == 255 || p[1] == 255 || p[2] == 255;
+      t.power += double(l * w);
+      if (clipped) t.clippedPower += double(l * w);
+      if (l > t.brightest) t.brightest = l, t.brightestClipped = clipped;
+    }
+  }
+  return t.confidence(std::size_t(frame.width) * frame.height, 1);
+}
+
+BracketMerger::BracketMerger(MergeOptions options) : opt_(std::move(options)) {
+  if (opt_.frames < 1 || opt_.frames > kMaxBracket)
+    throw Error("a bracket merges 1 to " + std::to_string(kMaxBracket) + " frames");
+}
+
+void BracketMerger::push(const Frame& in) {
+  if (in.format != PixelFormat::Bgr8)
+    throw Error("an exposure bracket merges 8-bit frames; this frame is already radiance");
+  if (!window_.empty() && (window_.back().width != in.width || window_.back().height != in.height))
+    window_.clear();
+  // The window keeps copies; the oldest frame's buffer is reused for the newest.
+  Frame kept;
+  if (window_.size() == std::size_t(opt_.frames)) {
+    kept.bgr8 = std::move(window_.front().bgr8);
+    window_.pop_front();
+  }
+  kept.bgr8.assign(in.bgr8.begin(), in.bgr8.end());
+  kept.sequence = in.sequence, kept.timestamp = in.timestamp;
+  kept.width = in.width, kept.height = in.height, kept.format = in.format;
+  kept.radianceScale = in.radianceScale, kept.captureTime = in.captureTime;
+  kept.exposure100us = in.exposure100us, kept.gain = in.gain;
+  window_.push_back(std::move(kept));
+}
+
+namespace {
+
+// One frame's reading of one pixel: radiance per channel, its largest code, its hat weight.
+struct Reading {
+  float e[3];
+  float peak;  ///< the largest channel's radiance
+  float scale;
+  int code;  ///< the largest channel's code
+  float w;
+};
+
+enum class Verdict : std::uint8_t { Unknown, Agree, Disagree };
+
+// What one reading says about the radiance (its largest channel), as an interval with room for
+// 8-bit steps and compression noise: a mid-range code within 25%, a low code within a factor of
+// two, a dark one below what would have read kWellExposed, a clipped one above what would have
+// read kSurelyUnclipped.
+struct Judge {
+  int floor, clip;
+  float wellLinear, belowClipLinear;  ///< linear at kWellExposed and at kSurelyUnclipped
+
+  bool well(const Reading& r) const { return r.code >= kWellExposed && r.code < clip; }
+  std::pair<float, float> bounds(const Reading& r) const {
+    // Both well exposed is the common case: operator() checks it first, without bounds.
+    constexpr float kInf = std::numeric_limits<float>::infinity();
+    if (r.code <= floor) return {0.0f, wellLinear * r.scale};
+    if (r.code >= clip) return {belowClipLinear * r.scale, kInf};
+    const float k = well(r) ? 1.25f : 2.0f;
+    return {r.peak / k, r.peak * k};
+  }
+  // Whether an older reading and the newest tell the same story.
+  Verdict operator()(const Reading& old, const Reading& now) const {
+    if (well(old) && well(now)) {
+      const float q = old.peak / now.peak;
+      return q < 1.25f * 1.25f && q > 1.0f / (1.25f * 1.25f) ? Verdict::Agree : Verdict::Disagree;
+    }
+    const auto [lo0, hi0] = bounds(old);
+    const auto [lo1, hi1] = bounds(now);
+    if (lo0 > hi1 || lo1 > hi0) return Verdict::Disagree;
+    return well(old) && well(now) ? Verdict::Agree : Verdict::Unknown;
+  }
+};
+
+}  // namespace
+
+// One merge's frames as the pixel loop reads them, and the steps of a pixel's merge.
+struct BracketView {
+  int n = 0, newest = 0, shortest = 0, longest = 0;
+  std::array<bool, kMaxBracket> usable{};
+  std::array<const std::uint8_t*, kMaxBracket> pixels{};
+  std::array<float, kMaxBracket> scales{};
+  /// Per frame and code: the hat times the exposure time (a longer exposure gathers more light
+  /// for the same code noise; a short exposure's lowest codes, where a response is least known,
+  /// barely count).
+  std::array<std::array<float, 256>, kMaxBracket> weights{};
+  const std::array<std::array<float, 256>, 3>* lut = nullptr;
+  Judge judge{};
+  float inv2s2 = 0;
+
+  void read(int i, std::size_t at, Reading& r) const {
+    const std::uint8_t* p = pixels[std::size_t(i)] + at;
+    const auto& l = *lut;
+    r.scale = scales[std::size_t(i)];
+    r.e[0] = l[0][p[2]] * r.scale, r.e[1] = l[1][p[1]] * r.scale, r.e[2] = l[2][p[0]] * r.scale;
+    r.code = std::max({p[0], p[1], p[2]});
+    r.peak = std::max({r.e[0], r.e[1], r.e[2]});
+    r.w = weights[std::size_t(i)][std::size_t(r.code)];
+  }
+
+  /// Where an older reading contradicts the newest, the newest wins (the older one's weight goes,
+  /// and the largest such radiance is returned as lost); where both measured, the older one is
+  /// weighed by how closely it agrees. Returns -1 when nothing was contradicted.
+  float resolveMotion(Reading* r) const {
+    float lost = -1;
+    for (int i = 0; i < newest; ++i) {
+      if (!usable[std::size_t(i)]) continue;
+      const Verdict v = judge(r[i], r[newest]);
+      if (v == Verdict::Disagree) {
+        r[i].w = 0;
+        lost = std::max(lost, luminance(r[i].e[0], r[i].e[1], r[i].e[2]));
+      } else if (v == Verdict::Agree) {
+        // d = log(q) for q within the agreement bound: 2 (q - 1) / (q + 1) is within 2%.
+        const float q = r[i].peak / r[newest].peak;
+        const float d = 2.0f * (q - 1.0f) / (q + 1.0f);
+        r[i].w *= std::exp(-d * d * inv2s2);
+      }
+    }
+    return lost;
+  }
+
+  /// One pixel: its radiance in `c`; whether it is clipped (a lower bound) and whether an exposure
+  /// read it well; the light the newest frame contradicted (< 0: none).
+  struct Pixel {
+    bool clipped = false, wellSeen = false;
+    float lost = -1;
+  };
+  Pixel merge(std::size_t at, float* c) const {
+    Reading r[kMaxBracket];
+    bool anyClipped = false;
+    for (int i = 0; i < n; ++i) {
+      read(i, at, r[i]);
+      if (!usable[std::size_t(i)]) r[i].w = 0;
+      anyClipped |= usable[std::size_t(i)] && r[i].code >= judge.clip;
+    }
+    Pixel px;
+    px.lost = resolveMotion(r);
+    float sw = 0;
+    c[0] = c[1] = c[2] = 0;
+    for (int i = 0; i < n; ++i) {
+      sw += r[i].w;
+      px.wellSeen |= r[i].w > 0 && judge.well(r[i]);
+      for (int k = 0; k < 3; ++k) c[k] += r[i].w * r[i].e[k];
+    }
+    if (sw > 0) {
+      for (int k = 0; k < 3; ++k) c[k] /= sw;
+      return px;
+    }
+    // Unmeasured. Contradicted: as the newest frame reads it. Clipped somewhere: at least the
+    // shortest exposure's value. Dark everywhere: the longest exposure's.
+    const bool contradicted = px.lost >= 0;
+    const int i = contradicted ? newest : anyClipped ? shortest : longest;
+    std::copy(r[i].e, r[i].e + 3, c);
+    px.clipped = contradicted ? r[i].code >= judge.clip : anyClipped;
+    return px;
+  }
+};
+
+FrameConfidence BracketMerger::add(const Frame& in, Frame& out, Executor* executor) {
+  push(in);
+  const int w = in.width, h = in.height;
+  out.format = PixelFormat::RgbF32;
+  out.width = w, out.height = h;
+  out.bgr8.clear();
+  out.rgb.resize(std::size_t(w) * h * 3);
+  out.sequence = in.sequence, out.timestamp = in.timestamp;
+  out.captureTime = window_.front().captureTime;
+  out.radianceScale = 1.0;
+  out.exposure100us = in.exposure100us, out.gain = in.gain;
+  int exposures = 0;
+  const BracketView view = prepare(exposures);
+  const bool fresh = previous_.size() == std::size_t(w) * std::size_t(h);
+  previous_.resize(std::size_t(w) * std::size_t(h));
+  const MergeTally total = parallelReduce(
+      executor, std::size_t(h), Split{.grain = 1, .perThread = 4}, MergeTally{},
+      [&](std::size_t y0, std::size_t y1) {
+        MergeTally t;
+        for (std::size_t y = y0; y < y1; ++y)
+          t.add(mergeRow(view, y, out.rgb.data() + y * std::size_t(w) * 3,
+                         previous_.data() + y * std::size_t(w), fresh));
+        return t;
+      },
+      [](MergeTally& into, const MergeTally& part) { into.add(part); });
+  return total.confidence(std::size_t(w) * h, exposures);
+}
+
+BracketView BracketMerger::prepare(int& exposures) const {
+  BracketView v;
+  v.n = int(window_.size()), v.newest = v.n - 1;
+  v.lut = &opt_.response.linear;
+  const auto& lut = opt_.response.linear;
+  v.judge = Judge{opt_.noiseFloor, opt_.clipLevel, lut[1][kWellExposed], lut[1][kSurelyUnclipped]};
+  v.inv2s2 = float(1.0 / (2.0 * opt_.ghostSigma * opt_.ghostSigma));
+  for (int i = 0; i < v.n; ++i) {
+    v.pixels[std::size_t(i)] = window_[std::size_t(i)].bgr8.data();
+    v.scales[std::size_t(i)] = float(window_[std::size_t(i)].radianceScale);
+    for (int z = 0; z < 256; ++z)
+      v.weights[std::size_t(i)][std::size_t(z)] =
+          hat(z, opt_.noiseFloor, opt_.clipLevel) / v.scales[std::size_t(i)];
+  }
+  v.usable = usableFrames(v);
+  v.shortest = v.longest = v.newest;
+  std::vector<float> distinct;
+  for (int i = 0; i < v.n; ++i) {
+    if (!v.usable[std::size_t(i)]) continue;
+    const float s = v.scales[std::size_t(i)];
+    if (s > v.scales[std::size_t(v.shortest)]) v.shortest = i;
+    if (s < v.scales[std::size_t(v.longest)]) v.longest = i;
+    if (std::none_of(distinct.begin(), distinct.end(),
+                     [&](float d) { return std::abs(d - s) <= 0.02f * s; }))
+      distinct.push_back(s);
+  }
+  exposures = int(distinct.size());
+  return v;
+}
+
+MergeTally BracketMerger::mergeRow(const BracketView& v, std::size_t y, float* out, float* previous,
+                                   bool fresh) const {
+  const int w = window_.back().width, h = window_.back().height;
+  const float rw = rowWeight(int(y), h, opt_.equirect);
+  // Sums in locals (registers); the row's total goes to the tally once.
+  double power = 0, clippedPower = 0, lostPower = 0;
+  std::size_t dark = 0;
+  float brightest = -1;
+  bool brightestClipped = false;
+  for (int x = 0; x < w; ++x, out += 3) {
+    const BracketView::Pixel px = v.merge((y * std::size_t(w) + std::size_t(x)) * 3, out);
+    const float l = luminance(out[0], out[1], out[2]);
+    dark += !px.clipped && !px.wellSeen;
+    // What was lost: at least what the older readings say, and what the last merge saw.
+    if (px.lost >= 0)
+      lostPower += std::max(std::max(px.lost, fresh ? previous[x] : 0.0f) - l, 0.0f);
+    previous[x] = l;
+    power += l;
+    if (px.clipped) clippedPower += l;
+    if (l > brightest) brightest = l, brightestClipped = px.clipped;
+  }
+  MergeTally t;
+  t.power = power * rw, t.clippedPower = clippedPower * rw, t.disagreedPower = lostPower * rw;
+  t.dark = dark;
+  t.brightest = brightest, t.brightestClipped = brightestClipped;
+  return t;
+}
+
+std::array<bool, kMaxBracket> BracketMerger::usableFrames(const BracketView& v) const {
+  // A whole frame that contradicts the newest on most of a sparse grid (a hand over the lens, a
+  // flash) is left out; the newest frame always counts.
+  std::array<bool, kMaxBracket> usable{};
+  const int w = window_.back().width, h = window_.back().height;
+  usable[std::size_t(v.newest)] = true;
+  std::array<std::size_t, kMaxBracket> agree{}, disagree{};
+  Reading now, old;
+  for (int y = 2; y < h; y += 4)
+    for (int x = 2; x < w; x += 4) {
+      const std::size_t at = (std::size_t(y) * std::size_t(w) + std::size_t(x)) * 3;
+      v.read(v.newest, at, now);
+      for (int i = 0; i < v.newest; ++i) {
+        v.read(i, at, old);
+        const Verdict verdict = v.judge(old, now);
+        agree[std::size_t(i)] += verdict == Verdict::Agree;
+        disagree[std::size_t(i)] += verdict == Verdict::Disagree;
+      }
+    }
+  const std::size_t grid = std::size_t((h + 1) / 4) * std::size_t((w + 1) / 4);
+  for (int i = 0; i < v.newest; ++i) {
+    const std::size_t decided = agree[std::size_t(i)] + disagree[std::size_t(i)];
+    usable[std::size_t(i)] = decided * 100 < grid || disagree[std::size_t(i)] * 2 <= decided;
+  }
+  return usable;
+}
+
+}  // namespace lp

@@ -1,0 +1,241 @@
+// Exposure bracketing's library parts against analytic truth: 8-bit frames rendered from a known
+// radiance map through a known response merge back to that map; motion and a covered lens are
+// caught; a response is recovered from a sweep; a UVC metadata buffer gives its exposure time.
+#include <gtest/gtest.h>
+#include <linux/uvcvideo.h>
+
+#include <cmath>
+#include <cstring>
+#include <nlohmann/json.hpp>
+#include <vector>
+
+#include "liveprobe/capture/hdr_merge.h"
+#include "liveprobe/capture/image.h"
+#include "liveprobe/capture/v4l2.h"
+#include "liveprobe/sh/error.h"
+
+namespace {
+
+using lp::BracketMerger;
+using lp::CameraResponse;
+using lp::Frame;
+using lp::FrameConfidence;
+using lp::MergeOptions;
+
+constexpr int kW = 128, kH = 64;
+
+// Radiance (linear RGB, per second of exposure): a sky from 0.02 at the horizon to 0.2 at the
+// zenith, a 2000x brighter sun (about 11 stops over the sky) in a 3-pixel disc, a dark ground.
+std::vector<float> scene(int sunX = 40) {
+  std::vector<float> rgb(std::size_t(kW) * kH * 3);
+  for (int y = 0; y < kH; ++y)
+    for (int x = 0; x < kW; ++x) {
+      float v = y < kH / 2 ? 0.02f + 0.18f * float(kH / 2 - y) / float(kH / 2) : 0.01f;
+      if ((x - sunX) * (x - sunX) + (y - 12) * (y - 12) <= 2) v = 400.0f;
+      float* p = &rgb[(std::size_t(y) * kW + x) * 3];
+      p[0] = v, p[1] = 0.9f * v, p[2] = 0.8f * v;
+    }
+  return rgb;
+}
+
+// What an 8-bit camera with response `encode` (linear 0..1 to code 0..1) reads at exposure t.
+template <class Encode>
+Frame shoot(const std::vector<float>& radiance, double t, Encode encode) {
+  Frame f;
+  f.format = lp::PixelFormat::Bgr8;
+  f.width = kW, f.height = kH;
+  f.radianceScale = 1.0 / t;
+  f.bgr8.resize(radiance.size());
+  for (std::size_t i = 0; i < radiance.size(); i += 3)
+    for (int c = 0; c < 3; ++c) {
+      const float v = std::clamp(float(radiance[i + std::size_t(c)] * t), 0.0f, 1.0f);
+      f.bgr8[i + 2 - std::size_t(c)] = std::uint8_t(std::lround(255.0f * encode(v)));
+    }
+  return f;
+}
+
+Frame shootSrgb(const std::vector<float>& radiance, double t) {
+  return shoot(radiance, t, [](float v) { return lp::linearToSrgb(v); });
+}
+
+// The truth merged against: pixels some exposure read between codes 16 and 249.
+double relativeError(float merged, float truth) { return std::abs(merged - truth) / truth; }
+
+TEST(HdrMerge, TwelveStopsOfRadianceComeBack) {
+  const auto radiance = scene();
+  BracketMerger merger(MergeOptions{});
+  Frame out;
+  FrameConfidence c;
+  for (double t : {1.0 / 4096, 1.0 / 64, 1.0}) c = merger.add(shootSrgb(radiance, t), out);
+  ASSERT_EQ(out.format, lp::PixelFormat::RgbF32);
+  EXPECT_EQ(c.exposures, 3);
+  EXPECT_TRUE(c.brightestMeasured);
+  EXPECT_NEAR(c.clippedShare, 0.0, 1e-9);
+  EXPECT_NEAR(c.agreement, 1.0, 1e-6);
+  // Every sky pixel and the sun within the 8-bit step of the exposure that read it best.
+  double worst = 0;
+  for (std::size_t i = 0; i < radiance.size(); ++i)
+    worst = std::max(worst, relativeError(out.rgb[i], radiance[i]));
+  EXPECT_LT(worst, 0.03);
+}
+
+TEST(HdrMerge, ClippedEverywhereIsALowerBoundAndSaysSo) {
+  const auto radiance = scene();
+  BracketMerger merger(MergeOptions{.frames = 2});
+  Frame out;
+  FrameConfidence c;
+  for (double t : {1.0 / 16, 1.0}) c = merger.add(shootSrgb(radiance, t), out);
+  EXPECT_FALSE(c.brightestMeasured);
+  // The sun holds most of the power; clipped at 1 / (1/16 s) = 16, its share is still a fifth.
+  EXPECT_GT(c.clippedShare, 0.05);
+  const std::size_t sun = (std::size_t(12) * kW + 40) * 3;
+  EXPECT_NEAR(out.rgb[sun], 16.0f, 0.01f);
+  EXPECT_LT(out.rgb[sun], radiance[sun]);
+}
+
+TEST(HdrMerge, AMovedSunComesFromTheNewestFrameOnly) {
+  // The sun moves 20 pixels between the frames; the newest frame (short) sees it at x = 60.
+  BracketMerger merger(MergeOptions{.frames = 3});
+  Frame out;
+  FrameConfidence c;
+  c = merger.add(shootSrgb(scene(20), 1.0), out);
+  c = merger.add(shootSrgb(scene(20), 1.0 / 64), out);
+  c = merger.add(shootSrgb(scene(60), 1.0 / 4096), out);
+  const auto truth = scene(60);
+  const std::size_t now = (std::size_t(12) * kW + 60) * 3, before = (std::size_t(12) * kW + 20) * 3;
+  EXPECT_LT(relativeError(out.rgb[now], truth[now]), 0.03);
+  // No ghost at the old position: the newest frame reads dark there, which contradicts the
+  // older frames' clipped sun; what they saw is counted as lost light.
+  EXPECT_LT(out.rgb[before], 0.01f * truth[now]);
+  EXPECT_LT(c.agreement, 0.9);
+}
+
+TEST(HdrMerge, ACoveredLensIsLeftOutOrFlagged) {
+  const auto radiance = scene();
+  Frame out;
+  // A dark frame in the middle of a good bracket: contradicted by the newest, left out.
+  {
+    BracketMerger merger(MergeOptions{.frames = 3});
+    Frame dark = shootSrgb(radiance, 1.0 / 64);
+    std::fill(dark.bgr8.begin(), dark.bgr8.end(), std::uint8_t(2));
+    merger.add(shootSrgb(radiance, 1.0 / 4096), out);
+    merger.add(dark, out);
+    const FrameConfidence c = merger.add(shootSrgb(radiance, 1.0), out);
+    EXPECT_GT(c.value(), 0.95);
+    for (int y : {12, 20})
+      for (int x : {40, 90}) {
+        const std::size_t at = (std::size_t(y) * kW + std::size_t(x)) * 3;
+        EXPECT_LT(relativeError(out.rgb[at], radiance[at]), 0.03) << x << "," << y;
+      }
+  }
+  // The newest frame dark: nothing is measured, and the confidence says so.
+  {
+    BracketMerger merger(MergeOptions{.frames = 3});
+    Frame dark = shootSrgb(radiance, 1.0);
+    std::fill(dark.bgr8.begin(), dark.bgr8.end(), std::uint8_t(2));
+    merger.add(shootSrgb(radiance, 1.0 / 4096), out);
+    merger.add(shootSrgb(radiance, 1.0 / 64), out);
+    const FrameConfidence c = merger.add(dark, out);
+    EXPECT_LT(c.value(), 0.2);
+  }
+}
+
+TEST(HdrMerge, TheResponseRecoveredFromASweepIsThePowerLaw) {
+  const auto radiance = scene();
+  std::vector<Frame> frames;
+  for (int stop = -6; stop <= 3; ++stop)
+    frames.push_back(
+        shoot(radiance, std::exp2(stop), [](float v) { return std::pow(v, 1 / 2.6f); }));
+  const CameraResponse r = lp::calibrateResponse(frames);
+  EXPECT_LT(r.firstDecrease(), 0);
+  const lp::PowerLaw like = lp::fitPowerLaw([&](int i) { return r.linear[1][std::size_t(i)]; });
+  EXPECT_NEAR(like.gamma, 2.6, 0.05);
+  for (int code : {32, 64, 128, 200, 240})
+    EXPECT_NEAR(r.linear[1][std::size_t(code)], std::pow(code / 255.0, 2.6),
+                0.03 * std::pow(code / 255.0, 2.6))
+        << "code " << code;
+}
+
+TEST(HdrMerge, AResponseFileIsCheckedWhole) {
+  const std::string good = CameraResponse::gamma(2.2f).json();
+  EXPECT_NEAR(CameraResponse::parse(good, "r.json").linear[0][128], std::pow(128 / 255.0, 2.2),
+              1e-6);
+  auto failsWith = [](const std::string& text, const std::string& says) {
+    try {
+      CameraResponse::parse(text, "r.json");
+      ADD_FAILURE() << "accepted " << text.substr(0, 60);
+    } catch (const lp::Error& e) {
+      EXPECT_NE(std::string(e.what()).find(says), std::string::npos) << e.what();
+      EXPECT_EQ(std::string(e.what()).find('\n'), std::string::npos);
+    }
+  };
+  failsWith("{}", "r.json: not a camera response");
+  failsWith(R"({"response": [[1,2],[1,2],[1,2]]})", "256 values");
+  auto falling = nlohmann::json::parse(good);
+  falling["response"][0][3] = 0.0;  // red falls from code 2 to code 3
+  failsWith(falling.dump(), "falls at code 3 of channel R");
+  failsWith(R"({"response": 7})", "3 curves");
+}
+
+TEST(HdrMerge, OnlyBracketsOfEightBitFramesMerge) {
+  BracketMerger merger(MergeOptions{});
+  Frame f, out;
+  f.format = lp::PixelFormat::RgbF32;
+  f.width = 2, f.height = 1;
+  f.rgb.assign(6, 1.0f);
+  EXPECT_THROW(merger.add(f, out), lp::Error);
+  EXPECT_THROW(BracketMerger(MergeOptions{.frames = 6}), lp::Error);
+}
+
+// One uvc_meta_buf block: ns, sof, then a payload header of `length` bytes.
+std::vector<std::uint8_t> metaBlock(std::uint8_t flags, const std::vector<std::uint8_t>& rest) {
+  uvc_meta_buf head{};
+  head.ns = 123456789;
+  head.sof = 42;
+  head.length = std::uint8_t(2 + rest.size());
+  head.flags = flags;
+  std::vector<std::uint8_t> b(sizeof head + rest.size());
+  std::memcpy(b.data(), &head, sizeof head);
+  if (!rest.empty()) std::memcpy(b.data() + sizeof head, rest.data(), rest.size());
+  return b;
+}
+
+// Microsoft's MetadataId_CaptureStats item: id 3, size, flags, reserved, ExposureTime (100 ns).
+std::vector<std::uint8_t> captureStats(std::uint32_t flags, std::uint64_t exposure100ns) {
+  std::vector<std::uint8_t> s(80, 0);
+  const std::uint32_t id = 3, size = 80;
+  std::memcpy(s.data(), &id, 4), std::memcpy(s.data() + 4, &size, 4);
+  std::memcpy(s.data() + 8, &flags, 4), std::memcpy(s.data() + 16, &exposure100ns, 8);
+  return s;
+}
+
+TEST(UvcMetadata, TheExposureTimeIsReadFromMicrosoftsCaptureStatistics) {
+  std::vector<std::uint8_t> rest(4 + 6, 0);    // PTS and SCR
+  const auto stats = captureStats(1, 333000);  // 33.3 ms
+  rest.insert(rest.end(), stats.begin(), stats.end());
+  // A header-only block first (as a frame's later packets give), then the one with statistics.
+  const auto header = metaBlock(0x0c, std::vector<std::uint8_t>(10, 0));
+  const auto block = metaBlock(0x8e, rest);
+  std::vector<std::uint8_t> buffer(header.size() + block.size());
+  std::memcpy(buffer.data(), header.data(), header.size());
+  std::memcpy(buffer.data() + header.size(), block.data(), block.size());
+  const auto t = lp::parseUvcExposure(buffer.data(), buffer.size());
+  ASSERT_TRUE(t.has_value());
+  EXPECT_NEAR(*t, 0.0333, 1e-9);
+  // The exposure-time flag off, the standard header alone, or a torn block: no exposure.
+  auto noFlag = metaBlock(0x8e, rest);
+  noFlag[sizeof(uvc_meta_buf) + 10 + 8] = 0;
+  EXPECT_FALSE(lp::parseUvcExposure(noFlag.data(), noFlag.size()));
+  const auto plain = metaBlock(0x0c, std::vector<std::uint8_t>(10, 0));
+  EXPECT_FALSE(lp::parseUvcExposure(plain.data(), plain.size()));
+  EXPECT_FALSE(lp::parseUvcExposure(block.data(), block.size() - 30));
+  EXPECT_FALSE(lp::parseUvcExposure(block.data(), 5));
+}
+
+TEST(UvcMetadata, TheMetadataNodeFollowsTheVideoNode) {
+  EXPECT_EQ(lp::siblingMetadataNode("/dev/video0"), "/dev/video1");
+  EXPECT_EQ(lp::siblingMetadataNode("/dev/video19"), "/dev/video20");
+  EXPECT_EQ(lp::siblingMetadataNode("/dev/camera"), "");
+}
+
+}  // namespace

@@ -1,0 +1,381 @@
+// Exposure bracketing end to end: liveprobe live --bracket against the emulated camera rendering
+// the synthetic sky's HDR frames (recordings/sky-hdr) as an 8-bit sensor would, with a late and
+// rounding exposure control and per-frame exposure metadata. The truth is the HDR replay of the
+// same source frames, divided by the camera's gain (the emulator's sensitivity is 1).
+#include <gtest/gtest.h>
+#include <linux/videodev2.h>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <opencv2/imgcodecs.hpp>
+#include <regex>
+
+#include "emulator.h"
+#include "liveprobe/capture/frame.h"
+#include "liveprobe/capture/hdr_merge.h"
+#include "liveprobe/capture/image.h"
+#include "test_util.h"
+
+namespace {
+
+namespace fs = std::filesystem;
+using lpt::Emulator;
+using lpt::readJsonl;
+using nlohmann::json;
+
+std::string skyFrame(int i) {
+  char name[64];
+  std::snprintf(name, sizeof name, "/recordings/sky-hdr/%04d.exr", i);
+  return std::string(LIVEPROBE_SOURCE_DIR) + name;
+}
+
+const std::string kBracket =
+    " --bracket -12,-6,0 --lock-exposure 0.3 --headless --view-size 64x36 --no-background ";
+
+// The camera's gain over its unit gain (64), from "locked after ...: ... gain N": the emulated
+// sensor multiplies radiance by it.
+double gainOf(const std::string& output) {
+  std::smatch m;
+  EXPECT_TRUE(std::regex_search(output, m, std::regex("gain ([0-9]+)"))) << output;
+  return m.empty() ? 1.0 : std::stod(m[1]) / 64.0;
+}
+
+double angleDeg(const json& a, const json& b) {
+  double d = 0;
+  for (int i = 0; i < 3; ++i) d += a[i].get<double>() * b[i].get<double>();
+  return std::acos(std::clamp(d, -1.0, 1.0)) * 180.0 / M_PI;
+}
+
+// The largest difference of the 27 numbers, in units of the truth's green L00, after dividing
+// `measured` by `scale`.
+double worstCoefficient(const json& measured, const json& truth, double scale) {
+  double worst = 0;
+  for (const auto& [name, rgb] : truth.items())
+    for (int c = 0; c < 3; ++c)
+      worst =
+          std::max(worst, std::abs(measured[name][c].get<double>() / scale - rgb[c].get<double>()));
+  return worst / truth["L00"][1].get<double>();
+}
+
+// A bracketed live run (-12,-6,0) of the still sky in `mode` with the emulator's `faults`: the
+// frames of a complete bracket, and the camera's gain.
+std::vector<json> bracketedFrames(const std::string& mode, const std::string& faults,
+                                  double& gain) {
+  Emulator emu(mode, {skyFrame(30)}, faults);
+  const auto r = emu.run("live /dev/video7" + kBracket + "--frames 24 --sun --coeffs-out " +
+                         emu.tmp / "c.jsonl");
+  EXPECT_EQ(r.exitCode, 0) << r.output;
+  gain = gainOf(r.output);
+  std::vector<json> complete;
+  for (const json& f : readJsonl(emu.tmp / "c.jsonl"))
+    if (f["confidence"]["exposures"] == 3) complete.push_back(f);
+  EXPECT_GE(complete.size(), 12u) << r.output;
+  return complete;
+}
+
+// The still sky through one locked exposure, no bracket: every frame's record.
+std::vector<json> oneExposureFrames() {
+  Emulator emu("MJPG_256x128", {skyFrame(30)});
+  const auto r = emu.run(
+      "live /dev/video7 --lock-exposure 0.3 --headless --view-size 64x36 --no-background "
+      "--frames 8 --sun --coeffs-out " +
+      emu.tmp / "c.jsonl");
+  EXPECT_EQ(r.exitCode, 0) << r.output;
+  return readJsonl(emu.tmp / "c.jsonl");
+}
+
+json truthOf(const std::string& exr) {
+  const auto r = lpt::runLiveprobe("coeffs " + exr + " --sun");
+  EXPECT_EQ(r.exitCode, 0) << r.output;
+  return json::parse(r.output);
+}
+
+// A still sky (one source frame): every merged frame of a complete bracket finds the sun with
+// the HDR frame's share and direction. The coefficients: the merge itself is exact to 0.2% of
+// L00 (RGB24: no codec between the sensor and the merge); MJPEG's 4:2:0 chroma and quantisation
+// move the coloured horizon lights and the sun's disc, 2-4% of L00 on one coefficient, while L00
+// stays within 1%.
+TEST(LiveHdr, BracketMeasuresTheSun) {
+  const json truth = truthOf(skyFrame(30));
+  const json& sun = truth["lights"][0];
+  for (const auto& [mode, tolerance] : std::vector<std::pair<std::string, double>>{
+           {"RGB3_256x128", 0.005}, {"MJPG_256x128", 0.04}}) {
+    double gain = 1;
+    for (const json& f : bracketedFrames(mode, "control_delay=2", gain)) {
+      ASSERT_TRUE(f.contains("lights")) << mode << " frame " << f["frame"];
+      const json& l = f["lights"][0];
+      EXPECT_NEAR(l["share"].get<double>(), sun["share"].get<double>(),
+                  0.1 * sun["share"].get<double>())
+          << mode;
+      EXPECT_LT(angleDeg(l["direction"], sun["direction"]), 1.0) << mode;
+      EXPECT_TRUE(f["confidence"]["brightest_measured"].get<bool>());
+      EXPECT_NEAR(f["coefficients"]["L00"][1].get<double>() / gain,
+                  truth["coefficients"]["L00"][1].get<double>(),
+                  0.02 * truth["coefficients"]["L00"][1].get<double>())
+          << mode;
+      EXPECT_LT(worstCoefficient(f["coefficients"], truth["coefficients"], gain), tolerance)
+          << mode << " frame " << f["frame"];
+    }
+  }
+}
+
+// The synthetic sky's sun turns 18 degrees a second (at 30 frames/s, about 1 degree a frame): a
+// merge takes the sun from the bracket's shortest exposure, up to two frames old. It is found
+// in every complete bracket, with the HDR share, where the HDR replay has it in one of the
+// frames merged.
+TEST(LiveHdr, AMovingSunIsFoundInEveryMergedFrame) {
+  std::vector<std::string> files;
+  for (int i = 0; i < 75; ++i) files.push_back(skyFrame(i));
+  lpt::TempDir truthDir;
+  const auto hdr = lpt::runLiveprobe("replay " + std::string(LIVEPROBE_SOURCE_DIR) +
+                                     "/recordings/sky-hdr/%04d.exr --sun --headless --size 64x36 "
+                                     "--no-background --quiet --coeffs-out " +
+                                     truthDir / "hdr.jsonl");
+  ASSERT_EQ(hdr.exitCode, 0) << hdr.output;
+  const auto truth = readJsonl(truthDir / "hdr.jsonl");
+  ASSERT_EQ(truth.size(), 75u);
+  Emulator emu("MJPG_256x128", files, "control_delay=2");
+  const auto r = emu.run("live /dev/video7" + kBracket + "--frames 40 --sun --coeffs-out " +
+                         emu.tmp / "c.jsonl");
+  ASSERT_EQ(r.exitCode, 0) << r.output;
+  int complete = 0;
+  for (const json& f : readJsonl(emu.tmp / "c.jsonl")) {
+    if (f["confidence"]["exposures"] != 3) continue;
+    ++complete;
+    ASSERT_TRUE(f.contains("lights")) << f.dump();
+    // The emulator serves source frame `sequence` (mod 75) as the camera's frame `sequence`.
+    const long s = f["sequence"].get<long>();
+    double nearest = 180;
+    for (long k = 0; k < 3; ++k) {
+      const json& t = truth[std::size_t((s - k) % 75)]["lights"][0];
+      nearest = std::min(nearest, angleDeg(f["lights"][0]["direction"], t["direction"]));
+    }
+    EXPECT_LT(nearest, 1.0) << "frame " << s;
+    const double share = truth[std::size_t(s % 75)]["lights"][0]["share"].get<double>();
+    EXPECT_NEAR(f["lights"][0]["share"].get<double>(), share, 0.1 * share) << "frame " << s;
+  }
+  EXPECT_GE(complete, 30) << r.output;
+}
+
+// The shadow the sun casts on the ground, in a render lit by `coeffs` (a coefficients file):
+// 1 - shadowed / unshadowed ground, averaged over the pixels `mask` marks (computed from the
+// first render when empty: where the shadow darkens the ground by more than 10%).
+double groundDarkening(const std::string& coeffs, double exposure, std::vector<bool>& mask,
+                       const lpt::TempDir& dir) {
+  std::vector<cv::Mat> images;
+  for (const std::string shadows : {"--shadows ", ""}) {
+    const std::string out = dir / ("ground" + std::to_string(images.size()) + ".png");
+    const auto r = lpt::runLiveprobe(
+        "render --coeffs " + coeffs + " " + shadows + "--ground --tonemap linear --exposure " +
+        std::to_string(exposure) + " --pitch 25 --size 320x180 --headless --out " + out);
+    EXPECT_EQ(r.exitCode, 0) << r.output;
+    images.push_back(cv::imread(out, cv::IMREAD_GRAYSCALE));
+  }
+  const cv::Mat& shadowed = images[0];
+  const cv::Mat& lit = images[1];
+  if (mask.empty())
+    for (int i = 0; i < lit.rows * lit.cols; ++i)
+      mask.push_back(lp::srgbToLinear(shadowed.data[i] / 255.0f) <
+                     0.9f * lp::srgbToLinear(lit.data[i] / 255.0f));
+  double sum = 0;
+  int count = 0;
+  for (int i = 0; i < lit.rows * lit.cols; ++i)
+    if (mask[std::size_t(i)]) {
+      sum += 1.0 - lp::srgbToLinear(shadowed.data[i] / 255.0f) /
+                       std::max(1e-6f, lp::srgbToLinear(lit.data[i] / 255.0f));
+      ++count;
+    }
+  EXPECT_GT(count, 100) << coeffs;
+  return count ? sum / count : 0.0;
+}
+
+// The shadow a bracket's sun casts is as dark as the HDR frame's: the ground under the model is
+// darkened within 10% as much; one 8-bit exposure finds no sun to cast one.
+TEST(LiveHdr, TheBracketsSunCastsTheHdrShadow) {
+  lpt::TempDir dir;
+  const std::string hdr = dir / "hdr.json";
+  std::ofstream(hdr) << truthOf(skyFrame(30)).dump();
+  Emulator emu("MJPG_256x128", {skyFrame(30)}, "control_delay=2");
+  const auto r = emu.run("live /dev/video7" + kBracket + "--frames 16 --sun --coeffs-out " +
+                         emu.tmp / "c.jsonl");
+  ASSERT_EQ(r.exitCode, 0) << r.output;
+  const double gain = gainOf(r.output);
+  std::ofstream(dir / "merged.json") << readJsonl(emu.tmp / "c.jsonl").back().dump();
+  std::vector<bool> shadow;
+  const double truth = groundDarkening(hdr, 1.0, shadow, dir);
+  const double merged = groundDarkening(dir / "merged.json", 1.0 / gain, shadow, dir);
+  EXPECT_GT(truth, 0.3);
+  EXPECT_NEAR(merged, truth, 0.1 * truth);
+  std::ofstream(dir / "plain.json") << oneExposureFrames().back().dump();
+  EXPECT_LT(groundDarkening(dir / "plain.json", 1.0 / gain, shadow, dir), 0.1 * truth);
+  std::printf("ground darkening: HDR %.3f, bracket %.3f\n", truth, merged);
+}
+
+// The same camera without bracketing: exposed for the sky (median at mid-grey), it clips the sun
+// and cannot know it: the brightest pixel is not measured, and what is found of the sun holds a
+// few percent of the power at most, against 46% in the HDR frame.
+TEST(LiveHdr, OneExposureClipsTheSun) {
+  for (const json& f : oneExposureFrames()) {
+    EXPECT_FALSE(f["confidence"]["brightest_measured"].get<bool>());
+    EXPECT_GT(f["confidence"]["clipped_share"].get<double>(), 0.0);
+    if (f.contains("lights")) EXPECT_LT(f["lights"][0]["share"].get<double>(), 0.05);
+  }
+}
+
+// A camera that applies a new exposure three frames late and only in powers of two (100 us
+// units: 60 becomes 64, 3859 becomes 4096): the merge divides by what each frame reports, so L00
+// is right; dividing by what was asked would be 6% off.
+TEST(LiveHdr, LateAndRoundedExposuresAreTakenAsReported) {
+  const json truth = truthOf(skyFrame(30));
+  double gain = 1;
+  for (const json& f : bracketedFrames("RGB3_256x128", "control_delay=3,exposure_pow2", gain))
+    EXPECT_LT(worstCoefficient(f["coefficients"], truth["coefficients"], gain), 0.005);
+}
+
+// Cameras that cannot bracket say so in one line and exit 1.
+TEST(LiveHdr, CamerasThatCannotBracketAreRefused) {
+  const std::vector<std::tuple<std::string, std::string, std::string>> cases = {
+      {"no_exposure", "", "no exposure time control"},
+      {"refuse=" + std::to_string(V4L2_CID_EXPOSURE_ABSOLUTE), "", "Device or resource busy"},
+      {"ignore_exposure", "", "ignores its exposure control"},
+      {"", "--metadata /dev/video9", "no per-frame exposure times: /dev/video9"},
+  };
+  for (const auto& [faults, extra, says] : cases) {
+    Emulator emu("MJPG_256x128", {skyFrame(30)}, faults);
+    const auto r = emu.run("live /dev/video7" + kBracket + "--frames 40 " + extra);
+    EXPECT_EQ(r.exitCode, 1) << faults << "\n" << r.output;
+    const std::string last = r.output.substr(r.output.rfind('\n', r.output.size() - 2) + 1);
+    EXPECT_NE(last.find(says), std::string::npos) << faults << "\n" << r.output;
+  }
+  Emulator emu("MJPG_256x128", {skyFrame(30)});
+  for (const std::string& bad : {"-12", "-12,-12,0", "-30,0", "1,2,3,4,5,6", "a,0"}) {
+    const auto r = emu.run("live /dev/video7 --bracket " + bad);
+    EXPECT_EQ(r.exitCode, 1) << bad;
+    EXPECT_EQ(lpt::lineCount(r.output), 1) << r.output;
+    EXPECT_NE(r.output.find("--bracket"), std::string::npos) << r.output;
+  }
+}
+
+// A bracketed recording replays through the same merge, frame for frame: the coefficients are
+// the live run's, to the last digit.
+TEST(LiveHdr, ABracketedRecordingReplaysAsLive) {
+  Emulator emu("MJPG_256x128", {skyFrame(10), skyFrame(11), skyFrame(12)}, "control_delay=2");
+  const auto live = emu.run("live /dev/video7" + kBracket + "--frames 20 --sun --coeffs-out " +
+                            emu.tmp / "live.jsonl --record " + emu.tmp / "b.mkv");
+  ASSERT_EQ(live.exitCode, 0) << live.output;
+  const auto replay = lpt::runLiveprobe("replay " + emu.tmp / "b.mkv" +
+                                        " --sun --headless --size 64x36 --no-background --quiet "
+                                        "--coeffs-out " +
+                                        emu.tmp / "replay.jsonl");
+  ASSERT_EQ(replay.exitCode, 0) << replay.output;
+  const auto a = readJsonl(emu.tmp / "live.jsonl"), b = readJsonl(emu.tmp / "replay.jsonl");
+  ASSERT_EQ(a.size(), b.size());
+  for (std::size_t i = 0; i < a.size(); ++i) {
+    EXPECT_EQ(a[i]["coefficients"], b[i]["coefficients"]) << "frame " << i;
+    EXPECT_EQ(a[i].value("lights", json()), b[i].value("lights", json())) << "frame " << i;
+    EXPECT_EQ(a[i]["confidence"], b[i]["confidence"]) << "frame " << i;
+  }
+}
+
+// A hand over the lens (10 frames gone dark, or white): --hold-below keeps the last good
+// lighting through it, counts the held frames, and lets go once a clean bracket is back.
+TEST(LiveHdr, HoldBelowKeepsTheLightingThroughAnOccluder) {
+  for (const std::string& how : {"", ",occlude_white"}) {
+    Emulator emu("MJPG_256x128", {skyFrame(30)},
+                 "control_delay=2,occlude_from=30,occlude_frames=10" + how);
+    const auto r =
+        emu.run("live /dev/video7" + kBracket + "--frames 45 --sun --hold-below 0.7 --coeffs-out " +
+                emu.tmp / "c.jsonl");
+    ASSERT_EQ(r.exitCode, 0) << r.output;
+    const auto frames = readJsonl(emu.tmp / "c.jsonl");
+    json good;
+    int held = 0;
+    for (const json& f : frames) {
+      const long s = f["sequence"].get<long>();
+      const bool isHeld = f["confidence"]["held"].get<bool>();
+      held += isHeld;
+      if (s >= 31 && s <= 39) EXPECT_TRUE(isHeld) << how << " frame " << s;
+      if (isHeld) {
+        EXPECT_LT(f["confidence"]["value"].get<double>(), 0.7);
+        EXPECT_EQ(f["coefficients"], good["coefficients"]) << how << " frame " << s;
+      } else if (s < 30) {
+        good = f;
+      }
+      if (s >= 43) EXPECT_FALSE(isHeld) << how << " frame " << s;
+    }
+    EXPECT_GE(held, 10) << how;
+    EXPECT_NE(r.output.find(std::to_string(held) + " held"), std::string::npos) << r.output;
+  }
+}
+
+// calibrate on a camera whose response is a gamma of 2.6, not sRGB: the recovered curve is that
+// power law, and a bracket merged with it gives the source's radiance (up to the one scale a
+// response leaves open) within 5% wherever an exposure read the pixel unclipped.
+TEST(LiveHdr, CalibrateRecoversTheResponse) {
+  Emulator emu("RGB3_256x128", {skyFrame(30)}, "control_delay=2");
+  emu.env = "LPEMU_RESPONSE=gamma=2.6 ";
+  const auto cal = emu.run("calibrate /dev/video7 --lock-exposure 0.3 --out " + emu.tmp / "r.json");
+  ASSERT_EQ(cal.exitCode, 0) << cal.output;
+  EXPECT_NE(cal.output.find("like a gamma of 2.6"), std::string::npos) << cal.output;
+  const lp::CameraResponse response = lp::CameraResponse::load(emu.tmp / "r.json");
+  for (int code = 32; code <= 240; code += 16)
+    EXPECT_NEAR(response.linear[1][std::size_t(code)], std::pow(code / 255.0, 2.6),
+                0.03 * std::pow(code / 255.0, 2.6));
+
+  const auto live = emu.run("live /dev/video7" + kBracket + "--frames 12 --response " +
+                            emu.tmp / "r.json --record " + emu.tmp / "b.mkv");
+  ASSERT_EQ(live.exitCode, 0) << live.output;
+  // The recorded bracket, merged by the library as replay merges it.
+  auto source = lp::openSource(emu.tmp / "b.mkv");
+  ASSERT_EQ(source->bracketFrames(), 3);
+  lp::BracketMerger merger({.frames = 3, .response = response});
+  lp::Frame in, merged;
+  lp::FrameConfidence c;
+  while (source->next(in)) c = merger.add(in, merged);
+  ASSERT_EQ(c.exposures, 3);
+  const lp::Image truth = lp::loadImage(skyFrame(30));
+  std::vector<double> ratio;
+  for (std::size_t i = 0; i < truth.rgb.size(); ++i)
+    if (truth.rgb[i] > 0) ratio.push_back(merged.rgb[i] / truth.rgb[i]);
+  std::nth_element(ratio.begin(), ratio.begin() + long(ratio.size() / 2), ratio.end());
+  const double scale = ratio[ratio.size() / 2];
+  for (int y = 0; y < 128; y += 8) {
+    double sm = 0, st = 0;
+    int bad = 0;
+    for (int x = 0; x < 256; ++x)
+      for (int c = 0; c < 3; ++c) {
+        std::size_t i = (std::size_t(y) * 256 + x) * 3 + c;
+        sm += merged.rgb[i] / scale;
+        st += truth.rgb[i];
+        bad += std::abs(merged.rgb[i] / scale - truth.rgb[i]) > 0.05 * truth.rgb[i];
+      }
+    std::printf("row %d truth %.4f ratio %.3f bad %d\n", y, st / 768, sm / st, bad);
+  }
+  // Pixels the bracket measured: below the clip of its shortest exposure, above the floor of
+  // its longest (0.05% of the sky's median).
+  std::size_t measured = 0, within = 0;
+  for (std::size_t i = 0; i < truth.rgb.size(); ++i) {
+    if (!(truth.rgb[i] > 0)) continue;
+    ++measured;
+    const bool ok = std::abs(merged.rgb[i] / scale - truth.rgb[i]) <= 0.05 * truth.rgb[i];
+    within += ok;
+    static int shown = 0;
+    if (!ok && shown++ < 4000 && i % 97 == 0)
+      std::printf("px x %zu y %zu c %zu truth %g merged %g\n", i / 3 % 256, i / 3 / 256, i % 3,
+                  truth.rgb[i], merged.rgb[i] / scale);
+  }
+  EXPECT_GT(double(within) / double(measured), 0.99) << within << " of " << measured;
+
+  for (const std::string& faults : {"no_exposure", "ignore_exposure"}) {
+    Emulator bad("RGB3_256x128", {skyFrame(30)}, faults);
+    const auto r = bad.run("calibrate /dev/video7 --lock-exposure 0.2 --out " + bad.tmp / "r.json");
+    EXPECT_EQ(r.exitCode, 1) << faults << "\n" << r.output;
+    EXPECT_FALSE(fs::exists(bad.tmp / "r.json"));
+    EXPECT_NE(r.output.find(faults == "no_exposure" ? "no exposure time control" : "ignores"),
+              std::string::npos)
+        << r.output;
+  }
+}
+
+}  // namespace
