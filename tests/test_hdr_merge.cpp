@@ -9,6 +9,7 @@
 #include <nlohmann/json.hpp>
 #include <vector>
 
+#include "liveprobe/capture/frame_processor.h"
 #include "liveprobe/capture/hdr_merge.h"
 #include "liveprobe/capture/image.h"
 #include "liveprobe/capture/v4l2.h"
@@ -175,6 +176,41 @@ TEST(HdrMerge, AResponseFileIsCheckedWhole) {
   falling["response"][0][3] = 0.0;  // red falls from code 2 to code 3
   failsWith(falling.dump(), "falls at code 3 of channel R");
   failsWith(R"({"response": 7})", "3 curves");
+}
+
+// One 8-bit frame: its clipped share is the power of the pixels with a channel at 255 over the
+// map's, both by solid angle (here summed by hand over sin(theta) rows); float frames are
+// trusted whole.
+TEST(FrameConfidence, OneFramesClippedShareIsItsClippedPixelsPower) {
+  Frame f;
+  f.format = lp::PixelFormat::Bgr8;
+  f.width = kW, f.height = kH;
+  f.radianceScale = 4.0;
+  f.bgr8.assign(std::size_t(kW) * kH * 3, 128);
+  for (int y = 10; y < 14; ++y)
+    for (int x = 30; x < 36; ++x) std::fill_n(&f.bgr8[(std::size_t(y) * kW + x) * 3], 3, 255);
+  lp::FrameProcessor processor(lp::FrameProcessorOptions{});
+  const lp::FrameLighting lit = processor.process(f);
+  const FrameConfidence c = processor.confidence(f, lit);
+  double clipped = 0, total = 0;
+  for (int y = 0; y < kH; ++y) {
+    const double w = std::sin(M_PI * (y + 0.5) / kH);
+    for (int x = 0; x < kW; ++x) {
+      const bool hot = y >= 10 && y < 14 && x >= 30 && x < 36;
+      const double v = hot ? 1.0 : lp::srgbToLinear(128 / 255.0f);
+      total += v * w;
+      if (hot) clipped += v * w;
+    }
+  }
+  EXPECT_NEAR(c.clippedShare, clipped / total, 1e-4);
+  EXPECT_FALSE(c.brightestMeasured);
+  Frame hdr;
+  hdr.format = lp::PixelFormat::RgbF32;
+  hdr.width = kW, hdr.height = kH;
+  hdr.rgb.assign(std::size_t(kW) * kH * 3, 5.0f);
+  const FrameConfidence h = processor.confidence(hdr, processor.process(hdr));
+  EXPECT_EQ(h.clippedShare, 0.0);
+  EXPECT_TRUE(h.brightestMeasured);
 }
 
 TEST(HdrMerge, OnlyBracketsOfEightBitFramesMerge) {

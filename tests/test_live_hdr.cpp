@@ -214,13 +214,30 @@ TEST(LiveHdr, TheBracketsSunCastsTheHdrShadow) {
 
 // The same camera without bracketing: exposed for the sky (median at mid-grey), it clips the sun
 // and cannot know it: the brightest pixel is not measured, and what is found of the sun holds a
-// few percent of the power at most, against 46% in the HDR frame.
-TEST(LiveHdr, OneExposureClipsTheSun) {
+// few percent of the power at most, against 46% in the HDR frame. A bracket too short to reach
+// the sun (-4,0) finds it, marked clipped, its share a lower bound.
+TEST(LiveHdr, ASunTheExposuresCannotReachIsALowerBound) {
   for (const json& f : oneExposureFrames()) {
     EXPECT_FALSE(f["confidence"]["brightest_measured"].get<bool>());
     EXPECT_GT(f["confidence"]["clipped_share"].get<double>(), 0.0);
     if (f.contains("lights")) EXPECT_LT(f["lights"][0]["share"].get<double>(), 0.05);
   }
+  Emulator emu("MJPG_256x128", {skyFrame(30)}, "control_delay=2");
+  const auto r = emu.run(
+      "live /dev/video7 --bracket -4,0 --lock-exposure 0.3 --headless --view-size 64x36 "
+      "--no-background --frames 12 --sun --coeffs-out " +
+      emu.tmp / "c.jsonl");
+  ASSERT_EQ(r.exitCode, 0) << r.output;
+  int complete = 0;
+  for (const json& f : readJsonl(emu.tmp / "c.jsonl")) {
+    if (f["confidence"]["exposures"] != 2) continue;
+    ++complete;
+    EXPECT_FALSE(f["confidence"]["brightest_measured"].get<bool>());
+    ASSERT_TRUE(f.contains("lights")) << f.dump();
+    EXPECT_TRUE(f["lights"][0]["clipped"].get<bool>());
+    EXPECT_LT(f["lights"][0]["share"].get<double>(), 0.2);
+  }
+  EXPECT_GE(complete, 5);
 }
 
 // A camera that applies a new exposure three frames late and only in powers of two (100 us

@@ -2,6 +2,7 @@
 // Helpers shared by the tests: data paths that must exist (a missing data folder fails, it is
 // never skipped), temporary folders, running the liveprobe binary.
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <array>
@@ -23,9 +24,11 @@ struct TempDir {
   std::filesystem::path path;
   TempDir() {
     static int made = 0;
+    // The process id: two runs of one suite at once (a build's tests and a sanitizer build's)
+    // must not share a folder.
     path = std::filesystem::temp_directory_path() /
-           ("liveprobe-test-" + std::to_string(::testing::UnitTest::GetInstance()->random_seed()) +
-            "-" + ::testing::UnitTest::GetInstance()->current_test_info()->name() +
+           ("liveprobe-test-" + std::to_string(::getpid()) + "-" +
+            ::testing::UnitTest::GetInstance()->current_test_info()->name() +
             (made++ ? "-" + std::to_string(made) : std::string()));
     std::filesystem::remove_all(path);
     std::filesystem::create_directories(path);

@@ -14,7 +14,6 @@
 #include "liveprobe/capture/photometry.h"
 #include "liveprobe/capture/resample.h"
 #include "liveprobe/sh/error.h"
-#include "liveprobe/sh/projector.h"
 #include "progress.h"
 
 namespace lp::cli {

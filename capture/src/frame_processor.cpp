@@ -1,5 +1,9 @@
 #include "liveprobe/capture/frame_processor.h"
 
+#include <cmath>
+#include <cstring>
+#include <numbers>
+
 #include "liveprobe/capture/resample.h"
 #include "liveprobe/sh/error.h"
 
@@ -36,21 +40,53 @@ void FrameProcessor::fit(const Frame& frame) {
   if (opt_.lights.maxLights > 0) extractor_ = std::make_unique<LightExtractor>(*projector_);
 }
 
+FrameConfidence FrameProcessor::confidence(const Frame& frame, const FrameLighting& lit) const {
+  FrameConfidence c;
+  if (frame.format != PixelFormat::Bgr8 || !projector_) return c;
+  auto luminance = [](float r, float g, float b) { return 0.2126 * r + 0.7152 * g + 0.0722 * b; };
+  // The whole map's power: L00 = Y00 times the integral of the radiance.
+  const Rgb& l00 = lit.whole.c[0];
+  const double total = luminance(l00[0], l00[1], l00[2]) / double(kY00);
+  // The clipped pixels' power, by the projector's solid angles (an equirect formula when the
+  // projection was of a reduced frame).
+  const auto& samples = projector_->samples();
+  const bool own = samples.size() == std::size_t(frame.width) * std::size_t(frame.height);
+  const auto& lut = linearizer_.table();
+  const double row = 2.0 * std::numbers::pi / frame.width * std::numbers::pi / frame.height;
+  const std::uint8_t* data = frame.bgr8.data();
+  const std::uint8_t* end = data + frame.bgr8.size();
+  double clipped = 0;
+  for (const std::uint8_t* p = data; p < end && (p = static_cast<const std::uint8_t*>(
+                                                     std::memchr(p, 255, std::size_t(end - p))));) {
+    const std::size_t px = std::size_t(p - data) / 3;
+    const std::uint8_t* q = data + px * 3;
+    const double solidAngle =
+        own ? samples[px].solidAngle
+            : row * std::sin(std::numbers::pi * (double(px / std::size_t(frame.width)) + 0.5) /
+                             frame.height);
+    clipped += luminance(lut[q[2]], lut[q[1]], lut[q[0]]) * solidAngle;
+    c.brightestMeasured = false;
+    p = q + 3;
+  }
+  clipped *= frame.radianceScale;
+  c.clippedShare = total > 0 ? std::min(1.0, clipped / total) : 0.0;
+  return c;
+}
+
 FrameLighting FrameProcessor::process(const Frame& frame, Executor* executor, const Image* linear) {
   fit(frame);
   // The view: an 8-bit frame through the lookup table (the photometry's exposure in it) inside
   // the projection; a float frame as it is, scaled after; a reduction reads the linear copy.
-  Image small;
   PanoramaView view;
   float scale = float(frame.radianceScale);
   if (opt_.reduce > 1) {
-    Image converted;
     if (!linear) {
-      linearizer_.convert(frame, converted);
-      linear = &converted;
+      linearizer_.convert(frame, converted_);
+      linear = &converted_;
     }
-    small = reduceEquirect(linear->rgb.data(), linear->width, linear->height, opt_.reduce);
-    view = PanoramaView::rgbF32(small.rgb.data(), small.width, small.height, projector_->spec());
+    reduceEquirect(linear->rgb.data(), linear->width, linear->height, opt_.reduce, reduced_);
+    view = PanoramaView::rgbF32(reduced_.rgb.data(), reduced_.width, reduced_.height,
+                                projector_->spec());
   } else if (frame.format == PixelFormat::Bgr8) {
     view = PanoramaView::bgrU8(frame.bgr8.data(), frame.width, frame.height,
                                linearizer_.table().data(), projector_->spec());

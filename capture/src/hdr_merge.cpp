@@ -180,24 +180,6 @@ float rowWeight(int y, int h, bool equirect) {
 
 }  // namespace
 
-FrameConfidence singleFrameConfidence(const Frame& frame, const std::array<float, 256>& linear,
-                                      bool equirect) {
-  if (frame.format != PixelFormat::Bgr8) return {};
-  MergeTally t;
-  for (int y = 0; y < frame.height; ++y) {
-    const float w = rowWeight(y, frame.height, equirect);
-    const std::uint8_t* p = frame.bgr8.data() + std::size_t(y) * frame.width * 3;
-    for (int x = 0; x < frame.width; ++x, p += 3) {
-      const float l = luminance(linear[p[2]], linear[p[1]], linear[p[0]]);
-      const bool clipped = p[0] == 255 || p[1] == 255 || p[2] == 255;
-      t.power += double(l * w);
-      if (clipped) t.clippedPower += double(l * w);
-      if (l > t.brightest) t.brightest = l, t.brightestClipped = clipped;
-    }
-  }
-  return t.confidence(std::size_t(frame.width) * frame.height, 1);
-}
-
 BracketMerger::BracketMerger(MergeOptions options) : opt_(std::move(options)) {
   if (opt_.frames < 1 || opt_.frames > kMaxBracket)
     throw Error("a bracket merges 1 to " + std::to_string(kMaxBracket) + " frames");

@@ -156,26 +156,21 @@ bool CapturePipeline::grab(Loop& s) {
 }
 
 void CapturePipeline::merge(Loop& s, ProcessedFrame& out) const {
-  if (s.merger) {
-    out.confidence = s.merger->add(s.frame, s.merged, s.pool.get());
-    std::swap(s.frame, s.merged);
-  } else if (s.frame.format == PixelFormat::Bgr8 && countSaturated(s.frame) > 0) {
-    out.confidence = singleFrameConfidence(s.frame, s.processor.linearizer().table(),
-                                           opt_.layout.layout == Layout::Equirect);
-  }
+  if (!s.merger) return;
+  out.confidence = s.merger->add(s.frame, s.merged, s.pool.get());
+  std::swap(s.frame, s.merged);
 }
 
 bool CapturePipeline::hold(Loop& s, ProcessedFrame& out) {
-  if (opt_.holdBelow > 0 && out.confidence.value() < opt_.holdBelow && s.lastGood) {
-    out.radiance = s.lastGood->radiance;
-    out.unsmoothed = s.lastGood->unsmoothed;
-    out.lights = s.lastGood->lights;
-    out.held = true;
-    std::lock_guard lock(mutex_);
-    ++stats_.held;
-    return true;
-  }
-  return false;
+  // Nothing good yet: the frame as it is.
+  if (opt_.holdBelow <= 0 || out.confidence.value() >= opt_.holdBelow || !s.lastGood) return false;
+  out.radiance = s.lastGood->radiance;
+  out.unsmoothed = s.lastGood->unsmoothed;
+  out.lights = s.lastGood->lights;
+  out.held = true;
+  std::lock_guard lock(mutex_);
+  ++stats_.held;
+  return true;
 }
 
 void CapturePipeline::convertForDisplay(Loop& s, ProcessedFrame& out) const {
@@ -197,7 +192,7 @@ void CapturePipeline::convertForDisplay(Loop& s, ProcessedFrame& out) const {
   }
 }
 
-Sh9 CapturePipeline::project(Loop& s, ProcessedFrame& out) const {
+void CapturePipeline::project(Loop& s, ProcessedFrame& out) {
   // A reduction reads the display's linear copy when there is one.
   FrameLighting lit;
   try {
@@ -205,9 +200,20 @@ Sh9 CapturePipeline::project(Loop& s, ProcessedFrame& out) const {
   } catch (const Error& e) {
     throw Error(source_->describe() + ": frame " + std::to_string(out.index + 1) + ": " + e.what());
   }
+  // A merged bracket judged itself; a single frame is judged by its clipped pixels. A bracket
+  // whose brightest pixel clipped in every exposure has its strongest light's power as a lower
+  // bound, as an 8-bit frame's clipped light has.
+  if (!s.merger)
+    out.confidence = s.processor.confidence(s.frame, lit);
+  else if (!out.confidence.brightestMeasured && !lit.lights.empty())
+    lit.lights.front().clipped = true;
+  // Below --hold-below the last good lighting stands, and the smoothing does not see the frame.
+  if (hold(s, out)) return;
   out.unsmoothed = lit.radiance;
   out.lights = s.lightSmoother.update(lit.lights, out.timestamp);
-  return s.smoother.update(lit.radiance, out.timestamp);
+  out.radiance = s.smoother.update(lit.radiance, out.timestamp);
+  if (opt_.holdBelow > 0 && out.confidence.value() >= opt_.holdBelow)
+    s.lastGood = Loop::Lit{out.radiance, out.unsmoothed, out.lights};
 }
 
 template <class Ready>
@@ -263,11 +269,7 @@ void CapturePipeline::run() {
       const auto tm = Clock::now();
       convertForDisplay(s, out);
       const auto t2 = Clock::now();
-      if (!hold(s, out)) {
-        out.radiance = project(s, out);
-        if (opt_.holdBelow > 0 && out.confidence.value() >= opt_.holdBelow)
-          s.lastGood = Loop::Lit{out.radiance, out.unsmoothed, out.lights};
-      }
+      project(s, out);
       if (s.image && s.frame.radianceScale != 1.0)
         for (float& v : s.image->rgb) v *= float(s.frame.radianceScale);
       const auto t3 = Clock::now();

@@ -28,14 +28,21 @@ Image resampleToEquirect(const Image& frame, const LayoutSpec& spec, int width, 
 }
 
 Image reduceEquirect(const float* rgb, int width, int height, int f) {
+  Image out;
+  reduceEquirect(rgb, width, height, f, out);
+  return out;
+}
+
+void reduceEquirect(const float* rgb, int width, int height, int f, Image& out) {
   if (f < 1 || width % f || height % f)
     throw Error("reduce: " + std::to_string(width) + "x" + std::to_string(height) +
                 " is not a multiple of " + std::to_string(f));
   const int w = width / f, h = height / f;
-  Image out(w, h);
-  std::vector<float> acc(std::size_t(w) * 3);
+  out.width = w, out.height = h;
+  out.rgb.resize(std::size_t(w) * std::size_t(h) * 3);
   for (int I = 0; I < h; ++I) {
-    std::fill(acc.begin(), acc.end(), 0.0f);
+    float* acc = out.pixel(0, I);  // the output row gathers the sums
+    std::fill(acc, acc + std::size_t(w) * 3, 0.0f);
     double total = 0;
     for (int r = 0; r < f; ++r) {
       const int i = I * f + r;
@@ -50,10 +57,8 @@ Image reduceEquirect(const float* rgb, int width, int height, int f) {
       }
     }
     const float norm = float(1.0 / (total * f));
-    float* o = out.pixel(0, I);
-    for (std::size_t x = 0; x < acc.size(); ++x) o[x] = acc[x] * norm;
+    for (std::size_t x = 0; x < std::size_t(w) * 3; ++x) acc[x] *= norm;
   }
-  return out;
 }
 
 }  // namespace lp

@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "liveprobe/capture/frame.h"
+#include "liveprobe/capture/hdr_merge.h"
 #include "liveprobe/capture/image.h"
 #include "liveprobe/capture/photometry.h"
 #include "liveprobe/sh/executor.h"
@@ -51,6 +52,12 @@ class FrameProcessor {
   FrameLighting process(const Frame& frame, Executor* executor = nullptr,
                         const Image* linear = nullptr);
 
+  /// How far one frame's lighting (from process()) can be trusted: an 8-bit frame's pixels with
+  /// a channel at 255 are clipped, their power (by solid angle) a lower bound against the whole
+  /// map's (from L00), and then the brightest source is not known to be measured. Reads only the
+  /// clipped pixels. Float frames: full confidence.
+  FrameConfidence confidence(const Frame& frame, const FrameLighting& lighting) const;
+
   /// The projector of the last frame's size (nullptr before the first frame).
   const Projector* projector() const;
   const Linearizer& linearizer() const { return linearizer_; }
@@ -64,6 +71,7 @@ class FrameProcessor {
   // On the heap: the extractor points at the projector, and both survive a move.
   std::unique_ptr<Projector> projector_;
   std::unique_ptr<LightExtractor> extractor_;
+  Image converted_, reduced_;  ///< a reduction's buffers, kept from frame to frame
 };
 
 /// Whether the display takes this frame as it is: 8-bit sRGB in a layout the background shader

@@ -98,11 +98,6 @@ struct MergeOptions {
   double ghostSigma = 0.3;  ///< motion weighting: sigma of the log radiance ratio
 };
 
-/// The confidence of one 8-bit frame on its own (no bracket): pixels with a channel at 255 are
-/// clipped. `linear` decodes a code (the photometry's table). Float frames: full confidence.
-FrameConfidence singleFrameConfidence(const Frame& frame, const std::array<float, 256>& linear,
-                                      bool equirect);
-
 class BracketMerger {
  public:
   explicit BracketMerger(MergeOptions options);

@@ -177,10 +177,12 @@ class CapturePipeline {
   bool waitForTurn(Loop& s);  ///< the pause / step gate; false when stopping
   bool grab(Loop& s);         ///< the next frame (looping if asked); false at the end
   void merge(Loop& s, ProcessedFrame& out) const;  ///< a bracket into radiance; the confidence
-  bool hold(Loop& s, ProcessedFrame& out);         ///< below holdBelow: the last good lighting
+  /// Below holdBelow, after a good frame: the last good lighting stands (counted).
+  bool hold(Loop& s, ProcessedFrame& out);
   void convertForDisplay(Loop& s, ProcessedFrame& out) const;
-  Sh9 project(Loop& s, ProcessedFrame& out) const;  ///< the frame through its FrameProcessor
-  void pace(Loop& s, double timestamp);             ///< --realtime: waits for the frame's time
+  /// The frame through its FrameProcessor, judged, held or smoothed.
+  void project(Loop& s, ProcessedFrame& out);
+  void pace(Loop& s, double timestamp);  ///< --realtime: waits for the frame's time
   /// Waits on cv_ until ready(), stop, `until`, or PipelineOptions::interrupted (polled).
   template <class Ready>
   void waitPolling(std::unique_lock<std::mutex>& lock, std::chrono::steady_clock::time_point until,

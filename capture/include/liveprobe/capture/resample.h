@@ -16,5 +16,7 @@ Image resampleToEquirect(const Image& frame, const LayoutSpec& spec, int width, 
 /// amount (README; the test bounds it at 0.1% of L00 for f = 4 on 1K HDRs), for 1/f^2 the work.
 /// W and H must be multiples of f.
 Image reduceEquirect(const float* rgb, int width, int height, int factor);
+/// The same into `out`, whose storage is reused (a stream reduces every frame).
+void reduceEquirect(const float* rgb, int width, int height, int factor, Image& out);
 
 }  // namespace lp
