@@ -227,14 +227,14 @@ struct Judge {
 
   bool well(const Reading& r) const { return r.code >= kWellExposed && r.code < clip; }
   std::pair<float, float> bounds(const Reading& r) const {
-    // Both well exposed is the common case: operator() checks it first, without bounds.
     constexpr float kInf = std::numeric_limits<float>::infinity();
     if (r.code <= floor) return {0.0f, wellLinear * r.scale};
     if (r.code >= clip) return {belowClipLinear * r.scale, kInf};
     const float k = well(r) ? 1.25f : 2.0f;
     return {r.peak / k, r.peak * k};
   }
-  // Whether an older reading and the newest tell the same story.
+  // Whether an older reading and the newest tell the same story. Both well exposed, the common
+  // case, is a ratio; otherwise their intervals must meet.
   Verdict operator()(const Reading& old, const Reading& now) const {
     if (well(old) && well(now)) {
       const float q = old.peak / now.peak;
@@ -242,8 +242,7 @@ struct Judge {
     }
     const auto [lo0, hi0] = bounds(old);
     const auto [lo1, hi1] = bounds(now);
-    if (lo0 > hi1 || lo1 > hi0) return Verdict::Disagree;
-    return well(old) && well(now) ? Verdict::Agree : Verdict::Unknown;
+    return lo0 > hi1 || lo1 > hi0 ? Verdict::Disagree : Verdict::Unknown;
   }
 };
 
