@@ -203,9 +203,10 @@ void CapturePipeline::project(Loop& s, ProcessedFrame& out) {
   // A merged bracket judged itself; a single frame is judged by its clipped pixels. A bracket
   // whose brightest pixel clipped in every exposure has its strongest light's power as a lower
   // bound, as an 8-bit frame's clipped light has.
-  if (!s.merger)
-    out.confidence = s.processor.confidence(s.frame, lit);
-  else if (!out.confidence.brightestMeasured && !lit.lights.empty())
+  if (!s.merger) {
+    // convertForDisplay counted the values at 255: without any, the frame is trusted whole.
+    if (out.saturated > 0) out.confidence = s.processor.confidence(s.frame, lit);
+  } else if (!out.confidence.brightestMeasured && !lit.lights.empty())
     lit.lights.front().clipped = true;
   // Below --hold-below the last good lighting stands, and the smoothing does not see the frame.
   if (hold(s, out)) return;
