@@ -141,6 +141,32 @@ TEST(HdrMerge, ACoveredLensIsLeftOutOrFlagged) {
   }
 }
 
+// A hand or a white card over the lens in the newest frame, whatever exposure it came at and
+// whatever exposures the two frames before it had (a camera that applies its controls late
+// repeats or skips stops), after a merge that measured the whole scene: the light measured a
+// frame ago is gone or unmeasured, and the confidence says so.
+TEST(HdrMerge, AnOccludedNewestFrameIsNeverTrusted) {
+  const auto radiance = scene();
+  const std::vector<double> bracket = {1.0 / 4096, 1.0 / 64, 1.0};
+  for (const std::uint8_t code : {std::uint8_t(2), std::uint8_t(255)})
+    for (std::size_t a = 0; a < 3; ++a)
+      for (std::size_t b = 0; b < 3; ++b)
+        for (std::size_t now = 0; now < 3; ++now) {
+          BracketMerger merger(MergeOptions{.frames = 3});
+          Frame out;
+          for (auto t = bracket.rbegin(); t != bracket.rend(); ++t)
+            merger.add(shootSrgb(radiance, *t), out);
+          merger.add(shootSrgb(radiance, bracket[a]), out);
+          merger.add(shootSrgb(radiance, bracket[b]), out);
+          Frame covered = shootSrgb(radiance, bracket[now]);
+          std::fill(covered.bgr8.begin(), covered.bgr8.end(), code);
+          const FrameConfidence c = merger.add(covered, out);
+          EXPECT_LT(c.value(), 0.5)
+              << "code " << int(code) << ", exposures " << a << b << now << ": clipped "
+              << c.clippedShare << ", dark " << c.darkShare << ", agreement " << c.agreement;
+        }
+}
+
 TEST(HdrMerge, TheResponseRecoveredFromASweepIsThePowerLaw) {
   const auto radiance = scene();
   std::vector<Frame> frames;

@@ -250,7 +250,7 @@ struct Judge {
 
 // One merge's frames as the pixel loop reads them, and the steps of a pixel's merge.
 struct BracketView {
-  int n = 0, newest = 0, shortest = 0, longest = 0;
+  int n = 0, newest = 0, longest = 0;
   std::array<bool, kMaxBracket> usable{};
   std::array<const std::uint8_t*, kMaxBracket> pixels{};
   std::array<float, kMaxBracket> scales{};
@@ -294,21 +294,25 @@ struct BracketView {
   }
 
   /// One pixel: its radiance in `c`; whether it is clipped (a lower bound) and whether an exposure
-  /// read it well; the light the newest frame contradicted (< 0: none).
+  /// read it well; the light the newest frame contradicted (< 0: none); the most the newest
+  /// frame allows there.
   struct Pixel {
     bool clipped = false, wellSeen = false;
-    float lost = -1;
+    float lost = -1, ceiling = 0;
   };
   Pixel merge(std::size_t at, float* c) const {
     Reading r[kMaxBracket];
-    bool anyClipped = false;
+    int clipped = -1;  // the clipped reading that bounds the pixel highest
     for (int i = 0; i < n; ++i) {
       read(i, at, r[i]);
       if (!usable[std::size_t(i)]) r[i].w = 0;
-      anyClipped |= usable[std::size_t(i)] && r[i].code >= judge.clip;
+      if (usable[std::size_t(i)] && r[i].code >= judge.clip &&
+          (clipped < 0 || r[i].peak > r[clipped].peak))
+        clipped = i;
     }
     Pixel px;
     px.lost = resolveMotion(r);
+    px.ceiling = judge.bounds(r[newest]).second;
     float sw = 0;
     c[0] = c[1] = c[2] = 0;
     for (int i = 0; i < n; ++i) {
@@ -321,11 +325,12 @@ struct BracketView {
       return px;
     }
     // Unmeasured. Contradicted: as the newest frame reads it. Clipped somewhere: at least the
-    // shortest exposure's value. Dark everywhere: the longest exposure's.
+    // highest bound a clipped reading sets (the shortest clipped exposure's value; a darker
+    // reading elsewhere only bounds it from above). Dark everywhere: the longest exposure's.
     const bool contradicted = px.lost >= 0;
-    const int i = contradicted ? newest : anyClipped ? shortest : longest;
+    const int i = contradicted ? newest : clipped >= 0 ? clipped : longest;
     std::copy(r[i].e, r[i].e + 3, c);
-    px.clipped = contradicted ? r[i].code >= judge.clip : anyClipped;
+    px.clipped = contradicted ? r[i].code >= judge.clip : clipped >= 0;
     return px;
   }
 };
@@ -373,12 +378,11 @@ BracketView BracketMerger::prepare(int& exposures) const {
           hat(z, opt_.noiseFloor, opt_.clipLevel) / v.scales[std::size_t(i)];
   }
   v.usable = usableFrames(v);
-  v.shortest = v.longest = v.newest;
+  v.longest = v.newest;
   std::vector<float> distinct;
   for (int i = 0; i < v.n; ++i) {
     if (!v.usable[std::size_t(i)]) continue;
     const float s = v.scales[std::size_t(i)];
-    if (s > v.scales[std::size_t(v.shortest)]) v.shortest = i;
     if (s < v.scales[std::size_t(v.longest)]) v.longest = i;
     if (std::none_of(distinct.begin(), distinct.end(),
                      [&](float d) { return std::abs(d - s) <= 0.02f * s; }))
@@ -401,9 +405,12 @@ MergeTally BracketMerger::mergeRow(const BracketView& v, std::size_t y, float* o
     const BracketView::Pixel px = v.merge((y * std::size_t(w) + std::size_t(x)) * 3, out);
     const float l = luminance(out[0], out[1], out[2]);
     dark += !px.clipped && !px.wellSeen;
-    // What was lost: at least what the older readings say, and what the last merge saw.
-    if (px.lost >= 0)
-      lostPower += std::max(std::max(px.lost, fresh ? previous[x] : 0.0f) - l, 0.0f);
+    // What was lost: at least what the older readings say, and what the last merge saw where
+    // the newest frame rules that out (older frames that all missed it, as a window of repeated
+    // long exposures misses the sun, cannot vouch for it).
+    const float seen = fresh ? previous[x] : 0.0f;
+    if (px.lost >= 0 || seen > 1.25f * px.ceiling)
+      lostPower += std::max(std::max(px.lost, seen) - l, 0.0f);
     previous[x] = l;
     power += l;
     if (px.clipped) clippedPower += l;

@@ -3,13 +3,15 @@
 // time, merged into one radiance frame (Debevec and Malik, SIGGRAPH 1997). Per pixel, a weighted
 // average of response^-1(code) / exposure over the frames where the pixel is neither clipped nor
 // in the noise floor, weighted by the hat (mid-range codes count most) times the exposure time (a
-// longer exposure gathers more light for the same code noise); a pixel clipped in every frame
-// keeps the shortest exposure's value, a lower bound, and is counted as clipped.
+// longer exposure gathers more light for the same code noise); a pixel no frame measured but some
+// frame clipped keeps the highest bound a clipped reading sets (the shortest clipped exposure's
+// value), a lower bound, and is counted as clipped.
 //
 // Motion between the frames of a set (the newest frame is the truth of now): where an older
 // reading and the newest contradict each other (radiances 25% apart where both are well exposed,
 // or one dark or clipped where the other's reading says it cannot be), the older one is dropped,
-// and what it saw counts as lost light; where both agree, the older one is weighed by how closely
+// and what it saw counts as lost light, as does what the last merge saw where the newest frame
+// rules it out; where both agree, the older one is weighed by how closely
 // (exp(-d^2 / (2 sigma^2)), d the log ratio). A frame that contradicts the newest on most of the
 // picture (a hand over the lens, a flash) is left out whole. A source the newest frame clips (the
 // sun at 0 EV) can only come from an older, shorter exposure: it lags by up to N - 1 frames.
