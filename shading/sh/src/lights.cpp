@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <optional>
 #include <unordered_map>
 
 namespace lp {
@@ -266,33 +267,57 @@ struct RegionSums {
 
 }  // namespace
 
-LightSplit LightExtractor::extract(const PanoramaView& frame, const Sh9& whole,
-                                   const std::vector<float>& rowPeaks,
-                                   const LightOptions& opt) const {
-  LightSplit out{whole, {}};
-  const float totalLum = luminance(whole.c[0]) / kY00;  // L00 = Y00 * integral of L
-  if (opt.maxLights <= 0 || !(totalLum > 0.0f) || rowPeaks.size() != std::size_t(frame.height))
-    return out;
-  const auto& samples = projector_->samples();
-  const Index& index = *index_;
-  const std::size_t width = std::size_t(frame.width);
-  const bool u8 = frame.format == PanoramaFormat::BgrU8 || frame.format == PanoramaFormat::RgbU8;
-  const float clipLevel = u8 ? frame.decode[255] : INFINITY;
-  std::unordered_map<std::uint32_t, Rgb> filled;  // residual values of the lights' pixels
-  // A run's values, with the earlier lights' pixels as they left them.
-  const auto readRun = [&](const Index::Run& r, Rgb* values) {
-    readPixels(frame, r.row, r.col, r.count, values);
-    if (!filled.empty())
-      for (std::uint32_t k = 0; k < r.count; ++k)
-        if (const auto it = filled.find(std::uint32_t(r.row * width + r.col + k));
-            it != filled.end())
-          values[k] = it->second;
-  };
-  std::vector<Rgb> values(index.longest), excess(index.longest);
-  std::vector<float> lums(index.longest);
-  // Calls f(sample, cos angle to centre, value, weight) for each pixel of the cap, on a lattice
-  // of the given step (weight: the pixel's solid angle times step^2).
-  const auto forCap = [&](glm::vec3 centre, float radius, std::uint32_t step, auto&& f) {
+/// One extract() call's state: the frame, the row peaks as the lights found so far leave them,
+/// the pixels those lights filled, and the buffers a run is read into. Each step of the search
+/// for one light is a member.
+struct LightExtractor::Search {
+  const PanoramaView& frame;
+  const Projector& projector;
+  const Index& index;
+  const std::vector<SphereSample>& samples;
+  const LightOptions& opt;
+  const std::size_t width;
+  const float clipLevel;  ///< an 8-bit frame's maximum (infinite for float frames)
+  const float totalLum;   ///< the map's luminance power
+  std::unordered_map<std::uint32_t, Rgb> filled;  ///< residual values of the lights' pixels
+  std::vector<Rgb> values, excess, rowValues;
+  std::vector<float> lums;
+  const std::vector<float>* peaks;  ///< the row peaks, copied only once a light changes them
+  std::vector<float> ownPeaks;
+  std::vector<Rgb> ring;
+  std::vector<Sampled> region;
+
+  Search(const LightExtractor& x, const PanoramaView& f, const std::vector<float>& rowPeaks,
+         const LightOptions& o, float total)
+      : frame(f),
+        projector(*x.projector_),
+        index(*x.index_),
+        samples(projector.samples()),
+        opt(o),
+        width(std::size_t(f.width)),
+        clipLevel(f.format == PanoramaFormat::BgrU8 || f.format == PanoramaFormat::RgbU8
+                      ? f.decode[255]
+                      : INFINITY),
+        totalLum(total),
+        values(index.longest),
+        excess(index.longest),
+        rowValues(width),
+        lums(index.longest),
+        peaks(&rowPeaks) {}
+
+  /// A run's values, with the earlier lights' pixels as they left them.
+  void readRun(const Index::Run& r, Rgb* out) const {
+    readPixels(frame, r.row, r.col, r.count, out);
+    if (filled.empty()) return;
+    for (std::uint32_t k = 0; k < r.count; ++k)
+      if (const auto it = filled.find(std::uint32_t(r.row * width + r.col + k)); it != filled.end())
+        out[k] = it->second;
+  }
+
+  /// Calls f(sample, cos angle to centre, value, weight) for each pixel of the cap, on a lattice
+  /// of the given step (weight: the pixel's solid angle times step^2).
+  template <class F>
+  void forCap(glm::vec3 centre, float radius, std::uint32_t step, F&& f) {
     const float cosRadius = std::cos(radius), area = float(step * step);
     index.forCap(CapBounds(centre, radius), step, [&](const Index::Run& r) {
       const std::uint32_t k0 = step == 1 ? 0 : (step - r.col % step) % step;
@@ -304,10 +329,11 @@ LightSplit LightExtractor::extract(const PanoramaView& frame, const Sh9& whole,
         if (c >= cosRadius) f(s[k], c, values[k], s[k].solidAngle * area);
       }
     });
-  };
-  // A row's largest channel value among the pixels the layout sees, and where it is.
-  std::vector<Rgb> rowValues(width);
-  const auto rowPeak = [&](std::size_t row) {
+  }
+
+  /// A row's largest channel value among the pixels the layout sees, and where it is (the row's
+  /// values stay in rowValues).
+  std::pair<float, std::uint32_t> rowPeak(std::size_t row) {
     readRun({std::uint32_t(row), 0, std::uint32_t(width)}, rowValues.data());
     const SphereSample* s = samples.data() + row * width;
     float best = -INFINITY;
@@ -316,94 +342,96 @@ LightSplit LightExtractor::extract(const PanoramaView& frame, const Sh9& whole,
       const float v = maxChannel(rowValues[j]);
       if (s[j].solidAngle > 0.0f && v > best) best = v, at = std::uint32_t(row * width + j);
     }
-    return std::pair{best, at};
-  };
-  // The row peaks, copied only once a light changes them.
-  std::vector<float> ownPeaks;
-  const std::vector<float>* peaks = &rowPeaks;
-  const auto setPeak = [&](std::size_t row, float v) {
-    if (ownPeaks.empty()) ownPeaks = rowPeaks, peaks = &ownPeaks;
-    ownPeaks[row] = v;
-  };
-  const float maxRadius = glm::radians(opt.maxRadiusDeg);
-  std::vector<Rgb> ring;
-  std::vector<Sampled> region;
+    return {best, at};
+  }
 
-  for (int n = 0; n < opt.maxLights; ++n) {
-    // 1. The peak: the brightest row, then its brightest pixel that the layout sees (a row's
-    //    peak may lie outside the layout's image: then the row is re-ranked by what it holds).
-    std::uint32_t peak = 0;
-    float peakValue = -INFINITY;
+  void setPeak(std::size_t row, float v) {
+    if (ownPeaks.empty()) ownPeaks = *peaks, peaks = &ownPeaks;
+    ownPeaks[row] = v;
+  }
+
+  /// Where a light's search starts.
+  struct Peak {
+    std::uint32_t pixel = 0;
+    float value = -INFINITY, lum = 0;
+  };
+  /// 1. The brightest row, then its brightest pixel that the layout sees (a row's peak may lie
+  ///    outside the layout's image: then the row is ranked again by what it holds).
+  Peak findPeak() {
     for (;;) {
       const auto row = std::size_t(std::max_element(peaks->begin(), peaks->end()) - peaks->begin());
       const auto [best, at] = rowPeak(row);
-      peak = at;
-      if (best >= (*peaks)[row]) {
-        peakValue = best;
-        break;
-      }
-      setPeak(row, best);  // the row's peak lay outside the image; rank it again
+      if (best >= (*peaks)[row])
+        return {at, best, best > 0.0f ? luminance(rowValues[at % width]) : 0.0f};
+      setPeak(row, best);
     }
-    if (!(peakValue > 0.0f)) break;
-    const glm::vec3 d0 = samples[peak].dir;
-    const float peakLum = luminance(rowValues[peak % width]);  // the row last read
-    if (!(peakLum > 0.0f)) break;
-    // A clipped peak (an 8-bit frame at its maximum) has no known brightness: its core is the
-    // clipped plateau itself, not what lies above a fraction of a value that is only a bound,
-    // and its power, a lower bound, needs a smaller share.
-    const bool peakClipped = peakValue >= clipLevel;
-    const float minShare = peakClipped ? opt.minClippedShare : opt.minShare;
-    const auto inCore = [&](Rgb v) {
-      return peakClipped ? maxChannel(v) >= clipLevel : luminance(v) >= opt.coreFraction * peakLum;
-    };
-    const float pixelDw = samples[peak].solidAngle;
-    const float pixelRadius = std::sqrt(pixelDw / float(kPi));
-    const float glare = std::max(glm::radians(opt.glareDeg), 2.0f * pixelRadius);
-    const float ringWidth = std::max(glm::radians(opt.ringDeg), 3.0f * pixelRadius);
+  }
 
-    // 2. The core, in caps of growing reach (most sources are small, and the cost is the cap's
-    //    pixels): the first reach that holds it, or not compact once it is wider than the
-    //    largest. A cap of many pixels is read on a lattice of at most about kCoreSamples: the
-    //    core's area and centre need a thousand samples, not every pixel of a 4K frame (its
-    //    exact centroid and size come from the region's every pixel below).
-    constexpr float kCoreSamples = 1000.0f;
+  /// The scales one light is measured at, from its peak.
+  struct Scales {
+    bool clipped;  ///< the peak is at the 8-bit maximum
+    float minShare, pixelDw, pixelRadius, glare, ringWidth;
+  };
+  Scales scalesAt(const Peak& peak) const {
+    // A clipped peak has no known brightness: its power, a lower bound, needs a smaller share.
+    Scales sc{};
+    sc.clipped = peak.value >= clipLevel;
+    sc.minShare = sc.clipped ? opt.minClippedShare : opt.minShare;
+    sc.pixelDw = samples[peak.pixel].solidAngle;
+    sc.pixelRadius = std::sqrt(sc.pixelDw / float(kPi));
+    sc.glare = std::max(glm::radians(opt.glareDeg), 2.0f * sc.pixelRadius);
+    sc.ringWidth = std::max(glm::radians(opt.ringDeg), 3.0f * sc.pixelRadius);
+    return sc;
+  }
+
+  /// 2. The core (a clipped peak's core is its clipped plateau, not what lies above a fraction of
+  ///    a value that is only a bound), in caps of growing reach (most sources are small, and the
+  ///    cost is the cap's pixels): the first reach that holds it. Each cap is centred on the
+  ///    centroid found so far; a reach that holds the core is measured once more if its centroid
+  ///    moved by more than a pixel (a plateau seen from its edge). A cap of many pixels is read
+  ///    on a lattice of at most about kCoreSamples: the core's area and centre need a thousand
+  ///    samples, not every pixel of a 4K frame (its exact centroid and size come from the
+  ///    region's every pixel). Returns the core's radius (over the largest: not compact) and
+  ///    moves `centre` to its centroid.
+  static constexpr float kCoreSamples = 1000.0f;
+  float measureCore(const Peak& peak, const Scales& sc, glm::vec3& centre) {
+    const auto inCore = [&](Rgb v) {
+      return sc.clipped ? maxChannel(v) >= clipLevel : luminance(v) >= opt.coreFraction * peak.lum;
+    };
+    const float maxRadius = glm::radians(opt.maxRadiusDeg);
     float coreRadius = INFINITY;
-    glm::vec3 centre = d0;
-    // Each cap is centred on the centroid found so far; a reach that holds the core is measured
-    // once more if its centroid moved by more than a pixel (a plateau seen from its edge).
     bool again = false;
     for (float reach = glm::radians(1.0f);;) {
-      const float radius = 1.25f * reach + pixelRadius;  // a margin: a wide core shows as wider
+      const float radius = 1.25f * reach + sc.pixelRadius;  // a wide core shows as wider
       const glm::vec3 from = centre;
       double coreArea = 0;
       glm::dvec3 coreSum(0.0);
-      forCap(from, radius, latticeStep(radius, pixelDw, kCoreSamples),
+      forCap(from, radius, latticeStep(radius, sc.pixelDw, kCoreSamples),
              [&](const SphereSample& s, float, Rgb v, float w) {
                if (!inCore(v)) return;
                coreArea += w;
                coreSum += glm::dvec3(s.dir) * double(luminance(v) * w);
              });
-      coreRadius = float(std::acos(std::max(-1.0, 1.0 - coreArea / (2 * kPi)))) + pixelRadius;
+      coreRadius = float(std::acos(std::max(-1.0, 1.0 - coreArea / (2 * kPi)))) + sc.pixelRadius;
       if (glm::length(coreSum) > 0.0) centre = glm::vec3(glm::normalize(coreSum));
-      if (coreRadius > maxRadius) break;                // already wider than any light
+      if (coreRadius > maxRadius) return coreRadius;    // already wider than any light
       if (coreRadius <= reach || reach >= maxRadius) {  // held within this reach
-        if (again || glm::dot(centre, from) >= std::cos(pixelRadius)) break;
-        again = true;  // measure it once more around its centroid
+        if (again || glm::dot(centre, from) >= std::cos(sc.pixelRadius)) return coreRadius;
+        again = true;
         continue;
       }
       again = false;
       reach = std::min(2.0f * reach, maxRadius);
     }
-    if (coreRadius > maxRadius) break;  // not compact: no (further) light
-    const float regionRadius = coreRadius + std::max(glare, 0.5f * coreRadius);
+  }
 
-    // 3-4. The region and the ring around it; the fill is the ring's median. A wide ring is
-    //    sampled (on a lattice of at most about kCoreSamples pixels, as the core), and so is a
-    //    first estimate of the light's share: a source that plainly falls short is dropped
-    //    before its region is read whole.
+  /// 3-4. The ring around the region; the fill is its median. A wide ring is sampled (on a
+  ///    lattice, as the core), and so is a first estimate of the light's share: a source that
+  ///    plainly falls short is dropped (nullopt) before its region is read whole.
+  std::optional<Rgb> ringFill(glm::vec3 centre, float regionRadius, const Scales& sc) {
     const float cosRegion = std::cos(regionRadius);
-    const float outer = regionRadius + ringWidth;
-    const std::uint32_t outerStep = latticeStep(outer + pixelRadius, pixelDw, kCoreSamples);
+    const float outer = regionRadius + sc.ringWidth;
+    const std::uint32_t outerStep = latticeStep(outer + sc.pixelRadius, sc.pixelDw, kCoreSamples);
     ring.clear();
     region.clear();
     forCap(centre, outer, outerStep, [&](const SphereSample&, float c, Rgb v, float w) {
@@ -417,17 +445,21 @@ LightSplit LightExtractor::extract(const PanoramaView& frame, const Sh9& whole,
       double estimate = 0;
       for (const Sampled& p : region)
         estimate += double(luminance(glm::max(p.value - fill, Rgb(0.0f)))) * p.weight;
-      if (estimate < 0.5 * minShare * totalLum) break;  // far below the share: no light
+      if (estimate < 0.5 * sc.minShare * totalLum) return std::nullopt;
     }
+    return fill;
+  }
 
-    // 5. The light, from every pixel of the region: what lies above the fill, and the
-    //    coefficients it takes from the map (with the projector's own weights, summed in
-    //    double, so residual + light is the whole map).
-    const bool more = n + 1 < opt.maxLights;
-    const float regionReach = regionRadius + pixelRadius;
+  /// 5. The light from every pixel of the region: what lies above the fill, and the coefficients
+  ///    it takes from the map (with the projector's own weights, summed in double, so residual +
+  ///    light is the whole map). `keep`: also what each pixel leaves for the next light.
+  RegionSums measureRegion(glm::vec3 centre, float regionRadius, const Scales& sc, Rgb fill,
+                           bool keep) {
+    const float cosRegion = std::cos(regionRadius);
+    const float regionReach = regionRadius + sc.pixelRadius;
     const float regionHalf = std::sin(0.5f * regionReach);
     RegionSums got;
-    got.lit.reserve(std::size_t(8.0f * float(kPi) * regionHalf * regionHalf / pixelDw));  // 2x
+    got.lit.reserve(std::size_t(8.0f * float(kPi) * regionHalf * regionHalf / sc.pixelDw));  // 2x
     index.forCap(CapBounds(centre, regionReach), 1, [&](const Index::Run& r) {
       readRun(r, values.data());
       const std::size_t first = r.row * width + r.col;
@@ -449,7 +481,7 @@ LightSplit LightExtractor::extract(const PanoramaView& frame, const Sh9& whole,
         runClipped = runClipped || (in && maxChannel(values[k]) >= clipLevel);
       }
       got.clipped = got.clipped || runClipped;
-      if (more)
+      if (keep)
         for (std::uint32_t k = 0; k < r.count; ++k)
           if (glm::dot(s[k].dir, centre) >= cosRegion)
             got.keep.emplace_back(std::uint32_t(first + k), glm::min(values[k], fill));
@@ -461,24 +493,29 @@ LightSplit LightExtractor::extract(const PanoramaView& frame, const Sh9& whole,
       got.maxExcess = std::max(got.maxExcess, runMax);
       got.power += glm::dvec3(runPower);
       got.centroid += glm::dvec3(runCentroid);
-      projector_->addPixels(r.row, r.col + lo, excess.data() + lo, hi - lo + 1, got.taken);
+      projector.addPixels(r.row, r.col + lo, excess.data() + lo, hi - lo + 1, got.taken);
     });
+    return got;
+  }
+
+  /// The light the region's sums describe; its size is the area at half the largest excess.
+  Light lightOf(const RegionSums& got) const {
     Light light;
     light.power = Rgb(got.power);
     light.share = luminance(light.power) / totalLum;
-    if (!(light.share >= minShare) || glm::length(got.centroid) <= 0.0) break;
-    light.dir = glm::vec3(glm::normalize(got.centroid));
+    light.dir = glm::length(got.centroid) > 0.0 ? glm::vec3(glm::normalize(got.centroid))
+                                                : glm::vec3(0.0f, 0.0f, 1.0f);
     light.clipped = got.clipped;
     double halfMaxArea = 0;
     for (const auto& [lum, dw] : got.lit)
       if (lum >= 0.5f * got.maxExcess) halfMaxArea += dw;
     light.angularRadius = float(std::acos(std::max(-1.0, 1.0 - halfMaxArea / (2 * kPi))));
+    return light;
+  }
 
-    // Commit: the coefficients lose what the light took; for the next light, the region keeps
-    // min(L, fill), and the rows it touched get their peaks from what is left.
-    for (int k = 0; k < kShCount; ++k) out.residual.c[k] -= Rgb(got.taken[k]);
-    out.lights.push_back(light);
-    if (!more) break;
+  /// For the next light: the region keeps min(L, fill), and the rows it touched get their peaks
+  /// from what is left.
+  void fillRegion(const RegionSums& got) {
     std::vector<std::size_t> rows;
     for (const auto& [i, v] : got.keep) {
       filled[i] = v;
@@ -487,6 +524,36 @@ LightSplit LightExtractor::extract(const PanoramaView& frame, const Sh9& whole,
     std::sort(rows.begin(), rows.end());
     rows.erase(std::unique(rows.begin(), rows.end()), rows.end());
     for (const std::size_t r : rows) setPeak(r, std::max(0.0f, rowPeak(r).first));
+  }
+};
+
+LightSplit LightExtractor::extract(const PanoramaView& frame, const Sh9& whole,
+                                   const std::vector<float>& rowPeaks,
+                                   const LightOptions& opt) const {
+  LightSplit out{whole, {}};
+  const float totalLum = luminance(whole.c[0]) / kY00;  // L00 = Y00 * integral of L
+  if (opt.maxLights <= 0 || !(totalLum > 0.0f) || rowPeaks.size() != std::size_t(frame.height))
+    return out;
+  Search search(*this, frame, rowPeaks, opt, totalLum);
+  for (int n = 0; n < opt.maxLights; ++n) {
+    const Search::Peak peak = search.findPeak();
+    if (!(peak.value > 0.0f) || !(peak.lum > 0.0f)) break;
+    const Search::Scales scales = search.scalesAt(peak);
+    glm::vec3 centre = search.samples[peak.pixel].dir;
+    const float coreRadius = search.measureCore(peak, scales, centre);
+    if (coreRadius > glm::radians(opt.maxRadiusDeg)) break;  // not compact: no (further) light
+    const float regionRadius = coreRadius + std::max(scales.glare, 0.5f * coreRadius);
+    const std::optional<Rgb> fill = search.ringFill(centre, regionRadius, scales);
+    if (!fill) break;  // far below the share: no light
+    const bool more = n + 1 < opt.maxLights;
+    const RegionSums got = search.measureRegion(centre, regionRadius, scales, *fill, more);
+    if (glm::length(got.centroid) <= 0.0) break;
+    const Light light = search.lightOf(got);
+    if (!(light.share >= scales.minShare)) break;
+    // Commit: the coefficients lose what the light took.
+    for (int k = 0; k < kShCount; ++k) out.residual.c[k] -= Rgb(got.taken[k]);
+    out.lights.push_back(light);
+    if (more) search.fillRegion(got);
   }
   return out;
 }

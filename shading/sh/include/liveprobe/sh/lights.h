@@ -112,6 +112,7 @@ class LightExtractor {
 
  private:
   struct Index;
+  struct Search;
   const Projector* projector_;
   std::unique_ptr<const Index> index_;
 };
