@@ -94,7 +94,8 @@ TEST(Hud, NeverCoversTheModelAtAnySize) {
     for (int i = 0; i < 40; ++i) {
       lp::cli::HudSample h;
       h.frame = std::uint64_t(i);
-      h.grabMs = 1 + i % 3, h.projectMs = 0.2, h.renderMs = 12 + i % 5, h.latencyMs = 30;
+      h.times[lp::Stage::Grab] = 1 + i % 3, h.times[lp::Stage::Project] = 0.2;
+      h.times[lp::Stage::Render] = 12 + i % 5, h.latencyMs = 30;
       h.radiance = h.unsmoothed = L;
       h.unsmoothed.c[0] *= 1.0f + 0.01f * float(i % 4);
       h.lights = {sun};
@@ -103,9 +104,10 @@ TEST(Hud, NeverCoversTheModelAtAnySize) {
     hud.setCounters({40, 40, 0, 0, 0.0, 2, 0, 0});
     lp::cli::ViewState state;
     state.shading.background = true;  // no panorama is set: the model is drawn on black
-    renderer.draw(fb, lp::cli::framedBesideHud(state.camera, fb, true), state.shading);
+    const lp::cli::HudLayout layout = lp::cli::hudLayout(fb);
+    renderer.draw(fb, lp::cli::framedBesideHud(state.camera, layout, true), state.shading);
     const auto before = lp::gl::Renderer::readRgb8(fb);
-    hud.draw(fb, renderer, state, 16.0);
+    hud.draw(layout, renderer, state, 16.0);
     const auto after = lp::gl::Renderer::readRgb8(fb);
     ASSERT_EQ(before.size(), after.size());
 
@@ -120,7 +122,6 @@ TEST(Hud, NeverCoversTheModelAtAnySize) {
     EXPECT_GT(model, before.size() / 3 / 50) << "the model is hardly visible";
     EXPECT_EQ(covered, 0u) << "the HUD covers " << covered << " of the model's " << model
                            << " pixels";
-    const lp::cli::HudLayout layout = lp::cli::hudLayout(fb);
     if (layout.status) {
       EXPECT_GT(changed, 0u) << "no HUD drawn";
     }

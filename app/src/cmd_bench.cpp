@@ -19,6 +19,7 @@
 #include "liveprobe/capture/input_file.h"
 #include "liveprobe/capture/photometry.h"
 #include "liveprobe/capture/pipeline.h"
+#include "liveprobe/capture/stages.h"
 #include "liveprobe/sh/error.h"
 #include "liveprobe/sh/executor.h"
 #include "liveprobe/sh/layout.h"
@@ -33,8 +34,13 @@ namespace {
 
 namespace fs = std::filesystem;
 using Clock = std::chrono::steady_clock;
-const char* const kStages[] = {"grab", "convert", "project", "upload", "render", "readback"};
-constexpr int kStageCount = 6;
+// The stages bench times, in the profiler's order (liveprobe/capture/stages.h; bench merges no
+// bracket); arrays below are indexed by position in this list.
+constexpr std::array kBenchStages = {Stage::Grab,   Stage::Convert, Stage::Project,
+                                     Stage::Upload, Stage::Render,  Stage::Readback};
+constexpr int kStageCount = int(kBenchStages.size());
+// A stage's name (the names are literals: NUL-terminated).
+const char* stageLabel(int s) { return stageName(kBenchStages[std::size_t(s)]).data(); }
 
 double msSince(Clock::time_point t0) {
   return std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
@@ -81,6 +87,90 @@ double calibrationMs() {
 constexpr int kWarmup =
     3;  // frames at the start of each run shown as warm-up (caches, JIT of llvmpipe's shaders)
 
+/// Frames' stage times stacked, one line a frame, into `data`; the totals.
+std::vector<double> writeStackedStages(const std::string& data, const std::string& path,
+                                       const std::vector<std::array<double, kStageCount>>& frames) {
+  std::vector<double> total;
+  std::ofstream d(data);
+  for (std::size_t i = 0; i < frames.size(); ++i) {
+    double cum = 0;
+    d << i;
+    for (double v : frames[i]) d << ' ' << (cum += v);
+    d << '\n';
+    total.push_back(cum);
+  }
+  if (!d) throw Error(path + ": cannot write the plot's data beside it");
+  return total;
+}
+
+/// A histogram of the totals in `bins` bins up to `top`, into `hist`.
+void writeHistogram(const std::string& hist, const std::vector<double>& total, double top,
+                    int bins) {
+  const double width = top / bins;
+  std::vector<int> counts(std::size_t(bins), 0);
+  for (double t : total) counts[std::size_t(std::min(bins - 1, int(t / width)))]++;
+  std::ofstream h(hist);
+  for (int b = 0; b < bins; ++b) h << (b + 0.5) * width << ' ' << counts[std::size_t(b)] << '\n';
+}
+
+/// The gnuplot script: the stacked stages with the warm-up bands, then the histogram with the
+/// median and p95 marked.
+std::string plotScript(const std::string& png, const std::string& data, const std::string& hist,
+                       const std::string& title, std::size_t frameCount, int framesPerRun,
+                       double top, int bins, double med, double p95) {
+  std::ostringstream g;
+  g << "set terminal pngcairo size 1400,480 font 'sans,10'\nset output '" << png << "'\n"
+    << "set multiplot layout 1,2 title '" << title << "'\n"
+    << "set style fill solid 0.85 noborder\nset grid ytics lc rgb '#dddddd'\n"
+    << "set xlabel 'frame (all runs in order)'\nset ylabel 'time per frame (ms), stages stacked'\n"
+    << "set key outside right top vertical\nset yrange [0:" << top
+    << "]\nset xrange [0:" << std::max<std::size_t>(1, frameCount - 1) << "]\n";
+  for (std::size_t start = 0, k = 1; start < frameCount; start += std::size_t(framesPerRun), ++k)
+    g << "set object " << k << " rect from " << start << ",0 to " << start + kWarmup - 1 << ","
+      << top << " fc rgb '#909090' fs solid 0.35 noborder behind\n";
+  g << "set label 1 'grey bands: the warm-up frames of each run' at graph 0.01, graph 0.96\n";
+  const char* colours[kStageCount] = {"#1f77b4", "#ff7f0e", "#2ca02c",
+                                      "#d62728", "#9467bd", "#8c564b"};
+  g << "plot ";
+  for (int s = kStageCount - 1; s >= 0; --s) {
+    g << "'" << data << "' using 1:" << (s + 2) << " with filledcurves x1 lc rgb '" << colours[s]
+      << "' title '" << stageLabel(s) << "'";
+    g << (s ? ", " : "\n");
+  }
+  g << "unset object\nunset label\nset xlabel 'frame time (ms)'\nset ylabel 'frames'\nset xrange "
+       "[0:"
+    << top << "]\nset yrange [0:*]\nset boxwidth " << top / bins * 0.9 << "\n"
+    << "set arrow 1 from " << med << ", graph 0 to " << med
+    << ", graph 1 nohead lc rgb '#2ca02c' lw 2\n"
+    << "set arrow 2 from " << p95 << ", graph 0 to " << p95
+    << ", graph 1 nohead lc rgb '#d62728' lw 2 dt 2\n"
+    << "set label 2 sprintf('median %.2f ms', " << med << ") at " << med
+    << ", graph 0.95 offset 1,0 tc rgb '#2ca02c'\n"
+    << "set label 3 sprintf('p95 %.2f ms', " << p95 << ") at " << p95
+    << ", graph 0.88 offset 1,0 tc rgb '#d62728'\n"
+    << "plot '" << hist
+    << "' using 1:2 with boxes lc rgb '#777777' title 'frames'\nunset multiplot\n";
+  return g.str();
+}
+
+/// Runs gnuplot on `script`; lp::Error naming `path` with gnuplot's first line when it fails.
+void runGnuplot(const std::string& script, const std::string& png, const std::string& path) {
+  const std::string cmd = "gnuplot '" + script + "' 2>&1";
+  FILE* pipe = ::popen(cmd.c_str(), "r");
+  if (!pipe) throw Error(path + ": cannot run gnuplot");
+  std::string said;
+  char buf[256];
+  while (std::fgets(buf, sizeof buf, pipe)) said += buf;
+  const int rc = ::pclose(pipe);
+  if (rc != 0 || !fs::exists(png)) {
+    const auto nl = said.find('\n');
+    throw Error(path + ": gnuplot failed (" +
+                (rc == 127 * 256 ? std::string("not installed: scripts/deps installs gnuplot-nox")
+                                 : said.substr(0, nl)) +
+                ")");
+  }
+}
+
 /// The frame-time plot, by gnuplot (pngcairo): stages stacked and filled against the frame
 /// number, the warm-up frames shaded, and a histogram of the total with median and p95 marked.
 /// Written to a temporary file and renamed; lp::Error when gnuplot is missing or fails.
@@ -98,80 +188,18 @@ void drawPlot(const std::string& path, const std::vector<std::array<double, kSta
     }
   } cleanup{{data, hist, script}};
 
-  std::vector<double> total;
-  {
-    std::ofstream d(data);
-    for (std::size_t i = 0; i < frames.size(); ++i) {
-      double cum = 0;
-      d << i;
-      for (double v : frames[i]) d << ' ' << (cum += v);
-      d << '\n';
-      total.push_back(cum);
-    }
-    if (!d) throw Error(path + ": cannot write the plot's data beside it");
-  }
+  const std::vector<double> total = writeStackedStages(data, path, frames);
   const double med = percentile(total, 0.5), p95 = percentile(total, 0.95);
-  const double top =
-      std::max(1e-3, percentile(total, 0.99) * 1.25);  // a warm-up spike does not set the scale
-  const int bins = 40;
-  const double width = top / bins;
-  std::vector<int> counts(bins, 0);
-  for (double t : total) counts[std::size_t(std::min(bins - 1, int(t / width)))]++;
-  {
-    std::ofstream h(hist);
-    for (int b = 0; b < bins; ++b) h << (b + 0.5) * width << ' ' << counts[std::size_t(b)] << '\n';
-  }
-  std::ostringstream g;
-  g << "set terminal pngcairo size 1400,480 font 'sans,10'\nset output '" << png << "'\n"
-    << "set multiplot layout 1,2 title '" << title << "'\n"
-    << "set style fill solid 0.85 noborder\nset grid ytics lc rgb '#dddddd'\n"
-    << "set xlabel 'frame (all runs in order)'\nset ylabel 'time per frame (ms), stages stacked'\n"
-    << "set key outside right top vertical\nset yrange [0:" << top
-    << "]\nset xrange [0:" << std::max<std::size_t>(1, frames.size() - 1) << "]\n";
-  for (std::size_t start = 0, k = 1; start < frames.size(); start += std::size_t(framesPerRun), ++k)
-    g << "set object " << k << " rect from " << start << ",0 to " << start + kWarmup - 1 << ","
-      << top << " fc rgb '#909090' fs solid 0.35 noborder behind\n";
-  g << "set label 1 'grey bands: the warm-up frames of each run' at graph 0.01, graph 0.96\n";
-  const char* colours[kStageCount] = {"#1f77b4", "#ff7f0e", "#2ca02c",
-                                      "#d62728", "#9467bd", "#8c564b"};
-  g << "plot ";
-  for (int s = kStageCount - 1; s >= 0; --s) {
-    g << "'" << data << "' using 1:" << (s + 2) << " with filledcurves x1 lc rgb '" << colours[s]
-      << "' title '" << kStages[s] << "'";
-    g << (s ? ", " : "\n");
-  }
-  g << "unset object\nunset label\nset xlabel 'frame time (ms)'\nset ylabel 'frames'\nset xrange "
-       "[0:"
-    << top << "]\nset yrange [0:*]\nset boxwidth " << width * 0.9 << "\n"
-    << "set arrow 1 from " << med << ", graph 0 to " << med
-    << ", graph 1 nohead lc rgb '#2ca02c' lw 2\n"
-    << "set arrow 2 from " << p95 << ", graph 0 to " << p95
-    << ", graph 1 nohead lc rgb '#d62728' lw 2 dt 2\n"
-    << "set label 2 sprintf('median %.2f ms', " << med << ") at " << med
-    << ", graph 0.95 offset 1,0 tc rgb '#2ca02c'\n"
-    << "set label 3 sprintf('p95 %.2f ms', " << p95 << ") at " << p95
-    << ", graph 0.88 offset 1,0 tc rgb '#d62728'\n"
-    << "plot '" << hist
-    << "' using 1:2 with boxes lc rgb '#777777' title 'frames'\nunset multiplot\n";
+  // A warm-up spike does not set the scale.
+  const double top = std::max(1e-3, percentile(total, 0.99) * 1.25);
+  constexpr int kBins = 40;
+  writeHistogram(hist, total, top, kBins);
   {
     std::ofstream f(script);
-    f << g.str();
+    f << plotScript(png, data, hist, title, frames.size(), framesPerRun, top, kBins, med, p95);
     if (!f) throw Error(path + ": cannot write the plot's script beside it");
   }
-  const std::string cmd = "gnuplot '" + script + "' 2>&1";
-  FILE* pipe = ::popen(cmd.c_str(), "r");
-  if (!pipe) throw Error(path + ": cannot run gnuplot");
-  std::string said;
-  char buf[256];
-  while (std::fgets(buf, sizeof buf, pipe)) said += buf;
-  const int rc = ::pclose(pipe);
-  if (rc != 0 || !fs::exists(png)) {
-    const auto nl = said.find('\n');
-    throw Error(path + ": gnuplot failed (" +
-                (rc == 127 * 256 ? std::string("not installed: scripts/deps installs gnuplot-nox")
-                                 : said.substr(0, nl)) +
-                ")");
-  }
+  runGnuplot(script, png, path);
   plot.commit();
 }
 
@@ -232,10 +260,12 @@ std::array<double, kStageCount> parseInjections(const Args& a) {
     const auto eq = d.find('=');
     int stage = -1;
     for (int s = 0; s < kStageCount; ++s)
-      if (eq != std::string::npos && d.substr(0, eq) == kStages[s]) stage = s;
-    if (stage < 0)
-      throw Error("--inject-delay " + d +
-                  ": expected STAGE=MS, STAGE one of grab convert project upload render readback");
+      if (eq != std::string::npos && d.substr(0, eq) == stageLabel(s)) stage = s;
+    if (stage < 0) {
+      std::string names;
+      for (int s = 0; s < kStageCount; ++s) names += std::string(" ") + stageLabel(s);
+      throw Error("--inject-delay " + d + ": expected STAGE=MS, STAGE one of" + names);
+    }
     const double ms = parseNumber(d.substr(eq + 1), "--inject-delay");
     if (ms < 0 || ms > 10000) throw Error("--inject-delay " + d + ": expected 0 to 10000 ms");
     inject[std::size_t(stage)] += ms;
@@ -247,7 +277,7 @@ std::array<double, kStageCount> parseInjections(const Args& a) {
 
 namespace {
 
-using StageTimes = std::array<double, kStageCount>;
+using BenchTimes = std::array<double, kStageCount>;  // by position in kBenchStages
 
 /// What the bench draws into, made once for every run.
 struct BenchScene {
@@ -273,12 +303,12 @@ struct RunState {
 /// One frame through the pipeline, stage by stage, as the replay pipeline does it: grab, convert
 /// (only frames the display cannot take as they are get a linear copy), project, upload, render
 /// and read back.
-StageTimes timeFrame(BenchScene& scene, RunState& run, FrameSource& source,
+BenchTimes timeFrame(BenchScene& scene, RunState& run, FrameSource& source,
                      const std::string& sourceName, Executor& pool, bool first) {
   const Linearizer& lin = scene.lin;
   Frame& frame = run.frame;
   Image& image = run.image;
-  StageTimes t{};
+  BenchTimes t{};
   auto t0 = Clock::now();
   auto lap = [&](int stage) {
     spin(scene.inject[std::size_t(stage)]);
@@ -324,7 +354,7 @@ StageTimes timeFrame(BenchScene& scene, RunState& run, FrameSource& source,
 
 /// Per stage: the median of the runs' medians, and p95, p99 and max over every frame; printed
 /// as a table and returned as the report's "stages".
-nlohmann::ordered_json stageSummary(const std::vector<StageTimes>& all,
+nlohmann::ordered_json stageSummary(const std::vector<BenchTimes>& all,
                                     const std::array<std::vector<double>, kStageCount>& runMedians,
                                     int repeat, int frames, const std::string& description) {
   nlohmann::ordered_json stages;
@@ -334,11 +364,11 @@ nlohmann::ordered_json stageSummary(const std::vector<StageTimes>& all,
     std::vector<double> v;
     for (const auto& t : all) v.push_back(t[std::size_t(s)]);
     const double med = percentile(runMedians[std::size_t(s)], 0.5);
-    stages[kStages[s]] = {{"median_ms", med},
-                          {"p95_ms", percentile(v, 0.95)},
-                          {"p99_ms", percentile(v, 0.99)},
-                          {"max_ms", percentile(v, 1.0)}};
-    std::printf("%-9s %9.3f %9.3f %9.3f %9.3f\n", kStages[s], med, percentile(v, 0.95),
+    stages[stageLabel(s)] = {{"median_ms", med},
+                             {"p95_ms", percentile(v, 0.95)},
+                             {"p99_ms", percentile(v, 0.99)},
+                             {"max_ms", percentile(v, 1.0)}};
+    std::printf("%-9s %9.3f %9.3f %9.3f %9.3f\n", stageLabel(s), med, percentile(v, 0.95),
                 percentile(v, 0.99), percentile(v, 1.0));
   }
   return stages;
@@ -354,27 +384,27 @@ nlohmann::ordered_json compareWithBaseline(const nlohmann::ordered_json& stages,
   const double baseCal = baseline.at("calibration_ms").get<double>();
   const nlohmann::json& baseStages = baseline.at("stages");
   for (int s = 0; s < kStageCount; ++s) {
-    if (!baseStages.contains(kStages[s])) continue;
-    const double baseMs = baseStages.at(kStages[s]).at("median_ms").get<double>();
-    const double nowMs = stages[kStages[s]]["median_ms"].get<double>();
+    if (!baseStages.contains(stageLabel(s))) continue;
+    const double baseMs = baseStages.at(stageLabel(s)).at("median_ms").get<double>();
+    const double nowMs = stages[stageLabel(s)]["median_ms"].get<double>();
     const double nowAtBase = nowMs / calibration * baseCal;
     ++compared;
     if (baseMs < kMeasurableMs && nowAtBase < kMeasurableMs) {
-      std::printf("%-9s %8.3f ms vs %.3f ms (too small to measure)\n", kStages[s], nowAtBase,
+      std::printf("%-9s %8.3f ms vs %.3f ms (too small to measure)\n", stageLabel(s), nowAtBase,
                   baseMs);
       continue;
     }
     const double change = baseMs > kMeasurableMs ? 100.0 * (nowAtBase - baseMs) / baseMs : 0.0;
     if (baseMs > kMeasurableMs)
-      std::printf("%-9s %8.3f ms vs %.3f ms  %+7.1f%% (normalised by calibration)\n", kStages[s],
+      std::printf("%-9s %8.3f ms vs %.3f ms  %+7.1f%% (normalised by calibration)\n", stageLabel(s),
                   nowAtBase, baseMs, change);
     else
-      std::printf("%-9s %8.3f ms vs %.3f ms (baseline too small for a percentage)\n", kStages[s],
+      std::printf("%-9s %8.3f ms vs %.3f ms (baseline too small for a percentage)\n", stageLabel(s),
                   nowAtBase, baseMs);
     // A change under 0.5 ms is within scheduling noise on a 2-core machine whatever its
     // percentage.
     if (nowAtBase - baseMs > 0.5 && (baseMs <= kMeasurableMs || change > threshold))
-      regressions.push_back({{"stage", kStages[s]},
+      regressions.push_back({{"stage", stageLabel(s)},
                              {"change_pct", change},
                              {"change_ms", nowAtBase - baseMs},
                              {"median_ms", nowMs},
@@ -415,28 +445,29 @@ int runBench(const Args& a) {
   if (a.has("--baseline"))
     baseline = parseBaseline(readInputFile(a.get("--baseline")), a.get("--baseline"));
   layoutFromArgs(a);  // option errors before the source is opened
+  std::unique_ptr<FrameSource> source = openSource(sourceName);
   BenchScene scene{openContext(gl::Backend::Headless, size),
                    {},
-                   layoutFromArgs(a, openSource(sourceName).get()),
+                   layoutFromArgs(a, source.get()),
                    envOrientationFromArgs(a),
                    parseInjections(a)};
   loadModel(scene.renderer, meshFromArgs(a));
   scene.renderer.setEnvOrientation(scene.orientation);
   ThreadPool pool(threads);
 
-  // The runs: each opens the source afresh and times every frame; a calibration kernel is timed
-  // before each.
-  std::vector<StageTimes> all;
+  // The runs: each starts the source from its first frame (rewound, or opened again where it
+  // cannot rewind) and times every frame; a calibration kernel is timed before each.
+  std::vector<BenchTimes> all;
   std::array<std::vector<double>, kStageCount> runMedians;
   std::vector<double> calibrations;
   std::string description;
   Progress progress("bench", std::int64_t(frames) * repeat, a.has("--quiet"));
   for (int run = 0; run < repeat && !stopRequested(); ++run) {
     calibrations.push_back(calibrationMs());
-    auto source = openSource(sourceName);
+    if (run > 0 && !source->rewind()) source = openSource(sourceName);
     description = source->describe();
     RunState state(scene);
-    std::vector<StageTimes> times;
+    std::vector<BenchTimes> times;
     for (int i = 0; i < frames && !stopRequested(); ++i) {
       times.push_back(timeFrame(scene, state, *source, sourceName, pool, i == 0));
       progress.update(std::int64_t(all.size() + times.size()));

@@ -81,11 +81,12 @@ int runRender(const Args& a) {
     gl::Renderer renderer;
     loadScene(renderer, mesh, lighting);
     const glm::ivec2 fb = ctx->framebufferSize();
-    renderer.draw(fb, framedBesideHud(camera, fb, a.has("--hud")), state.shading);
+    const HudLayout layout = hudLayout(fb);
+    renderer.draw(fb, framedBesideHud(camera, layout, a.has("--hud")), state.shading);
     if (a.has("--hud")) {
       Hud hud(*ctx);
       showStill(hud, a, lighting);
-      hud.draw(fb, renderer, state, 0.0);
+      hud.draw(layout, renderer, state, 0.0);
     }
     const auto px = gl::Renderer::readRgb8(fb);
     saveRgb8(out, fb.x, fb.y, px.data());
@@ -121,85 +122,99 @@ const CommandSpec kViewSpec{
     0,
     0};
 
+namespace {
+
+/// `view`'s window (or headless screenshot) and what it draws.
+struct StillViewer {
+  std::unique_ptr<gl::GlContext> ctx;
+  std::unique_ptr<gl::Renderer> renderer;  ///< made once ctx is current
+  std::unique_ptr<Hud> hud;
+  ViewState state;
+  DynamicResolution dynamicResolution;
+
+  /// One frame: input, the model, the HUD (and, when its editor changed the coefficients, the
+  /// model lit by them from the next frame).
+  void frame(Lighting& lighting, double lastMs) {
+    const auto keys = handleInput(*ctx, hud.get(), state, false);
+    if (hud && std::count(keys.begin(), keys.end(), gl::KeyAction::Save))
+      std::fprintf(stderr, "liveprobe: %s\n", hud->saveCoefficients().c_str());
+    const glm::ivec2 fb = ctx->framebufferSize();
+    const HudLayout layout = hudLayout(fb);
+    renderer->draw(fb, framedBesideHud(state.camera, layout, hud && state.hud),
+                   dynamicResolution.apply(state.shading));
+    if (!hud || !(state.hud || state.help)) return;
+    hud->setNote(dynamicResolution.describe());
+    hud->draw(layout, *renderer, state, lastMs);
+    if (!hud->edited()) return;
+    renderer->setLighting(lighting.radiance, lighting.lights);
+    HudSample s;
+    s.radiance = s.unsmoothed = lighting.radiance;
+    s.lights = lighting.lights;
+    hud->push(s);
+  }
+};
+
+/// The last frame saved, and what it was: frames, median frame time, size, model, GL.
+void saveScreenshot(const std::string& path, const gl::GlContext& ctx, std::vector<double> frameMs,
+                    std::size_t triangles) {
+  const glm::ivec2 fb = ctx.framebufferSize();
+  const auto px = gl::Renderer::readRgb8(fb);
+  saveRgb8(path, fb.x, fb.y, px.data());
+  const std::size_t frames = frameMs.size();
+  std::sort(frameMs.begin(), frameMs.end());
+  std::fprintf(stderr,
+               "liveprobe: %s after %zu frame%s, median frame %.2f ms (%dx%d, %zu triangles, %s)\n",
+               path.c_str(), frames, frames == 1 ? "" : "s", frameMs[frames / 2], fb.x, fb.y,
+               triangles, ctx.describe().c_str());
+}
+
+}  // namespace
+
 int runView(const Args& a) {
   installStopHandlers();
   const auto size = parseSize(a.get("--size", "1280x720"), "--size");
   Lighting lighting = requireLighting(a);
-  ViewState state;
-  state.camera = state.initialCamera = cameraFromArgs(a);
-  state.shading =
+  StillViewer v;
+  v.state.camera = v.state.initialCamera = cameraFromArgs(a);
+  v.state.shading =
       shadingFromArgs(a, lighting.radiance, lighting.background.has_value(), lighting.lights);
   const Mesh mesh = meshFromArgs(a);
   const bool screenshot = a.has("--screenshot");
   if (screenshot)
     requireExtension(a.get("--screenshot"), "--screenshot", {".png", ".jpg", ".jpeg"});
   const int frames = a.integerIn("--frames", 1, 1, 1000000);
-  auto ctx = openContext(backendFromArgs(a), size);
-  if (ctx->isHeadless() && !screenshot)
+  v.ctx = openContext(backendFromArgs(a), size);
+  const bool window = !v.ctx->isHeadless();
+  if (!window && !screenshot)
     throw Error("no display to open a window on (use --screenshot, or liveprobe render)");
   try {
-    gl::Renderer renderer;
-    loadScene(renderer, mesh, lighting);
-    std::unique_ptr<Hud> hud;
-    if (!ctx->isHeadless() || a.has("--hud")) {
-      hud = std::make_unique<Hud>(*ctx);
-      showStill(*hud, a, lighting);
-      hud->enableEditor(&lighting.radiance, a.get("--save-coeffs", "coeffs-edited.json"));
-      state.hud = ctx->isHeadless() || !a.has("--no-hud");
+    v.renderer = std::make_unique<gl::Renderer>();
+    loadScene(*v.renderer, mesh, lighting);
+    if (window || a.has("--hud")) {
+      v.hud = std::make_unique<Hud>(*v.ctx);
+      showStill(*v.hud, a, lighting);
+      v.hud->enableEditor(&lighting.radiance, a.get("--save-coeffs", "coeffs-edited.json"));
+      v.state.hud = !window || !a.has("--no-hud");
     }
     // A screenshot is drawn as asked; an interactive window keeps its rate (dynamic_resolution.h).
-    DynamicResolution dynamicResolution(!ctx->isHeadless() && !screenshot &&
-                                        isSoftwareGl(ctx->describe()) &&
-                                        !a.has("--full-resolution"));
-    auto t0 = std::chrono::steady_clock::now();
+    v.dynamicResolution = DynamicResolution(
+        window && !screenshot && isSoftwareGl(v.ctx->describe()) && !a.has("--full-resolution"));
+    RateTitle rate;
     std::vector<double> frameMs;
-    std::size_t fpsFrames = 0;
-    double lastMs = 0;
-    for (int frame = 0; !ctx->shouldClose() && !stopRequested(); ++frame) {
+    while (!v.ctx->shouldClose() && !stopRequested()) {
       const auto start = std::chrono::steady_clock::now();
-      const auto keys = handleInput(*ctx, hud.get(), state, false);
-      if (hud && std::count(keys.begin(), keys.end(), gl::KeyAction::Save))
-        std::fprintf(stderr, "liveprobe: %s\n", hud->saveCoefficients().c_str());
-      const glm::ivec2 fb = ctx->framebufferSize();
-      renderer.draw(fb, framedBesideHud(state.camera, fb, hud && state.hud),
-                    dynamicResolution.apply(state.shading));
-      if (hud && (state.hud || state.help)) {
-        hud->setNote(dynamicResolution.describe());
-        hud->draw(fb, renderer, state, lastMs);
-        if (hud->edited()) {
-          renderer.setLighting(lighting.radiance, lighting.lights);
-          HudSample s;
-          s.radiance = s.unsmoothed = lighting.radiance;
-          s.lights = lighting.lights;
-          hud->push(s);
-        }
-      }
+      v.frame(lighting, frameMs.empty() ? 0.0 : frameMs.back());
       gl::Renderer::finish();
-      lastMs = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start)
-                   .count();
-      frameMs.push_back(lastMs);
-      dynamicResolution.update(lastMs);
-      ++fpsFrames;
-      if (screenshot && frame + 1 >= frames) {
-        const auto px = gl::Renderer::readRgb8(fb);
-        saveRgb8(a.get("--screenshot"), fb.x, fb.y, px.data());
-        std::sort(frameMs.begin(), frameMs.end());
-        std::fprintf(
-            stderr,
-            "liveprobe: %s after %d frame%s, median frame %.2f ms (%dx%d, %zu triangles, %s)\n",
-            a.get("--screenshot").c_str(), frames, frames == 1 ? "" : "s",
-            frameMs[frameMs.size() / 2], fb.x, fb.y, mesh.triangleCount(), ctx->describe().c_str());
+      frameMs.push_back(
+          std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start)
+              .count());
+      v.dynamicResolution.update(frameMs.back());
+      if (screenshot && int(frameMs.size()) >= frames) {
+        saveScreenshot(a.get("--screenshot"), *v.ctx, frameMs, mesh.triangleCount());
         break;
       }
-      ctx->present();
-      const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-      if (s >= 1.0) {
-        char title[128];
-        std::snprintf(title, sizeof title, "liveprobe view - %.1f frames/s", double(fpsFrames) / s);
-        ctx->setTitle(title);
-        fpsFrames = 0;
-        t0 = std::chrono::steady_clock::now();
-      }
+      v.ctx->present();
+      rate.tick(*v.ctx, "liveprobe view");
     }
   } catch (const gl::ContextError& e) {
     throw Error(std::string("GL: ") + e.what());

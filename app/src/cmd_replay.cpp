@@ -310,12 +310,15 @@ StreamOutputs openOutputs(const Args& a, double fps, const std::string& descript
 
 /// What the render loop measured, for the summary.
 struct StreamTally {
-  std::vector<double> grab, convert, project, upload, render;
-  std::vector<double> latency;  ///< capture to shown, ms
+  std::array<std::vector<double>, kStageCount> stages;  ///< ms per drawn frame, by lp::Stage
+  std::vector<double> latency;                          ///< capture to shown, ms
   std::size_t drawn = 0, saturated = 0;
   std::size_t withLight = 0, clippedLight = 0;  ///< frames with a light; of them, clipped
-  std::vector<double> merge, confidence;        ///< bracket merge ms; each frame's confidence
+  std::vector<double> confidence;               ///< each frame's
   std::size_t brightestMeasured = 0;            ///< frames whose brightest pixel was measured
+
+  std::size_t frames() const { return latency.size(); }
+  double median(Stage s) const { return cli::median(stages[std::size_t(s)]); }
 };
 
 /// Everything the render loop holds: GL, the HUD, the interactive state.
@@ -354,10 +357,11 @@ struct StreamView {
   }
   void draw(double lastFrameMs) {
     const glm::ivec2 fb = ctx->framebufferSize();
-    renderer->draw(fb, framedBesideHud(state.camera, fb, hud && state.hud),
+    const HudLayout layout = hudLayout(fb);
+    renderer->draw(fb, framedBesideHud(state.camera, layout, hud && state.hud),
                    dynamicResolution.apply(state.shading));
     if (hud) hud->setNote(dynamicResolution.describe());
-    if (hud && (state.hud || state.help)) hud->draw(fb, *renderer, state, lastFrameMs);
+    if (hud && (state.hud || state.help)) hud->draw(layout, *renderer, state, lastFrameMs);
   }
 };
 
@@ -379,14 +383,12 @@ struct RecordSinks {
 void recordSample(StreamTally& t, const ProcessedFrame& f, double uploadMs, double renderMs,
                   double latencyMs, Hud* hud, const PipelineStats& st,
                   const RecordSinks* sinks = nullptr) {
+  StageTimes times = f.times;
+  times[Stage::Upload] = uploadMs;
+  times[Stage::Render] = renderMs;
   t.latency.push_back(latencyMs);
-  t.grab.push_back(f.times.grabMs);
-  t.convert.push_back(f.times.convertMs);
-  t.project.push_back(f.times.projectMs);
-  t.upload.push_back(uploadMs);
-  t.render.push_back(renderMs);
+  for (std::size_t k = 0; k < kStageCount; ++k) t.stages[k].push_back(times.ms[k]);
   t.saturated += f.saturated;
-  t.merge.push_back(f.times.mergeMs);
   t.confidence.push_back(f.confidence.value());
   t.brightestMeasured += f.confidence.brightestMeasured;
   if (!f.lights.empty()) ++t.withLight;
@@ -396,8 +398,8 @@ void recordSample(StreamTally& t, const ProcessedFrame& f, double uploadMs, doub
   HudSample s;
   s.frame = f.index;
   s.time = f.timestamp;
-  s.grabMs = f.times.grabMs, s.convertMs = f.times.convertMs, s.projectMs = f.times.projectMs;
-  s.uploadMs = uploadMs, s.renderMs = renderMs, s.latencyMs = latencyMs;
+  s.times = times;
+  s.latencyMs = latencyMs;
   s.radiance = f.radiance;
   s.unsmoothed = f.unsmoothed;
   s.lights = f.lights;
@@ -405,7 +407,7 @@ void recordSample(StreamTally& t, const ProcessedFrame& f, double uploadMs, doub
   s.held = f.held;
   hud->push(s);
   HudCounters c{st.captured, t.drawn, st.dropped, st.skipped,
-                t.grab.empty() ? 0.0 : double(t.saturated) / double(t.grab.size())};
+                double(t.saturated) / double(t.frames())};
   if (sinks) sinks->fill(c);
   hud->setCounters(c);
 }
@@ -437,8 +439,7 @@ void runOffline(CapturePipeline& pipeline, StreamView& view, const StreamOutputs
 void runInteractive(CapturePipeline& pipeline, StreamView& view, StreamTally& tally,
                     Progress& progress, bool live, const std::string& title,
                     const RecordSinks& sinks) {
-  auto fpsT0 = Clock::now();
-  std::size_t fpsFrames = 0;
+  RateTitle rate;
   double lastMs = 0;
   bool wasPaused = false;
   const bool headless = view.ctx->isHeadless();
@@ -468,16 +469,23 @@ void runInteractive(CapturePipeline& pipeline, StreamView& view, StreamTally& ta
                    view.hud.get(), st, &sinks);
       progress.update(std::int64_t(st.captured));
     }
-    ++fpsFrames;
-    const double s = std::chrono::duration<double>(Clock::now() - fpsT0).count();
-    if (s >= 1.0 && !headless) {
-      char t[256];
-      std::snprintf(t, sizeof t, "liveprobe - %s - frame %zu - %.1f frames/s%s", title.c_str(),
-                    st.captured, double(fpsFrames) / s, view.state.paused ? " - paused" : "");
-      view.ctx->setTitle(t);
-      fpsT0 = Clock::now(), fpsFrames = 0;
-    }
+    rate.tick(*view.ctx, "liveprobe - " + title + " - frame " + std::to_string(st.captured),
+              view.state.paused ? " - paused" : "");
   }
+}
+
+/// "grab 0.95, convert 0.00, ...": the median of each stage up to render (merge only where a
+/// bracket was merged).
+std::string stageMedians(const StreamTally& t) {
+  std::string out;
+  char one[64];
+  for (std::size_t k = 0; k <= std::size_t(Stage::Render); ++k) {
+    if (Stage(k) == Stage::Merge && !(t.median(Stage::Merge) > 0)) continue;
+    std::snprintf(one, sizeof one, "%s%s %.2f", out.empty() ? "" : ", ",
+                  std::string(kStageNames[k]).c_str(), t.median(Stage(k)));
+    out += one;
+  }
+  return out;
 }
 
 void printSummary(const std::string& description, const PipelineStats& st, const StreamTally& t,
@@ -485,19 +493,17 @@ void printSummary(const std::string& description, const PipelineStats& st, const
   std::fprintf(stderr,
                "liveprobe: %s: %zu frames captured, %zu drawn, %zu dropped (stale), %zu skipped "
                "(corrupt)%s%s%s\n"
-               "  median ms: grab %.2f, convert %.2f, project %.2f, upload %.2f, render %.2f; "
-               "saturated values %.1f per frame\n",
+               "  median ms: %s; saturated values %.1f per frame\n",
                description.c_str(), st.captured, t.drawn, st.dropped, st.skipped,
                st.endReason.empty() ? "" : "; ", st.endReason.c_str(),
-               interrupted ? "; stopped by a signal" : "", median(t.grab), median(t.convert),
-               median(t.project), median(t.upload), median(t.render),
-               t.grab.empty() ? 0.0 : double(t.saturated) / double(t.grab.size()));
+               interrupted ? "; stopped by a signal" : "", stageMedians(t).c_str(),
+               t.frames() == 0 ? 0.0 : double(t.saturated) / double(t.frames()));
   if (!t.latency.empty())
     std::fprintf(stderr, "  latency ms (capture to shown): p50 %.1f, p95 %.1f, p99 %.1f\n",
                  percentile(t.latency, 0.5), percentile(t.latency, 0.95),
                  percentile(t.latency, 0.99));
   if (t.withLight > 0 || t.clippedLight > 0)
-    std::fprintf(stderr, "  lights: in %zu of %zu frames%s\n", t.withLight, t.grab.size(),
+    std::fprintf(stderr, "  lights: in %zu of %zu frames%s\n", t.withLight, t.frames(),
                  t.clippedLight > 0 ? (", clipped (8-bit maximum: power is a lower bound) in " +
                                        std::to_string(t.clippedLight))
                                           .c_str()
@@ -521,15 +527,12 @@ void printSummary(const std::string& description, const PipelineStats& st, const
                  m.published == 0 && st.captured > 0 ? "; no message reached the broker" : "");
   }
   if (!t.confidence.empty() &&
-      (st.held > 0 || median(t.merge) > 0 || percentile(t.confidence, 0.0) < 1.0))
+      (st.held > 0 || t.median(Stage::Merge) > 0 || percentile(t.confidence, 0.0) < 1.0))
     std::fprintf(stderr,
                  "  confidence: median %.3f, lowest %.3f; brightest source measured unclipped in "
-                 "%zu of %zu frames; %zu held (last good lighting)%s\n",
+                 "%zu of %zu frames; %zu held (last good lighting)\n",
                  median(t.confidence), percentile(t.confidence, 0.0), t.brightestMeasured,
-                 t.confidence.size(), st.held,
-                 median(t.merge) > 0
-                     ? ("; bracket merge " + formatNumber(median(t.merge)) + " ms median").c_str()
-                     : "");
+                 t.confidence.size(), st.held);
   if (st.gapsShortened > 0)
     warn(std::to_string(st.gapsShortened) + " gap(s) in the source's timestamps over " +
          formatNumber(PipelineOptions{}.maxGapSeconds) + " s were played as one frame interval");
@@ -582,123 +585,127 @@ RecordSinks openSinks(const Args& a) {
   return s;
 }
 
-// The pipeline and the render loop, for replay (a file) and live (a camera). A camera is never
-// paced or held back: capture uses the latest-value handoff even headless, and --coeffs-out
-// lines are written as frames are captured.
-int runStream(const Args& a, std::unique_ptr<FrameSource> source, bool live) {
-  installStopHandlers();
+/// How one run goes: the pipeline's options and what the loop decides from the source.
+struct StreamPlan {
+  PipelineOptions opt;
+  bool live = false, headless = false;
+  bool endless = false;      ///< no end but Ctrl-C
+  std::pair<int, int> size;  ///< the view's
+  double fps = 0;
+  std::string description;
+  gl::Camera camera;  ///< the model and the camera, read before any output is opened
+  Mesh mesh;
+};
+
+StreamPlan planStream(const Args& a, const FrameSource& source, bool live) {
   if (a.has("--hud") && a.has("--no-hud")) throw Error("--hud and --no-hud: give one of them");
-  PipelineOptions opt = pipelineOptionsFromArgs(a, *source);
-  const gl::Camera cameraInit = cameraFromArgs(a);
-  const Mesh mesh = meshFromArgs(a);
-  const double fps = source->fps();
-  const std::string description = source->describe();
-  const bool headless =
-      a.has("--headless") || !(std::getenv("DISPLAY") || std::getenv("WAYLAND_DISPLAY"));
+  StreamPlan p;
+  p.live = live;
+  p.opt = pipelineOptionsFromArgs(a, source);
+  p.camera = cameraFromArgs(a);
+  p.mesh = meshFromArgs(a);
+  p.fps = source.fps();
+  p.description = source.describe();
+  p.headless = a.has("--headless") || !(std::getenv("DISPLAY") || std::getenv("WAYLAND_DISPLAY"));
   const std::string sizeOpt = live ? "--view-size" : "--size";  // live: --size is the camera's
-  const auto size = parseSize(a.get(sizeOpt, headless ? "640x360" : "1280x720"), sizeOpt);
+  p.size = parseSize(a.get(sizeOpt, p.headless ? "640x360" : "1280x720"), sizeOpt);
+  PipelineOptions& opt = p.opt;
   if (a.has("--duration")) {
     const double d = a.numberIn("--duration", 0, 1e-3, 1e7);
-    const std::int64_t n = std::max<std::int64_t>(1, std::llround(d * (fps > 0 ? fps : 30.0)));
+    const std::int64_t n = std::max<std::int64_t>(1, std::llround(d * (p.fps > 0 ? p.fps : 30.0)));
     opt.maxFrames = opt.maxFrames < 0 ? n : std::min(opt.maxFrames, n);
   }
   // (live says so on its first line, with the camera's description)
-  const bool endless =
-      !live && opt.maxFrames < 0 && (opt.loop || description.rfind("synthetic", 0) == 0);
-  opt.handoff = headless && !live ? Handoff::Every : Handoff::Latest;
+  p.endless = !live && opt.maxFrames < 0 && (opt.loop || p.description.rfind("synthetic", 0) == 0);
+  opt.handoff = p.headless && !live ? Handoff::Every : Handoff::Latest;
   // A window plays in real time; so does a headless replay that serves or publishes (its readers
   // want the source's pace, not as fast as it renders), or that asks with --realtime.
   opt.realtime =
-      !live && (!headless || a.has("--realtime") || a.has("--serve") || a.has("--publish"));
+      !live && (!p.headless || a.has("--realtime") || a.has("--serve") || a.has("--publish"));
+  opt.keepImages = true;  // the background can be switched on at any time (B), and the HUD shows it
+  return p;
+}
 
+/// At capture, on capture's thread: --coeffs-out lines of a window or a camera, the stream and
+/// MQTT (none of them waits on a reader); --record's raw frames.
+void wireCaptureOutputs(StreamPlan& p, StreamOutputs& out, const RecordSinks& sinks,
+                        const FrameSource& source) {
+  AtomicTextFile* file = (!p.headless || p.live) ? out.coeffs.get() : nullptr;
+  StreamServer* server = sinks.server.get();
+  MqttPublisher* mqtt = sinks.mqtt.get();
+  if (out.coeffs && !file && (server || mqtt)) out.sent = std::make_unique<SentRecords>();
+  SentRecords* sent = out.sent.get();
+  const CoeffFormat format = out.format;
+  if (file || server || mqtt)
+    p.opt.onCaptured = [file, server, mqtt, sent, format](const ProcessedFrame& f) {
+      // One record for the file and the broker (both in --coeffs-format); the server
+      // serializes per client format, once per frame.
+      if (server) server->publish(f);
+      if (!file && !mqtt && !sent) return;  // the server alone: no record to make here
+      std::string record = frameRecord(f, format, {});
+      if (file) file->line(record);
+      if (mqtt) mqtt->publish(record);
+      if (sent) sent->sent(f.index, std::move(record));
+    };
+  // --record (live): the raw stream, finalised even when capture stops on a fault.
+  if (VideoRecorder* rec = out.record.get()) {
+    if (source.bracketFrames() > 0)  // replayed through the same merge
+      rec->setBracket(source.bracketFrames(), p.opt.bracket->response.json());
+    p.opt.onFrame = [rec](const Frame& f) { rec->write(f); };
+  }
+}
+
+/// The GL context, the renderer with its model, and the HUD (a window always has one: H shows
+/// it, F1 the help).
+StreamView openStreamView(const Args& a, const StreamPlan& p) {
   StreamView view;
   view.state.shading = shadingFromArgs(a, Sh9{});
   view.autoExposure = a.get("--exposure", "auto") == "auto";
-  view.layout = opt.layout;
-  view.source = description;
-  opt.keepImages = true;  // the background can be switched on at any time (B), and the HUD shows it
-
-  StreamOutputs out = openOutputs(a, fps, description);
-  RecordSinks sinks = openSinks(a);
-  {
-    // At capture, on capture's thread: --coeffs-out lines of a window or a camera, the stream
-    // and MQTT. None of them waits on a reader.
-    AtomicTextFile* file = (!headless || live) ? out.coeffs.get() : nullptr;
-    StreamServer* server = sinks.server.get();
-    MqttPublisher* mqtt = sinks.mqtt.get();
-    if (out.coeffs && !file && (server || mqtt)) out.sent = std::make_unique<SentRecords>();
-    SentRecords* sent = out.sent.get();
-    const CoeffFormat format = out.format;
-    if (file || server || mqtt)
-      opt.onCaptured = [file, server, mqtt, sent, format](const ProcessedFrame& f) {
-        // One record for the file and the broker (both in --coeffs-format); the server
-        // serializes per client format, once per frame.
-        if (server) server->publish(f);
-        if (!file && !mqtt && !sent) return;  // the server alone: no record to make here
-        std::string record = frameRecord(f, format, {});
-        if (file) file->line(record);
-        if (mqtt) mqtt->publish(record);
-        if (sent) sent->sent(f.index, std::move(record));
-      };
-  }
-  if (out.record) {  // --record (live): the raw stream, finalised even when capture stops on a
-                     // fault
-    VideoRecorder* rec = out.record.get();
-    if (source->bracketFrames() > 0)  // replayed through the same merge
-      rec->setBracket(source->bracketFrames(), opt.bracket->response.json());
-    opt.onFrame = [rec](const Frame& f) { rec->write(f); };
-  }
-
-  view.ctx = openContext(headless ? gl::Backend::Headless : gl::Backend::Auto, size);
-  view.dynamicResolution = DynamicResolution(
-      !view.ctx->isHeadless() && isSoftwareGl(view.ctx->describe()) && !a.has("--full-resolution"));
-  view.state.camera = view.state.initialCamera = cameraInit;
+  view.layout = p.opt.layout;
+  view.source = p.description;
+  view.state.camera = view.state.initialCamera = p.camera;
+  view.ctx = openContext(p.headless ? gl::Backend::Headless : gl::Backend::Auto, p.size);
+  const bool window = !view.ctx->isHeadless();
+  view.dynamicResolution = DynamicResolution(window && isSoftwareGl(view.ctx->describe()) &&
+                                             !a.has("--full-resolution"));
   view.renderer = std::make_unique<gl::Renderer>();
-  loadModel(*view.renderer, mesh);
-  if (opt.rotation) view.renderer->setEnvOrientation(*opt.rotation);
-  const bool wantHud = view.ctx->isHeadless() ? a.has("--hud") : !a.has("--no-hud");
-  if (wantHud ||
-      !view.ctx->isHeadless()) {  // a window always has the HUD (H shows it, F1 the help)
+  loadModel(*view.renderer, p.mesh);
+  if (p.opt.rotation) view.renderer->setEnvOrientation(*p.opt.rotation);
+  const bool wantHud = window ? !a.has("--no-hud") : a.has("--hud");
+  if (wantHud || window) {
     view.hud = std::make_unique<Hud>(*view.ctx);
-    view.hud->setSource(description, std::string(layoutName(opt.layout.layout)),
-                        opt.smoothSeconds > 0);
+    view.hud->setSource(p.description, std::string(layoutName(p.opt.layout.layout)),
+                        p.opt.smoothSeconds > 0);
     view.state.hud = wantHud;
   }
-  const bool quiet = a.has("--quiet");
-  if (endless && view.ctx->isHeadless() && !quiet)
+  return view;
+}
+
+/// What the run says before it starts; the progress line (a file of known length shows its
+/// total and an ETA without --frames).
+Progress announceRun(const StreamPlan& p, const FrameSource& source, bool window, bool quiet) {
+  if (p.endless && !window && !quiet)
     std::fprintf(
         stderr,
         "liveprobe: %s has no end: running until Ctrl-C (or give --frames N or --duration S)\n",
-        description.c_str());
-  // A file of known length shows its total and an ETA without --frames.
-  const std::int64_t length = live || opt.loop ? -1 : source->frameCount();
+        p.description.c_str());
+  const std::int64_t length = p.live || p.opt.loop ? -1 : source.frameCount();
   const std::int64_t total =
-      length > 0 && (opt.maxFrames < 0 || length < opt.maxFrames) ? length : opt.maxFrames;
-  if (!endless && !live && !opt.loop && !view.ctx->isHeadless() && !quiet)
+      length > 0 && (p.opt.maxFrames < 0 || length < p.opt.maxFrames) ? length : p.opt.maxFrames;
+  if (!p.endless && !p.live && !p.opt.loop && window && !quiet)
     std::fprintf(stderr, "liveprobe: the window closes after %s%s (--loop plays on)\n",
                  total > 0 ? (std::to_string(total) + " frames of ").c_str() : "the end of ",
-                 description.c_str());
-  Progress progress(live ? "live" : "replay", total, quiet || !view.ctx->isHeadless());
+                 p.description.c_str());
+  return Progress(p.live ? "live" : "replay", total, quiet || window);
+}
 
-  CapturePipeline pipeline(std::move(source), opt);
-  pipeline.start();
-  StreamTally tally;
-  try {
-    if (view.ctx->isHeadless() && !live)
-      runOffline(pipeline, view, out, tally, progress, sinks);
-    else
-      runInteractive(pipeline, view, tally, progress, live, description, sinks);
-  } catch (const gl::ContextError& e) {
-    pipeline.stop();
-    throw Error(std::string("GL: ") + e.what());
-  }
-  pipeline.stop();
-  progress.finish();
+/// After the loop: the files kept or discarded, the summary, the exit code.
+int finishStream(const StreamPlan& p, const PipelineStats& st, const StreamTally& tally,
+                 StreamOutputs& out, const RecordSinks& sinks, const StreamView& view) {
   if (sinks.server) sinks.server->stop();  // every client gets a clean close (1001)
-  const PipelineStats st = pipeline.stats();
   // A camera's frames up to a fault are real data and are kept; a replay that failed keeps
   // nothing (the recorders' destructors discard what they wrote).
-  const bool keep = st.error.empty() || live;
+  const bool keep = st.error.empty() || p.live;
   if (out.record && keep) {
     out.record->finish();
     std::fprintf(stderr, "liveprobe: recorded %zu frames to %s\n", out.record->frames(),
@@ -710,7 +717,7 @@ int runStream(const Args& a, std::unique_ptr<FrameSource> source, bool live) {
   if (!st.error.empty()) throw Error(st.error);
   if (out.video) out.video->finish();
   if (out.frames) out.frames->keep();
-  printSummary(description, st, tally, opt.smoothSeconds, stopRequested(), sinks);
+  printSummary(p.description, st, tally, p.opt.smoothSeconds, stopRequested(), sinks);
   if (view.dynamicResolution.active())
     std::fprintf(stderr, "  %s at the end (dynamic resolution; --full-resolution turns it off)\n",
                  view.dynamicResolution.describe().c_str());
@@ -718,6 +725,35 @@ int runStream(const Args& a, std::unique_ptr<FrameSource> source, bool live) {
   // Publishing was asked for and nothing at all reached the broker: the run failed its purpose.
   if (sinks.mqtt && sinks.mqtt->stats().published == 0 && st.captured > 0) return kExitRuntime;
   return 0;
+}
+
+// The pipeline and the render loop, for replay (a file) and live (a camera). A camera is never
+// paced or held back: capture uses the latest-value handoff even headless, and --coeffs-out
+// lines are written as frames are captured.
+int runStream(const Args& a, std::unique_ptr<FrameSource> source, bool live) {
+  installStopHandlers();
+  StreamPlan plan = planStream(a, *source, live);
+  StreamOutputs out = openOutputs(a, plan.fps, plan.description);
+  RecordSinks sinks = openSinks(a);
+  wireCaptureOutputs(plan, out, sinks, *source);
+  StreamView view = openStreamView(a, plan);
+  Progress progress = announceRun(plan, *source, !view.ctx->isHeadless(), a.has("--quiet"));
+
+  CapturePipeline pipeline(std::move(source), plan.opt);
+  pipeline.start();
+  StreamTally tally;
+  try {
+    if (view.ctx->isHeadless() && !live)
+      runOffline(pipeline, view, out, tally, progress, sinks);
+    else
+      runInteractive(pipeline, view, tally, progress, live, plan.description, sinks);
+  } catch (const gl::ContextError& e) {
+    pipeline.stop();
+    throw Error(std::string("GL: ") + e.what());
+  }
+  pipeline.stop();
+  progress.finish();
+  return finishStream(plan, pipeline.stats(), tally, out, sinks, view);
 }
 
 }  // namespace

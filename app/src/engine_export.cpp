@@ -146,100 +146,131 @@ std::string coeffFormatNames(bool perFrame) {
                   : "json, text, glsl, three, babylon, filament, unity, gltf or webxr";
 }
 
-ojson engineJson(Engine engine, const Sh9& radiance, const std::vector<Light>& lights) {
-  const Sh9 L = toEngineFrame(radiance, engine);
+namespace {
+
+// One object per light under the engine's names: where its light travels (from the light
+// towards the origin), its colour and its intensity.
+ojson travellingLights(const std::vector<Light>& lights, Engine engine, const char* direction,
+                       const char* colour) {
+  ojson a = ojson::array();
+  for (const Light& l : lights) {
+    const ColorIntensity ci = colorIntensity(l.power);
+    a.push_back({{direction, triple(-towards(l, engine))},
+                 {colour, triple(ci.color)},
+                 {"intensity", jsonFloat(ci.intensity)}});
+  }
+  return a;
+}
+
+// three.js: LightProbe.fromJSON({sh, intensity}); a DirectionalLight per light, placed along
+// `direction` (it shines from there towards the origin), colour times intensity = the irradiance
+// facing it.
+ojson threeJson(const Sh9& L, const std::vector<Light>& lights) {
   ojson j;
-  switch (engine) {
-    case Engine::Three: {
-      // LightProbe.fromJSON({sh, intensity}); a DirectionalLight per light, placed along
-      // `direction` (it shines from there towards the origin), colour times intensity = the
-      // irradiance facing it.
-      j["sh"] = flat27(L);
-      j["intensity"] = 1;
-      ojson a = ojson::array();
-      for (const Light& l : lights) {
-        const ColorIntensity ci = colorIntensity(l.power);
-        a.push_back({{"direction", triple(towards(l, engine))},
-                     {"color", triple(ci.color)},
-                     {"intensity", jsonFloat(ci.intensity)},
-                     {"angular_radius_deg", jsonFloat(glm::degrees(l.angularRadius))}});
-      }
-      j["directionalLights"] = a;
-      break;
-    }
-    case Engine::WebXr: {
-      j["sphericalHarmonicsCoefficients"] = flat27(L);
-      if (!lights.empty()) {
-        const glm::vec3 d = towards(lights[0], engine);
-        const glm::vec3 p = lights[0].power;
-        j["primaryLightDirection"] = {
-            {"x", jsonFloat(d.x)}, {"y", jsonFloat(d.y)}, {"z", jsonFloat(d.z)}, {"w", 0}};
-        j["primaryLightIntensity"] = {
-            {"x", jsonFloat(p.x)}, {"y", jsonFloat(p.y)}, {"z", jsonFloat(p.z)}, {"w", 1}};
-      }
-      break;
-    }
-    case Engine::Babylon: {
-      Sh9 h = condonShortley(toIrradiance(L));
-      h *= float(1.0 / kPi);
-      static const char* names[kShCount] = {"l00",  "l1_1", "l10", "l11", "l2_2",
-                                            "l2_1", "l20",  "l21", "l22"};
-      ojson hj;
-      for (int k = 0; k < kShCount; ++k) hj[names[k]] = triple(h.c[k]);
-      j["harmonics"] = hj;
-      const BabylonPolynomial p = babylonPolynomial(h);
-      j["polynomial"] = {{"x", triple(p.x)},   {"y", triple(p.y)},   {"z", triple(p.z)},
-                         {"xx", triple(p.xx)}, {"yy", triple(p.yy)}, {"zz", triple(p.zz)},
-                         {"yz", triple(p.yz)}, {"zx", triple(p.zx)}, {"xy", triple(p.xy)}};
-      ojson a = ojson::array();
-      for (const Light& l : lights) {  // DirectionalLight.direction: where the light travels
-        const ColorIntensity ci = colorIntensity(l.power);
-        a.push_back({{"direction", triple(-towards(l, engine))},
-                     {"diffuse", triple(ci.color)},
-                     {"intensity", jsonFloat(ci.intensity)}});
-      }
-      j["directionalLights"] = a;
-      break;
-    }
-    case Engine::Filament:
-    case Engine::Unity: {
-      const Sh9 s = preScaledIrradiance(L);
-      if (engine == Engine::Filament) {
-        j["irradiance"] = nineTriples(s);  // IndirectLight::Builder::irradiance(3, sh)
-      } else {                             // SphericalHarmonicsL2[channel, coefficient]
-        ojson sh = ojson::array();
-        for (int ch = 0; ch < 3; ++ch) {
-          ojson row = ojson::array();
-          for (int k = 0; k < kShCount; ++k) row.push_back(jsonFloat(s.c[k][ch]));
-          sh.push_back(row);
-        }
-        j["sh"] = sh;
-      }
-      ojson a = ojson::array();
-      for (std::size_t i = 0; i < lights.size(); ++i) {
-        const Light& l = lights[i];
-        const ColorIntensity ci = colorIntensity(l.power);
-        ojson o;
-        if (engine == Engine::Filament) {  // LightManager: SUN (the first), else DIRECTIONAL
-          o["type"] = i == 0 ? "SUN" : "DIRECTIONAL";
-          o["direction"] = triple(-towards(l, engine));
-          o["color"] = triple(ci.color);
-          o["intensity"] = jsonFloat(ci.intensity);
-          if (i == 0) o["sunAngularRadius"] = jsonFloat(glm::degrees(l.angularRadius));
-        } else {  // a Directional Light whose transform.forward is where the light travels
-          o["forward"] = triple(-towards(l, engine));
-          o["color"] = triple(ci.color);
-          o["intensity"] = jsonFloat(ci.intensity);
-        }
-        a.push_back(o);
-      }
-      j["lights"] = a;
-      break;
-    }
-    case Engine::Gltf:
-      throw Error("gltf: a document, not a record (gltfDocument)");
+  j["sh"] = flat27(L);
+  j["intensity"] = 1;
+  ojson a = ojson::array();
+  for (const Light& l : lights) {
+    const ColorIntensity ci = colorIntensity(l.power);
+    a.push_back({{"direction", triple(towards(l, Engine::Three))},
+                 {"color", triple(ci.color)},
+                 {"intensity", jsonFloat(ci.intensity)},
+                 {"angular_radius_deg", jsonFloat(glm::degrees(l.angularRadius))}});
+  }
+  j["directionalLights"] = a;
+  return j;
+}
+
+// WebXR's XRLightProbe estimate: the coefficients and the primary light only.
+ojson webXrJson(const Sh9& L, const std::vector<Light>& lights) {
+  ojson j;
+  j["sphericalHarmonicsCoefficients"] = flat27(L);
+  if (!lights.empty()) {
+    const glm::vec3 d = towards(lights[0], Engine::WebXr);
+    const glm::vec3 p = lights[0].power;
+    j["primaryLightDirection"] = {
+        {"x", jsonFloat(d.x)}, {"y", jsonFloat(d.y)}, {"z", jsonFloat(d.z)}, {"w", 0}};
+    j["primaryLightIntensity"] = {
+        {"x", jsonFloat(p.x)}, {"y", jsonFloat(p.y)}, {"z", jsonFloat(p.z)}, {"w", 1}};
   }
   return j;
+}
+
+// Babylon.js: SphericalHarmonics (irradiance / pi, Condon-Shortley phase) and the
+// SphericalPolynomial it derives; a DirectionalLight per light, whose direction is where the
+// light travels.
+ojson babylonJson(const Sh9& L, const std::vector<Light>& lights) {
+  ojson j;
+  Sh9 h = condonShortley(toIrradiance(L));
+  h *= float(1.0 / kPi);
+  static const char* names[kShCount] = {"l00",  "l1_1", "l10", "l11", "l2_2",
+                                        "l2_1", "l20",  "l21", "l22"};
+  ojson hj;
+  for (int k = 0; k < kShCount; ++k) hj[names[k]] = triple(h.c[k]);
+  j["harmonics"] = hj;
+  const BabylonPolynomial p = babylonPolynomial(h);
+  j["polynomial"] = {{"x", triple(p.x)},   {"y", triple(p.y)},   {"z", triple(p.z)},
+                     {"xx", triple(p.xx)}, {"yy", triple(p.yy)}, {"zz", triple(p.zz)},
+                     {"yz", triple(p.yz)}, {"zx", triple(p.zx)}, {"xy", triple(p.xy)}};
+  j["directionalLights"] = travellingLights(lights, Engine::Babylon, "direction", "diffuse");
+  return j;
+}
+
+// Filament: IndirectLight::Builder::irradiance(3, sh), pre-scaled; LightManager lights, SUN (the
+// first) and DIRECTIONAL.
+ojson filamentJson(const Sh9& L, const std::vector<Light>& lights) {
+  ojson j;
+  j["irradiance"] = nineTriples(preScaledIrradiance(L));
+  ojson a = ojson::array();
+  for (std::size_t i = 0; i < lights.size(); ++i) {
+    const ColorIntensity ci = colorIntensity(lights[i].power);
+    ojson o;
+    o["type"] = i == 0 ? "SUN" : "DIRECTIONAL";
+    o["direction"] = triple(-towards(lights[i], Engine::Filament));
+    o["color"] = triple(ci.color);
+    o["intensity"] = jsonFloat(ci.intensity);
+    if (i == 0) o["sunAngularRadius"] = jsonFloat(glm::degrees(lights[i].angularRadius));
+    a.push_back(o);
+  }
+  j["lights"] = a;
+  return j;
+}
+
+// Unity: SphericalHarmonicsL2[channel, coefficient], pre-scaled as Filament's; a Directional
+// Light per light, whose transform.forward is where the light travels.
+ojson unityJson(const Sh9& L, const std::vector<Light>& lights) {
+  ojson j;
+  const Sh9 s = preScaledIrradiance(L);
+  ojson sh = ojson::array();
+  for (int ch = 0; ch < 3; ++ch) {
+    ojson row = ojson::array();
+    for (int k = 0; k < kShCount; ++k) row.push_back(jsonFloat(s.c[k][ch]));
+    sh.push_back(row);
+  }
+  j["sh"] = sh;
+  j["lights"] = travellingLights(lights, Engine::Unity, "forward", "color");
+  return j;
+}
+
+}  // namespace
+
+ojson engineJson(Engine engine, const Sh9& radiance, const std::vector<Light>& lights) {
+  const Sh9 L = toEngineFrame(radiance, engine);
+  switch (engine) {
+    case Engine::Three:
+      return threeJson(L, lights);
+    case Engine::WebXr:
+      return webXrJson(L, lights);
+    case Engine::Babylon:
+      return babylonJson(L, lights);
+    case Engine::Filament:
+      return filamentJson(L, lights);
+    case Engine::Unity:
+      return unityJson(L, lights);
+    case Engine::Gltf:
+      break;
+  }
+  throw Error("gltf: a document, not a record (gltfDocument)");
 }
 
 ojson gltfDocument(const Environment& env, const Sh9& radiance, const std::vector<Light>& lights) {
@@ -332,12 +363,11 @@ std::string frameRecord(const ProcessedFrame& f, const CoeffFormat& format, Reco
     j["coefficients"] = coefficientsJson(f.radiance);
     if (!f.lights.empty()) j["lights"] = lightsJson(f.lights);
   }
+  // Capture's stages (merge only with a bracket), and render: null where the frame was not drawn.
   ojson tm;
-  tm["grab"] = f.times.grabMs;
-  tm["convert"] = f.times.convertMs;
-  tm["project"] = f.times.projectMs;
+  for (const Stage s : {Stage::Grab, Stage::Merge, Stage::Convert, Stage::Project})
+    if (s != Stage::Merge || f.times[s] > 0) tm[std::string(stageName(s))] = f.times[s];
   tm["render"] = t.renderMs < 0 ? ojson(nullptr) : ojson(t.renderMs);
-  if (f.times.mergeMs > 0) tm["merge"] = f.times.mergeMs;
   j["timings_ms"] = tm;
   const FrameConfidence& c = f.confidence;
   j["confidence"] = {{"value", c.value()},

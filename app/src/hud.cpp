@@ -20,10 +20,11 @@ namespace {
 constexpr std::size_t kHistory = 300;  // frames kept for the plots
 const ImU32 kChannel[3] = {IM_COL32(235, 80, 70, 255), IM_COL32(90, 200, 90, 255),
                            IM_COL32(80, 140, 240, 255)};
-const ImU32 kStageColour[5] = {IM_COL32(100, 180, 255, 255), IM_COL32(255, 160, 60, 255),
-                               IM_COL32(110, 220, 110, 255), IM_COL32(255, 110, 110, 255),
-                               IM_COL32(200, 150, 255, 255)};
-const char* const kStageName[5] = {"grab", "convert", "project", "upload", "render"};
+// The stages the HUD plots (lp::Stage up to render), each with its colour.
+constexpr std::size_t kPlotted = std::size_t(Stage::Render) + 1;
+const ImU32 kStageColour[kPlotted] = {IM_COL32(100, 180, 255, 255), IM_COL32(240, 220, 80, 255),
+                                      IM_COL32(255, 160, 60, 255),  IM_COL32(110, 220, 110, 255),
+                                      IM_COL32(255, 110, 110, 255), IM_COL32(200, 150, 255, 255)};
 
 /// Several series on one set of axes (ImGui's PlotLines draws one), scaled to [lo, hi], clipped
 /// to their box, with `label` (if any) in its top left corner.
@@ -106,6 +107,7 @@ void applyKeys(const std::vector<gl::KeyAction>& keys, ViewState& s, bool canPau
 
 HudLayout hudLayout(glm::ivec2 size) {
   HudLayout l;
+  l.size = size;
   const float w = float(std::max(1, size.x)), h = float(std::max(1, size.y));
   l.scale = std::clamp(std::min(w / 1280.0f, h / 720.0f), 0.75f, 2.0f);
   l.margin = 8.0f * l.scale;
@@ -124,9 +126,20 @@ HudLayout hudLayout(glm::ivec2 size) {
   return l;
 }
 
-gl::Camera framedBesideHud(gl::Camera camera, glm::ivec2 size, bool hudShown) {
-  if (hudShown) camera.frame = hudLayout(size).modelFrame;
+gl::Camera framedBesideHud(gl::Camera camera, const HudLayout& layout, bool hudShown) {
+  if (hudShown) camera.frame = layout.modelFrame;
   return camera;
+}
+
+void RateTitle::tick(gl::GlContext& ctx, const std::string& prefix, const std::string& suffix) {
+  ++frames_;
+  const auto now = std::chrono::steady_clock::now();
+  const double s = std::chrono::duration<double>(now - t0_).count();
+  if (s < 1.0 || ctx.isHeadless()) return;
+  char rate[64];
+  std::snprintf(rate, sizeof rate, " - %.1f frames/s", double(frames_) / s);
+  ctx.setTitle(prefix + rate + suffix);
+  t0_ = now, frames_ = 0;
 }
 
 std::vector<gl::KeyAction> handleInput(gl::GlContext& ctx, const Hud* hud, ViewState& state,
@@ -214,17 +227,16 @@ void Hud::recordPanel(const char* name) {
                          ImGui::GetStyle().WindowPadding.y});
 }
 
-void Hud::draw(glm::ivec2 fb, gl::Renderer& renderer, ViewState& state, double frameMs) {
+void Hud::draw(const HudLayout& layout, gl::Renderer& renderer, ViewState& state, double frameMs) {
   edited_ = false;
   ImGuiIO& io = ImGui::GetIO();
   ImGui_ImplOpenGL3_NewFrame();
   if (window_) {
     ImGui_ImplGlfw_NewFrame();
   } else {
-    io.DisplaySize = ImVec2(float(fb.x), float(fb.y));
+    io.DisplaySize = ImVec2(float(layout.size.x), float(layout.size.y));
     io.DeltaTime = 1.0f / 30.0f;
   }
-  const HudLayout layout = hudLayout(fb);
   applyScale(layout.scale);
   const float maxHeight = io.DisplaySize.y - 2 * layout.margin;
   fpsSmoothed_ = fpsSmoothed_ == 0 ? frameMs : 0.9 * fpsSmoothed_ + 0.1 * frameMs;
@@ -321,27 +333,35 @@ void Hud::drawStatusTimes(float maxHeight) {
   const float s = scale_, line = ImGui::GetTextLineHeightWithSpacing();
   const float plotHeight = 70.0f * s;
   if (!fits(line + plotHeight + 2 * line, maxHeight)) return;
-  std::vector<std::vector<float>> series(5);
+  // The stages up to render; merge only where a bracket was merged.
+  std::vector<std::size_t> shown;
+  for (std::size_t k = 0; k < kPlotted; ++k)
+    if (Stage(k) != Stage::Merge ||
+        std::any_of(history_.begin(), history_.end(),
+                    [&](const HudSample& h) { return h.times.ms[k] > 0; }))
+      shown.push_back(k);
+  std::vector<std::vector<float>> series;
+  std::vector<ImU32> colours;
   std::vector<float> all;
-  for (const auto& h : history_) {
-    const double v[5] = {h.grabMs, h.convertMs, h.projectMs, h.uploadMs, h.renderMs};
-    for (int k = 0; k < 5; ++k) {
-      series[std::size_t(k)].push_back(float(v[k]));
-      all.push_back(float(v[k]));
+  for (const std::size_t k : shown) {
+    series.emplace_back();
+    colours.push_back(kStageColour[k]);
+    for (const auto& h : history_) {
+      series.back().push_back(float(h.times.ms[k]));
+      all.push_back(float(h.times.ms[k]));
     }
   }
   // The scale follows the 95th percentile: a warm-up spike does not flatten everything else.
   std::nth_element(all.begin(), all.begin() + std::ptrdiff_t(all.size() * 95 / 100), all.end());
   const float top = std::max(1.0f, 1.3f * all[all.size() * 95 / 100]);
   ImGui::TextWrapped("stage times, last %zu frames (0 .. %.1f ms)", history_.size(), top);
-  plotSeries("stages", series, {std::begin(kStageColour), std::end(kStageColour)},
-             {ImGui::GetContentRegionAvail().x, plotHeight}, 0, top);
-  const auto& b = history_.back();
-  const double now[5] = {b.grabMs, b.convertMs, b.projectMs, b.uploadMs, b.renderMs};
+  plotSeries("stages", series, colours, {ImGui::GetContentRegionAvail().x, plotHeight}, 0, top);
+  const StageTimes& now = history_.back().times;
   if (ImGui::BeginTable("stages", 3)) {
-    for (int k = 0; k < 5; ++k) {
+    for (const std::size_t k : shown) {
       ImGui::TableNextColumn();
-      ImGui::TextColored(ImColor(kStageColour[k]), "%s %.1f ms", kStageName[k], now[k]);
+      ImGui::TextColored(ImColor(kStageColour[k]), "%s %.1f ms",
+                         std::string(kStageNames[k]).c_str(), now.ms[k]);
     }
     ImGui::EndTable();
   }
@@ -349,12 +369,19 @@ void Hud::drawStatusTimes(float maxHeight) {
 
 void Hud::drawLight(gl::Renderer& renderer, const HudLayout& layout, float maxHeight) {
   const ImGuiIO& io = ImGui::GetIO();
-  const float s = layout.scale;
   beginPanel("light", {io.DisplaySize.x - layout.margin, layout.margin}, {1, 0}, layout.lightWidth,
              maxHeight);
+  drawProbes(renderer, maxHeight);
+  drawCoefficientBars(maxHeight);
+  if (!still_) drawLightPlots(maxHeight);
+  recordPanel("light");
+  ImGui::End();
+}
+
+void Hud::drawProbes(gl::Renderer& renderer, float maxHeight) {
   auto imageSize = [&](gl::ProbeView v, float scale) {
     const glm::ivec2 size = renderer.probeSize(v);
-    return ImVec2{float(size.x) * scale * s, float(size.y) * scale * s};
+    return ImVec2{float(size.x) * scale * scale_, float(size.y) * scale * scale_};
   };
   auto image = [&](gl::ProbeView v, float scale) {
     // The textures are rendered bottom-up (GL): flip v.
@@ -367,19 +394,7 @@ void Hud::drawLight(gl::Renderer& renderer, const HudLayout& layout, float maxHe
   const auto& lights = history_.empty() ? none : history_.back().lights;
   if (fits(imageSize(gl::ProbeView::Panorama, 1.05f).y + float(lights.size()) * line, maxHeight)) {
     image(gl::ProbeView::Panorama, 1.05f);
-    // The lights (--sun) marked where they are on the panorama: the inset is the world's equirect
-    // (azimuth left to right from +x, the zenith at the top; shaders.cpp, kProbeFs mode 0).
-    const ImVec2 lo = ImGui::GetItemRectMin(), hi = ImGui::GetItemRectMax();
-    ImDrawList* marks = ImGui::GetWindowDrawList();
-    for (const Light& l : lights) {
-      float p = std::atan2(l.dir.y, l.dir.x);
-      if (p < 0) p += 2 * float(kPi);
-      const float t = std::acos(std::clamp(l.dir.z, -1.0f, 1.0f));
-      const ImVec2 c{lo.x + (hi.x - lo.x) * p / (2 * float(kPi)),
-                     lo.y + (hi.y - lo.y) * t / float(kPi)};
-      marks->AddCircle(c, 7.0f * s, IM_COL32(255, 60, 40, 255), 16, 2.0f * s);
-      marks->AddCircle(c, 8.5f * s, IM_COL32(0, 0, 0, 200), 16, 1.0f * s);
-    }
+    drawLightMarks(lights);
     for (const Light& l : lights)
       ImGui::TextWrapped("light %.0f%%  r %.2f deg  E %.3g%s", 100 * l.share,
                          glm::degrees(l.angularRadius), luminance(l.power),
@@ -394,32 +409,49 @@ void Hud::drawLight(gl::Renderer& renderer, const HudLayout& layout, float maxHe
                     ImGui::GetStyle().WindowPadding.x + ImGui::GetStyle().ItemSpacing.x);
     ImGui::TextDisabled("chrome");
   }
+}
 
+void Hud::drawLightMarks(const std::vector<Light>& lights) {
+  // The lights (--sun) marked where they are on the panorama just drawn: the inset is the
+  // world's equirect (azimuth left to right from +x, the zenith at the top; shaders.cpp,
+  // kProbeFs mode 0).
+  const ImVec2 lo = ImGui::GetItemRectMin(), hi = ImGui::GetItemRectMax();
+  ImDrawList* marks = ImGui::GetWindowDrawList();
+  for (const Light& l : lights) {
+    float p = std::atan2(l.dir.y, l.dir.x);
+    if (p < 0) p += 2 * float(kPi);
+    const float t = std::acos(std::clamp(l.dir.z, -1.0f, 1.0f));
+    const ImVec2 c{lo.x + (hi.x - lo.x) * p / (2 * float(kPi)),
+                   lo.y + (hi.y - lo.y) * t / float(kPi)};
+    marks->AddCircle(c, 7.0f * scale_, IM_COL32(255, 60, 40, 255), 16, 2.0f * scale_);
+    marks->AddCircle(c, 8.5f * scale_, IM_COL32(0, 0, 0, 200), 16, 1.0f * scale_);
+  }
+}
+
+void Hud::drawCoefficientBars(float maxHeight) {
   // The nine coefficients: bars per channel, scaled to the largest magnitude.
   const Sh9& L = history_.empty() ? Sh9{} : history_.back().radiance;
   float scale = 1e-12f;
   for (const auto& c : L.c) scale = std::max({scale, std::abs(c.x), std::abs(c.y), std::abs(c.z)});
   ImDrawList* dl = ImGui::GetWindowDrawList();
-  const float barW = 120.0f * s, barH = 4.0f * s;
-  if (fits(9 * std::max(line, 3 * barH + ImGui::GetStyle().ItemSpacing.y), maxHeight))
-    for (int k = 0; k < kShCount; ++k) {
-      ImGui::Text("%-4s", std::string(kShNames[std::size_t(k)]).c_str());
-      ImGui::SameLine(44.0f * s);
-      const ImVec2 p = ImGui::GetCursorScreenPos();
-      const float mid = p.x + barW / 2;
-      dl->AddLine({mid, p.y}, {mid, p.y + 3 * barH}, IM_COL32(120, 120, 120, 255));
-      for (int ch = 0; ch < 3; ++ch) {
-        const float v = L.c[std::size_t(k)][ch] / scale * (barW / 2);
-        dl->AddRectFilled({std::min(mid, mid + v), p.y + float(ch) * barH},
-                          {std::max(mid, mid + v), p.y + float(ch + 1) * barH - 1}, kChannel[ch]);
-      }
-      ImGui::Dummy({barW, 3 * barH});
-      ImGui::SameLine();
-      ImGui::Text("%+.3f", luminance(L.c[std::size_t(k)]));
+  const float line = ImGui::GetTextLineHeightWithSpacing();
+  const float barW = 120.0f * scale_, barH = 4.0f * scale_;
+  if (!fits(9 * std::max(line, 3 * barH + ImGui::GetStyle().ItemSpacing.y), maxHeight)) return;
+  for (int k = 0; k < kShCount; ++k) {
+    ImGui::Text("%-4s", std::string(kShNames[std::size_t(k)]).c_str());
+    ImGui::SameLine(44.0f * scale_);
+    const ImVec2 p = ImGui::GetCursorScreenPos();
+    const float mid = p.x + barW / 2;
+    dl->AddLine({mid, p.y}, {mid, p.y + 3 * barH}, IM_COL32(120, 120, 120, 255));
+    for (int ch = 0; ch < 3; ++ch) {
+      const float v = L.c[std::size_t(k)][ch] / scale * (barW / 2);
+      dl->AddRectFilled({std::min(mid, mid + v), p.y + float(ch) * barH},
+                        {std::max(mid, mid + v), p.y + float(ch + 1) * barH - 1}, kChannel[ch]);
     }
-  if (!still_) drawLightPlots(maxHeight);
-  recordPanel("light");
-  ImGui::End();
+    ImGui::Dummy({barW, 3 * barH});
+    ImGui::SameLine();
+    ImGui::Text("%+.3f", luminance(L.c[std::size_t(k)]));
+  }
 }
 
 void Hud::drawLightPlots(float maxHeight) {

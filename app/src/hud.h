@@ -2,6 +2,7 @@
 // The on-screen HUD of view, replay and live (Dear ImGui), and the interactive state its keys
 // and sliders change. In a window it uses ImGui's GLFW backend for input; headless (--hud) the
 // same HUD is drawn into the offscreen frame, so tests and recorded frames show it.
+#include <chrono>
 #include <cstdint>
 #include <deque>
 #include <memory>
@@ -10,6 +11,7 @@
 #include <vector>
 
 #include "liveprobe/capture/hdr_merge.h"
+#include "liveprobe/capture/stages.h"
 #include "liveprobe/gl/context.h"
 #include "liveprobe/gl/renderer.h"
 #include "liveprobe/sh/lights.h"
@@ -20,8 +22,8 @@ namespace lp::cli {
 /// One drawn frame's numbers, for the HUD's history plots.
 struct HudSample {
   std::uint64_t frame = 0;
-  double time = 0;  ///< the source's timestamp, seconds
-  double grabMs = 0, convertMs = 0, projectMs = 0, uploadMs = 0, renderMs = 0;
+  double time = 0;            ///< the source's timestamp, seconds
+  StageTimes times;           ///< up to render (a window reads nothing back)
   double latencyMs = 0;       ///< capture to shown
   Sh9 radiance;               ///< as lit (after rotation and smoothing)
   Sh9 unsmoothed;             ///< before smoothing (equal to radiance without --smooth)
@@ -52,6 +54,7 @@ struct ViewState {
 /// between them would be narrower than a fifth of the frame, the light panel is left out, then
 /// the status panel too: the HUD never covers the model.
 struct HudLayout {
+  glm::ivec2 size{1, 1};  ///< the frame's
   float scale = 1.0f;
   bool status = false, light = false;  ///< which panels are drawn
   float margin = 0, statusWidth = 0, lightWidth = 0;
@@ -60,7 +63,7 @@ struct HudLayout {
 HudLayout hudLayout(glm::ivec2 size);
 
 /// `camera` framed in the part of the frame the HUD leaves, when the HUD is shown.
-gl::Camera framedBesideHud(gl::Camera camera, glm::ivec2 size, bool hudShown);
+gl::Camera framedBesideHud(gl::Camera camera, const HudLayout& layout, bool hudShown);
 
 /// A panel as the last draw() laid it out, in pixels from the top left, and the height its
 /// content took.
@@ -68,6 +71,17 @@ struct HudPanel {
   std::string name;
   glm::vec2 min{0.0f}, max{0.0f};
   float contentHeight = 0;
+};
+
+/// The window title's frame rate, set once a second: "PREFIX - N frames/s" (and SUFFIX).
+class RateTitle {
+ public:
+  /// Counts one presented frame; once a second writes the title (a headless context has none).
+  void tick(gl::GlContext& ctx, const std::string& prefix, const std::string& suffix = "");
+
+ private:
+  std::chrono::steady_clock::time_point t0_ = std::chrono::steady_clock::now();
+  std::size_t frames_ = 0;
 };
 
 class Hud;
@@ -107,15 +121,18 @@ class Hud {
   /// The panels of the last draw().
   const std::vector<HudPanel>& panels() const { return panels_; }
 
-  /// Draws the HUD (and the help overlay) over the bound framebuffer, after the scene (drawn with
-  /// framedBesideHud). Headless, the window's controls (exposure, background, help) are left
-  /// out: the exposure is written instead.
-  void draw(glm::ivec2 framebuffer, gl::Renderer& renderer, ViewState& state, double frameMs);
+  /// Draws the HUD (and the help overlay) over the bound framebuffer laid out as `layout`, after
+  /// the scene (drawn with framedBesideHud of the same layout). Headless, the window's controls
+  /// (exposure, background, help) are left out: the exposure is written instead.
+  void draw(const HudLayout& layout, gl::Renderer& renderer, ViewState& state, double frameMs);
 
  private:
   void drawStatus(ViewState& state, double frameMs, const HudLayout& layout, float maxHeight);
   void drawStatusTimes(float maxHeight);
   void drawLight(gl::Renderer& renderer, const HudLayout& layout, float maxHeight);
+  void drawProbes(gl::Renderer& renderer, float maxHeight);
+  void drawLightMarks(const std::vector<Light>& lights);
+  void drawCoefficientBars(float maxHeight);
   void drawLightPlots(float maxHeight);
   void drawEditor(const HudLayout& layout);
   void recordPanel(const char* name);

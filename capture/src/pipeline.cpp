@@ -276,8 +276,10 @@ void CapturePipeline::run() {
       const auto t3 = Clock::now();
       if (opt_.keepImages && !out.raw) out.image = std::move(s.image);  // one background a frame
       s.image.reset();
-      out.times = {msBetween(t0, t1), msBetween(tm, t2), msBetween(t2, t3),
-                   s.merger ? msBetween(t1, tm) : 0.0};
+      out.times[Stage::Grab] = msBetween(t0, t1);
+      if (s.merger) out.times[Stage::Merge] = msBetween(t1, tm);
+      out.times[Stage::Convert] = msBetween(tm, t2);
+      out.times[Stage::Project] = msBetween(t2, t3);
       out.captureTime = s.frame.captureTime >= 0 ? s.frame.captureTime : grabbed;
       out.coefficientsLatencyMs = 1000.0 * (monotonicSeconds() - out.captureTime);
       if (opt_.onCaptured) opt_.onCaptured(out);

@@ -19,6 +19,7 @@
 #include "liveprobe/capture/hdr_merge.h"
 #include "liveprobe/capture/image.h"
 #include "liveprobe/capture/photometry.h"
+#include "liveprobe/capture/stages.h"
 #include "liveprobe/sh/executor.h"
 #include "liveprobe/sh/layout.h"
 #include "liveprobe/sh/lights.h"
@@ -26,13 +27,6 @@
 #include "liveprobe/sh/sh.h"
 
 namespace lp {
-
-/// Where one frame's capture time went. 8-bit frames are linearised inside the projection
-/// (its lookup table fused in), so `convertMs` is only the linear copy kept for display.
-struct StageTimes {
-  double grabMs = 0, convertMs = 0, projectMs = 0;
-  double mergeMs = 0;  ///< an exposure bracket's merge (0 without one)
-};
 
 struct ProcessedFrame {
   std::uint64_t index = 0;     ///< position in this pipeline's output, from 0
@@ -51,7 +45,7 @@ struct ProcessedFrame {
   /// For `image` made from an 8-bit frame: the scale its decoded values carry (0 for HDR frames),
   /// so the display can show it as the source looks (gl::Renderer::setBackground).
   float displayScale = 0.0f;
-  StageTimes times;
+  StageTimes times;  ///< capture's stages; the viewer adds its own
   std::size_t saturated = 0;
   /// How far this frame's lighting can be trusted (clipped power, the bracket's agreement).
   FrameConfidence confidence;

@@ -1,0 +1,45 @@
+#pragma once
+// The stages of a frame's path, named and ordered once: capture's (grab, merge, convert, project,
+// on the capture thread) then the viewer's (upload, render, readback). Every report of where a
+// frame's time went (the per-frame records, the HUD's plot, the summary, `liveprobe bench`) reads
+// its stages from here.
+#include <array>
+#include <cstddef>
+#include <string_view>
+
+namespace lp {
+
+enum class Stage : int {
+  Grab,      ///< the source's next frame, decoded
+  Merge,     ///< an exposure bracket's merge into radiance
+  Convert,   ///< the linear copy kept for display (8-bit frames are linearised in the projection)
+  Project,   ///< coefficients and lights
+  Upload,    ///< lighting and background handed to GL
+  Render,    ///< the model drawn (and the HUD)
+  Readback,  ///< the frame read back (headless outputs, bench)
+  Count
+};
+
+inline constexpr std::size_t kStageCount = std::size_t(Stage::Count);
+
+inline constexpr std::array<std::string_view, kStageCount> kStageNames = {
+    "grab", "merge", "convert", "project", "upload", "render", "readback"};
+
+constexpr std::string_view stageName(Stage s) { return kStageNames[std::size_t(s)]; }
+
+/// The stage called `name` (Stage::Count: none).
+constexpr Stage stageNamed(std::string_view name) {
+  for (std::size_t i = 0; i < kStageCount; ++i)
+    if (kStageNames[i] == name) return Stage(i);
+  return Stage::Count;
+}
+
+/// One frame's time per stage, ms (0: the stage did not run for it).
+struct StageTimes {
+  std::array<double, kStageCount> ms{};
+
+  double& operator[](Stage s) { return ms[std::size_t(s)]; }
+  double operator[](Stage s) const { return ms[std::size_t(s)]; }
+};
+
+}  // namespace lp
