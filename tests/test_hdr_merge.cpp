@@ -43,7 +43,7 @@ std::vector<float> scene(int sunX = 40) {
 template <class Encode>
 Frame shoot(const std::vector<float>& radiance, double t, Encode encode) {
   Frame f;
-  f.format = lp::PixelFormat::Bgr8;
+  f.format = lp::PanoramaFormat::BgrU8;
   f.width = kW, f.height = kH;
   f.radianceScale = 1.0 / t;
   f.bgr8.resize(radiance.size());
@@ -68,7 +68,7 @@ TEST(HdrMerge, TwelveStopsOfRadianceComeBack) {
   Frame out;
   FrameConfidence c;
   for (double t : {1.0 / 4096, 1.0 / 64, 1.0}) c = merger.add(shootSrgb(radiance, t), out);
-  ASSERT_EQ(out.format, lp::PixelFormat::RgbF32);
+  ASSERT_EQ(out.format, lp::PanoramaFormat::RgbF32);
   EXPECT_EQ(c.exposures, 3);
   EXPECT_TRUE(c.brightestMeasured);
   EXPECT_NEAR(c.clippedShare, 0.0, 1e-9);
@@ -209,7 +209,7 @@ TEST(HdrMerge, AResponseFileIsCheckedWhole) {
 // trusted whole.
 TEST(FrameConfidence, OneFramesClippedShareIsItsClippedPixelsPower) {
   Frame f;
-  f.format = lp::PixelFormat::Bgr8;
+  f.format = lp::PanoramaFormat::BgrU8;
   f.width = kW, f.height = kH;
   f.radianceScale = 4.0;
   f.bgr8.assign(std::size_t(kW) * kH * 3, 128);
@@ -231,7 +231,7 @@ TEST(FrameConfidence, OneFramesClippedShareIsItsClippedPixelsPower) {
   EXPECT_NEAR(c.clippedShare, clipped / total, 1e-4);
   EXPECT_FALSE(c.brightestMeasured);
   Frame hdr;
-  hdr.format = lp::PixelFormat::RgbF32;
+  hdr.format = lp::PanoramaFormat::RgbF32;
   hdr.width = kW, hdr.height = kH;
   hdr.rgb.assign(std::size_t(kW) * kH * 3, 5.0f);
   const FrameConfidence h = processor.confidence(hdr, processor.process(hdr));
@@ -242,7 +242,7 @@ TEST(FrameConfidence, OneFramesClippedShareIsItsClippedPixelsPower) {
 TEST(HdrMerge, OnlyBracketsOfEightBitFramesMerge) {
   BracketMerger merger(MergeOptions{});
   Frame f, out;
-  f.format = lp::PixelFormat::RgbF32;
+  f.format = lp::PanoramaFormat::RgbF32;
   f.width = 2, f.height = 1;
   f.rgb.assign(6, 1.0f);
   EXPECT_THROW(merger.add(f, out), lp::Error);

@@ -3,7 +3,11 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <fstream>
+#include <nlohmann/json.hpp>
 #include <numbers>
+#include <string>
+#include <vector>
 
 #include "layout_dirs.h"
 #include "liveprobe/capture/frame.h"
@@ -182,6 +186,45 @@ TEST(Layouts, SolidAnglesAndInverse) {
         ++checked;
       }
     EXPECT_GT(checked, 50);
+  }
+}
+
+// The one frame path: a map of each layout, made here, gives the same coefficients, to the last
+// digit, through a still command (coeffs), the capture pipeline (replay, one thread: the sums in
+// the same order) and the accuracy evaluation (compare).
+TEST_F(EveryLayout, TheSameCoefficientsThroughEveryCommand) {
+  lpt::TempDir tmp;
+  struct Case {
+    std::string name, args;
+    lp::Image image;
+  };
+  const int n = 32;
+  const std::vector<Case> cases = {
+      {"equirect", "", resample(eq_, 128, 64, lpt::equirectDirs(128, 64))},
+      {"angular", "--layout angular", resample(eq_, 96, 96, lpt::angularDirs(96))},
+      {"mirrorball", "--layout mirrorball --circle 70,60,50",
+       resample(eq_, 160, 120, lpt::mirrorBallDirs(70, 60, 50))},
+      {"cube", "--layout cube", resample(eq_, 4 * n, 3 * n, lpt::cubeCrossDirs(n, false))},
+      {"fisheye", "--layout fisheye --fov 200",
+       resample(eq_, 192, 96, lpt::dualFisheyeDirs(192, 96, 200))}};
+  for (const Case& c : cases) {
+    SCOPED_TRACE(c.name);
+    const std::string file = tmp / (c.name + ".exr");
+    lp::saveImage(file, c.image);
+    const auto still = lpt::runLiveprobe("coeffs " + file + " " + c.args);
+    ASSERT_EQ(still.exitCode, 0) << still.output;
+    const auto replay = lpt::runLiveprobe(
+        "replay " + file + " " + c.args +
+        " --headless --frames 1 --threads 1 --size 32x18 --quiet --coeffs-out " + tmp / "c.jsonl");
+    ASSERT_EQ(replay.exitCode, 0) << replay.output;
+    const auto compare = lpt::runLiveprobe("compare " + file + " " + c.args + " --size 8x4 --json");
+    ASSERT_EQ(compare.exitCode, 0) << compare.output;
+    const auto want = nlohmann::json::parse(still.output)["coefficients"];
+    std::ifstream lines(tmp / "c.jsonl");
+    std::string first;
+    ASSERT_TRUE(std::getline(lines, first));
+    EXPECT_EQ(nlohmann::json::parse(first)["coefficients"], want);
+    EXPECT_EQ(nlohmann::json::parse(compare.output)["coefficients"], want);
   }
 }
 

@@ -34,12 +34,12 @@ TEST(FrameProcessor, OneExposureOneProjectionEveryFormat) {
   std::vector<float> sky;
   lp::renderSyntheticSky(w, h, 0.7, sky);
   lp::Frame hdr;
-  hdr.format = lp::PixelFormat::RgbF32;
+  hdr.format = lp::PanoramaFormat::RgbF32;
   hdr.width = w, hdr.height = h;
   hdr.rgb = sky;
   hdr.radianceScale = 3.0;
   lp::Frame ldr;
-  ldr.format = lp::PixelFormat::Bgr8;
+  ldr.format = lp::PanoramaFormat::BgrU8;
   ldr.width = w, ldr.height = h;
   ldr.bgr8.resize(std::size_t(w) * h * 3);
   for (std::size_t p = 0; p < std::size_t(w) * h; ++p)
@@ -372,7 +372,7 @@ TEST(Accuracy, EightBitAndHalfInputs) {
   for (auto& v : bgr) v = std::uint8_t(rng());
   const lp::Linearizer lin;
   lp::Frame f;
-  f.format = lp::PixelFormat::Bgr8, f.width = w, f.height = h, f.bgr8 = bgr;
+  f.format = lp::PanoramaFormat::BgrU8, f.width = w, f.height = h, f.bgr8 = bgr;
   lp::Image img;
   lin.convert(f, img);
   for (lp::Layout layout : {lp::Layout::Equirect, lp::Layout::DualFisheye}) {

@@ -284,7 +284,7 @@ TEST(ReplayCli, CubeFaceFolderIsReadAsACube) {
   auto src = lp::openSource(dir);
   lp::Frame f;
   ASSERT_TRUE(src->next(f));
-  ASSERT_EQ(f.format, lp::PixelFormat::RgbF32);
+  ASSERT_EQ(f.format, lp::PanoramaFormat::RgbF32);
   const lp::Sh9 truth =
       lp::project(lp::PanoramaView::rgbF32(f.rgb.data(), f.width, f.height, lp::Layout::Cube));
   const auto r = runLiveprobe("coeffs " + dir + " --format json");

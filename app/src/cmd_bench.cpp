@@ -339,7 +339,7 @@ BenchTimes timeFrame(BenchScene& scene, RunState& run, FrameSource& source,
     setBackground(scene.renderer, frame, scene.layout, lin.exposure() * scale);
   else
     setBackground(scene.renderer, image, scene.layout,
-                  frame.format == PixelFormat::Bgr8 ? lin.exposure() * scale : 0.0f);
+                  frame.format == PanoramaFormat::BgrU8 ? lin.exposure() * scale : 0.0f);
   gl::Renderer::finish();
   lap(3);
   gl::ShadingSettings shading;

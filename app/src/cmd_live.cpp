@@ -158,11 +158,8 @@ int runLive(const Args& a) {
   if (!stops.empty()) cs.metadataDevice = a.get("--metadata", siblingMetadataNode(cs.device));
   auto camera = std::make_unique<V4l2Source>(cs);
   camera->start();
-  const bool headless =
-      a.has("--headless") || !(std::getenv("DISPLAY") || std::getenv("WAYLAND_DISPLAY"));
-  std::fprintf(
-      stderr, "liveprobe live: %s%s\n", camera->describe().c_str(),
-      headless && !a.has("--frames") && !a.has("--duration") ? "; running until Ctrl-C" : "");
+  std::fprintf(stderr, "liveprobe live: %s%s\n", camera->describe().c_str(),
+               a.has("--frames") || a.has("--duration") ? "" : "; running until Ctrl-C");
   // Bracketing counts its stops from a locked exposure.
   if (a.has("--lock-exposure") || !stops.empty()) lockFromArgs(a, *camera, "live");
   if (!stops.empty()) startBracket(*camera, stops);

@@ -278,7 +278,7 @@ struct StreamOutputs {
     if (frames) frames->write(f.index, fb, rgb);
     if (video) {
       Frame out;
-      out.format = PixelFormat::Bgr8;
+      out.format = PanoramaFormat::BgrU8;
       out.width = fb.x, out.height = fb.y;
       out.timestamp = f.timestamp;
       out.bgr8.resize(rgb.size());
@@ -588,9 +588,10 @@ RecordSinks openSinks(const Args& a) {
 /// How one run goes: the pipeline's options and what the loop decides from the source.
 struct StreamPlan {
   PipelineOptions opt;
-  bool live = false, headless = false;
-  bool endless = false;      ///< no end but Ctrl-C
-  std::pair<int, int> size;  ///< the view's
+  bool live = false;
+  bool headless = false;                   ///< as the GL context came up (setHeadless)
+  bool endless = false;                    ///< no end but Ctrl-C
+  std::pair<int, int> size, headlessSize;  ///< the view's, in a window and headless
   double fps = 0;
   std::string description;
   gl::Camera camera;  ///< the model and the camera, read before any output is opened
@@ -606,9 +607,9 @@ StreamPlan planStream(const Args& a, const FrameSource& source, bool live) {
   p.mesh = meshFromArgs(a);
   p.fps = source.fps();
   p.description = source.describe();
-  p.headless = a.has("--headless") || !(std::getenv("DISPLAY") || std::getenv("WAYLAND_DISPLAY"));
   const std::string sizeOpt = live ? "--view-size" : "--size";  // live: --size is the camera's
-  p.size = parseSize(a.get(sizeOpt, p.headless ? "640x360" : "1280x720"), sizeOpt);
+  p.size = parseSize(a.get(sizeOpt, "1280x720"), sizeOpt);
+  p.headlessSize = a.has(sizeOpt) ? p.size : std::pair{640, 360};
   PipelineOptions& opt = p.opt;
   if (a.has("--duration")) {
     const double d = a.numberIn("--duration", 0, 1e-3, 1e7);
@@ -617,13 +618,19 @@ StreamPlan planStream(const Args& a, const FrameSource& source, bool live) {
   }
   // (live says so on its first line, with the camera's description)
   p.endless = !live && opt.maxFrames < 0 && (opt.loop || p.description.rfind("synthetic", 0) == 0);
-  opt.handoff = p.headless && !live ? Handoff::Every : Handoff::Latest;
-  // A window plays in real time; so does a headless replay that serves or publishes (its readers
-  // want the source's pace, not as fast as it renders), or that asks with --realtime.
-  opt.realtime =
-      !live && (!p.headless || a.has("--realtime") || a.has("--serve") || a.has("--publish"));
   opt.keepImages = true;  // the background can be switched on at any time (B), and the HUD shows it
   return p;
+}
+
+/// What follows from the GL context that came up, a window or headless: how frames are handed
+/// over and paced.
+void setHeadless(const Args& a, StreamPlan& p, bool headless) {
+  p.headless = headless;
+  p.opt.handoff = headless && !p.live ? Handoff::Every : Handoff::Latest;
+  // A window plays in real time; so does a headless replay that serves or publishes (its readers
+  // want the source's pace, not as fast as it renders), or that asks with --realtime.
+  p.opt.realtime =
+      !p.live && (!headless || a.has("--realtime") || a.has("--serve") || a.has("--publish"));
 }
 
 /// At capture, on capture's thread: --coeffs-out lines of a window or a camera, the stream and
@@ -664,7 +671,7 @@ StreamView openStreamView(const Args& a, const StreamPlan& p) {
   view.layout = p.opt.layout;
   view.source = p.description;
   view.state.camera = view.state.initialCamera = p.camera;
-  view.ctx = openContext(p.headless ? gl::Backend::Headless : gl::Backend::Auto, p.size);
+  view.ctx = openContext(backendFromArgs(a), p.size, p.headlessSize);
   const bool window = !view.ctx->isHeadless();
   view.dynamicResolution = DynamicResolution(window && isSoftwareGl(view.ctx->describe()) &&
                                              !a.has("--full-resolution"));
@@ -685,10 +692,10 @@ StreamView openStreamView(const Args& a, const StreamPlan& p) {
 /// total and an ETA without --frames).
 Progress announceRun(const StreamPlan& p, const FrameSource& source, bool window, bool quiet) {
   if (p.endless && !window && !quiet)
-    std::fprintf(
-        stderr,
-        "liveprobe: %s has no end: running until Ctrl-C (or give --frames N or --duration S)\n",
-        p.description.c_str());
+    std::fprintf(stderr,
+                 "liveprobe: %s has no end: running until Ctrl-C (or give --frames N or "
+                 "--duration S)\n",
+                 p.description.c_str());
   const std::int64_t length = p.live || p.opt.loop ? -1 : source.frameCount();
   const std::int64_t total =
       length > 0 && (p.opt.maxFrames < 0 || length < p.opt.maxFrames) ? length : p.opt.maxFrames;
@@ -735,15 +742,16 @@ int runStream(const Args& a, std::unique_ptr<FrameSource> source, bool live) {
   StreamPlan plan = planStream(a, *source, live);
   StreamOutputs out = openOutputs(a, plan.fps, plan.description);
   RecordSinks sinks = openSinks(a);
-  wireCaptureOutputs(plan, out, sinks, *source);
   StreamView view = openStreamView(a, plan);
-  Progress progress = announceRun(plan, *source, !view.ctx->isHeadless(), a.has("--quiet"));
+  setHeadless(a, plan, view.ctx->isHeadless());
+  wireCaptureOutputs(plan, out, sinks, *source);
+  Progress progress = announceRun(plan, *source, !plan.headless, a.has("--quiet"));
 
   CapturePipeline pipeline(std::move(source), plan.opt);
   pipeline.start();
   StreamTally tally;
   try {
-    if (view.ctx->isHeadless() && !live)
+    if (plan.headless && !live)
       runOffline(pipeline, view, out, tally, progress, sinks);
     else
       runInteractive(pipeline, view, tally, progress, live, plan.description, sinks);

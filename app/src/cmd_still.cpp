@@ -226,6 +226,7 @@ int runCompare(const Args& a) {
     j["sh_ms"] = r.shMs;
     j["brute_ms"] = r.bruteMs;
     j["speed_ratio"] = r.bruteMs / r.shMs;
+    j["coefficients"] = coefficientsJson(r.radiance);
     if (r.sun) {
       j["sun_mean_frac_total"] = r.meanFracTotalSun;
       j["sun_max_frac_total"] = r.maxFracTotalSun;

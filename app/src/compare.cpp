@@ -7,9 +7,9 @@
 #include <glm/gtc/type_ptr.hpp>
 #include <opencv2/imgproc.hpp>
 
+#include "liveprobe/capture/frame_processor.h"
 #include "liveprobe/capture/image.h"
 #include "liveprobe/sh/brute.h"
-#include "liveprobe/sh/projector.h"
 
 namespace lp::cli {
 
@@ -23,9 +23,14 @@ CompareResult compareIrradiance(const Image& img, const LayoutSpec& layout, int 
                                 const BandWindow& window, unsigned threads,
                                 const glm::mat3& orientation, const BruteProgress& progress,
                                 const LightOptions* sun) {
-  const Projector projector(layout, img.width, img.height);
-  auto samples = projector.samples();
-  for (auto& s : samples) s.dir = orientation * s.dir;
+  // The map through the frame path every command shares, timed with the evaluation: the SH
+  // side of the paper's comparison.
+  Frame frame;
+  frame.format = PanoramaFormat::RgbF32;
+  frame.width = img.width, frame.height = img.height;
+  frame.rgb = img.rgb;
+  FrameProcessor processor(
+      {layout, Photometry{}, orientation, 1, sun ? *sun : LightOptions{.maxLights = 0}});
   const auto grid = equirectSamples(width, height);
   std::vector<glm::vec3> normals(grid.size());
   for (std::size_t i = 0; i < grid.size(); ++i) normals[i] = grid[i].dir;
@@ -36,25 +41,25 @@ CompareResult compareIrradiance(const Image& img, const LayoutSpec& layout, int 
   r.ySh.resize(grid.size());
   r.yBrute.resize(grid.size());
 
+  processor.fit(frame);  // the sample table is made once per size, as for a stream
   auto t0 = std::chrono::steady_clock::now();
-  const auto view = PanoramaView::rgbF32(img.rgb.data(), img.width, img.height, layout);
-  std::vector<float> peaks;
-  const Sh9 whole = projector.project(view, nullptr, &peaks);
-  const Sh9 L = applyWindow(rotateSh(whole, orientation), window);
-  const auto m = irradianceMatrices(L);
+  const FrameLighting lit = processor.process(frame);
+  r.radiance = lit.whole;
+  const auto m = irradianceMatrices(applyWindow(lit.whole, window));
   for (std::size_t i = 0; i < grid.size(); ++i)
     r.ySh[i] = luminance(evalIrradianceQuadratic(m, normals[i]));
   r.shMs = msSince(t0);
   if (sun) {
-    const LightSplit split =
-        rotateSplit(LightExtractor(projector).extract(view, whole, peaks, *sun), orientation);
-    const Sh9 residual = applyWindow(split.residual, window);
+    const Sh9 residual = applyWindow(lit.radiance, window);
     r.sun = true;
-    r.lights = split.lights;
+    r.lights = lit.lights;
     r.ySun.resize(grid.size());
     for (std::size_t i = 0; i < grid.size(); ++i)
-      r.ySun[i] = luminance(evalIrradiance(residual, split.lights, normals[i]));
+      r.ySun[i] = luminance(evalIrradiance(residual, lit.lights, normals[i]));
   }
+  // The oracle integrates the same pixels, each with its solid angle, turned to the world.
+  auto samples = processor.projector()->samples();
+  for (auto& s : samples) s.dir = orientation * s.dir;
 
   t0 = std::chrono::steady_clock::now();
   ThreadPool pool(threads);

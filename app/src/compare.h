@@ -20,6 +20,7 @@ struct CompareResult {
   double meanRelMean = 0, maxRelMean = 0;      ///< |E_sh - E| / mean irradiance
   double minShOverMean = 0;                    ///< min Y(E_sh) / mean irradiance
   double shMs = 0, bruteMs = 0;
+  Sh9 radiance;  ///< the map's coefficients (lights included), unwindowed, in the world frame
   /// With lights (compare --sun): SH of the residual plus the lights, its errors, and the lights.
   bool sun = false;
   std::vector<float> ySun;

@@ -137,7 +137,7 @@ Environment loadEnvironment(const std::string& source, const Args& a, const Ligh
   processor.linearizer().convert(frame, env.image);
   if (scale != 1.0f)
     for (float& v : env.image.rgb) v *= scale;
-  if (frame.format == PixelFormat::Bgr8) env.displayScale = scale;
+  if (frame.format == PanoramaFormat::BgrU8) env.displayScale = scale;
   warnIfLayoutLooksWrong(source, env.layout, env.image.width, env.image.height,
                          env.image.rgb.data());
   return env;
@@ -358,9 +358,11 @@ gl::Backend backendFromArgs(const Args& a) {
   return a.has("--headless") ? gl::Backend::Headless : gl::Backend::Auto;
 }
 
-std::unique_ptr<gl::GlContext> openContext(gl::Backend backend, std::pair<int, int> size) {
+std::unique_ptr<gl::GlContext> openContext(gl::Backend backend, std::pair<int, int> size,
+                                           std::pair<int, int> headlessSize) {
   try {
-    return gl::createGlContext({backend, size.first, size.second, "liveprobe", true});
+    return gl::createGlContext({backend, size.first, size.second, "liveprobe", true,
+                                headlessSize.first, headlessSize.second});
   } catch (const gl::ContextError& e) {
     throw Error(std::string("GL context: ") + e.what());
   }

@@ -96,8 +96,10 @@ float autoExposure(const Sh9& radiance, bool environment = true,
                    const std::vector<Light>& lights = {});
 gl::Backend backendFromArgs(const Args& a);
 
-/// Creates a GL context (lp::Error on failure).
-std::unique_ptr<gl::GlContext> openContext(gl::Backend backend, std::pair<int, int> size);
+/// Creates a GL context (lp::Error on failure); `headlessSize`, where given, is its size when
+/// Auto finds no display. Whether it is headless is the context's to say (isHeadless()).
+std::unique_ptr<gl::GlContext> openContext(gl::Backend backend, std::pair<int, int> size,
+                                           std::pair<int, int> headlessSize = {0, 0});
 
 /// Uploads the mesh and its albedo texture.
 void loadModel(gl::Renderer& r, const Mesh& mesh);

@@ -11,7 +11,7 @@ namespace lp {
 
 bool displayTakesFrameAsIs(const Frame& frame, const Photometry& photometry,
                            const LayoutSpec& layout) {
-  return frame.format == PixelFormat::Bgr8 && photometry.gamma == 0.0f &&
+  return frame.format == PanoramaFormat::BgrU8 && photometry.gamma == 0.0f &&
          (layout.layout == Layout::Equirect || layout.layout == Layout::Angular);
 }
 
@@ -42,7 +42,7 @@ void FrameProcessor::fit(const Frame& frame) {
 
 FrameConfidence FrameProcessor::confidence(const Frame& frame, const FrameLighting& lit) const {
   FrameConfidence c;
-  if (frame.format != PixelFormat::Bgr8 || !projector_) return c;
+  if (frame.format != PanoramaFormat::BgrU8 || !projector_) return c;
   auto luminance = [](float r, float g, float b) { return 0.2126 * r + 0.7152 * g + 0.0722 * b; };
   // The whole map's power: L00 = Y00 times the integral of the radiance.
   const Rgb& l00 = lit.whole.c[0];
@@ -87,7 +87,7 @@ FrameLighting FrameProcessor::process(const Frame& frame, Executor* executor, co
     reduceEquirect(linear->rgb.data(), linear->width, linear->height, opt_.reduce, reduced_);
     view = PanoramaView::rgbF32(reduced_.rgb.data(), reduced_.width, reduced_.height,
                                 projector_->spec());
-  } else if (frame.format == PixelFormat::Bgr8) {
+  } else if (frame.format == PanoramaFormat::BgrU8) {
     view = PanoramaView::bgrU8(frame.bgr8.data(), frame.width, frame.height,
                                linearizer_.table().data(), projector_->spec());
   } else {

@@ -100,7 +100,7 @@ CameraResponse calibrateResponse(const std::vector<Frame>& frames) {
   std::vector<cv::Mat> images;
   std::vector<float> times;
   for (const Frame& f : frames) {
-    if (f.format != PixelFormat::Bgr8) throw Error("calibration takes 8-bit frames");
+    if (f.format != PanoramaFormat::BgrU8) throw Error("calibration takes 8-bit frames");
     if (f.width != frames.front().width || f.height != frames.front().height)
       throw Error("calibration frames differ in size");
     images.emplace_back(f.height, f.width, CV_8UC3, const_cast<std::uint8_t*>(f.bgr8.data()));
@@ -186,7 +186,7 @@ BracketMerger::BracketMerger(MergeOptions options) : opt_(std::move(options)) {
 }
 
 void BracketMerger::push(const Frame& in) {
-  if (in.format != PixelFormat::Bgr8)
+  if (in.format != PanoramaFormat::BgrU8)
     throw Error("an exposure bracket merges 8-bit frames; this frame is already radiance");
   if (!window_.empty() && (window_.back().width != in.width || window_.back().height != in.height))
     window_.clear();
@@ -338,7 +338,7 @@ struct BracketView {
 FrameConfidence BracketMerger::add(const Frame& in, Frame& out, Executor* executor) {
   push(in);
   const int w = in.width, h = in.height;
-  out.format = PixelFormat::RgbF32;
+  out.format = PanoramaFormat::RgbF32;
   out.width = w, out.height = h;
   out.bgr8.clear();
   out.rgb.resize(std::size_t(w) * h * 3);

@@ -139,7 +139,7 @@ void readPng(const std::string& path, Frame& frame) {
   frame.height = int(img.height);
   const std::size_t n = std::size_t(img.width) * img.height * 3;
   if (!wide) {
-    frame.format = PixelFormat::Bgr8;
+    frame.format = PanoramaFormat::BgrU8;
     frame.rgb.clear();
     frame.bgr8.resize(n);
     if (!png_image_finish_read(&img, nullptr, frame.bgr8.data(), 0, nullptr)) fail();
@@ -147,7 +147,7 @@ void readPng(const std::string& path, Frame& frame) {
   }
   std::vector<std::uint16_t> linear(n);
   if (!png_image_finish_read(&img, nullptr, linear.data(), 0, nullptr)) fail();
-  frame.format = PixelFormat::RgbF32;
+  frame.format = PanoramaFormat::RgbF32;
   frame.bgr8.clear();
   frame.rgb.resize(n);
   for (std::size_t i = 0; i < n; ++i) frame.rgb[i] = float(linear[i]) / 65535.0f;
@@ -190,7 +190,7 @@ void readImageFrame(const std::string& path, Frame& frame) {
   frame.height = bgr.rows;
   const std::size_t n = std::size_t(bgr.cols) * bgr.rows * 3;
   if (bgr.depth() == CV_8U) {
-    frame.format = PixelFormat::Bgr8;
+    frame.format = PanoramaFormat::BgrU8;
     frame.rgb.clear();
     frame.bgr8.resize(n);
     for (int y = 0; y < bgr.rows; ++y)
@@ -201,7 +201,7 @@ void readImageFrame(const std::string& path, Frame& frame) {
   cv::Mat rgb, f;
   cv::cvtColor(bgr, rgb, cv::COLOR_BGR2RGB);
   rgb.convertTo(f, CV_32F, bgr.depth() == CV_16U ? 1.0 / 65535.0 : 1.0);
-  frame.format = PixelFormat::RgbF32;
+  frame.format = PanoramaFormat::RgbF32;
   frame.bgr8.clear();
   frame.rgb.resize(n);
   for (int y = 0; y < f.rows; ++y)
@@ -225,7 +225,7 @@ Image loadImage(const std::string& path) {
   Frame f;
   readImageFrame(path, f);
   Image img(f.width, f.height);
-  if (f.format == PixelFormat::RgbF32) {
+  if (f.format == PanoramaFormat::RgbF32) {
     img.rgb = std::move(f.rgb);
     return img;
   }

@@ -16,7 +16,7 @@ std::size_t Linearizer::convert(const Frame& frame, Image& out) const {
   out.height = frame.height;
   const std::size_t n = std::size_t(frame.width) * frame.height;
   out.rgb.resize(n * 3);
-  if (frame.format == PixelFormat::RgbF32) {
+  if (frame.format == PanoramaFormat::RgbF32) {
     if (exposure_ == 1.0f) {
       std::copy(frame.rgb.begin(), frame.rgb.end(), out.rgb.begin());
     } else {
@@ -37,7 +37,7 @@ std::size_t Linearizer::convert(const Frame& frame, Image& out) const {
 }
 
 std::size_t countSaturated(const Frame& frame) {
-  if (frame.format != PixelFormat::Bgr8) return 0;
+  if (frame.format != PanoramaFormat::BgrU8) return 0;
   std::size_t n = 0;  // channel values at 255 (a byte count vectorises; pixels would not)
   for (const std::uint8_t v : frame.bgr8) n += v == 255;
   return n;

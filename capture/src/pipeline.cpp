@@ -180,7 +180,7 @@ void CapturePipeline::convertForDisplay(Loop& s, ProcessedFrame& out) const {
   const Frame& frame = s.frame;
   const double scale = frame.radianceScale;
   out.rawScale = float(scale) * opt_.photometry.exposure;
-  out.displayScale = frame.format == PixelFormat::Bgr8 ? out.rawScale : 0.0f;
+  out.displayScale = frame.format == PanoramaFormat::BgrU8 ? out.rawScale : 0.0f;
   if (opt_.keepImages && displayTakesFrameAsIs(frame, opt_.photometry, opt_.layout)) {
     out.raw = std::make_shared<Frame>(frame);  // the display decodes it: no linear copy
     out.saturated = countSaturated(frame);

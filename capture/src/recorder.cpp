@@ -99,7 +99,7 @@ void VideoRecorder::write(const Frame& f) {
   }
   cv::Mat& bgr = impl_->bgr;
   double exposure = 0;
-  if (f.format == PixelFormat::Bgr8) {
+  if (f.format == PanoramaFormat::BgrU8) {
     exposure = 1.0 / f.radianceScale;  // the frame's own: a camera's may change every frame
     bgr = cv::Mat(f.height, f.width, CV_8UC3, const_cast<std::uint8_t*>(f.bgr8.data()));
   } else {

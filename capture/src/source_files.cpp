@@ -91,7 +91,7 @@ class CubeFacesSource final : public FrameSource {
             f.rgb.data() +
                 ((std::size_t(cells[k][1]) * n + y) * f.width + std::size_t(cells[k][0]) * n) * 3);
     }
-    f.format = PixelFormat::RgbF32;
+    f.format = PanoramaFormat::RgbF32;
     f.bgr8.clear();
     f.sequence = 0;
     f.timestamp = 0;
@@ -156,7 +156,7 @@ class VideoSource final : public FrameSource {
     skipped_ +=
         std::size_t(read_ > 0 ? badRun : 0);  // failures before a good frame: skipped damage
     if (m.type() != CV_8UC3) throw Error(path_ + ": unsupported decoded pixel type");
-    f.format = PixelFormat::Bgr8;
+    f.format = PanoramaFormat::BgrU8;
     f.width = m.cols, f.height = m.rows;
     f.rgb.clear();
     f.bgr8.resize(std::size_t(m.cols) * m.rows * 3);

@@ -71,7 +71,7 @@ class SyntheticSource final : public FrameSource {
     f.sequence = n_;
     f.timestamp = double(n_) / fps_;
     f.width = w_, f.height = h_;
-    f.format = PixelFormat::RgbF32;
+    f.format = PanoramaFormat::RgbF32;
     f.bgr8.clear();
     renderSyntheticSky(w_, h_, f.timestamp, f.rgb);
     ++n_;

@@ -745,7 +745,7 @@ void decodeCameraFrame(const CameraBuffer& in, int mjpegReduce, Frame& f) {
   } catch (const cv::Exception&) {  // odd sizes the conversion refuses (NV12 needs even ones)
     bgr.release();
   }
-  f.format = PixelFormat::Bgr8;
+  f.format = PanoramaFormat::BgrU8;
   f.rgb.clear();
   if (bgr.empty()) {
     f.width = f.height = 0;

@@ -365,7 +365,7 @@ void mergeBench(benchmark::State& state, Size s, int threads) {
   std::vector<lp::Frame> bracket;
   for (const double stops : {-12.0, -6.0, 0.0}) {
     lp::Frame f;
-    f.format = lp::PixelFormat::Bgr8;
+    f.format = lp::PanoramaFormat::BgrU8;
     f.width = s.w, f.height = s.h;
     const double t = 0.1 * std::exp2(stops);  // 0 EV: the sky's median near mid-grey
     f.radianceScale = 1.0 / t;

@@ -179,10 +179,16 @@ class OsMesaContext final : public GlContext {
 
 }  // namespace
 
+namespace {
+void checkSize(int width, int height) {
+  if (width <= 0 || height <= 0 || width > 16384 || height > 16384)
+    throw ContextError("bad framebuffer size " + std::to_string(width) + "x" +
+                       std::to_string(height));
+}
+}  // namespace
+
 std::unique_ptr<GlContext> createGlContext(const ContextSpec& spec) {
-  if (spec.width <= 0 || spec.height <= 0 || spec.width > 16384 || spec.height > 16384)
-    throw ContextError("bad framebuffer size " + std::to_string(spec.width) + "x" +
-                       std::to_string(spec.height));
+  checkSize(spec.width, spec.height);
   if (spec.backend != Backend::Headless) {
     glfwSetErrorCallback([](int, const char* msg) { glfwLastError() = msg ? msg : "?"; });
     // Without a display glfwInit() fails: the natural point to fall back to headless.
@@ -192,6 +198,12 @@ std::unique_ptr<GlContext> createGlContext(const ContextSpec& spec) {
       throw ContextError(
           "cannot open a window (no display: " +
           (glfwLastError().empty() ? std::string("DISPLAY is not set") : glfwLastError()) + ")");
+    if (spec.headlessWidth > 0 && spec.headlessHeight > 0) {
+      ContextSpec headless = spec;
+      headless.width = spec.headlessWidth, headless.height = spec.headlessHeight;
+      checkSize(headless.width, headless.height);
+      return std::make_unique<OsMesaContext>(headless);
+    }
   }
   return std::make_unique<OsMesaContext>(spec);
 }

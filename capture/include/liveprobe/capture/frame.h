@@ -10,21 +10,19 @@
 #include <vector>
 
 #include "liveprobe/sh/layout.h"
+#include "liveprobe/sh/projector.h"
 
 namespace lp {
 
-enum class PixelFormat : std::uint8_t {
-  Bgr8,    ///< 8-bit, display-encoded (sRGB or a gamma), OpenCV channel order
-  RgbF32,  ///< linear radiance, float
-};
-
-/// One frame. Exactly one of the two buffers is filled, by `format`.
+/// One frame. Exactly one of the two buffers is filled, by `format`: the projector's pixel format
+/// (liveprobe/sh/projector.h), of which frames hold two, BgrU8 (8-bit, display-encoded: sRGB or
+/// a gamma, in OpenCV's channel order) and RgbF32 (linear radiance).
 struct Frame {
   std::uint64_t sequence = 0;  ///< frame number at the source; a gap means frames were lost
   double timestamp = 0.0;      ///< seconds since the first frame of the source
   int width = 0, height = 0;
-  PixelFormat format = PixelFormat::RgbF32;
-  std::vector<std::uint8_t> bgr8;  ///< width * height * 3 (Bgr8)
+  PanoramaFormat format = PanoramaFormat::RgbF32;
+  std::vector<std::uint8_t> bgr8;  ///< width * height * 3 (BgrU8)
   std::vector<float> rgb;          ///< width * height * 3 (RgbF32)
   // Per-frame metadata, as in force for this frame (after libcamera's per-request metadata):
   /// Linear radiance = decoded 8-bit value * this: a camera's 1 / exposure time, a recording's

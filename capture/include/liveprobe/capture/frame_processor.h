@@ -58,14 +58,17 @@ class FrameProcessor {
   /// clipped pixels. Float frames: full confidence.
   FrameConfidence confidence(const Frame& frame, const FrameLighting& lighting) const;
 
+  /// Makes the projector (and the light index) for frames of `frame`'s size, as the first
+  /// process() of that size would: a caller that times process() calls it first. Throws lp::Error
+  /// as process() does for a frame that does not fit.
+  void fit(const Frame& frame);
+
   /// The projector of the last frame's size (nullptr before the first frame).
   const Projector* projector() const;
   const Linearizer& linearizer() const { return linearizer_; }
   const FrameProcessorOptions& options() const { return opt_; }
 
  private:
-  void fit(const Frame& frame);
-
   FrameProcessorOptions opt_;
   Linearizer linearizer_;
   // On the heap: the extractor points at the projector, and both survive a move.

@@ -23,6 +23,8 @@ struct ContextSpec {
   int height = 720;
   std::string title = "liveprobe";
   bool vsync = true;
+  /// The framebuffer's size when Auto comes up headless (0: width x height).
+  int headlessWidth = 0, headlessHeight = 0;
 };
 
 /// What a key press asks for. Keys arrive through GLFW's callbacks, so a tap shorter than a frame
