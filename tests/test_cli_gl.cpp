@@ -41,7 +41,7 @@ TEST(CliGl, ViewWindowUnderXvfb) {
   const std::string common =
       "--coeff L00=0.8 --coeff L10=0.3,0.1,0.0 --size 200x150 --frames 3 --no-hud ";
   const std::string win = tmp / "window.png", off = tmp / "offscreen.png";
-  const std::string xvfb = "xvfb-run -a -s '-screen 0 640x480x24' ";
+  const std::string xvfb = lpt::xvfbRun("640x480x24");
   const auto run =
       lpt::runCommand(xvfb + LIVEPROBE_BIN + " view " + common + "--screenshot " + win);
   const std::string& out = run.output;

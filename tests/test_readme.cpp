@@ -150,9 +150,8 @@ TEST_P(ReadmeExample, RunsAsWritten) {
                                           " & pid=$!; sleep 6; kill -0 $pid 2>/dev/null && echo "
                                           "still-running; kill -INT $pid; wait $pid; echo rc=$?"
                                     : env + e.command + "\necho rc=$?";
-  const std::string cmd = "cd " + lpt::shellQuote(work.string()) +
-                          " && timeout -k 10 400 xvfb-run -a -s '-screen 0 1600x1000x24' bash -c " +
-                          lpt::shellQuote(run);
+  const std::string cmd = "cd " + lpt::shellQuote(work.string()) + " && timeout -k 10 400 " +
+                          lpt::xvfbRun("1600x1000x24") + "bash -c " + lpt::shellQuote(run);
   const std::string out = lpt::runCommand(cmd).output;
   const std::string where = e.file + ":" + std::to_string(e.line) + ": " + e.command + "\n" + out;
   ASSERT_TRUE(std::regex_search(out, m, std::regex(R"(rc=(\d+))"))) << where;

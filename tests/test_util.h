@@ -68,6 +68,16 @@ inline std::string shellQuote(const std::string& s) {
   return q + "'";
 }
 
+/// An xvfb-run prefix for one command under its own X server of `screen` ("WxHxD"). Tests run
+/// in parallel, each in its own process: `-a` alone would start every search for a free display
+/// number at 99, and two servers started at once can pick the same one (the second fails, and
+/// its command runs on the first's display until that one goes away). Each process starts its
+/// search at its own number.
+inline std::string xvfbRun(const std::string& screen) {
+  return "xvfb-run -n " + std::to_string(100 + int(::getpid() % 30000)) + " -a -s '-screen 0 " +
+         screen + "' ";
+}
+
 inline int lineCount(const std::string& s) { return int(std::count(s.begin(), s.end(), '\n')); }
 
 /// A bad input gives exit status 1 and exactly one line that names the input and says what is

@@ -64,9 +64,9 @@ int frameInTitle(const std::string& output, const std::string& key) {
 // keys step once a press, and a single short tap of Esc quits.
 TEST(Window, HudAndKeysUnderXvfb) {
   lpt::TempDir tmp;
-  const auto run = lpt::runCommand(
-      "xvfb-run -a -s '-screen 0 1280x800x24' " + std::string(LIVEPROBE_SOURCE_DIR) +
-      "/tests/scripts/window_keys.sh " + LIVEPROBE_BIN + " " + tmp.path.string());
+  const auto run =
+      lpt::runCommand(lpt::xvfbRun("1280x800x24") + std::string(LIVEPROBE_SOURCE_DIR) +
+                      "/tests/scripts/window_keys.sh " + LIVEPROBE_BIN + " " + tmp.path.string());
   const std::string& out = run.output;
   ASSERT_EQ(run.exitCode, 0) << out;
   std::ifstream logf(tmp / "log");
@@ -113,7 +113,7 @@ TEST(Window, HudAndKeysUnderXvfb) {
 // least 1.5 times the frames it draws at full resolution with MSAA (a ratio within one run, so a
 // busy machine slows both), and the summary says at what scale it ended.
 TEST(Window, DynamicResolutionKeepsTheRate) {
-  const std::string xvfb = "xvfb-run -a -s '-screen 0 1280x720x24' ";
+  const std::string xvfb = lpt::xvfbRun("1280x720x24");
   const std::string cmd = xvfb + LIVEPROBE_BIN + " replay " + LIVEPROBE_SOURCE_DIR +
                           "/recordings/sky.mkv --sun --ground --model " +
                           lpt::dataPath("models/stanford-bunny.obj") +
@@ -139,7 +139,7 @@ TEST(Window, DynamicResolutionKeepsTheRate) {
 // A replay in a window says at its start when the window will close: after the file's frames
 // (or --frames), unless --loop plays on.
 TEST(Window, ReplaySaysWhenTheWindowCloses) {
-  const std::string xvfb = "xvfb-run -a -s '-screen 0 640x480x24' ";
+  const std::string xvfb = lpt::xvfbRun("640x480x24");
   const std::string seq = std::string(LIVEPROBE_SOURCE_DIR) + "/recordings/sky-hdr";
   const auto run = lpt::runCommand(xvfb + LIVEPROBE_BIN + " replay " + seq +
                                    " --size 160x90 --msaa 1 --no-hud --frames 5");
@@ -154,10 +154,9 @@ TEST(Window, ReplaySaysWhenTheWindowCloses) {
 TEST(Window, ViewSavesTheCoefficientsForRender) {
   lpt::TempDir tmp;
   const std::string out = tmp / "edited.json";
-  const auto run =
-      lpt::runCommand("xvfb-run -a -s '-screen 0 1024x768x24' " +
-                      std::string(LIVEPROBE_SOURCE_DIR) + "/tests/scripts/view_save.sh " +
-                      LIVEPROBE_BIN + " " + out + " --coeff L00=0.5 --coeff L10=0.2,0.1,0");
+  const auto run = lpt::runCommand(lpt::xvfbRun("1024x768x24") + std::string(LIVEPROBE_SOURCE_DIR) +
+                                   "/tests/scripts/view_save.sh " + LIVEPROBE_BIN + " " + out +
+                                   " --coeff L00=0.5 --coeff L10=0.2,0.1,0");
   ASSERT_EQ(run.exitCode, 0) << run.output;
   EXPECT_NE(run.output.find("rc: 0"), std::string::npos) << run.output;
   EXPECT_NE(run.output.find("saved the coefficients to"), std::string::npos) << run.output;

@@ -7,6 +7,7 @@
 #include <GL/osmesa.h>
 #include <GLFW/glfw3.h>
 
+#include <cstdio>
 #include <cstdlib>
 #include <utility>
 #include <vector>
@@ -194,6 +195,9 @@ std::unique_ptr<GlContext> createGlContext(const ContextSpec& spec) {
     // Without a display glfwInit() fails: the natural point to fall back to headless.
     const bool haveDisplay = std::getenv("DISPLAY") || std::getenv("WAYLAND_DISPLAY");
     if (haveDisplay && glfwInit()) return std::make_unique<GlfwContext>(spec);
+    if (haveDisplay && spec.backend == Backend::Auto)  // named, but unusable: say why
+      std::fprintf(stderr, "liveprobe: warning: no window on the display (%s): drawing headless\n",
+                   glfwLastError().empty() ? "glfwInit failed" : glfwLastError().c_str());
     if (spec.backend == Backend::Window)
       throw ContextError(
           "cannot open a window (no display: " +
