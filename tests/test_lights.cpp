@@ -8,6 +8,7 @@
 #include <fstream>
 #include <nlohmann/json.hpp>
 #include <numbers>
+#include <opencv2/imgcodecs.hpp>
 #include <optional>
 #include <random>
 
@@ -387,3 +388,77 @@ TEST(Lights, SmoothingSlerpsTheDirection) {
 }
 
 }  // namespace
+
+namespace {
+
+// An equirect of six equal lamps (discs of 3 degrees) around the horizon, alternately 30 degrees
+// above and below it, on a dim uniform sky; float RGB, R&H frame (+z up, the top row).
+cv::Mat sixLampMap(int w, int h) {
+  cv::Mat img(h, w, CV_32FC3, cv::Scalar::all(0.02));
+  std::vector<dvec3> lamps;
+  for (int i = 0; i < 6; ++i) {
+    const double az = std::numbers::pi / 3 * i, el = glm::radians(i % 2 ? 30.0 : -30.0);
+    lamps.push_back({std::cos(el) * std::cos(az), std::cos(el) * std::sin(az), std::sin(el)});
+  }
+  const double cosR = std::cos(glm::radians(3.0));
+  for (int i = 0; i < h; ++i) {
+    const double t = std::numbers::pi * (i + 0.5) / h;
+    for (int j = 0; j < w; ++j) {
+      const double p = 2 * std::numbers::pi * (j + 0.5) / w;
+      const dvec3 d(std::sin(t) * std::cos(p), std::sin(t) * std::sin(p), std::cos(t));
+      for (const dvec3& l : lamps)
+        if (glm::dot(d, l) >= cosR) img.at<cv::Vec3f>(i, j) = cv::Vec3f(40, 40, 40);
+    }
+  }
+  return img;
+}
+
+// The sum over an 8-bit sRGB image of its linear values (every channel).
+double linearSum(const cv::Mat& srgb) {
+  double s = 0;
+  for (auto it = srgb.begin<cv::Vec3b>(); it != srgb.end<cv::Vec3b>(); ++it)
+    for (int ch = 0; ch < 3; ++ch) {
+      const double c = (*it)[ch] / 255.0;
+      s += c <= 0.04045 ? c / 12.92 : std::pow((c + 0.055) / 1.055, 2.4);
+    }
+  return s;
+}
+
+}  // namespace
+
+// Every light found is drawn: six equal lamps are six lights, and the light a render shows,
+// summed over views from three sides at a fixed exposure with the linear tone map, is the same
+// whether six, four or no lights leave the coefficients (what is not a light stays in them).
+TEST(LightsCli, SixLampsAreAllDrawn) {
+  lpt::TempDir tmp;
+  const std::string map = tmp / "lamps.hdr";
+  ASSERT_TRUE(cv::imwrite(map, sixLampMap(1024, 512)));
+  const auto found = lpt::runLiveprobe("coeffs " + map + " --lights 6");
+  ASSERT_EQ(found.exitCode, 0) << found.output;
+  const auto lights = lp::cli::lightsFromJson(nlohmann::json::parse(found.output), "coeffs");
+  ASSERT_EQ(lights.size(), 6u);
+  for (const lp::Light& l : lights)  // equal lamps, equal shares
+    EXPECT_NEAR(l.share, lights[0].share, 0.02 * lights[0].share);
+
+  auto renderedLight = [&](const std::string& lightsOption) {
+    double sum = 0;
+    for (int yaw : {0, 120, 240}) {
+      const std::string out = tmp / ("view" + std::to_string(yaw) + ".png");
+      const auto r = lpt::runLiveprobe("render --headless --env " + map + " " + lightsOption +
+                                       " --no-background --tonemap linear --exposure 0.25" +
+                                       " --msaa 1 --size 256x256 --yaw " + std::to_string(yaw) +
+                                       " --out " + out);
+      EXPECT_EQ(r.exitCode, 0) << r.output;
+      const cv::Mat img = cv::imread(out);
+      double hi;
+      cv::minMaxLoc(img.reshape(1), nullptr, &hi);
+      EXPECT_LT(hi, 255) << lightsOption << ": clipped, the sum would not be the light";
+      sum += linearSum(img);
+    }
+    return sum;
+  };
+  const double six = renderedLight("--lights 6"), four = renderedLight("--lights 4"),
+               none = renderedLight("");
+  EXPECT_NEAR(six / four, 1.0, 0.03) << six << " against " << four;
+  EXPECT_NEAR(six / none, 1.0, 0.03) << six << " against " << none;
+}
