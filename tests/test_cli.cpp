@@ -8,6 +8,7 @@
 #include <opencv2/imgcodecs.hpp>
 
 #include "coeffs_io.h"
+#include "commands.h"
 #include "liveprobe/capture/image.h"
 #include "liveprobe/sh/sh.h"
 #include "test_util.h"
@@ -157,14 +158,56 @@ TEST(CliBadInput, EngineFormats) {
   expectOneLineError("coeffs " + map + " --format povray", "--format povray", "expected json");
   expectOneLineError("replay synthetic:64x32 --headless --frames 1 --coeffs-format gltf",
                      "--coeffs-format gltf", "one JSON line");
-  expectOneLineError("replay synthetic:64x32 --headless --frames 1 --publish http://x/y",
-                     "--publish http://x/y", "mqtt://");
-  expectOneLineError("replay synthetic:64x32 --headless --frames 1 --publish mqtt://x",
-                     "--publish mqtt://x", "no topic");
-  expectOneLineError("replay synthetic:64x32 --headless --frames 1 --serve 70000", "--serve 70000",
-                     "0..65535");
+  if (lp::cli::builtIn(lp::cli::OptionalBackend::Mqtt)) {
+    expectOneLineError("replay synthetic:64x32 --headless --frames 1 --publish http://x/y",
+                       "--publish http://x/y", "mqtt://");
+    expectOneLineError("replay synthetic:64x32 --headless --frames 1 --publish mqtt://x",
+                       "--publish mqtt://x", "no topic");
+  }
+  if (lp::cli::builtIn(lp::cli::OptionalBackend::Stream))
+    expectOneLineError("replay synthetic:64x32 --headless --frames 1 --serve 70000",
+                       "--serve 70000", "0..65535");
   expectOneLineError("replay synthetic:64x32 --headless --frames 1 --serve-clients 4",
                      "--serve-clients", "go with --serve");
+}
+
+// The optional backends: --version lists the ones built in, and each one missing from the build
+// is one line naming what asked for it and the CMake option that builds it, exit 1.
+TEST(Backends, VersionListsThemAndAMissingOneIsOneLine) {
+  using lp::cli::OptionalBackend;
+  const auto v = runLiveprobe("--version");
+  ASSERT_EQ(v.exitCode, 0) << v.output;
+  const std::string line = v.output.substr(v.output.find("backends: "));
+  struct Case {
+    OptionalBackend backend;
+    const char* label;    // in --version
+    const char* command;  // what needs it
+    const char* names;    // the one line names it
+    const char* option;   // and the CMake option
+  };
+  const Case cases[] = {
+      {OptionalBackend::Window, "window (GLFW)", "view --coeff L00=1", "view",
+       "LIVEPROBE_WITH_GLFW"},
+      {OptionalBackend::V4l2, "V4L2 cameras", "live /dev/video0", "live", "LIVEPROBE_WITH_V4L2"},
+      {OptionalBackend::Stream, "WebSocket stream",
+       "replay synthetic:64x32 --headless --frames 1 --serve 0", "--serve",
+       "LIVEPROBE_WITH_STREAM"},
+      {OptionalBackend::Mqtt, "MQTT",
+       "replay synthetic:64x32 --headless --frames 1 --publish mqtt://127.0.0.1:1/t", "--publish",
+       "LIVEPROBE_WITH_MQTT"},
+  };
+  const std::size_t without = line.find("built without");
+  for (const Case& c : cases) {
+    const std::size_t at = line.find(c.label);
+    ASSERT_NE(at, std::string::npos) << line;
+    if (lp::cli::builtIn(c.backend)) {
+      EXPECT_TRUE(without == std::string::npos || at < without) << c.label << ": " << line;
+    } else {
+      EXPECT_TRUE(without != std::string::npos && at > without) << c.label << ": " << line;
+      expectOneLineError(c.command, c.names, std::string("built without"));
+      expectOneLineError(c.command, c.names, c.option);
+    }
+  }
 }
 
 TEST(Cli, CompareJson) {

@@ -5,6 +5,7 @@
 #include <fstream>
 #include <opencv2/imgcodecs.hpp>
 
+#include "liveprobe/backends.h"
 #include "test_util.h"
 
 namespace {
@@ -34,6 +35,7 @@ TEST(CliGl, RenderHeadlessWithEnvironment) {
   EXPECT_GT(spread(img), 100);
 }
 
+#if LIVEPROBE_WITH_GLFW
 // The window path runs for real: GLFW on Xvfb (xvfb-run), screenshot not blank, and the same
 // pixels as the OSMesa path (both are llvmpipe; stack-notes.md found them byte-identical).
 TEST(CliGl, ViewWindowUnderXvfb) {
@@ -60,6 +62,7 @@ TEST(CliGl, ViewWindowUnderXvfb) {
   cv::minMaxLoc(diff.reshape(1), nullptr, &worst);
   EXPECT_LE(worst, 2) << "window and offscreen renders differ";
 }
+#endif  // LIVEPROBE_WITH_GLFW
 
 // An albedo texture from the model's material is multiplied in: a quad textured half red, half
 // green under white light shows both colours.

@@ -2,17 +2,21 @@
 // radiance map through a known response merge back to that map; motion and a covered lens are
 // caught; a response is recovered from a sweep; a UVC metadata buffer gives its exposure time.
 #include <gtest/gtest.h>
-#include <linux/uvcvideo.h>
 
 #include <cmath>
 #include <cstring>
 #include <nlohmann/json.hpp>
 #include <vector>
 
+#include "liveprobe/backends.h"
 #include "liveprobe/capture/frame_processor.h"
 #include "liveprobe/capture/hdr_merge.h"
 #include "liveprobe/capture/image.h"
+#if LIVEPROBE_WITH_V4L2
+#include <linux/uvcvideo.h>
+
 #include "liveprobe/capture/v4l2.h"
+#endif
 #include "liveprobe/sh/error.h"
 
 namespace {
@@ -249,6 +253,7 @@ TEST(HdrMerge, OnlyBracketsOfEightBitFramesMerge) {
   EXPECT_THROW(BracketMerger(MergeOptions{.frames = 6}), lp::Error);
 }
 
+#if LIVEPROBE_WITH_V4L2
 // One uvc_meta_buf block: ns, sof, then a payload header of `length` bytes.
 std::vector<std::uint8_t> metaBlock(std::uint8_t flags, const std::vector<std::uint8_t>& rest) {
   uvc_meta_buf head{};
@@ -299,5 +304,6 @@ TEST(UvcMetadata, TheMetadataNodeFollowsTheVideoNode) {
   EXPECT_EQ(lp::siblingMetadataNode("/dev/video19"), "/dev/video20");
   EXPECT_EQ(lp::siblingMetadataNode("/dev/camera"), "");
 }
+#endif  // LIVEPROBE_WITH_V4L2
 
 }  // namespace

@@ -3,7 +3,6 @@
 // fault, and nothing left behind in the output folder. Commands run under `timeout`, so a hang
 // fails the test (exit 124) instead of stalling the suite.
 #include <gtest/gtest.h>
-#include <linux/videodev2.h>
 #include <sys/stat.h>
 
 #include <filesystem>
@@ -15,8 +14,13 @@
 #include <string>
 #include <vector>
 
+#include "liveprobe/backends.h"
 #include "liveprobe/capture/frame.h"
+#if LIVEPROBE_WITH_V4L2
+#include <linux/videodev2.h>
+
 #include "liveprobe/capture/v4l2.h"
+#endif
 #include "test_util.h"
 
 namespace {
@@ -200,6 +204,7 @@ TEST(Hostile, FailedRecordingIsDiscarded) {
 
 }  // namespace
 
+#if LIVEPROBE_WITH_V4L2
 namespace {
 
 lp::Frame decodeMjpeg(const std::vector<std::uint8_t>& jpeg, int width, int height) {
@@ -237,6 +242,7 @@ TEST(Hostile, CameraFrameOfAnotherSizeIsDropped) {
   lp::decodeCameraFrame({V4L2_PIX_FMT_YUYV, 32, 16, 64, png.data(), 64 * 15}, 1, yuyv);
   EXPECT_EQ(yuyv.width, 0);
 }
+#endif  // LIVEPROBE_WITH_V4L2
 
 // OpenCV's video writer does not report FFmpeg's write errors: a video cut short by a full disk
 // (here, a file size limit; SIGXFSZ ignored, so writes fail as on a full disk) is found when it

@@ -101,7 +101,7 @@ TEST(Hud, NeverCoversTheModelAtAnySize) {
       h.lights = {sun};
       hud.push(h);
     }
-    hud.setCounters({40, 40, 0, 0, 0.0, 2, 0, 0});
+    hud.setCounters({40, 40, 0, 0, 0.0, {"stream: 2 clients, 0 dropped", "mqtt: 0 lost"}});
     lp::cli::ViewState state;
     state.shading.background = true;  // no panorama is set: the model is drawn on black
     const lp::cli::HudLayout layout = lp::cli::hudLayout(fb);

@@ -1,7 +1,5 @@
 // Live light probe from a V4L2 camera: live (the replay pipeline with a camera as its source)
 // and devices (what each camera offers).
-#include <linux/videodev2.h>
-
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -11,6 +9,7 @@
 #include <tuple>
 
 #include "commands.h"
+#include "liveprobe/backends.h"
 #include "liveprobe/capture/atomic_file.h"
 #include "liveprobe/capture/hdr_merge.h"
 #include "liveprobe/capture/v4l2.h"
@@ -44,6 +43,7 @@ std::vector<OptionSpec> cameraOptions() {
        false, false, g}};
 }
 
+#if LIVEPROBE_WITH_V4L2
 CameraSettings cameraSettingsFromArgs(const Args& a) {
   CameraSettings cs;
   cs.device = a.positional()[0];
@@ -113,6 +113,8 @@ void startBracket(V4l2Source& camera, const std::vector<double>& stops) {
                clamped.empty() ? "" : (";" + clamped).c_str());
 }
 
+#endif  // LIVEPROBE_WITH_V4L2
+
 }  // namespace
 
 const CommandSpec kLiveSpec{
@@ -149,6 +151,7 @@ const CommandSpec kLiveSpec{
     1,
     "a V4L2 video-capture node, e.g. /dev/video0"};
 
+#if LIVEPROBE_WITH_V4L2
 int runLive(const Args& a) {
   layoutFromArgs(a);
   CameraSettings cs = cameraSettingsFromArgs(a);
@@ -165,6 +168,12 @@ int runLive(const Args& a) {
   if (!stops.empty()) startBracket(*camera, stops);
   return runStreamForLive(a, std::move(camera));
 }
+#else
+int runLive(const Args&) {
+  requireBackend(OptionalBackend::V4l2, "");
+  return 1;
+}
+#endif
 
 const CommandSpec kCalibrateSpec{
     "calibrate",
@@ -191,6 +200,7 @@ const CommandSpec kCalibrateSpec{
     1,
     "a V4L2 video-capture node, e.g. /dev/video0"};
 
+#if LIVEPROBE_WITH_V4L2
 int runCalibrate(const Args& a) {
   if (!a.has("--out")) throw Error("--out FILE.json is required");
   requireExtension(a.get("--out"), "--out", {".json"});
@@ -253,6 +263,12 @@ int runCalibrate(const Args& a) {
                frames.size(), like.gamma, a.get("--out").c_str());
   return 0;
 }
+#else
+int runCalibrate(const Args&) {
+  requireBackend(OptionalBackend::V4l2, "");
+  return 1;
+}
+#endif
 
 const CommandSpec kDevicesSpec{
     "devices",
@@ -264,6 +280,7 @@ const CommandSpec kDevicesSpec{
     64,
     "V4L2 nodes to list (default: every /dev/video*)"};
 
+#if LIVEPROBE_WITH_V4L2
 int runDevices(const Args& a) {
   std::vector<std::string> paths = a.positional();
   if (paths.empty()) {
@@ -304,5 +321,11 @@ int runDevices(const Args& a) {
   }
   return failures ? 1 : 0;
 }
+#else
+int runDevices(const Args&) {
+  requireBackend(OptionalBackend::V4l2, "");
+  return 1;
+}
+#endif
 
 }  // namespace lp::cli

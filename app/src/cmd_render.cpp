@@ -185,8 +185,10 @@ int runView(const Args& a) {
   const int frames = a.integerIn("--frames", 1, 1, 1000000);
   v.ctx = openContext(backendFromArgs(a), size);
   const bool window = !v.ctx->isHeadless();
-  if (!window && !screenshot)
+  if (!window && !screenshot) {
+    requireBackend(OptionalBackend::Window, "", "use --screenshot, or liveprobe render");
     throw Error("no display to open a window on (use --screenshot, or liveprobe render)");
+  }
   try {
     v.renderer = std::make_unique<gl::Renderer>();
     loadScene(*v.renderer, mesh, lighting);

@@ -15,15 +15,21 @@
 #include "dynamic_resolution.h"
 #include "engine_export.h"
 #include "hud.h"
+#include "liveprobe/backends.h"
 #include "liveprobe/capture/atomic_file.h"
 #include "liveprobe/capture/input_file.h"
 #include "liveprobe/capture/pipeline.h"
 #include "liveprobe/capture/recorder.h"
 #include "liveprobe/sh/error.h"
+#if LIVEPROBE_WITH_MQTT
 #include "mqtt_publisher.h"
+#endif
 #include "progress.h"
 #include "scene.h"
+#if LIVEPROBE_WITH_STREAM
 #include "stream_server.h"
+#endif
+#include "record_sink.h"
 
 namespace lp::cli {
 
@@ -265,6 +271,16 @@ class SentRecords {
   std::map<std::uint64_t, std::string> pending_;
 };
 
+/// --coeffs-out of a window or a camera: each line as the frame is captured.
+class CoeffsFileSink final : public RecordSink {
+ public:
+  explicit CoeffsFileSink(AtomicTextFile& file) : file_(file) {}
+  void publish(FrameRecord& record) override { file_.line(record.text()); }
+
+ private:
+  AtomicTextFile& file_;
+};
+
 /// Where the frames go besides the screen: --coeffs-out, --out-dir, --out-video, --record.
 struct StreamOutputs {
   std::unique_ptr<AtomicTextFile> coeffs;
@@ -365,18 +381,14 @@ struct StreamView {
   }
 };
 
-/// Where records go beyond the screen and files: the WebSocket stream and the MQTT broker.
+/// Where records go at capture besides the screen: the stream, the broker, and the --coeffs-out
+/// file of a window or a camera (record_sink.h).
 struct RecordSinks {
-  std::unique_ptr<StreamServer> server;
-  std::unique_ptr<MqttPublisher> mqtt;
+  std::vector<std::unique_ptr<RecordSink>> all;
 
   void fill(HudCounters& c) const {
-    if (server) {
-      const StreamStats s = server->stats();
-      c.streamClients = std::int64_t(s.clients);
-      c.streamDropped = std::int64_t(s.dropped);
-    }
-    if (mqtt) c.mqttLost = std::int64_t(mqtt->stats().lost);
+    for (const auto& s : all)
+      if (std::string line = s->status(); !line.empty()) c.sinks.push_back(std::move(line));
   }
 };
 
@@ -508,24 +520,9 @@ void printSummary(const std::string& description, const PipelineStats& st, const
                                        std::to_string(t.clippedLight))
                                           .c_str()
                                     : "");
-  if (sinks.server) {
-    const StreamStats s = sinks.server->stats();
-    std::fprintf(stderr,
-                 "  stream: %llu clients served, %llu messages sent, %llu dropped for slow "
-                 "clients, %llu refused (client limit), %llu closed (bad message or idle), %llu "
-                 "connections closed before their handshake\n",
-                 (unsigned long long)s.connected, (unsigned long long)s.sent,
-                 (unsigned long long)s.dropped, (unsigned long long)s.refused,
-                 (unsigned long long)s.closed, (unsigned long long)s.evicted);
-  }
-  if (sinks.mqtt) {
-    const MqttStats m = sinks.mqtt->stats();
-    std::fprintf(stderr,
-                 "  %s: %llu published, %llu lost (no broker connection), %llu reconnects%s\n",
-                 sinks.mqtt->target().describe().c_str(), (unsigned long long)m.published,
-                 (unsigned long long)m.lost, (unsigned long long)m.reconnects,
-                 m.published == 0 && st.captured > 0 ? "; no message reached the broker" : "");
-  }
+  for (const auto& sink : sinks.all)
+    if (const std::string line = sink->summary(); !line.empty())
+      std::fprintf(stderr, "  %s\n", line.c_str());
   if (!t.confidence.empty() &&
       (st.held > 0 || t.median(Stage::Merge) > 0 || percentile(t.confidence, 0.0) < 1.0))
     std::fprintf(stderr,
@@ -542,46 +539,63 @@ void printSummary(const std::string& description, const PipelineStats& st, const
                  smoothSeconds, smoothSeconds);
 }
 
+std::unique_ptr<RecordSink> openStream([[maybe_unused]] const Args& a) {
+  requireBackend(OptionalBackend::Stream, "--serve");
+#if LIVEPROBE_WITH_STREAM
+  StreamServerOptions o;
+  parseServeAddress(a.get("--serve"), a.has("--serve-remote"), o);
+  o.maxClients = int(a.integerIn("--serve-clients", 32, 1, 1000));
+  o.idleSeconds = int(a.integerIn("--serve-idle", 30, 2, 3600));
+  o.defaultFormat = parseCoeffFormat("three", "--serve", true);
+  const char* web = std::getenv("LIVEPROBE_WEB_DIR");
+  o.webDir = web ? web : shareDir() + "/web";
+  o.threeDir = o.webDir + "/three";
+  if (!fs::exists(o.threeDir + "/three.module.js"))
+    warn("--serve: three.js is not in " + o.threeDir +
+         " (the build stages it from app/web/node_modules, which scripts/build installs with "
+         "npm); the page will not draw");
+  auto server = std::make_unique<StreamServer>(o);
+  std::fprintf(stderr, "liveprobe: serving http://%s:%d/ (WebSocket ws://%s:%d/?format=three)\n",
+               o.host.c_str(), server->port(), o.host.c_str(), server->port());
+  return server;
+#else
+  return nullptr;  // (requireBackend threw)
+#endif
+}
+
+std::unique_ptr<RecordSink> openBroker([[maybe_unused]] const Args& a) {
+  requireBackend(OptionalBackend::Mqtt, "--publish");
+#if LIVEPROBE_WITH_MQTT
+  MqttTarget t = parseMqttUrl(a.get("--publish"));
+  if (a.has("--mqtt-cafile")) {
+    if (!t.tls) throw Error("--mqtt-cafile goes with an mqtts:// broker");
+    t.cafile = a.get("--mqtt-cafile");
+    readInputFile(t.cafile);  // a missing or unreadable file is one line, now
+  }
+  if (t.password.empty() && !t.username.empty()) {
+    if (a.has("--mqtt-password-file")) {
+      const std::string text = readInputFile(a.get("--mqtt-password-file"));
+      t.password = text.substr(0, text.find_first_of("\r\n"));  // its first line
+    } else if (const char* pw = std::getenv("LIVEPROBE_MQTT_PASSWORD")) {
+      t.password = pw;
+    }
+  }
+  return std::make_unique<MqttPublisher>(std::move(t));
+#else
+  return nullptr;  // (requireBackend threw)
+#endif
+}
+
 RecordSinks openSinks(const Args& a) {
   RecordSinks s;
-  if (a.has("--serve")) {
-    StreamServerOptions o;
-    parseServeAddress(a.get("--serve"), a.has("--serve-remote"), o);
-    o.maxClients = int(a.integerIn("--serve-clients", 32, 1, 1000));
-    o.idleSeconds = int(a.integerIn("--serve-idle", 30, 2, 3600));
-    o.defaultFormat = parseCoeffFormat("three", "--serve", true);
-    const char* web = std::getenv("LIVEPROBE_WEB_DIR");
-    o.webDir = web ? web : shareDir() + "/web";
-    o.threeDir = o.webDir + "/three";
-    if (!fs::exists(o.threeDir + "/three.module.js"))
-      warn("--serve: three.js is not in " + o.threeDir +
-           " (the build stages it from app/web/node_modules, which scripts/build installs with "
-           "npm); the page will not draw");
-    s.server = std::make_unique<StreamServer>(o);
-    std::fprintf(stderr, "liveprobe: serving http://%s:%d/ (WebSocket ws://%s:%d/?format=three)\n",
-                 o.host.c_str(), s.server->port(), o.host.c_str(), s.server->port());
-  } else if (a.has("--serve-remote") || a.has("--serve-clients") || a.has("--serve-idle")) {
+  if (a.has("--serve"))
+    s.all.push_back(openStream(a));
+  else if (a.has("--serve-remote") || a.has("--serve-clients") || a.has("--serve-idle"))
     throw Error("--serve-remote, --serve-clients and --serve-idle go with --serve");
-  }
-  if (a.has("--publish")) {
-    MqttTarget t = parseMqttUrl(a.get("--publish"));
-    if (a.has("--mqtt-cafile")) {
-      if (!t.tls) throw Error("--mqtt-cafile goes with an mqtts:// broker");
-      t.cafile = a.get("--mqtt-cafile");
-      readInputFile(t.cafile);  // a missing or unreadable file is one line, now
-    }
-    if (t.password.empty() && !t.username.empty()) {
-      if (a.has("--mqtt-password-file")) {
-        const std::string text = readInputFile(a.get("--mqtt-password-file"));
-        t.password = text.substr(0, text.find_first_of("\r\n"));  // its first line
-      } else if (const char* pw = std::getenv("LIVEPROBE_MQTT_PASSWORD")) {
-        t.password = pw;
-      }
-    }
-    s.mqtt = std::make_unique<MqttPublisher>(std::move(t));
-  } else if (a.has("--mqtt-cafile") || a.has("--mqtt-password-file")) {
+  if (a.has("--publish"))
+    s.all.push_back(openBroker(a));
+  else if (a.has("--mqtt-cafile") || a.has("--mqtt-password-file"))
     throw Error("--mqtt-cafile and --mqtt-password-file go with --publish");
-  }
   return s;
 }
 
@@ -635,24 +649,21 @@ void setHeadless(const Args& a, StreamPlan& p, bool headless) {
 
 /// At capture, on capture's thread: --coeffs-out lines of a window or a camera, the stream and
 /// MQTT (none of them waits on a reader); --record's raw frames.
-void wireCaptureOutputs(StreamPlan& p, StreamOutputs& out, const RecordSinks& sinks,
+void wireCaptureOutputs(StreamPlan& p, StreamOutputs& out, RecordSinks& sinks,
                         const FrameSource& source) {
-  AtomicTextFile* file = (!p.headless || p.live) ? out.coeffs.get() : nullptr;
-  StreamServer* server = sinks.server.get();
-  MqttPublisher* mqtt = sinks.mqtt.get();
-  if (out.coeffs && !file && (server || mqtt)) out.sent = std::make_unique<SentRecords>();
+  const bool network = !sinks.all.empty();
+  if (out.coeffs && (!p.headless || p.live))
+    sinks.all.push_back(std::make_unique<CoeffsFileSink>(*out.coeffs));
+  else if (out.coeffs && network)  // headless: the drawn frames' lines, and the sent-only ones
+    out.sent = std::make_unique<SentRecords>();
+  std::vector<RecordSink*> to;
+  for (const auto& sink : sinks.all) to.push_back(sink.get());
   SentRecords* sent = out.sent.get();
-  const CoeffFormat format = out.format;
-  if (file || server || mqtt)
-    p.opt.onCaptured = [file, server, mqtt, sent, format](const ProcessedFrame& f) {
-      // One record for the file and the broker (both in --coeffs-format); the server
-      // serializes per client format, once per frame.
-      if (server) server->publish(f);
-      if (!file && !mqtt && !sent) return;  // the server alone: no record to make here
-      std::string record = frameRecord(f, format, {});
-      if (file) file->line(record);
-      if (mqtt) mqtt->publish(record);
-      if (sent) sent->sent(f.index, std::move(record));
+  if (!to.empty())
+    p.opt.onCaptured = [to, sent, format = out.format](const ProcessedFrame& f) {
+      FrameRecord record(f, format);
+      for (RecordSink* sink : to) sink->publish(record);
+      if (sent) sent->sent(f.index, record.text());
     };
   // --record (live): the raw stream, finalised even when capture stops on a fault.
   if (VideoRecorder* rec = out.record.get()) {
@@ -709,7 +720,7 @@ Progress announceRun(const StreamPlan& p, const FrameSource& source, bool window
 /// After the loop: the files kept or discarded, the summary, the exit code.
 int finishStream(const StreamPlan& p, const PipelineStats& st, const StreamTally& tally,
                  StreamOutputs& out, const RecordSinks& sinks, const StreamView& view) {
-  if (sinks.server) sinks.server->stop();  // every client gets a clean close (1001)
+  for (const auto& sink : sinks.all) sink->stop();  // every stream client gets a clean close
   // A camera's frames up to a fault are real data and are kept; a replay that failed keeps
   // nothing (the recorders' destructors discard what they wrote).
   const bool keep = st.error.empty() || p.live;
@@ -730,7 +741,8 @@ int finishStream(const StreamPlan& p, const PipelineStats& st, const StreamTally
                  view.dynamicResolution.describe().c_str());
   if (stopRequested()) return kExitInterrupted;
   // Publishing was asked for and nothing at all reached the broker: the run failed its purpose.
-  if (sinks.mqtt && sinks.mqtt->stats().published == 0 && st.captured > 0) return kExitRuntime;
+  for (const auto& sink : sinks.all)
+    if (!sink->delivered() && st.captured > 0) return kExitRuntime;
   return 0;
 }
 

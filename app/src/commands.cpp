@@ -1,5 +1,8 @@
 #include "commands.h"
 
+#include "liveprobe/backends.h"
+#include "liveprobe/sh/error.h"
+
 namespace lp::cli {
 
 std::vector<OptionSpec> lightOptionSpecs() {
@@ -33,6 +36,49 @@ const std::vector<Command>& commands() {
       {kBenchSpec, runBench, "frame-time regression run against a baseline"},
   };
   return all;
+}
+
+namespace {
+struct BackendInfo {
+  bool built;
+  const char* name;    ///< as a sentence says it
+  const char* label;   ///< as --version lists it
+  const char* option;  ///< CMake's LIVEPROBE_WITH_*
+};
+BackendInfo backendInfo(OptionalBackend b) {
+  switch (b) {
+    case OptionalBackend::Window:
+      return {LIVEPROBE_WITH_GLFW, "the GLFW window", "window (GLFW)", "LIVEPROBE_WITH_GLFW"};
+    case OptionalBackend::V4l2:
+      return {LIVEPROBE_WITH_V4L2, "V4L2 cameras", "V4L2 cameras", "LIVEPROBE_WITH_V4L2"};
+    case OptionalBackend::Stream:
+      return {LIVEPROBE_WITH_STREAM, "the WebSocket stream", "WebSocket stream",
+              "LIVEPROBE_WITH_STREAM"};
+    case OptionalBackend::Mqtt:
+      return {LIVEPROBE_WITH_MQTT, "MQTT", "MQTT", "LIVEPROBE_WITH_MQTT"};
+  }
+  return {false, "?", "?", "?"};
+}
+}  // namespace
+
+bool builtIn(OptionalBackend b) { return backendInfo(b).built; }
+
+void requireBackend(OptionalBackend b, const std::string& what, const std::string& instead) {
+  const BackendInfo info = backendInfo(b);
+  if (!info.built)
+    throw Error((what.empty() ? "" : what + ": ") + "this liveprobe was built without " +
+                info.name + " (" + info.option + ")" + (instead.empty() ? "" : "; " + instead));
+}
+
+std::string backendsLine() {
+  std::string with, without;
+  for (OptionalBackend b : {OptionalBackend::Window, OptionalBackend::V4l2, OptionalBackend::Stream,
+                            OptionalBackend::Mqtt}) {
+    const BackendInfo info = backendInfo(b);
+    std::string& list = info.built ? with : without;
+    list += std::string(list.empty() ? "" : ", ") + info.label;
+  }
+  return (with.empty() ? "none" : with) + (without.empty() ? "" : "; built without " + without);
 }
 
 }  // namespace lp::cli

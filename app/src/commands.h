@@ -1,6 +1,7 @@
 #pragma once
 // The subcommands of the liveprobe program. Each returns the process exit code; errors are
 // thrown as lp::Error and printed by main() as one line.
+#include <cstdint>
 #include <memory>
 #include <string>
 #include <vector>
@@ -18,6 +19,17 @@ struct Command {
 };
 
 const std::vector<Command>& commands();
+
+/// The optional parts of a build (CMake's LIVEPROBE_WITH_*, liveprobe/backends.h).
+enum class OptionalBackend : std::uint8_t { Window, V4l2, Stream, Mqtt };
+/// Whether this build has it.
+bool builtIn(OptionalBackend b);
+/// Throws lp::Error "WHAT: this liveprobe was built without NAME (ITS CMAKE OPTION); INSTEAD"
+/// unless it is built in (an empty `what` for a whole command, which main() names).
+void requireBackend(OptionalBackend b, const std::string& what, const std::string& instead = {});
+/// For --version: "window (GLFW), V4L2 cameras, WebSocket stream, MQTT", then "; built without
+/// ..." the ones this build lacks.
+std::string backendsLine();
 
 int runCoeffs(const Args&);
 int runIrradiance(const Args&);

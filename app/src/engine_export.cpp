@@ -7,6 +7,7 @@
 #include "liveprobe/capture/image.h"
 #include "liveprobe/sh/error.h"
 #include "liveprobe/sh/layout.h"
+#include "scene.h"
 
 namespace lp::cli {
 

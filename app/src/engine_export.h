@@ -9,9 +9,10 @@
 #include "liveprobe/capture/pipeline.h"
 #include "liveprobe/sh/engines.h"
 #include "liveprobe/sh/lights.h"
-#include "scene.h"
 
 namespace lp::cli {
+
+struct Environment;  // scene.h
 
 /// json (liveprobe's own, R&H frame), text, glsl, or one engine's.
 struct CoeffFormat {

@@ -1,8 +1,12 @@
 #include "hud.h"
 
 #include <imgui.h>
-#include <imgui_impl_glfw.h>
 #include <imgui_impl_opengl3.h>
+
+#include "liveprobe/backends.h"
+#if LIVEPROBE_WITH_GLFW
+#include <imgui_impl_glfw.h>
+#endif
 
 #include <algorithm>
 #include <cmath>
@@ -16,6 +20,19 @@
 namespace lp::cli {
 
 namespace {
+
+// Dear ImGui's platform backend for a window (GLFW's; a build without GLFW has no windows).
+#if LIVEPROBE_WITH_GLFW
+bool platformInit(void* window) {
+  return ImGui_ImplGlfw_InitForOpenGL(static_cast<GLFWwindow*>(window), true);
+}
+void platformShutdown() { ImGui_ImplGlfw_Shutdown(); }
+void platformNewFrame() { ImGui_ImplGlfw_NewFrame(); }
+#else
+bool platformInit(void*) { return false; }
+void platformShutdown() {}
+void platformNewFrame() {}
+#endif
 
 constexpr std::size_t kHistory = 300;  // frames kept for the plots
 const ImU32 kChannel[3] = {IM_COL32(235, 80, 70, 255), IM_COL32(90, 200, 90, 255),
@@ -161,10 +178,10 @@ Hud::Hud(gl::GlContext& ctx) : window_(ctx.nativeWindow() != nullptr) {
   ImGuiIO& io = ImGui::GetIO();
   io.IniFilename = nullptr;  // no imgui.ini left in the user's folder
   ImGui::GetStyle() = baseStyle();
-  if (window_ && !ImGui_ImplGlfw_InitForOpenGL(static_cast<GLFWwindow*>(ctx.nativeWindow()), true))
+  if (window_ && !platformInit(ctx.nativeWindow()))
     throw Error("HUD: cannot attach Dear ImGui to the window");
   if (!ImGui_ImplOpenGL3_Init("#version 330 core")) {
-    if (window_) ImGui_ImplGlfw_Shutdown();
+    if (window_) platformShutdown();
     ImGui::DestroyContext();
     throw Error("HUD: cannot initialise Dear ImGui's OpenGL 3 renderer");
   }
@@ -172,7 +189,7 @@ Hud::Hud(gl::GlContext& ctx) : window_(ctx.nativeWindow() != nullptr) {
 
 Hud::~Hud() {
   ImGui_ImplOpenGL3_Shutdown();
-  if (window_) ImGui_ImplGlfw_Shutdown();
+  if (window_) platformShutdown();
   ImGui::DestroyContext();
 }
 
@@ -232,7 +249,7 @@ void Hud::draw(const HudLayout& layout, gl::Renderer& renderer, ViewState& state
   ImGuiIO& io = ImGui::GetIO();
   ImGui_ImplOpenGL3_NewFrame();
   if (window_) {
-    ImGui_ImplGlfw_NewFrame();
+    platformNewFrame();
   } else {
     io.DisplaySize = ImVec2(float(layout.size.x), float(layout.size.y));
     io.DeltaTime = 1.0f / 30.0f;
@@ -299,8 +316,7 @@ void Hud::drawStatus(ViewState& state, double frameMs, const HudLayout& layout, 
                        h.held ? "  HELD" : "");
   }
   const float line = ImGui::GetTextLineHeightWithSpacing();
-  const int counterLines =
-      still_ ? 0 : 2 + (counters_.streamClients >= 0) + (counters_.mqttLost >= 0);
+  const int counterLines = still_ ? 0 : 2 + int(counters_.sinks.size());
   // What must stay: the counters and the exposure; the stage times go first when short of room.
   const float reserved = float(counterLines + (window_ ? 2 : 1)) * line;
   if (!still_ && !history_.empty()) drawStatusTimes(maxHeight - reserved);
@@ -309,10 +325,7 @@ void Hud::drawStatus(ViewState& state, double frameMs, const HudLayout& layout, 
                 counters_.dropped);
     ImGui::Text("skipped %zu  saturated %.1f/frame", counters_.skipped,
                 counters_.saturatedPerFrame);
-    if (counters_.streamClients >= 0)
-      ImGui::Text("stream: %lld clients, %lld dropped", (long long)counters_.streamClients,
-                  (long long)counters_.streamDropped);
-    if (counters_.mqttLost >= 0) ImGui::Text("mqtt: %lld lost", (long long)counters_.mqttLost);
+    for (const std::string& sink : counters_.sinks) ImGui::TextUnformatted(sink.c_str());
   }
   float ev = std::log2(state.shading.exposure);
   if (window_) {  // the window's controls; a headless frame only says the exposure

@@ -35,8 +35,8 @@ struct HudSample {
 struct HudCounters {
   std::size_t captured = 0, drawn = 0, dropped = 0, skipped = 0;
   double saturatedPerFrame = 0;
-  /// --serve: clients now and frames they missed (-1: not serving); --publish: messages lost.
-  std::int64_t streamClients = -1, streamDropped = 0, mqttLost = -1;
+  /// A line from each record sink (--serve: clients and drops; --publish: messages lost).
+  std::vector<std::string> sinks;
 };
 
 /// What the viewer's keys and the HUD's widgets change.

@@ -33,7 +33,8 @@ void printOverview() {
     name.resize(14, ' ');
     std::cout << name << c.brief << "\n";
   }
-  std::cout << "\n  --version     print the version, the git commit and the SIMD path in use\n";
+  std::cout << "\n  --version     print the version, the git commit, the SIMD path in use and the "
+               "backends\n";
 }
 
 }  // namespace
@@ -71,6 +72,7 @@ int main(int argc, char** argv) {
       std::string all;
       for (const auto& p : lp::simd::available()) all += (all.empty() ? "" : " ") + p;
       std::cout << "simd: " << lp::simd::current() << " (this CPU runs: " << all << ")\n";
+      std::cout << "backends: " << lp::cli::backendsLine() << "\n";
     } catch (const lp::Error& e) {
       lp::cli::errs() << "liveprobe: " << e.what() << "\n";
       return 1;

@@ -158,4 +158,13 @@ MqttStats MqttPublisher::stats() const {
   return s;
 }
 
+std::string MqttPublisher::status() const { return "mqtt: " + std::to_string(lost_) + " lost"; }
+
+std::string MqttPublisher::summary() const {
+  const MqttStats m = stats();
+  return target_.describe() + ": " + std::to_string(m.published) + " published, " +
+         std::to_string(m.lost) + " lost (no broker connection), " + std::to_string(m.reconnects) +
+         " reconnects" + (m.published == 0 ? "; no message reached the broker" : "");
+}
+
 }  // namespace lp::cli

@@ -8,6 +8,8 @@
 #include <cstdint>
 #include <string>
 
+#include "record_sink.h"
+
 struct mosquitto;
 
 namespace lp::cli {
@@ -36,19 +38,24 @@ struct MqttStats {
   bool connected = false;
 };
 
-class MqttPublisher {
+class MqttPublisher final : public RecordSink {
  public:
   /// Starts connecting (in the background: a broker that is down is retried, not an error).
   /// Waits up to 3 s for the first connection; a broker that refuses the credentials (or the
   /// TLS handshake) in that time throws lp::Error.
   explicit MqttPublisher(MqttTarget target);
-  ~MqttPublisher();
+  ~MqttPublisher() override;
   MqttPublisher(const MqttPublisher&) = delete;
   MqttPublisher& operator=(const MqttPublisher&) = delete;
 
   /// Publishes a frame's record, frameRecord() (any thread; never waits for the broker).
   void publish(const std::string& record);
+  void publish(FrameRecord& record) override { publish(record.text()); }
   MqttStats stats() const;
+  std::string status() const override;
+  std::string summary() const override;
+  /// Some message reached the broker.
+  bool delivered() const override { return published_ > 0; }
   const MqttTarget& target() const { return target_; }
 
  private:

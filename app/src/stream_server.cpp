@@ -418,6 +418,21 @@ StreamStats StreamServer::stats() const {
   return impl_->stats;
 }
 
+std::string StreamServer::status() const {
+  const StreamStats s = stats();
+  return "stream: " + std::to_string(s.clients) + " clients, " + std::to_string(s.dropped) +
+         " dropped";
+}
+
+std::string StreamServer::summary() const {
+  const StreamStats s = stats();
+  return "stream: " + std::to_string(s.connected) + " clients served, " + std::to_string(s.sent) +
+         " messages sent, " + std::to_string(s.dropped) + " dropped for slow clients, " +
+         std::to_string(s.refused) + " refused (client limit), " + std::to_string(s.closed) +
+         " closed (bad message or idle), " + std::to_string(s.evicted) +
+         " connections closed before their handshake";
+}
+
 void StreamServer::stop() {
   if (!impl_->thread.joinable()) return;
   impl_->stopping = true;

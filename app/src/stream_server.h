@@ -9,6 +9,7 @@
 #include <string>
 
 #include "engine_export.h"
+#include "record_sink.h"
 
 namespace lp::cli {
 
@@ -42,20 +43,24 @@ struct StreamStats {
   std::uint64_t evicted = 0;    ///< connections closed before their handshake (deadline, limits)
 };
 
-class StreamServer {
+class StreamServer final : public RecordSink {
  public:
   /// Binds and starts serving on its own thread. Throws lp::Error if the address can't be bound.
   explicit StreamServer(StreamServerOptions options);
-  ~StreamServer();  ///< stop()
+  ~StreamServer() override;  ///< stop()
   StreamServer(const StreamServer&) = delete;
   StreamServer& operator=(const StreamServer&) = delete;
 
   int port() const;
-  /// Hands the server a frame (any thread; never waits for a client).
+  /// Hands the server a frame (any thread; never waits for a client). Each client gets it in
+  /// the format it asked for, serialized once per format.
   void publish(const ProcessedFrame& frame);
+  void publish(FrameRecord& record) override { publish(record.frame()); }
   StreamStats stats() const;
+  std::string status() const override;
+  std::string summary() const override;
   /// Closes every connection (status 1001, going away) and stops serving. Idempotent.
-  void stop();
+  void stop() override;
 
  private:
   struct Impl;

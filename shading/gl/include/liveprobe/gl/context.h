@@ -1,7 +1,8 @@
 #pragma once
-// One GL context interface, two backends in the same binary: a GLFW window (X11) and OSMesa
-// offscreen (Mesa llvmpipe). All backend #ifs live in src/gl/context_factory.cpp; the renderer
-// never sees GLFW or OSMesa. createGlContext() loads GL 3.3 core through glad for either.
+// One GL context interface, two backends in the same binary: a GLFW window (X11; where the build
+// has LIVEPROBE_WITH_GLFW) and OSMesa offscreen (Mesa llvmpipe). Each lives in its own file of
+// src/, picked by context_factory.cpp; the renderer never sees GLFW or OSMesa. createGlContext()
+// loads GL 3.3 core through glad for either.
 #include <cstdint>
 #include <glm/glm.hpp>
 #include <memory>
