@@ -22,7 +22,7 @@ def fmt(s):
     return f"{s * 1e6:.3g} us"
 
 
-STAGES = ["grab", "convert", "project", "upload", "render", "readback"]
+STAGES = ["grab", "convert", "project", "resample", "upload", "render", "readback"]
 print("| `liveprobe bench` (headless, 640x360, the default sphere) | " + " | ".join(STAGES) + " |")
 print("|---|" + "---|" * len(STAGES))
 for arg in sys.argv[2:]:

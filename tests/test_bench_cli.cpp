@@ -26,7 +26,7 @@ TEST(BenchCli, PassesAgainstTheBaselineAndCatchesAnInjectedDelay) {
   std::ifstream in(json);
   const auto j = nlohmann::json::parse(in);
   EXPECT_EQ(j["frames"], 100);
-  for (const char* s : {"grab", "convert", "project", "upload", "render", "readback"})
+  for (const char* s : {"grab", "convert", "project", "resample", "upload", "render", "readback"})
     for (const char* k : {"median_ms", "p95_ms", "p99_ms", "max_ms"})
       EXPECT_TRUE(j["stages"][s][k].is_number()) << s << k;
   EXPECT_GT(j["calibration_ms"].get<double>(), 0);

@@ -8,6 +8,7 @@
 #include <fstream>
 #include <iostream>
 #include <map>
+#include <numeric>
 #include <sstream>
 #include <thread>
 
@@ -19,6 +20,7 @@
 #include "liveprobe/capture/input_file.h"
 #include "liveprobe/capture/photometry.h"
 #include "liveprobe/capture/pipeline.h"
+#include "liveprobe/capture/resample.h"
 #include "liveprobe/capture/stages.h"
 #include "liveprobe/sh/error.h"
 #include "liveprobe/sh/executor.h"
@@ -36,7 +38,7 @@ namespace fs = std::filesystem;
 using Clock = std::chrono::steady_clock;
 // The stages bench times, in the profiler's order (liveprobe/capture/stages.h; bench merges no
 // bracket); arrays below are indexed by position in this list.
-constexpr std::array kBenchStages = {Stage::Grab,   Stage::Convert, Stage::Project,
+constexpr std::array kBenchStages = {Stage::Grab,   Stage::Convert, Stage::Project, Stage::Resample,
                                      Stage::Upload, Stage::Render,  Stage::Readback};
 constexpr int kStageCount = int(kBenchStages.size());
 // A stage's name (the names are literals: NUL-terminated).
@@ -129,7 +131,7 @@ std::string plotScript(const std::string& png, const std::string& data, const st
     g << "set object " << k << " rect from " << start << ",0 to " << start + kWarmup - 1 << ","
       << top << " fc rgb '#909090' fs solid 0.35 noborder behind\n";
   g << "set label 1 'grey bands: the warm-up frames of each run' at graph 0.01, graph 0.96\n";
-  const char* colours[kStageCount] = {"#1f77b4", "#ff7f0e", "#2ca02c",
+  const char* colours[kStageCount] = {"#1f77b4", "#ff7f0e", "#2ca02c", "#17becf",
                                       "#d62728", "#9467bd", "#8c564b"};
   g << "plot ";
   for (int s = kStageCount - 1; s >= 0; --s) {
@@ -301,8 +303,8 @@ struct RunState {
 };
 
 /// One frame through the pipeline, stage by stage, as the replay pipeline does it: grab, convert
-/// (only frames the display cannot take as they are get a linear copy), project, upload, render
-/// and read back.
+/// (only frames the display cannot take as they are get a linear copy), project, resample (a
+/// layout GL does not draw as it is), upload, render and read back.
 BenchTimes timeFrame(BenchScene& scene, RunState& run, FrameSource& source,
                      const std::string& sourceName, Executor& pool, bool first) {
   const Linearizer& lin = scene.lin;
@@ -333,22 +335,24 @@ BenchTimes timeFrame(BenchScene& scene, RunState& run, FrameSource& source,
     throw Error(sourceName + ": " + e.what());
   }
   lap(2);
+  if (!asIs && !displayDrawsAsIs(scene.layout)) image = displayEquirect(image, scene.layout);
+  lap(3);
   if (first) run.exposure = autoExposure(sh);
   scene.renderer.setLighting(sh);
   if (asIs)
-    setBackground(scene.renderer, frame, scene.layout, lin.exposure() * scale);
+    setBackground(scene.renderer, frame, displayLayout(scene.layout), lin.exposure() * scale);
   else
-    setBackground(scene.renderer, image, scene.layout,
+    setBackground(scene.renderer, image, displayLayout(scene.layout),
                   frame.format == PanoramaFormat::BgrU8 ? lin.exposure() * scale : 0.0f);
   gl::Renderer::finish();
-  lap(3);
+  lap(4);
   gl::ShadingSettings shading;
   shading.exposure = run.exposure;
   scene.renderer.draw(scene.ctx->framebufferSize(), gl::Camera{}, shading);
   gl::Renderer::finish();
-  lap(4);
-  auto px = gl::Renderer::readRgb8(scene.ctx->framebufferSize());
   lap(5);
+  auto px = gl::Renderer::readRgb8(scene.ctx->framebufferSize());
+  lap(6);
   return t;
 }
 
@@ -496,7 +500,7 @@ int runBench(const Args& a) {
   out["stages"] = stageSummary(all, runMedians, repeat, frames, description);
   // Latency, as replay measures it: from the frame's grab to the frame shown (read back).
   std::vector<double> latency;
-  for (const auto& t : all) latency.push_back(t[1] + t[2] + t[3] + t[4] + t[5]);
+  for (const auto& t : all) latency.push_back(std::accumulate(t.begin() + 1, t.end(), 0.0));
   out["latency_ms"] = {{"p50", percentile(latency, 0.5)},
                        {"p95", percentile(latency, 0.95)},
                        {"p99", percentile(latency, 0.99)}};

@@ -365,8 +365,8 @@ struct StreamView {
       state.shading.exposure = cli::autoExposure(f.radiance, true, f.lights);
     haveLighting = true;
     renderer->setLighting(f.radiance, f.lights);
-    if (f.image) setBackground(*renderer, *f.image, layout, f.displayScale);
-    if (f.raw) setBackground(*renderer, *f.raw, layout, f.rawScale);
+    if (f.image) setBackground(*renderer, *f.image, f.displayLayout, f.displayScale);
+    if (f.raw) setBackground(*renderer, *f.raw, f.displayLayout, f.rawScale);
     // The time to hand the data to GL, not waiting for it (no glFinish stalling every frame);
     // `liveprobe bench` times the upload to completion.
     return std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
@@ -486,13 +486,13 @@ void runInteractive(CapturePipeline& pipeline, StreamView& view, StreamTally& ta
   }
 }
 
-/// "grab 0.95, convert 0.00, ...": the median of each stage up to render (merge only where a
-/// bracket was merged).
+/// "grab 0.95, convert 0.00, ...": the median of each stage up to render (merge and resample
+/// only where they ran).
 std::string stageMedians(const StreamTally& t) {
   std::string out;
   char one[64];
   for (std::size_t k = 0; k <= std::size_t(Stage::Render); ++k) {
-    if (Stage(k) == Stage::Merge && !(t.median(Stage::Merge) > 0)) continue;
+    if (stageRunsForSomeSources(Stage(k)) && !(t.median(Stage(k)) > 0)) continue;
     std::snprintf(one, sizeof one, "%s%s %.2f", out.empty() ? "" : ", ",
                   std::string(kStageNames[k]).c_str(), t.median(Stage(k)));
     out += one;

@@ -364,10 +364,11 @@ std::string frameRecord(const ProcessedFrame& f, const CoeffFormat& format, Reco
     j["coefficients"] = coefficientsJson(f.radiance);
     if (!f.lights.empty()) j["lights"] = lightsJson(f.lights);
   }
-  // Capture's stages (merge only with a bracket), and render: null where the frame was not drawn.
+  // Capture's stages (merge and resample where they ran), and render: null where the frame was
+  // not drawn.
   ojson tm;
-  for (const Stage s : {Stage::Grab, Stage::Merge, Stage::Convert, Stage::Project})
-    if (s != Stage::Merge || f.times[s] > 0) tm[std::string(stageName(s))] = f.times[s];
+  for (const Stage s : {Stage::Grab, Stage::Merge, Stage::Convert, Stage::Project, Stage::Resample})
+    if (!stageRunsForSomeSources(s) || f.times[s] > 0) tm[std::string(stageName(s))] = f.times[s];
   tm["render"] = t.renderMs < 0 ? ojson(nullptr) : ojson(t.renderMs);
   j["timings_ms"] = tm;
   const FrameConfidence& c = f.confidence;

@@ -41,7 +41,8 @@ const ImU32 kChannel[3] = {IM_COL32(235, 80, 70, 255), IM_COL32(90, 200, 90, 255
 constexpr std::size_t kPlotted = std::size_t(Stage::Render) + 1;
 const ImU32 kStageColour[kPlotted] = {IM_COL32(100, 180, 255, 255), IM_COL32(240, 220, 80, 255),
                                       IM_COL32(255, 160, 60, 255),  IM_COL32(110, 220, 110, 255),
-                                      IM_COL32(255, 110, 110, 255), IM_COL32(200, 150, 255, 255)};
+                                      IM_COL32(80, 210, 210, 255),  IM_COL32(255, 110, 110, 255),
+                                      IM_COL32(200, 150, 255, 255)};
 
 /// Several series on one set of axes (ImGui's PlotLines draws one), scaled to [lo, hi], clipped
 /// to their box, with `label` (if any) in its top left corner.
@@ -346,10 +347,10 @@ void Hud::drawStatusTimes(float maxHeight) {
   const float s = scale_, line = ImGui::GetTextLineHeightWithSpacing();
   const float plotHeight = 70.0f * s;
   if (!fits(line + plotHeight + 2 * line, maxHeight)) return;
-  // The stages up to render; merge only where a bracket was merged.
+  // The stages up to render; merge and resample only where they ran.
   std::vector<std::size_t> shown;
   for (std::size_t k = 0; k < kPlotted; ++k)
-    if (Stage(k) != Stage::Merge ||
+    if (!stageRunsForSomeSources(Stage(k)) ||
         std::any_of(history_.begin(), history_.end(),
                     [&](const HudSample& h) { return h.times.ms[k] > 0; }))
       shown.push_back(k);

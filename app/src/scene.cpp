@@ -168,24 +168,22 @@ void warnIfLayoutLooksWrong(const std::string& source, const LayoutSpec& layout,
   }
 }
 
-void setBackground(gl::Renderer& r, const Image& frame, const LayoutSpec& layout,
-                   float displayScale) {
-  if (layout.layout == Layout::Equirect || layout.layout == Layout::Angular) {
-    r.setBackground(frame.rgb.data(), frame.width, frame.height,
-                    layout.layout == Layout::Angular ? gl::BackgroundMapping::Angular
-                                                     : gl::BackgroundMapping::Equirect,
-                    displayScale);
-    return;
-  }
-  const Image eq = resampleToEquirect(frame, layout, 1024, 512);
-  r.setBackground(eq.rgb.data(), eq.width, eq.height, gl::BackgroundMapping::Equirect,
+namespace {
+gl::BackgroundMapping backgroundMapping(Layout drawn) {
+  if (drawn != Layout::Equirect && drawn != Layout::Angular)
+    throw std::logic_error("the background is drawn from an equirect or an angular map");
+  return drawn == Layout::Angular ? gl::BackgroundMapping::Angular
+                                  : gl::BackgroundMapping::Equirect;
+}
+}  // namespace
+
+void setBackground(gl::Renderer& r, const Image& panorama, Layout drawn, float displayScale) {
+  r.setBackground(panorama.rgb.data(), panorama.width, panorama.height, backgroundMapping(drawn),
                   displayScale);
 }
 
-void setBackground(gl::Renderer& r, const Frame& frame, const LayoutSpec& layout, float scale) {
-  r.setBackgroundSrgb8(frame.bgr8.data(), frame.width, frame.height,
-                       layout.layout == Layout::Angular ? gl::BackgroundMapping::Angular
-                                                        : gl::BackgroundMapping::Equirect,
+void setBackground(gl::Renderer& r, const Frame& frame, Layout drawn, float scale) {
+  r.setBackgroundSrgb8(frame.bgr8.data(), frame.width, frame.height, backgroundMapping(drawn),
                        scale);
 }
 
@@ -380,8 +378,12 @@ void loadScene(gl::Renderer& r, const Mesh& mesh, const Lighting& lighting) {
   loadModel(r, mesh);
   r.setLighting(lighting.radiance, lighting.lights);
   r.setEnvOrientation(lighting.orientation);
-  if (lighting.background)
-    setBackground(r, *lighting.background, lighting.layout, lighting.displayScale);
+  if (!lighting.background) return;
+  if (displayDrawsAsIs(lighting.layout))
+    setBackground(r, *lighting.background, lighting.layout.layout, lighting.displayScale);
+  else
+    setBackground(r, displayEquirect(*lighting.background, lighting.layout), Layout::Equirect,
+                  lighting.displayScale);
 }
 
 }  // namespace lp::cli

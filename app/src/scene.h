@@ -65,14 +65,13 @@ struct Lighting {
   float displayScale = 0.0f;  ///< see Environment
 };
 
-/// The background texture for a frame: equirect and angular frames are drawn directly; other
-/// layouts are resampled to a 1024x512 equirect on the CPU (bilinear).
+/// The background texture: a panorama in a layout GL draws as it is (equirect or angular;
+/// liveprobe/capture/resample.h: displayLayout, displayEquirect for the others).
 /// `displayScale`: see gl::Renderer::setBackground (0 for an HDR frame).
-void setBackground(gl::Renderer& r, const Image& frame, const LayoutSpec& layout,
-                   float displayScale = 0.0f);
+void setBackground(gl::Renderer& r, const Image& panorama, Layout drawn, float displayScale = 0.0f);
 /// The background from an 8-bit sRGB frame the display takes as it is
 /// (liveprobe/capture/frame_processor.h, displayTakesFrameAsIs), its decoded values times `scale`.
-void setBackground(gl::Renderer& r, const Frame& frame, const LayoutSpec& layout, float scale);
+void setBackground(gl::Renderer& r, const Frame& frame, Layout drawn, float scale);
 
 /// From --env FILE [--layout], --coeffs FILE.json or --coeff NAME=VALUE...; nullopt if none given.
 std::optional<Lighting> lightingFromArgs(const Args& a);

@@ -12,7 +12,7 @@ namespace lp {
 bool displayTakesFrameAsIs(const Frame& frame, const Photometry& photometry,
                            const LayoutSpec& layout) {
   return frame.format == PanoramaFormat::BgrU8 && photometry.gamma == 0.0f &&
-         (layout.layout == Layout::Equirect || layout.layout == Layout::Angular);
+         displayDrawsAsIs(layout);
 }
 
 FrameProcessor::FrameProcessor(FrameProcessorOptions options)

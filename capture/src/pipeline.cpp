@@ -274,12 +274,20 @@ void CapturePipeline::run() {
       if (s.image && s.frame.radianceScale != 1.0)
         for (float& v : s.image->rgb) v *= float(s.frame.radianceScale);
       const auto t3 = Clock::now();
+      // The display's copy in a layout GL draws as it is, made here rather than on the viewer's
+      // thread.
+      out.displayLayout = displayLayout(opt_.layout);
+      if (s.image && !displayDrawsAsIs(opt_.layout))
+        *s.image = displayEquirect(*s.image, opt_.layout);
+      const auto t4 = Clock::now();
       if (opt_.keepImages && !out.raw) out.image = std::move(s.image);  // one background a frame
       s.image.reset();
       out.times[Stage::Grab] = msBetween(t0, t1);
       if (s.merger) out.times[Stage::Merge] = msBetween(t1, tm);
       out.times[Stage::Convert] = msBetween(tm, t2);
       out.times[Stage::Project] = msBetween(t2, t3);
+      if (out.image && !displayDrawsAsIs(opt_.layout))
+        out.times[Stage::Resample] = msBetween(t3, t4);
       out.captureTime = s.frame.captureTime >= 0 ? s.frame.captureTime : grabbed;
       out.coefficientsLatencyMs = 1000.0 * (monotonicSeconds() - out.captureTime);
       if (opt_.onCaptured) opt_.onCaptured(out);

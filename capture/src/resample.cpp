@@ -61,4 +61,16 @@ void reduceEquirect(const float* rgb, int width, int height, int f, Image& out) 
   }
 }
 
+bool displayDrawsAsIs(const LayoutSpec& layout) {
+  return layout.layout == Layout::Equirect || layout.layout == Layout::Angular;
+}
+
+Layout displayLayout(const LayoutSpec& layout) {
+  return displayDrawsAsIs(layout) ? layout.layout : Layout::Equirect;
+}
+
+Image displayEquirect(const Image& frame, const LayoutSpec& layout) {
+  return resampleToEquirect(frame, layout, 1024, 512);
+}
+
 }  // namespace lp

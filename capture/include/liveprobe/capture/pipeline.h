@@ -45,6 +45,9 @@ struct ProcessedFrame {
   /// For `image` made from an 8-bit frame: the scale its decoded values carry (0 for HDR frames),
   /// so the display can show it as the source looks (gl::Renderer::setBackground).
   float displayScale = 0.0f;
+  /// The layout `image` or `raw` is drawn in: equirect or angular (a frame of any other layout
+  /// is resampled to equirect on capture's thread, Stage::Resample).
+  Layout displayLayout = Layout::Equirect;
   StageTimes times;  ///< capture's stages; the viewer adds its own
   std::size_t saturated = 0;
   /// How far this frame's lighting can be trusted (clipped power, the bracket's agreement).

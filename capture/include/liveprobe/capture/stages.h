@@ -1,8 +1,8 @@
 #pragma once
 // The stages of a frame's path, named and ordered once: capture's (grab, merge, convert, project,
-// on the capture thread) then the viewer's (upload, render, readback). Every report of where a
-// frame's time went (the per-frame records, the HUD's plot, the summary, `liveprobe bench`) reads
-// its stages from here.
+// resample, on the capture thread) then the viewer's (upload, render, readback). Every report of
+// where a frame's time went (the per-frame records, the HUD's plot, the summary, `liveprobe bench`)
+// reads its stages from here.
 #include <array>
 #include <cstddef>
 #include <string_view>
@@ -14,6 +14,7 @@ enum class Stage : int {
   Merge,     ///< an exposure bracket's merge into radiance
   Convert,   ///< the linear copy kept for display (8-bit frames are linearised in the projection)
   Project,   ///< coefficients and lights
+  Resample,  ///< the display's equirect of a layout GL does not draw as it is (cube, ball, fisheye)
   Upload,    ///< lighting and background handed to GL
   Render,    ///< the model drawn (and the HUD)
   Readback,  ///< the frame read back (headless outputs, bench)
@@ -23,7 +24,13 @@ enum class Stage : int {
 inline constexpr std::size_t kStageCount = std::size_t(Stage::Count);
 
 inline constexpr std::array<std::string_view, kStageCount> kStageNames = {
-    "grab", "merge", "convert", "project", "upload", "render", "readback"};
+    "grab", "merge", "convert", "project", "resample", "upload", "render", "readback"};
+
+/// A stage that runs for some sources only (a bracket's merge, a layout's resample): reports show
+/// it where it ran.
+constexpr bool stageRunsForSomeSources(Stage s) {
+  return s == Stage::Merge || s == Stage::Resample;
+}
 
 constexpr std::string_view stageName(Stage s) { return kStageNames[std::size_t(s)]; }
 
