@@ -127,6 +127,7 @@ namespace {
 /// `view`'s window (or headless screenshot) and what it draws.
 struct StillViewer {
   std::unique_ptr<gl::GlContext> ctx;
+  std::unique_ptr<WindowInput> input;      ///< before the HUD, whose ImGui backend chains to it
   std::unique_ptr<gl::Renderer> renderer;  ///< made once ctx is current
   std::unique_ptr<Hud> hud;
   ViewState state;
@@ -135,8 +136,8 @@ struct StillViewer {
   /// One frame: input, the model, the HUD (and, when its editor changed the coefficients, the
   /// model lit by them from the next frame).
   void frame(Lighting& lighting, double lastMs) {
-    const auto keys = handleInput(*ctx, hud.get(), state, false);
-    if (hud && std::count(keys.begin(), keys.end(), gl::KeyAction::Save))
+    const auto keys = handleInput(*input, hud.get(), state, false);
+    if (hud && std::count(keys.begin(), keys.end(), KeyAction::Save))
       std::fprintf(stderr, "liveprobe: %s\n", hud->saveCoefficients().c_str());
     const glm::ivec2 fb = ctx->framebufferSize();
     const HudLayout layout = hudLayout(fb);
@@ -184,6 +185,7 @@ int runView(const Args& a) {
     requireExtension(a.get("--screenshot"), "--screenshot", {".png", ".jpg", ".jpeg"});
   const int frames = a.integerIn("--frames", 1, 1, 1000000);
   v.ctx = openContext(backendFromArgs(a), size);
+  v.input = std::make_unique<WindowInput>(*v.ctx);
   const bool window = !v.ctx->isHeadless();
   if (!window && !screenshot) {
     requireBackend(OptionalBackend::Window, "", "use --screenshot, or liveprobe render");
@@ -216,7 +218,7 @@ int runView(const Args& a) {
         break;
       }
       v.ctx->present();
-      rate.tick(*v.ctx, "liveprobe view");
+      rate.tick(*v.input, "liveprobe view");
     }
   } catch (const gl::ContextError& e) {
     throw Error(std::string("GL: ") + e.what());

@@ -340,6 +340,7 @@ struct StreamTally {
 /// Everything the render loop holds: GL, the HUD, the interactive state.
 struct StreamView {
   std::unique_ptr<gl::GlContext> ctx;
+  std::unique_ptr<WindowInput> input;  ///< before the HUD, whose ImGui backend chains to it
   std::unique_ptr<gl::Renderer> renderer;
   std::unique_ptr<Hud> hud;
   ViewState state;
@@ -456,7 +457,7 @@ void runInteractive(CapturePipeline& pipeline, StreamView& view, StreamTally& ta
   bool wasPaused = false;
   const bool headless = view.ctx->isHeadless();
   while (!view.ctx->shouldClose() && !stopRequested()) {
-    handleInput(*view.ctx, view.hud.get(), view.state, !live);
+    handleInput(*view.input, view.hud.get(), view.state, !live);
     if (view.state.paused != wasPaused) pipeline.setPaused(wasPaused = view.state.paused);
     for (; view.state.steps > 0; --view.state.steps) pipeline.step();
     double uploadMs = 0;
@@ -481,7 +482,7 @@ void runInteractive(CapturePipeline& pipeline, StreamView& view, StreamTally& ta
                    view.hud.get(), st, &sinks);
       progress.update(std::int64_t(st.captured));
     }
-    rate.tick(*view.ctx, "liveprobe - " + title + " - frame " + std::to_string(st.captured),
+    rate.tick(*view.input, "liveprobe - " + title + " - frame " + std::to_string(st.captured),
               view.state.paused ? " - paused" : "");
   }
 }
@@ -683,6 +684,7 @@ StreamView openStreamView(const Args& a, const StreamPlan& p) {
   view.source = p.description;
   view.state.camera = view.state.initialCamera = p.camera;
   view.ctx = openContext(backendFromArgs(a), p.size, p.headlessSize);
+  view.input = std::make_unique<WindowInput>(*view.ctx);
   const bool window = !view.ctx->isHeadless();
   view.dynamicResolution = DynamicResolution(window && isSoftwareGl(view.ctx->describe()) &&
                                              !a.has("--full-resolution"));

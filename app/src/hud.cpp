@@ -90,33 +90,33 @@ bool fits(float height, float maxHeight) {
   return ImGui::GetCursorPosY() + height + ImGui::GetStyle().WindowPadding.y <= maxHeight;
 }
 
-void applyKeys(const std::vector<gl::KeyAction>& keys, ViewState& s, bool canPause) {
+void applyKeys(const std::vector<KeyAction>& keys, ViewState& s, bool canPause) {
   for (const auto k : keys) switch (k) {
-      case gl::KeyAction::Pause:
+      case KeyAction::Pause:
         if (canPause) s.paused = !s.paused;
         break;
-      case gl::KeyAction::Step:
+      case KeyAction::Step:
         if (canPause) s.paused = true, ++s.steps;
         break;
-      case gl::KeyAction::ResetView:
+      case KeyAction::ResetView:
         s.camera = s.initialCamera;
         break;
-      case gl::KeyAction::ToggleBackground:
+      case KeyAction::ToggleBackground:
         s.shading.background = !s.shading.background;
         break;
-      case gl::KeyAction::ToggleHud:
+      case KeyAction::ToggleHud:
         s.hud = !s.hud;
         break;
-      case gl::KeyAction::ExposureUp:
+      case KeyAction::ExposureUp:
         s.shading.exposure *= std::sqrt(2.0f);
         break;  // half a stop
-      case gl::KeyAction::ExposureDown:
+      case KeyAction::ExposureDown:
         s.shading.exposure /= std::sqrt(2.0f);
         break;
-      case gl::KeyAction::Help:
+      case KeyAction::Help:
         s.help = !s.help;
         break;
-      case gl::KeyAction::Save:
+      case KeyAction::Save:
         break;  // the coefficient editor's (view)
     }
 }
@@ -149,20 +149,20 @@ gl::Camera framedBesideHud(gl::Camera camera, const HudLayout& layout, bool hudS
   return camera;
 }
 
-void RateTitle::tick(gl::GlContext& ctx, const std::string& prefix, const std::string& suffix) {
+void RateTitle::tick(WindowInput& input, const std::string& prefix, const std::string& suffix) {
   ++frames_;
   const auto now = std::chrono::steady_clock::now();
   const double s = std::chrono::duration<double>(now - t0_).count();
-  if (s < 1.0 || ctx.isHeadless()) return;
+  if (s < 1.0) return;
   char rate[64];
   std::snprintf(rate, sizeof rate, " - %.1f frames/s", double(frames_) / s);
-  ctx.setTitle(prefix + rate + suffix);
+  input.setTitle(prefix + rate + suffix);
   t0_ = now, frames_ = 0;
 }
 
-std::vector<gl::KeyAction> handleInput(gl::GlContext& ctx, const Hud* hud, ViewState& state,
-                                       bool canPause) {
-  gl::InputDelta input = ctx.pollEvents();
+std::vector<KeyAction> handleInput(WindowInput& window, const Hud* hud, ViewState& state,
+                                   bool canPause) {
+  InputDelta input = window.poll();
   if (!(hud && hud->wantsKeyboard())) applyKeys(input.keys, state, canPause);
   if (!(hud && hud->wantsMouse())) {
     gl::Camera& c = state.camera;

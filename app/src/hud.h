@@ -16,6 +16,7 @@
 #include "liveprobe/gl/renderer.h"
 #include "liveprobe/sh/lights.h"
 #include "liveprobe/sh/sh.h"
+#include "window_input.h"
 
 namespace lp::cli {
 
@@ -77,7 +78,7 @@ struct HudPanel {
 class RateTitle {
  public:
   /// Counts one presented frame; once a second writes the title (a headless context has none).
-  void tick(gl::GlContext& ctx, const std::string& prefix, const std::string& suffix = "");
+  void tick(WindowInput& input, const std::string& prefix, const std::string& suffix = "");
 
  private:
   std::chrono::steady_clock::time_point t0_ = std::chrono::steady_clock::now();
@@ -87,11 +88,11 @@ class RateTitle {
 class Hud;
 
 /// Polls the window's input and applies it to `state`: keys, orbit (left drag) and zoom (wheel),
-/// except what the HUD has (ImGui wants the mouse or the keyboard). A window's Esc/Q close it in
-/// the context itself. Returns the key presses, for the caller's own (Save: the coefficient
+/// except what the HUD has (ImGui wants the mouse or the keyboard). A window's Esc/Q close it
+/// from the key callback. Returns the key presses, for the caller's own (Save: the coefficient
 /// editor's, Hud::saveCoefficients). `canPause`: Space and Right mean something (replay).
-std::vector<gl::KeyAction> handleInput(gl::GlContext& ctx, const Hud* hud, ViewState& state,
-                                       bool canPause);
+std::vector<KeyAction> handleInput(WindowInput& input, const Hud* hud, ViewState& state,
+                                   bool canPause);
 
 class Hud {
  public:

@@ -48,11 +48,10 @@ class OsMesaContext final : public GlContext {
   void present() override {}
   glm::ivec2 framebufferSize() const override { return {width_, height_}; }
   bool shouldClose() const override { return false; }
-  InputDelta pollEvents() override { return {}; }
+  void pollEvents() override {}
   bool isHeadless() const override { return true; }
   std::string describe() const override { return "OSMesa offscreen (" + rendererString() + ")"; }
   void* nativeWindow() const override { return nullptr; }
-  void setTitle(const std::string&) override {}
   void requestClose() override {}
 
  private:

@@ -8,7 +8,6 @@
 #include <memory>
 #include <stdexcept>
 #include <string>
-#include <vector>
 
 namespace lp::gl {
 
@@ -28,27 +27,9 @@ struct ContextSpec {
   int headlessWidth = 0, headlessHeight = 0;
 };
 
-/// What a key press asks for. Keys arrive through GLFW's callbacks, so a tap shorter than a frame
-/// is never lost; Esc and Q close the window from the callback itself.
-enum class KeyAction : std::uint8_t {
-  Pause,             ///< Space
-  Step,              ///< Right arrow
-  ResetView,         ///< R
-  ToggleBackground,  ///< B
-  ToggleHud,         ///< H
-  ExposureUp,        ///< + or = (keypad +)
-  ExposureDown,      ///< - (keypad -)
-  Help,              ///< F1 or ?
-  Save,              ///< Ctrl+S
-};
-
-/// Input gathered since the last pollEvents().
-struct InputDelta {
-  glm::vec2 drag{0.0f};         ///< cursor movement with the left button held, in pixels
-  float scroll = 0.0f;          ///< wheel steps
-  std::vector<KeyAction> keys;  ///< in the order pressed
-};
-
+/// What a platform provides for liveprobe to draw into (as Filament's OpenGLPlatform): a current
+/// context, a framebuffer and, for a window, its events. Input and the title are the app's
+/// (GLFW's callbacks on nativeWindow()).
 class GlContext {
  public:
   virtual ~GlContext() = default;
@@ -57,13 +38,14 @@ class GlContext {
   virtual void present() = 0;
   virtual glm::ivec2 framebufferSize() const = 0;
   virtual bool shouldClose() const = 0;
-  virtual InputDelta pollEvents() = 0;
+  /// Processes the window's pending events (a headless context has none).
+  virtual void pollEvents() = 0;
   virtual bool isHeadless() const = 0;
   /// "GLFW window" or "OSMesa offscreen", plus GL_RENDERER.
   virtual std::string describe() const = 0;
-  /// The GLFWwindow* of a window (for Dear ImGui's GLFW backend); nullptr headless.
+  /// The GLFWwindow* of a window (for the app's input and Dear ImGui's GLFW backend); nullptr
+  /// headless.
   virtual void* nativeWindow() const = 0;
-  virtual void setTitle(const std::string& title) = 0;
   /// Asks the window to close (as Esc does).
   virtual void requestClose() = 0;
 };
