@@ -7,9 +7,9 @@
 #include <numbers>
 #include <opencv2/imgcodecs.hpp>
 
-#include "coeffs_io.h"
 #include "commands.h"
 #include "liveprobe/capture/image.h"
+#include "liveprobe/exchange/coeffs_io.h"
 #include "liveprobe/sh/sh.h"
 #include "test_util.h"
 
@@ -111,7 +111,7 @@ TEST(Cli, IrradianceCubeFollowsOpenGlsFaceTable) {
   ASSERT_EQ(r.exitCode, 0) << r.output;
   r = runLiveprobe("coeffs " + map);
   ASSERT_EQ(r.exitCode, 0) << r.output;
-  const lp::Sh9 L = lp::cli::coefficientsFromJson(nlohmann::json::parse(r.output), "coeffs");
+  const lp::Sh9 L = lp::coefficientsFromJson(nlohmann::json::parse(r.output), "coeffs");
   const lp::Image e = lp::loadImage(out);
   ASSERT_EQ(e.width, 4 * n);
   ASSERT_EQ(e.height, 3 * n);
@@ -145,7 +145,7 @@ TEST(Cli, IrradianceCubeFollowsOpenGlsFaceTable) {
   EXPECT_LT(worst / scale, 1e-5);
   r = runLiveprobe("coeffs " + out + " --layout cube");
   ASSERT_EQ(r.exitCode, 0) << r.output;
-  const lp::Sh9 E = lp::cli::coefficientsFromJson(nlohmann::json::parse(r.output), "cube");
+  const lp::Sh9 E = lp::coefficientsFromJson(nlohmann::json::parse(r.output), "cube");
   const lp::Sh9 truth = lp::toIrradiance(L);
   for (int k = 0; k < lp::kShCount; ++k)
     EXPECT_NEAR(E.c[k].x, truth.c[k].x, 2e-3 * truth.c[0].x) << lp::kShNames[k];

@@ -12,11 +12,11 @@
 #include <optional>
 #include <random>
 
-#include "coeffs_io.h"
 #include "layout_dirs.h"
 #include "liveprobe/capture/frame.h"
 #include "liveprobe/capture/image.h"
 #include "liveprobe/capture/pipeline.h"
+#include "liveprobe/exchange/coeffs_io.h"
 #include "liveprobe/sh/image.h"
 #include "liveprobe/sh/lights.h"
 #include "liveprobe/sh/projector.h"
@@ -299,11 +299,11 @@ TEST(LightsCli, CoeffsJsonCarriesTheLights) {
   ASSERT_EQ(sun.exitCode, 0) << sun.output;
   const auto jw = nlohmann::json::parse(whole.output), js = nlohmann::json::parse(sun.output);
   EXPECT_FALSE(jw.contains("lights"));
-  const auto lights = lp::cli::lightsFromJson(js, "coeffs --sun");
+  const auto lights = lp::lightsFromJson(js, "coeffs --sun");
   ASSERT_EQ(lights.size(), 1u);
   EXPECT_GT(lights[0].share, 0.5f);  // the sun holds more than half the power
-  const lp::Sh9 all = lp::cli::coefficientsFromJson(jw, "coeffs"),
-                sum = lp::cli::coefficientsFromJson(js, "coeffs --sun") + lp::lightsToSh(lights);
+  const lp::Sh9 all = lp::coefficientsFromJson(jw, "coeffs"),
+                sum = lp::coefficientsFromJson(js, "coeffs --sun") + lp::lightsToSh(lights);
   for (int k = 0; k < lp::kShCount; ++k)
     for (int ch = 0; ch < 3; ++ch)
       EXPECT_NEAR(sum.c[k][ch], all.c[k][ch], 1e-3 * all.c[0][ch]) << lp::kShNames[k];
@@ -311,7 +311,7 @@ TEST(LightsCli, CoeffsJsonCarriesTheLights) {
   // (-y, x, z).
   const auto turned = lpt::runLiveprobe("coeffs " + map + " --sun --env-rotate 90,0,0");
   ASSERT_EQ(turned.exitCode, 0) << turned.output;
-  const auto lt = lp::cli::lightsFromJson(nlohmann::json::parse(turned.output), "turned");
+  const auto lt = lp::lightsFromJson(nlohmann::json::parse(turned.output), "turned");
   ASSERT_EQ(lt.size(), 1u);
   EXPECT_LT(glm::length(lt[0].dir - glm::vec3(-lights[0].dir.y, lights[0].dir.x, lights[0].dir.z)),
             1e-4f);
@@ -358,7 +358,7 @@ TEST(LightsCli, ReplayTracksTheSunIntoCoeffsOut) {
   int n = 0;
   for (std::string line; std::getline(in, line); ++n) {
     const auto j = nlohmann::json::parse(line);
-    const auto lights = lp::cli::lightsFromJson(j, "line");
+    const auto lights = lp::lightsFromJson(j, "line");
     ASSERT_EQ(lights.size(), 1u) << line;
     const double t = j["time"].get<double>();
     EXPECT_LT(angleDeg(dvec3(lights[0].dir), dvec3(lp::syntheticSunDirection(t))), 0.5) << t;
@@ -435,7 +435,7 @@ TEST(LightsCli, SixLampsAreAllDrawn) {
   ASSERT_TRUE(cv::imwrite(map, sixLampMap(1024, 512)));
   const auto found = lpt::runLiveprobe("coeffs " + map + " --lights 6");
   ASSERT_EQ(found.exitCode, 0) << found.output;
-  const auto lights = lp::cli::lightsFromJson(nlohmann::json::parse(found.output), "coeffs");
+  const auto lights = lp::lightsFromJson(nlohmann::json::parse(found.output), "coeffs");
   ASSERT_EQ(lights.size(), 6u);
   for (const lp::Light& l : lights)  // equal lamps, equal shares
     EXPECT_NEAR(l.share, lights[0].share, 0.02 * lights[0].share);

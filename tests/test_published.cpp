@@ -6,8 +6,8 @@
 #include <cmath>
 #include <numbers>
 
-#include "compare.h"
 #include "disc_equirect.h"
+#include "liveprobe/capture/accuracy.h"
 #include "liveprobe/capture/image.h"
 #include "liveprobe/sh/layout.h"
 #include "liveprobe/sh/projector.h"
@@ -66,7 +66,7 @@ TEST(Published, DirectionalLightWorstCase) {
   double power = 0;
   const lp::Image img = lpt::discEquirect(2048, 1024, glm::normalize(glm::dvec3(0.3, -0.5, 0.6)),
                                           1.5 * std::numbers::pi / 180, 100.0f, &power);
-  const auto r = lp::cli::compareIrradiance(img, lp::Layout::Equirect, 64, 32);
+  const auto r = lp::compareIrradiance(img, lp::Layout::Equirect, 64, 32);
   EXPECT_GT(r.maxFracTotal, 0.085);
   EXPECT_LT(r.maxFracTotal, 0.10);
   // Closed form of the mean |error| for an ideal directional light: 3.07%
@@ -83,8 +83,8 @@ TEST(Published, DirectionalLightAsALight) {
   const lp::Image img = lpt::discEquirect(2048, 1024, glm::normalize(glm::dvec3(0.3, -0.5, 0.6)),
                                           1.5 * std::numbers::pi / 180, 100.0f, &power);
   const lp::LightOptions sun;
-  const auto r = lp::cli::compareIrradiance(img, lp::Layout::Equirect, 64, 32, {}, 0,
-                                            glm::mat3(1.0f), {}, &sun);
+  const auto r =
+      lp::compareIrradiance(img, lp::Layout::Equirect, 64, 32, {}, 0, glm::mat3(1.0f), {}, &sun);
   ASSERT_EQ(r.lights.size(), 1u);
   EXPECT_GT(r.maxFracTotal, 0.085);
   EXPECT_LT(r.maxFracTotalSun, 0.001);
@@ -124,8 +124,7 @@ TEST(Published, SunAndSkyOnRealMaps) {
     const lp::Image img = lp::loadImage(lpt::dataPath(c.file));
     lp::LightOptions sun;
     sun.maxLights = c.lights;
-    const auto r =
-        lp::cli::compareIrradiance(img, c.layout, 64, 32, {}, 0, glm::mat3(1.0f), {}, &sun);
+    const auto r = lp::compareIrradiance(img, c.layout, 64, 32, {}, 0, glm::mat3(1.0f), {}, &sun);
     EXPECT_LE(r.meanFracTotalSun, r.meanFracTotal + 1e-6);
     EXPECT_LE(r.maxFracTotalSun, r.maxFracTotal + 1e-6);
     if (c.meetsTargets) {

@@ -5,11 +5,13 @@
 
 #include <cmath>
 #include <fstream>
+#include <map>
 #include <nlohmann/json.hpp>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 #include <opencv2/videoio.hpp>
 #include <regex>
+#include <set>
 
 #include "commands.h"
 #include "dynamic_resolution.h"
@@ -515,6 +517,63 @@ TEST(CommandLine, MisspellingsSuggestTheNearestName) {
   const auto value = runLiveprobe("coeffs " + lpt::dataPath("probes/latlong_256x128/grace.hdr") +
                                   " --env-rotate=-30,0,0 --format text");
   EXPECT_EQ(value.exitCode, 0) << value.output;
+}
+
+// An option more than one command takes is declared once: one value placeholder and one help
+// text wherever it appears. The exceptions are the options whose meaning is each command's own
+// (what --out writes, what --size sizes, what --frames counts, ...).
+TEST(OptionGroups, ASharedOptionHasOneHelpText) {
+  const std::set<std::string> ownMeaning = {"--out",    "--size",     "--format", "--json",
+                                            "--frames", "--duration", "--fps"};
+  std::map<std::string, std::pair<const lp::cli::OptionSpec*, std::string>> first;
+  int shared = 0;
+  for (const auto& c : lp::cli::commands())
+    for (const auto& o : c.spec.options) {
+      if (ownMeaning.count(o.name)) continue;
+      const auto [it, fresh] = first.emplace(o.name, std::pair{&o, c.spec.name});
+      if (fresh) continue;
+      ++shared;
+      EXPECT_EQ(o.value, it->second.first->value)
+          << o.name << " in " << c.spec.name << " and " << it->second.second;
+      EXPECT_EQ(o.help, it->second.first->help)
+          << o.name << " in " << c.spec.name << " and " << it->second.second;
+    }
+  EXPECT_GT(shared, 50);  // the layout, lighting, scene, look and light groups
+}
+
+// The light group in every command that takes it: the largest --lights the renderer draws is
+// accepted, one more is one line naming the option and the range, a misspelling gets the name,
+// and the window's --hud with --no-hud is refused in one line where both exist.
+TEST(OptionGroups, TheLightGroupInEveryCommand) {
+  lpt::TempDir tmp;
+  const std::string map = lpt::dataPath("probes/latlong_256x128/grace.hdr");
+  const std::string png = tmp / "out.png", hdr = tmp / "out.hdr";
+  std::set<std::string> declaring;
+  for (const auto& c : lp::cli::commands())
+    for (const auto& o : c.spec.options)
+      if (o.name == "--lights") declaring.insert(c.spec.name);
+  // live needs a camera to get as far as its options' values; it takes the group from the same
+  // declaration as replay (the test above).
+  EXPECT_EQ(declaring,
+            (std::set<std::string>{"coeffs", "compare", "render", "view", "replay", "live"}));
+  const std::vector<std::string> commands = {
+      "coeffs " + map, "compare " + map + " --size 16x8 --quiet",
+      "render --env " + map + " --size 64x36 --out " + png,
+      "view --env " + map + " --size 64x36 --headless --screenshot " + png,
+      "replay " + map + " --headless --frames 1 --size 64x36 --quiet"};
+  const std::string most = std::to_string(lp::kMaxLights);
+  for (const std::string& c : commands) {
+    SCOPED_TRACE(c);
+    const auto ok = runLiveprobe(c + " --lights " + most);
+    EXPECT_EQ(ok.exitCode, 0) << ok.output;
+    expectOneLineError(c + " --lights " + std::to_string(lp::kMaxLights + 1), "--lights",
+                       "1 to " + most);
+    expectOneLineError(c + " --lihgts 2", "--lihgts", "did you mean --lights?");
+  }
+  expectOneLineError("view --env " + map + " --hud --no-hud --headless --screenshot " + png,
+                     "--no-hud", "give one");
+  expectOneLineError("replay " + map + " --headless --hud --no-hud --frames 1", "--no-hud",
+                     "give one");
 }
 
 TEST(CommandLine, VersionNamesTheCommit) {

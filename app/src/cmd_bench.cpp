@@ -13,7 +13,6 @@
 #include <thread>
 
 #include "baseline.h"
-#include "coeffs_io.h"
 #include "commands.h"
 #include "liveprobe/capture/atomic_file.h"
 #include "liveprobe/capture/frame.h"
@@ -22,6 +21,7 @@
 #include "liveprobe/capture/pipeline.h"
 #include "liveprobe/capture/resample.h"
 #include "liveprobe/capture/stages.h"
+#include "liveprobe/exchange/coeffs_io.h"
 #include "liveprobe/sh/error.h"
 #include "liveprobe/sh/executor.h"
 #include "liveprobe/sh/layout.h"
@@ -238,9 +238,9 @@ const CommandSpec kBenchSpec{
            {"--inject-delay", "STAGE=MS",
             "add MS (0 to 10000) milliseconds of busy work to STAGE; repeatable", true, false, g},
            {"--size", "WxH", "render size (default 640x360)", false, false, g},
-           {"--threads", "N", "projection threads, 1 to 64 (default 2)", false, false, g},
-           {"--model", "FILE|sphere", "model (default sphere)", false, false, g},
-           {"--quiet", "", "no progress on stderr", false, false, g}});
+           threadsOption(g),
+           sceneOptions()[0],
+           quietOption(g)});
       return o;
     }(),
     0,

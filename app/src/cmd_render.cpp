@@ -34,9 +34,7 @@ const CommandSpec kRenderSpec{
              "Output"},
             {"--out", "FILE.png", "output image, .png or .jpg (default render.png)", false, false,
              "Output"},
-            {"--hud", "",
-             "draw the HUD (the panorama, the probe balls, the coefficients) into the image", false,
-             false, "Output"}}),
+            hudOptions("Output", false)[0]}),
     0,
     0};
 
@@ -117,8 +115,8 @@ const CommandSpec kViewSpec{
             {"--save-coeffs", "FILE.json",
              "where the coefficient panel's Save writes (default coeffs-edited.json)", false, false,
              "Output"},
-            {"--hud", "", "draw the HUD into a headless screenshot too", false, false, "Output"},
-            {"--no-hud", "", "start with the HUD hidden (H shows it)", false, false, "Output"}}),
+            hudOptions("Output", true)[0],
+            hudOptions("Output", true)[1]}),
     0,
     0};
 
@@ -180,6 +178,7 @@ int runView(const Args& a) {
   v.state.shading =
       shadingFromArgs(a, lighting.radiance, lighting.background.has_value(), lighting.lights);
   const Mesh mesh = meshFromArgs(a);
+  checkHudOptions(a);
   const bool screenshot = a.has("--screenshot");
   if (screenshot)
     requireExtension(a.get("--screenshot"), "--screenshot", {".png", ".jpg", ".jpeg"});

@@ -10,26 +10,26 @@
 #include <mutex>
 #include <sstream>
 
-#include "coeffs_io.h"
 #include "commands.h"
 #include "dynamic_resolution.h"
-#include "engine_export.h"
 #include "hud.h"
 #include "liveprobe/backends.h"
 #include "liveprobe/capture/atomic_file.h"
 #include "liveprobe/capture/input_file.h"
 #include "liveprobe/capture/pipeline.h"
 #include "liveprobe/capture/recorder.h"
+#include "liveprobe/exchange/coeffs_io.h"
+#include "liveprobe/exchange/engine_export.h"
 #include "liveprobe/sh/error.h"
 #if LIVEPROBE_WITH_MQTT
-#include "mqtt_publisher.h"
+#include "liveprobe/exchange/mqtt_publisher.h"
 #endif
 #include "progress.h"
 #include "scene.h"
 #if LIVEPROBE_WITH_STREAM
-#include "stream_server.h"
+#include "liveprobe/exchange/stream_server.h"
 #endif
-#include "record_sink.h"
+#include "liveprobe/exchange/record_sink.h"
 
 namespace lp::cli {
 
@@ -90,8 +90,7 @@ std::vector<OptionSpec> streamOptions() {
        {"--reduce", "F",
         "equirect: project an F x F area average, 1 to 64 (its error: docs/accuracy.md)", false,
         false, g},
-       {"--threads", "N", "threads for one frame's projection, 1 to 64 (default 2)", false, false,
-        g},
+       threadsOption(g),
        {"--frames", "N", "stop after N frames", false, false, g},
        {"--duration", "SECONDS", "stop after this much of the source's time", false, false, g},
        {"--coeffs-out", "FILE.jsonl", "one JSON line per frame: coefficients and stage timings",
@@ -100,7 +99,6 @@ std::vector<OptionSpec> streamOptions() {
         "the coefficients in --coeffs-out lines: json (default), three, babylon, filament, "
         "unity or webxr (docs/engines.md)",
         false, false, g},
-       {"--hud", "", "draw the HUD into headless frames too", false, false, g},
        {"--serve", "[ADDR:]PORT",
         "serve every frame's record over WebSocket (ws://ADDR:PORT/?format=three|babylon|...) "
         "and a three.js page lit by it at http://ADDR:PORT/; ADDR defaults to 127.0.0.1",
@@ -121,11 +119,6 @@ std::vector<OptionSpec> streamOptions() {
         false, false, g},
        {"--mqtt-password-file", "FILE", "the MQTT user's password, the file's first line", false,
         false, g},
-       {"--sun", "",
-        "take the dominant compact source (sun, lamp, window) out of the coefficients and light "
-        "the model with it as a disc light",
-        false, false, g},
-       {"--lights", "K", "up to K such lights (implies --sun; 1..8)", false, false, g},
        {"--response", "FILE",
         "8-bit frames: the camera's response, from `liveprobe calibrate` (default: sRGB); a "
         "bracketed recording's own response otherwise",
@@ -134,8 +127,9 @@ std::vector<OptionSpec> streamOptions() {
         "keep the last good lighting while a frame's confidence is below C, 0 to 1 (a hand over "
         "the lens, a flash)",
         false, false, g},
-       {"--no-hud", "", "hide the HUD (H toggles it in a window)", false, false, g},
-       {"--quiet", "", "no progress on stderr", false, false, g}});
+       quietOption(g)});
+  for (auto& shared : {lightOptionSpecs(g), hudOptions(g, true)})
+    o.insert(o.end(), shared.begin(), shared.end());
   return o;
 }
 
@@ -614,7 +608,7 @@ struct StreamPlan {
 };
 
 StreamPlan planStream(const Args& a, const FrameSource& source, bool live) {
-  if (a.has("--hud") && a.has("--no-hud")) throw Error("--hud and --no-hud: give one of them");
+  checkHudOptions(a);
   StreamPlan p;
   p.live = live;
   p.opt = pipelineOptionsFromArgs(a, source);
@@ -813,7 +807,7 @@ const CommandSpec kRecordSpec{
      {"--duration", "SECONDS", "seconds of the source to record"},
      {"--fps", "F",
       "frame rate of image sequences and of the recording, 1 to 1000 (default: the source's)"},
-     {"--quiet", "", "no progress on stderr"}},
+     quietOption()},
     1,
     1,
     LP_SOURCE_KINDS};

@@ -4,11 +4,11 @@
 #include <iostream>
 #include <limits>
 
-#include "coeffs_io.h"
 #include "commands.h"
-#include "compare.h"
-#include "engine_export.h"
+#include "liveprobe/capture/accuracy.h"
 #include "liveprobe/capture/image.h"
+#include "liveprobe/exchange/coeffs_io.h"
+#include "liveprobe/exchange/engine_export.h"
 #include "liveprobe/sh/brute.h"
 #include "liveprobe/sh/error.h"
 #include "liveprobe/sh/layout.h"
@@ -85,7 +85,7 @@ int runCoeffs(const Args& a) {
   const Environment env = loadEnvironment(a, lights);
   const Sh9 L = applyWindow(env.radiance, chooseWindow(a, env.radiance));
   if (cf.engine == Engine::Gltf) {
-    std::cout << gltfDocument(env, L, env.lights).dump() << "\n";
+    std::cout << gltfDocument(env.image, env.layout, env.orientation, L, env.lights).dump() << "\n";
   } else if (cf.engine) {
     nlohmann::ordered_json j;
     j["source"] = a.positional()[0];
@@ -180,13 +180,14 @@ const CommandSpec kCompareSpec{
     "FILE",
     "Compares SH irradiance with the brute-force integral on a WxH equirect grid of normals\n"
     "(luminance, solid-angle weighted). Errors are given as a fraction of the total intensity\n"
-    "(the paper's measure) and of the mean irradiance.",
+    "(the paper's measure) and of the mean irradiance. With --sun, SH of the rest plus the\n"
+    "lights is measured beside SH alone.",
     withLayout({{"--size", "WxH", "grid of normals, each side up to 4096 (default 64x32)"},
                 {"--out", "PNG", "figure: SH map, brute-force map and error, with a colour scale"},
                 {"--json", "", "print JSON instead of text"},
-                {"--quiet", "", "no progress on stderr"},
+                quietOption(),
                 kWindowOpt,
-                {"--sun", "", "also measure SH of the rest plus the extracted lights"},
+                lightOptionSpecs()[0],
                 lightOptionSpecs()[1]}),
     1,
     1,

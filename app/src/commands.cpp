@@ -5,11 +5,37 @@
 
 namespace lp::cli {
 
-std::vector<OptionSpec> lightOptionSpecs() {
+std::vector<OptionSpec> lightOptionSpecs(const std::string& group) {
   return {{"--sun", "",
            "take the dominant compact source (sun, lamp, window) out of the coefficients and keep "
-           "it as a disc light"},
-          {"--lights", "K", "up to K such lights (implies --sun; 1..8, default 1)"}};
+           "it as a disc light",
+           false, false, group},
+          {"--lights", "K",
+           "up to K such lights (implies --sun; 1.." + std::to_string(kMaxLights) + ", default 1)",
+           false, false, group}};
+}
+
+OptionSpec threadsOption(const std::string& group) {
+  return {"--threads", "N",   "threads for one frame's projection, 1 to 64 (default 2)",
+          false,       false, group};
+}
+
+OptionSpec quietOption(const std::string& group) {
+  return {"--quiet", "", "no progress on stderr", false, false, group};
+}
+
+std::vector<OptionSpec> hudOptions(const std::string& group, bool window) {
+  std::vector<OptionSpec> o = {{"--hud", "",
+                                "draw the HUD (the panorama, the probes, the coefficients) into "
+                                "headless output too",
+                                false, false, group}};
+  if (window)
+    o.push_back({"--no-hud", "", "start with the HUD hidden (H shows it)", false, false, group});
+  return o;
+}
+
+void checkHudOptions(const Args& a) {
+  if (a.has("--hud") && a.has("--no-hud")) throw Error("--hud and --no-hud: give one of them");
 }
 
 LightOptions chooseLights(const Args& a) {

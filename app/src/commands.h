@@ -45,8 +45,18 @@ int runCalibrate(const Args&);
 /// The replay pipeline with an opened camera as its source (cmd_replay.cpp).
 int runStreamForLive(const Args& a, std::unique_ptr<FrameSource> camera);
 std::vector<OptionSpec> streamOptions();
+// Options more than one command takes, each declared once here with its one help text (a
+// command adds them to its list, under its own help section `group`).
 /// --sun and --lights K: extraction of the dominant compact lights (liveprobe/sh/lights.h).
-std::vector<OptionSpec> lightOptionSpecs();
+std::vector<OptionSpec> lightOptionSpecs(const std::string& group = {});
+/// --threads N: threads for one frame's projection.
+OptionSpec threadsOption(const std::string& group = {});
+/// --quiet: no progress line.
+OptionSpec quietOption(const std::string& group = {});
+/// --hud (into headless output) and, where there can be a window, --no-hud.
+std::vector<OptionSpec> hudOptions(const std::string& group, bool window);
+/// Refuses --hud with --no-hud (one line).
+void checkHudOptions(const Args& a);
 /// The extraction asked for: maxLights = K with --lights K, 1 with --sun alone, 0 without either.
 LightOptions chooseLights(const Args& a);
 

@@ -12,8 +12,8 @@
 #include <cmath>
 #include <cstdio>
 
-#include "coeffs_io.h"
 #include "liveprobe/capture/atomic_file.h"
+#include "liveprobe/exchange/coeffs_io.h"
 #include "liveprobe/sh/error.h"
 #include "progress.h"
 

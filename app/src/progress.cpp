@@ -65,12 +65,6 @@ void silenceLibraryStderr() {
 bool stopRequested() { return gStopSignal.load(std::memory_order_relaxed) != 0; }
 int stopSignal() { return gStopSignal.load(); }
 
-std::string formatNumber(double v, int digits) {
-  char b[64];
-  std::snprintf(b, sizeof b, "%.*g", digits, v);
-  return b;
-}
-
 void warn(const std::string& text) {
   std::fprintf(stderr, "liveprobe: warning: %s\n", text.c_str());
 }

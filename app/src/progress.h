@@ -48,10 +48,6 @@ class Progress {
   Clock::time_point start_, last_;
 };
 
-/// A number as a person writes it: up to `digits` significant digits, no trailing zeros
-/// (30, 25.13, 0.02).
-std::string formatNumber(double v, int digits = 4);
-
 /// One warning line on stderr ("liveprobe: warning: ..."); the run goes on.
 void warn(const std::string& text);
 

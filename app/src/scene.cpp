@@ -6,13 +6,13 @@
 #include <glm/gtc/matrix_transform.hpp>
 #include <sstream>
 
-#include "coeffs_io.h"
 #include "commands.h"
 #include "liveprobe/capture/frame.h"
 #include "liveprobe/capture/frame_processor.h"
 #include "liveprobe/capture/input_file.h"
 #include "liveprobe/capture/photometry.h"
 #include "liveprobe/capture/resample.h"
+#include "liveprobe/exchange/coeffs_io.h"
 #include "liveprobe/sh/error.h"
 #include "progress.h"
 

@@ -7,15 +7,15 @@
 #include <cstdint>
 #include <cstdlib>
 
-#include "coeffs_io.h"
+#include "liveprobe/exchange/coeffs_io.h"
 #include "liveprobe/sh/error.h"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   try {
     const nlohmann::json j = nlohmann::json::parse(data, data + size);
-    const lp::Sh9 sh = lp::cli::coefficientsFromJson(j, "fuzz");
+    const lp::Sh9 sh = lp::coefficientsFromJson(j, "fuzz");
     if (!lp::isFinite(sh)) std::abort();  // the reader promises finite coefficients
-    for (const lp::Light& l : lp::cli::lightsFromJson(j, "fuzz"))  // and finite, unit lights
+    for (const lp::Light& l : lp::lightsFromJson(j, "fuzz"))  // and finite, unit lights
       if (!std::isfinite(l.power.x) || !std::isfinite(l.power.y) || !std::isfinite(l.power.z) ||
           std::abs(glm::length(l.dir) - 1.0f) > 1e-3f)
         std::abort();

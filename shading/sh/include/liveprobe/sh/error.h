@@ -1,4 +1,5 @@
 #pragma once
+#include <cstdio>
 #include <stdexcept>
 #include <string>
 
@@ -11,5 +12,13 @@ class Error : public std::runtime_error {
  public:
   using std::runtime_error::runtime_error;
 };
+
+/// A number as a person writes it in a message: up to `digits` significant digits, no trailing
+/// zeros (30, 25.13, 0.02, 1e+30).
+inline std::string formatNumber(double v, int digits = 4) {
+  char b[64];
+  std::snprintf(b, sizeof b, "%.*g", digits, v);
+  return b;
+}
 
 }  // namespace lp

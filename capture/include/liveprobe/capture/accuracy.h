@@ -9,7 +9,7 @@
 #include "liveprobe/sh/lights.h"
 #include "liveprobe/sh/sh.h"
 
-namespace lp::cli {
+namespace lp {
 
 struct CompareResult {
   int width = 0, height = 0;       ///< the equirect grid of normals
@@ -43,4 +43,4 @@ CompareResult compareIrradiance(const Image& img, const LayoutSpec& layout, int 
 /// and |error| / total intensity with a colour scale, side by side, as an 8-bit PNG.
 void saveCompareFigure(const std::string& path, const CompareResult& r);
 
-}  // namespace lp::cli
+}  // namespace lp

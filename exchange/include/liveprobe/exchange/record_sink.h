@@ -5,9 +5,9 @@
 #include <optional>
 #include <string>
 
-#include "engine_export.h"
+#include "liveprobe/exchange/engine_export.h"
 
-namespace lp::cli {
+namespace lp {
 
 /// One captured frame and its record in the run's --coeffs-format, serialized at most once
 /// however many sinks take it as text.
@@ -43,4 +43,4 @@ class RecordSink {
   virtual bool delivered() const { return true; }
 };
 
-}  // namespace lp::cli
+}  // namespace lp

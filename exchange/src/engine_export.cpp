@@ -1,15 +1,14 @@
-#include "engine_export.h"
+#include "liveprobe/exchange/engine_export.h"
 
 #include <algorithm>
 #include <cmath>
 
-#include "coeffs_io.h"
 #include "liveprobe/capture/image.h"
+#include "liveprobe/exchange/coeffs_io.h"
 #include "liveprobe/sh/error.h"
 #include "liveprobe/sh/layout.h"
-#include "scene.h"
 
-namespace lp::cli {
+namespace lp {
 
 namespace {
 
@@ -76,9 +75,10 @@ std::string base64(const std::vector<std::uint8_t>& b) {
 
 /// One face of the environment's radiance, n x n, each texel the mean of 4 x 4 nearest-pixel
 /// samples (a box filter: no GGX prefiltering).
-std::vector<glm::vec3> radianceFace(const Environment& env, int face, int n) {
+std::vector<glm::vec3> radianceFace(const Image& image, const LayoutSpec& layout,
+                                    const glm::mat3& worldFromFile, int face, int n) {
   std::vector<glm::vec3> out(std::size_t(n) * n, glm::vec3(0.0f));
-  const glm::mat3 fileFromWorld = glm::transpose(env.orientation);
+  const glm::mat3 fileFromWorld = glm::transpose(worldFromFile);
   constexpr int kSub = 4;
   for (int i = 0; i < n; ++i)
     for (int j = 0; j < n; ++j) {
@@ -88,12 +88,11 @@ std::vector<glm::vec3> radianceFace(const Environment& env, int face, int n) {
         for (int b = 0; b < kSub; ++b) {
           const glm::vec3 d = glm::normalize(
               cubeFaceDirection(face, (j + (b + 0.5) / kSub) / n, (i + (a + 0.5) / kSub) / n));
-          const auto px =
-              layoutPixel(env.layout, env.image.width, env.image.height, fileFromWorld * d);
+          const auto px = layoutPixel(layout, image.width, image.height, fileFromWorld * d);
           if (!px) continue;
-          const int x = std::clamp(int(px->x), 0, env.image.width - 1);
-          const int y = std::clamp(int(px->y), 0, env.image.height - 1);
-          const float* p = &env.image.rgb[(std::size_t(y) * env.image.width + x) * 3];
+          const int x = std::clamp(int(px->x), 0, image.width - 1);
+          const int y = std::clamp(int(px->y), 0, image.height - 1);
+          const float* p = &image.rgb[(std::size_t(y) * image.width + x) * 3];
           sum += glm::vec3(p[0], p[1], p[2]);
           ++count;
         }
@@ -274,7 +273,8 @@ ojson engineJson(Engine engine, const Sh9& radiance, const std::vector<Light>& l
   throw Error("gltf: a document, not a record (gltfDocument)");
 }
 
-ojson gltfDocument(const Environment& env, const Sh9& radiance, const std::vector<Light>& lights) {
+ojson gltfDocument(const Image& panorama, const LayoutSpec& layout, const glm::mat3& worldFromFile,
+                   const Sh9& radiance, const std::vector<Light>& lights) {
   const Sh9 L = toEngineFrame(radiance, Engine::Gltf);
   ojson doc;
   doc["asset"] = {{"version", "2.0"}, {"generator", "liveprobe coeffs --format gltf"}};
@@ -285,7 +285,8 @@ ojson gltfDocument(const Environment& env, const Sh9& radiance, const std::vecto
   constexpr int kSize = 64, kMips = 3;
   ojson images = ojson::array(), mips = ojson::array();
   std::vector<std::vector<glm::vec3>> faces(6);
-  for (int f = 0; f < 6; ++f) faces[std::size_t(f)] = radianceFace(env, f, kSize);
+  for (int f = 0; f < 6; ++f)
+    faces[std::size_t(f)] = radianceFace(panorama, layout, worldFromFile, f, kSize);
   // RGBD holds radiance up to 255: a brighter map is stored scaled down by a power of two, with
   // the light's intensity (which readers multiply into the cube and the coefficients) the scale.
   float peak = 0;
@@ -388,4 +389,4 @@ std::string frameRecord(const ProcessedFrame& f, const CoeffFormat& format, Reco
   return j.dump();
 }
 
-}  // namespace lp::cli
+}  // namespace lp

@@ -1,4 +1,4 @@
-#include "stream_server.h"
+#include "liveprobe/exchange/stream_server.h"
 
 #include <arpa/inet.h>
 #include <libwebsockets.h>
@@ -20,7 +20,7 @@
 
 #include "liveprobe/sh/error.h"
 
-namespace lp::cli {
+namespace lp {
 
 namespace {
 
@@ -440,4 +440,4 @@ void StreamServer::stop() {
   impl_->thread.join();
 }
 
-}  // namespace lp::cli
+}  // namespace lp

@@ -1,4 +1,4 @@
-#include "compare.h"
+#include "liveprobe/capture/accuracy.h"
 
 #include <algorithm>
 #include <chrono>
@@ -11,7 +11,7 @@
 #include "liveprobe/capture/image.h"
 #include "liveprobe/sh/brute.h"
 
-namespace lp::cli {
+namespace lp {
 
 namespace {
 double msSince(std::chrono::steady_clock::time_point t0) {
@@ -162,4 +162,4 @@ void saveCompareFigure(const std::string& path, const CompareResult& r) {
   saveImage8(path, fig.cols, fig.rows, 3, fig.ptr<std::uint8_t>());
 }
 
-}  // namespace lp::cli
+}  // namespace lp

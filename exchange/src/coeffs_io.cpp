@@ -1,4 +1,4 @@
-#include "coeffs_io.h"
+#include "liveprobe/exchange/coeffs_io.h"
 
 #include <algorithm>
 #include <cmath>
@@ -9,9 +9,8 @@
 
 #include "liveprobe/capture/input_file.h"
 #include "liveprobe/sh/error.h"
-#include "progress.h"
 
-namespace lp::cli {
+namespace lp {
 
 double jsonFloat(float v) {
   char buf[32];
@@ -180,4 +179,4 @@ std::string coefficientsGlsl(const Sh9& radiance) {
   return s.str();
 }
 
-}  // namespace lp::cli
+}  // namespace lp

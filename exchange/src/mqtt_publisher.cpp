@@ -1,4 +1,4 @@
-#include "mqtt_publisher.h"
+#include "liveprobe/exchange/mqtt_publisher.h"
 
 #include <mosquitto.h>
 
@@ -10,7 +10,7 @@
 
 #include "liveprobe/sh/error.h"
 
-namespace lp::cli {
+namespace lp {
 
 std::string MqttTarget::describe() const {
   return std::string(tls ? "mqtts://" : "mqtt://") + (username.empty() ? "" : username + "@") +
@@ -167,4 +167,4 @@ std::string MqttPublisher::summary() const {
          " reconnects" + (m.published == 0 ? "; no message reached the broker" : "");
 }
 
-}  // namespace lp::cli
+}  // namespace lp

@@ -6,13 +6,13 @@
 #include <string>
 #include <vector>
 
+#include "liveprobe/capture/image.h"
 #include "liveprobe/capture/pipeline.h"
 #include "liveprobe/sh/engines.h"
+#include "liveprobe/sh/layout.h"
 #include "liveprobe/sh/lights.h"
 
-namespace lp::cli {
-
-struct Environment;  // scene.h
+namespace lp {
 
 /// json (liveprobe's own, R&H frame), text, glsl, or one engine's.
 struct CoeffFormat {
@@ -34,7 +34,8 @@ nlohmann::ordered_json engineJson(Engine engine, const Sh9& radiance,
 /// A glTF 2.0 document: EXT_lights_image_based with irradianceCoefficients and specular cube
 /// images made from the environment (RGBD PNGs, embedded), and a KHR_lights_punctual
 /// directional light per light.
-nlohmann::ordered_json gltfDocument(const Environment& env, const Sh9& radiance,
+nlohmann::ordered_json gltfDocument(const Image& panorama, const LayoutSpec& layout,
+                                    const glm::mat3& worldFromFile, const Sh9& radiance,
                                     const std::vector<Light>& lights);
 
 /// Timings of one frame beside its coefficients; negative: unknown (written as null or left out).
@@ -47,4 +48,4 @@ struct RecordTimes {
 /// `format`, stage timings and latency.
 std::string frameRecord(const ProcessedFrame& f, const CoeffFormat& format, RecordTimes t);
 
-}  // namespace lp::cli
+}  // namespace lp

@@ -8,10 +8,10 @@
 #include <memory>
 #include <string>
 
-#include "engine_export.h"
-#include "record_sink.h"
+#include "liveprobe/exchange/engine_export.h"
+#include "liveprobe/exchange/record_sink.h"
 
-namespace lp::cli {
+namespace lp {
 
 struct StreamServerOptions {
   std::string host = "127.0.0.1";  ///< an IPv4 address, or "localhost"
@@ -67,4 +67,4 @@ class StreamServer final : public RecordSink {
   std::unique_ptr<Impl> impl_;
 };
 
-}  // namespace lp::cli
+}  // namespace lp

@@ -8,11 +8,11 @@
 #include <cstdint>
 #include <string>
 
-#include "record_sink.h"
+#include "liveprobe/exchange/record_sink.h"
 
 struct mosquitto;
 
-namespace lp::cli {
+namespace lp {
 
 struct MqttTarget {
   std::string host;
@@ -66,4 +66,4 @@ class MqttPublisher final : public RecordSink {
   std::atomic<int> refusal_{0};  ///< the broker's CONNACK code when it refused the connection
 };
 
-}  // namespace lp::cli
+}  // namespace lp

@@ -7,7 +7,7 @@
 #include "liveprobe/sh/lights.h"
 #include "liveprobe/sh/sh.h"
 
-namespace lp::cli {
+namespace lp {
 
 /// The largest magnitude of a coefficient or a light's power that liveprobe reads: the shaders'
 /// sums of products of such values stay far inside float's range (3.4e38), where values near it
@@ -45,4 +45,4 @@ std::string coefficientsGlsl(const Sh9& radiance);
 /// A float as a JSON number with the shortest decimal form that round-trips the float.
 double jsonFloat(float v);
 
-}  // namespace lp::cli
+}  // namespace lp
