@@ -7,7 +7,7 @@
 #include <numbers>
 #include <opencv2/imgcodecs.hpp>
 
-#include "commands.h"
+#include "liveprobe/backends.h"
 #include "liveprobe/capture/image.h"
 #include "liveprobe/exchange/coeffs_io.h"
 #include "liveprobe/sh/sh.h"
@@ -158,13 +158,13 @@ TEST(CliBadInput, EngineFormats) {
   expectOneLineError("coeffs " + map + " --format povray", "--format povray", "expected json");
   expectOneLineError("replay synthetic:64x32 --headless --frames 1 --coeffs-format gltf",
                      "--coeffs-format gltf", "one JSON line");
-  if (lp::cli::builtIn(lp::cli::OptionalBackend::Mqtt)) {
+  if (LIVEPROBE_WITH_MQTT) {
     expectOneLineError("replay synthetic:64x32 --headless --frames 1 --publish http://x/y",
                        "--publish http://x/y", "mqtt://");
     expectOneLineError("replay synthetic:64x32 --headless --frames 1 --publish mqtt://x",
                        "--publish mqtt://x", "no topic");
   }
-  if (lp::cli::builtIn(lp::cli::OptionalBackend::Stream))
+  if (LIVEPROBE_WITH_STREAM)
     expectOneLineError("replay synthetic:64x32 --headless --frames 1 --serve 70000",
                        "--serve 70000", "0..65535");
   expectOneLineError("replay synthetic:64x32 --headless --frames 1 --serve-clients 4",
@@ -174,25 +174,23 @@ TEST(CliBadInput, EngineFormats) {
 // The optional backends: --version lists the ones built in, and each one missing from the build
 // is one line naming what asked for it and the CMake option that builds it, exit 1.
 TEST(Backends, VersionListsThemAndAMissingOneIsOneLine) {
-  using lp::cli::OptionalBackend;
   const auto v = runLiveprobe("--version");
   ASSERT_EQ(v.exitCode, 0) << v.output;
   const std::string line = v.output.substr(v.output.find("backends: "));
   struct Case {
-    OptionalBackend backend;
+    bool built;           // in this build (liveprobe/backends.h)
     const char* label;    // in --version
     const char* command;  // what needs it
     const char* names;    // the one line names it
     const char* option;   // and the CMake option
   };
   const Case cases[] = {
-      {OptionalBackend::Window, "window (GLFW)", "view --coeff L00=1", "view",
-       "LIVEPROBE_WITH_GLFW"},
-      {OptionalBackend::V4l2, "V4L2 cameras", "live /dev/video0", "live", "LIVEPROBE_WITH_V4L2"},
-      {OptionalBackend::Stream, "WebSocket stream",
+      {LIVEPROBE_WITH_GLFW, "window (GLFW)", "view --coeff L00=1", "view", "LIVEPROBE_WITH_GLFW"},
+      {LIVEPROBE_WITH_V4L2, "V4L2 cameras", "live /dev/video0", "live", "LIVEPROBE_WITH_V4L2"},
+      {LIVEPROBE_WITH_STREAM, "WebSocket stream",
        "replay synthetic:64x32 --headless --frames 1 --serve 0", "--serve",
        "LIVEPROBE_WITH_STREAM"},
-      {OptionalBackend::Mqtt, "MQTT",
+      {LIVEPROBE_WITH_MQTT, "MQTT",
        "replay synthetic:64x32 --headless --frames 1 --publish mqtt://127.0.0.1:1/t", "--publish",
        "LIVEPROBE_WITH_MQTT"},
   };
@@ -200,7 +198,7 @@ TEST(Backends, VersionListsThemAndAMissingOneIsOneLine) {
   for (const Case& c : cases) {
     const std::size_t at = line.find(c.label);
     ASSERT_NE(at, std::string::npos) << line;
-    if (lp::cli::builtIn(c.backend)) {
+    if (c.built) {
       EXPECT_TRUE(without == std::string::npos || at < without) << c.label << ": " << line;
     } else {
       EXPECT_TRUE(without != std::string::npos && at > without) << c.label << ": " << line;

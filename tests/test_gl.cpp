@@ -13,7 +13,6 @@
 #include "liveprobe/gl/renderer.h"
 #include "liveprobe/sh/axes.h"
 #include "liveprobe/sh/projector.h"
-#include "scene.h"
 #include "test_util.h"
 
 namespace {
@@ -285,7 +284,7 @@ TEST_F(GlTest, SunShadowFallsWhereGeometryPutsIt) {
 // normal pass tells where each pixel faces; the display pass is what the user sees.
 struct Single {
   const char* name;
-  const char* assign;
+  float value;
 };
 
 class SingleCoefficient : public GlTest, public ::testing::WithParamInterface<const char*> {};
@@ -299,12 +298,11 @@ TEST_P(SingleCoefficient, PaperFigures) {
   lp::gl::Renderer r;
   r.setMesh(mesh);
   lp::gl::Camera cam;
-  const Single figs[] = {
-      {"L00", "L00=0.5"}, {"L10", "L10=0.05"}, {"L20", "L20=-0.2"}, {"L22", "L22=-0.06"}};
+  const Single figs[] = {{"L00", 0.5f}, {"L10", 0.05f}, {"L20", -0.2f}, {"L22", -0.06f}};
   const auto normals = pass(r, cam, OutputMode::Normal);
   for (const auto& f : figs) {
     Sh9 L;
-    lp::cli::applyCoeffAssignment(f.assign, L);
+    L.c[std::size_t(lp::shIndex(f.name))] = glm::vec3(f.value);
     r.setLighting(L);
     // Exposure: the brightest irradiance on the sphere maps to 0.9 (linear tone map).
     float peak = 0;

@@ -5,6 +5,7 @@
 
 #include <cmath>
 #include <fstream>
+#include <iomanip>
 #include <map>
 #include <nlohmann/json.hpp>
 #include <opencv2/imgcodecs.hpp>
@@ -19,6 +20,7 @@
 #include "liveprobe/gl/context.h"
 #include "liveprobe/gl/mesh.h"
 #include "liveprobe/gl/renderer.h"
+#include "liveprobe/sh/error.h"
 #include "liveprobe/sh/sh.h"
 #include "test_util.h"
 
@@ -574,6 +576,49 @@ TEST(OptionGroups, TheLightGroupInEveryCommand) {
                      "--no-hud", "give one");
   expectOneLineError("replay " + map + " --headless --hud --no-hud --frames 1", "--no-hud",
                      "give one");
+}
+
+// Every option sets a typed field as the line is read, and where its help states a range, that
+// range is the one accepted: both ends are taken (an open end only just inside it), and a step
+// past either end is refused in one line that names the option.
+TEST(OptionGroups, TheRangeInHelpIsTheRangeAccepted) {
+  const std::regex closed(R"(\((-?[0-9.]+(?:e[+-]?[0-9]+)?) to (-?[0-9.]+(?:e[+-]?[0-9]+)?)[,)])");
+  const std::regex open(
+      R"(\(above (-?[0-9.]+(?:e[+-]?[0-9]+)?) and up to (-?[0-9.]+(?:e[+-]?[0-9]+)?)[,)])");
+  int ranged = 0;
+  for (const auto& c : lp::cli::commands())
+    for (const auto& o : c.spec.options) {
+      SCOPED_TRACE(c.spec.name + " " + o.name);
+      ASSERT_TRUE(o.set) << "not bound to a field";
+      std::smatch m;
+      const bool aboveLo = std::regex_search(o.help, m, open);
+      if (!aboveLo && !std::regex_search(o.help, m, closed)) continue;
+      ++ranged;
+      const double lo = std::stod(m[1]), hi = std::stod(m[2]);
+      const std::string name = o.name.substr(0, o.name.find(','));
+      auto accepts = [&](double v) {
+        std::ostringstream text;
+        text << std::setprecision(12) << v;
+        lp::cli::Settings settings;
+        try {
+          o.set(settings, text.str());
+          return true;
+        } catch (const lp::Error& e) {
+          const std::string what = e.what();
+          EXPECT_EQ(what.rfind(name + " " + text.str() + ": ", 0), 0u) << what;
+          EXPECT_EQ(what.find('\n'), std::string::npos) << what;
+          return false;
+        }
+      };
+      EXPECT_TRUE(accepts(hi));
+      EXPECT_FALSE(accepts(hi + 1));
+      EXPECT_EQ(accepts(lo), !aboveLo);
+      EXPECT_FALSE(accepts(lo - 1));
+      if (aboveLo) {
+        EXPECT_TRUE(accepts(lo + 1e-3));
+      }
+    }
+  EXPECT_GE(ranged, 20);  // --lights, --threads, --frames, --fps, --fov, --pitch, ...
 }
 
 TEST(CommandLine, VersionNamesTheCommit) {

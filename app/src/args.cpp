@@ -3,10 +3,13 @@
 #include <CLI/CLI.hpp>
 #include <algorithm>
 #include <cmath>
+#include <iomanip>
 #include <map>
 #include <sstream>
+#include <stdexcept>
 
 #include "liveprobe/sh/error.h"
+#include "settings.h"
 
 namespace lp::cli {
 
@@ -92,7 +95,7 @@ void declare(Args::Parsed& p, const CommandSpec& spec) {
 }  // namespace
 
 Args::Args(const CommandSpec& spec, const std::vector<std::string>& argv)
-    : p_(std::make_unique<Parsed>()) {
+    : p_(std::make_unique<Parsed>()), settings_(std::make_unique<Settings>()) {
   declare(*p_, spec);
   refuseUnknownOptions(spec, argv);
   std::vector<std::string> reversed(argv.rbegin(), argv.rend());  // CLI11 takes them reversed
@@ -123,58 +126,66 @@ Args::Args(const CommandSpec& spec, const std::vector<std::string>& argv)
                 spec.name + " --help)");
   if (int(positional_.size()) > spec.maxPositional)
     throw Error("unexpected argument '" + positional_[std::size_t(spec.maxPositional)] + "'");
+  // Every value into its typed field, in the order the options are declared.
+  for (const auto& o : spec.options) {
+    const CLI::Option* opt = p_->options[optionKey(o)];
+    if (!o.set) throw std::logic_error(o.name + ": declared without its field");
+    if (opt->count() == 0) continue;
+    const auto& values = p_->values[optionKey(o)];
+    if (o.value.empty() || values.empty())
+      o.set(*settings_, "");
+    else
+      for (const auto& v : values) o.set(*settings_, v);
+  }
+  if (spec.check) spec.check(*settings_);
 }
 
 Args::~Args() = default;
 Args::Args(Args&&) noexcept = default;
 
-bool Args::has(const std::string& name) const {
-  auto it = p_->options.find(name);
-  return it != p_->options.end() && it->second->count() > 0;
-}
-
-std::string Args::get(const std::string& name, const std::string& fallback) const {
-  if (!has(name)) return fallback;
-  const auto& v = p_->values.at(name);
-  return v.empty() ? std::string() : v.back();
-}
-
-std::vector<std::string> Args::all(const std::string& name) const {
-  auto it = p_->values.find(name);
-  return it == p_->values.end() ? std::vector<std::string>{} : it->second;
-}
-
-double Args::number(const std::string& name, double fallback) const {
-  return has(name) ? parseNumber(get(name), name) : fallback;
-}
-
-int Args::integer(const std::string& name, int fallback) const {
-  if (!has(name)) return fallback;
-  const double v = parseNumber(get(name), name);
-  if (v != std::floor(v) || std::abs(v) > 1e9)
-    throw Error(name + " " + get(name) + ": not an integer");
-  return int(v);
-}
-
-namespace {
-std::string rangeText(double lo, double hi) {
+std::string rangeText(const Range& r) {
   std::ostringstream s;
-  s << lo << " to " << hi;
+  s << std::setprecision(10);
+  if (r.aboveLo)
+    s << "above " << r.lo << " and up to " << r.hi;
+  else
+    s << r.lo << " to " << r.hi;
   return s.str();
 }
-}  // namespace
 
-double Args::numberIn(const std::string& name, double fallback, double lo, double hi) const {
-  const double v = number(name, fallback);
-  if (has(name) && !(v >= lo && v <= hi))
-    throw Error(name + " " + get(name) + ": expected " + rangeText(lo, hi));
-  return v;
+double parseNumberIn(const std::string& name, const std::string& v, const Range& r) {
+  const double x = parseNumber(v, name);
+  if (!((r.aboveLo ? x > r.lo : x >= r.lo) && x <= r.hi))
+    throw Error(name + " " + v + ": expected " + rangeText(r));
+  return x;
 }
 
-int Args::integerIn(const std::string& name, int fallback, int lo, int hi) const {
-  const int v = integer(name, fallback);
-  if (has(name) && (v < lo || v > hi))
-    throw Error(name + " " + get(name) + ": expected an integer from " + rangeText(lo, hi));
+std::int64_t parseIntegerIn(const std::string& name, const std::string& v, std::int64_t lo,
+                            std::int64_t hi) {
+  const double x = parseNumber(v, name);
+  if (x != std::floor(x) || x < double(lo) || x > double(hi))
+    throw Error(name + " " + v + ": expected an integer from " + std::to_string(lo) + " to " +
+                std::to_string(hi));
+  return std::int64_t(x);
+}
+
+Triple parseTriple(const std::string& name, const std::string& v, const std::string& expected) {
+  const auto n = parseNumberList(v, name, 3, expected);
+  return {n[0], n[1], n[2]};
+}
+
+std::string joinChoices(const std::vector<std::string>& choices, const std::string& separator) {
+  std::string text;
+  for (std::size_t i = 0; i < choices.size(); ++i)
+    text += (i == 0 ? "" : (separator == "|" || i + 1 < choices.size() ? separator : " or ")) +
+            choices[i];
+  return text;
+}
+
+std::string parseChoice(const std::string& name, const std::string& v,
+                        const std::vector<std::string>& choices) {
+  if (std::find(choices.begin(), choices.end(), v) == choices.end())
+    throw Error(name + " " + v + ": expected " + joinChoices(choices, ", "));
   return v;
 }
 

@@ -2,6 +2,7 @@
 // The command line, through CLI11. Each subcommand declares its options once (OptionSpec); the
 // parser and the --help text are both generated from that declaration, so usage and options
 // cannot disagree. Undeclared, repeated or malformed options are lp::Error (one line, exit 1).
+#include <functional>
 #include <memory>
 #include <string>
 #include <utility>
@@ -13,6 +14,8 @@ class App;
 
 namespace lp::cli {
 
+struct Settings;  // settings.h
+
 struct OptionSpec {
   std::string name;   ///< "--size"
   std::string value;  ///< placeholder for the value ("WxH"); empty for a flag
@@ -20,6 +23,9 @@ struct OptionSpec {
   bool repeatable = false;
   bool optionalValue = false;  ///< the value may be left out (then the option is a flag)
   std::string group = {};      ///< help section; empty: "Options"
+  /// Parses a value given on the command line into its typed field (an empty value for a flag);
+  /// throws lp::Error naming the option and the value (settings.h builds these).
+  std::function<void(Settings&, const std::string&)> set = {};
 };
 
 struct CommandSpec {
@@ -30,9 +36,11 @@ struct CommandSpec {
   int minPositional = 0;
   int maxPositional = 0;
   std::string positionalHelp = {};  ///< what the positional argument is, for --help
+  /// Options that conflict or go together, checked once every value is parsed (lp::Error).
+  void (*check)(const Settings&) = nullptr;
 };
 
-/// The parsed command line of one subcommand.
+/// The parsed command line of one subcommand: its positional arguments and its typed settings.
 class Args {
  public:
   /// Parses argv (without the subcommand name). Throws lp::Error on a bad command line.
@@ -41,21 +49,15 @@ class Args {
   Args(Args&&) noexcept;
 
   bool help() const { return help_; }
-  bool has(const std::string& name) const;
-  std::string get(const std::string& name, const std::string& fallback = {}) const;
-  std::vector<std::string> all(const std::string& name) const;
   const std::vector<std::string>& positional() const { return positional_; }
-
-  double number(const std::string& name, double fallback) const;
-  int integer(const std::string& name, int fallback) const;
-  /// A number within [lo, hi] (inclusive), or `fallback` when the option is absent.
-  double numberIn(const std::string& name, double fallback, double lo, double hi) const;
-  int integerIn(const std::string& name, int fallback, int lo, int hi) const;
+  /// Every option's value, typed (settings.h).
+  const Settings& settings() const { return *settings_; }
 
   struct Parsed;  ///< CLI11's app and the values bound to it (args.cpp)
 
  private:
   std::unique_ptr<Parsed> p_;
+  std::unique_ptr<Settings> settings_;
   std::vector<std::string> positional_;
   bool help_ = false;
 };

@@ -207,6 +207,43 @@ void drawPlot(const std::string& path, const std::vector<std::array<double, kSta
 
 }  // namespace
 
+namespace {
+
+std::array<double, kStageCount> parseInjections(const BenchSettings& b) {
+  std::array<double, kStageCount> inject{};
+  for (const auto& d : b.injectDelay) {
+    const auto eq = d.find('=');
+    int stage = -1;
+    for (int s = 0; s < kStageCount; ++s)
+      if (eq != std::string::npos && d.substr(0, eq) == stageLabel(s)) stage = s;
+    if (stage < 0) {
+      std::string names;
+      for (int s = 0; s < kStageCount; ++s) names += std::string(" ") + stageLabel(s);
+      throw Error("--inject-delay " + d + ": expected STAGE=MS, STAGE one of" + names);
+    }
+    const double ms = parseNumber(d.substr(eq + 1), "--inject-delay");
+    if (ms < 0 || ms > 10000) throw Error("--inject-delay " + d + ": expected 0 to 10000 ms");
+    inject[std::size_t(stage)] += ms;
+  }
+  return inject;
+}
+
+/// --inject-delay STAGE=MS, each checked as the line is read.
+OptionSpec injectDelayOption(const std::string& group) {
+  OptionSpec o = textOption("--inject-delay", "STAGE=MS",
+                            "add MS milliseconds, at most 10000, of busy work to STAGE; repeatable",
+                            LP_FIELD(bench.injectDelay), group, true);
+  o.set = [](Settings& s, const std::string& v) {
+    BenchSettings one;
+    one.injectDelay = {v};
+    parseInjections(one);
+    s.bench.injectDelay.push_back(v);
+  };
+  return o;
+}
+
+}  // namespace
+
 const CommandSpec kBenchSpec{
     "bench",
     "[SOURCE]",
@@ -222,25 +259,22 @@ const CommandSpec kBenchSpec{
       const std::string g = "Benchmark";
       o.insert(
           o.end(),
-          {{"--frames", "N", "frames per run, 1 to 100000 (default 100)", false, false, g},
-           {"--repeat", "R",
-            "runs, 1 to 1000; stage medians are taken per run, then the median of those (default "
-            "3)",
-            false, false, g},
-           {"--json", "FILE", "write the results as JSON", false, false, g},
-           {"--plot", "FILE.png",
-            "frame times by stage (stacked) and their histogram, drawn by gnuplot", false, false,
-            g},
-           {"--baseline", "FILE", "JSON from an earlier --json run to compare with", false, false,
-            g},
-           {"--threshold", "PCT", "allowed slow-down per stage, percent, 0 to 1000 (default 25)",
-            false, false, g},
-           {"--inject-delay", "STAGE=MS",
-            "add MS (0 to 10000) milliseconds of busy work to STAGE; repeatable", true, false, g},
-           {"--size", "WxH", "render size (default 640x360)", false, false, g},
-           threadsOption(g),
-           sceneOptions()[0],
-           quietOption(g)});
+          {integerOption("--frames", "N", "frames per run", 1, 100000, "100",
+                         LP_FIELD(output.frames), g),
+           integerOption("--repeat", "R",
+                         "runs; stage medians are taken per run, then the median of those", 1, 1000,
+                         "3", LP_FIELD(bench.repeat), g),
+           textOption("--json", "FILE", "write the results as JSON", LP_FIELD(output.jsonFile), g),
+           fileOption("--plot", "FILE.png",
+                      "frame times by stage (stacked) and their histogram, drawn by gnuplot",
+                      {".png"}, LP_FIELD(output.plot), g),
+           textOption("--baseline", "FILE", "JSON from an earlier --json run to compare with",
+                      LP_FIELD(bench.baseline), g),
+           numberOption("--threshold", "PCT", "allowed slow-down per stage, percent", {0, 1000},
+                        "25", LP_FIELD(bench.threshold), g),
+           injectDelayOption(g),
+           sizeOption("--size", "render size", 16384, "640x360", LP_FIELD(output.size), g),
+           threadsOption(g), sceneOptions()[0], quietOption(g)});
       return o;
     }(),
     0,
@@ -254,25 +288,6 @@ constexpr double kMeasurableMs = 0.05;
 
 std::string plural(long n, const char* word) {
   return std::to_string(n) + " " + word + (n == 1 ? "" : "s");
-}
-
-std::array<double, kStageCount> parseInjections(const Args& a) {
-  std::array<double, kStageCount> inject{};
-  for (const auto& d : a.all("--inject-delay")) {
-    const auto eq = d.find('=');
-    int stage = -1;
-    for (int s = 0; s < kStageCount; ++s)
-      if (eq != std::string::npos && d.substr(0, eq) == stageLabel(s)) stage = s;
-    if (stage < 0) {
-      std::string names;
-      for (int s = 0; s < kStageCount; ++s) names += std::string(" ") + stageLabel(s);
-      throw Error("--inject-delay " + d + ": expected STAGE=MS, STAGE one of" + names);
-    }
-    const double ms = parseNumber(d.substr(eq + 1), "--inject-delay");
-    if (ms < 0 || ms > 10000) throw Error("--inject-delay " + d + ": expected 0 to 10000 ms");
-    inject[std::size_t(stage)] += ms;
-  }
-  return inject;
 }
 
 }  // namespace
@@ -439,23 +454,22 @@ void printVerdict(const nlohmann::ordered_json& regressions, int compared, doubl
 int runBench(const Args& a) {
   installStopHandlers();
   const std::string sourceName = a.positional().empty() ? defaultRecording() : a.positional()[0];
-  const int frames = a.integerIn("--frames", 100, 1, 100000),
-            repeat = a.integerIn("--repeat", 3, 1, 1000);
-  const double threshold = a.numberIn("--threshold", 25.0, 0.0, 1000.0);
-  const auto size = parseSize(a.get("--size", "640x360"), "--size");
-  const unsigned threads = unsigned(a.integerIn("--threads", 2, 1, 64));
-  if (a.has("--plot")) requireExtension(a.get("--plot"), "--plot", {".png"});
+  const Settings& s = a.settings();
+  const int frames = int(s.output.frames.value_or(100)), repeat = s.bench.repeat;
+  const double threshold = s.bench.threshold;
+  const auto size = s.output.size.value_or(Size{640, 360});
+  const unsigned threads = unsigned(s.stream.threads);
   nlohmann::json baseline;
-  if (a.has("--baseline"))
-    baseline = parseBaseline(readInputFile(a.get("--baseline")), a.get("--baseline"));
-  layoutFromArgs(a);  // option errors before the source is opened
+  if (s.bench.baseline)
+    baseline = parseBaseline(readInputFile(*s.bench.baseline), *s.bench.baseline);
+  layoutSpec(s.panorama);  // option errors before the source is opened
   std::unique_ptr<FrameSource> source = openSource(sourceName);
   BenchScene scene{openContext(gl::Backend::Headless, size),
                    {},
-                   layoutFromArgs(a, source.get()),
-                   envOrientationFromArgs(a),
-                   parseInjections(a)};
-  loadModel(scene.renderer, meshFromArgs(a));
+                   layoutSpec(s.panorama, source.get()),
+                   envOrientation(s.panorama),
+                   parseInjections(s.bench)};
+  loadModel(scene.renderer, meshFrom(s.scene));
   scene.renderer.setEnvOrientation(scene.orientation);
   ThreadPool pool(threads);
 
@@ -465,7 +479,7 @@ int runBench(const Args& a) {
   std::array<std::vector<double>, kStageCount> runMedians;
   std::vector<double> calibrations;
   std::string description;
-  Progress progress("bench", std::int64_t(frames) * repeat, a.has("--quiet"));
+  Progress progress("bench", std::int64_t(frames) * repeat, s.output.quiet);
   for (int run = 0; run < repeat && !stopRequested(); ++run) {
     calibrations.push_back(calibrationMs());
     if (run > 0 && !source->rewind()) source = openSource(sourceName);
@@ -512,9 +526,9 @@ int runBench(const Args& a) {
   out["regressions"] = baseline.is_null() ? nlohmann::ordered_json::array()
                                           : compareWithBaseline(out["stages"], calibration,
                                                                 baseline, threshold, compared);
-  if (a.has("--json")) writeFileAtomically(a.get("--json"), out.dump(2) + "\n");
-  if (a.has("--plot"))
-    drawPlot(a.get("--plot"), all, frames,
+  if (s.output.jsonFile) writeFileAtomically(*s.output.jsonFile, out.dump(2) + "\n");
+  if (s.output.plot)
+    drawPlot(*s.output.plot, all, frames,
              "liveprobe bench: " + description + " (" + plural(repeat, "run") + " of " +
                  plural(frames, "frame") + ")");
   if (!baseline.is_null()) printVerdict(out["regressions"], compared, threshold);

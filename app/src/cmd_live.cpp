@@ -26,47 +26,51 @@ const std::string kCameraGroup = "Camera";
 /// What every command that opens a camera takes.
 std::vector<OptionSpec> cameraOptions() {
   const std::string g = kCameraGroup;
+  OptionSpec lock{
+      "--lock-exposure",
+      "SECONDS",
+      "let auto exposure settle for SECONDS (0 to 3600, default 2), then lock exposure, "
+      "gain, white balance",
+      false,
+      true,
+      g};
+  lock.set = [](Settings& s, const std::string& v) {
+    s.camera.lockExposure = v.empty() ? 2.0 : parseNumberIn("--lock-exposure", v, {0, 3600});
+  };
   return {
-      {"--format", "mjpeg|yuyv|nv12|rgb24|auto", "pixel format (default auto: MJPEG first)", false,
-       false, g},
-      {"--size", "WxH", "capture size asked of the camera (default: its largest)", false, false, g},
-      {"--fps", "N", "frame rate asked of the camera, up to 1000", false, false, g},
-      {"--lock-exposure", "SECONDS",
-       "let auto exposure settle (default 2 s), then lock exposure, gain, white balance", false,
-       true, g},
-      {"--mjpeg-reduce", "1|2|4|8", "decode MJPEG at a reduced scale (default 1)", false, false, g},
-      {"--timeout", "SECONDS", "stop when no frame arrives for this long (default 2)", false, false,
-       g},
-      {"--metadata", "DEVICE",
-       "the camera's UVC metadata node, which says each frame's exposure (default: the node "
-       "after DEVICE, as uvcvideo numbers them)",
-       false, false, g}};
+      choiceOption("--format", "pixel format (auto: MJPEG first)",
+                   {"mjpeg", "yuyv", "nv12", "rgb24", "auto"}, "auto", LP_FIELD(camera.format), g),
+      sizeOption("--size", "capture size asked of the camera", 16384, "its largest",
+                 LP_FIELD(camera.size), g),
+      numberOption("--fps", "N", "frame rate asked of the camera", {0, 1000}, "0: its own",
+                   LP_FIELD(camera.fps), g),
+      lock,
+      choiceOption("--mjpeg-reduce", "decode MJPEG at a reduced scale", {"1", "2", "4", "8"}, "1",
+                   LP_FIELD(camera.mjpegReduce), g,
+                   [](const std::string& v) { return std::stoi(v); }),
+      numberOption("--timeout", "SECONDS", "stop when no frame arrives for this long", {0.01, 3600},
+                   "2", LP_FIELD(camera.timeout), g),
+      textOption("--metadata", "DEVICE",
+                 "the camera's UVC metadata node, which says each frame's exposure (default: "
+                 "the node after DEVICE, as uvcvideo numbers them)",
+                 LP_FIELD(camera.metadata), g)};
 }
 
 #if LIVEPROBE_WITH_V4L2
-CameraSettings cameraSettingsFromArgs(const Args& a) {
+CameraSettings cameraSettingsFrom(const std::string& device, const CameraOptions& c) {
   CameraSettings cs;
-  cs.device = a.positional()[0];
-  try {
-    cs.format = parseCameraFormat(a.get("--format", "auto"));
-  } catch (const Error& e) {
-    throw Error("--format: " + std::string(e.what()));
-  }
-  if (a.has("--size")) std::tie(cs.width, cs.height) = parseSize(a.get("--size"), "--size");
-  cs.fps = a.number("--fps", 0.0);
-  if (cs.fps < 0 || cs.fps > 1000)
-    throw Error("--fps " + a.get("--fps") + ": expected a rate up to 1000");
-  cs.mjpegReduce = a.integer("--mjpeg-reduce", 1);
-  if (cs.mjpegReduce != 1 && cs.mjpegReduce != 2 && cs.mjpegReduce != 4 && cs.mjpegReduce != 8)
-    throw Error("--mjpeg-reduce " + a.get("--mjpeg-reduce") + ": expected 1, 2, 4 or 8");
-  cs.timeoutMs = int(1000 * a.number("--timeout", 2.0));
-  if (cs.timeoutMs < 10) throw Error("--timeout " + a.get("--timeout") + ": too short");
+  cs.device = device;
+  cs.format = parseCameraFormat(c.format);
+  if (c.size) std::tie(cs.width, cs.height) = *c.size;
+  cs.fps = c.fps;
+  cs.mjpegReduce = c.mjpegReduce;
+  cs.timeoutMs = int(1000 * c.timeout);
   return cs;
 }
 
 /// Settles auto exposure for --lock-exposure's seconds (default 2), locks, and says what it locked.
-LockedExposure lockFromArgs(const Args& a, V4l2Source& camera, const char* command) {
-  const double settle = a.get("--lock-exposure").empty() ? 2.0 : a.number("--lock-exposure", 2.0);
+LockedExposure lockExposure(const CameraOptions& c, V4l2Source& camera, const char* command) {
+  const double settle = c.lockExposure.value_or(2.0);
   const LockedExposure l = camera.lockExposure(settle);
   auto show = [](const std::optional<std::int32_t>& v) {
     return v ? std::to_string(*v) : std::string("n/a");
@@ -78,6 +82,8 @@ LockedExposure lockFromArgs(const Args& a, V4l2Source& camera, const char* comma
                show(l.whiteBalanceK).c_str());
   return l;
 }
+
+#endif  // LIVEPROBE_WITH_V4L2
 
 /// --bracket EV,EV,...: 2 to 5 distinct stops in [-20, 20].
 std::vector<double> bracketStops(const std::string& text) {
@@ -97,6 +103,7 @@ std::vector<double> bracketStops(const std::string& text) {
   return stops;
 }
 
+#if LIVEPROBE_WITH_V4L2
 void startBracket(V4l2Source& camera, const std::vector<double>& stops) {
   const std::vector<std::int32_t> asked = camera.bracket(stops);
   // The locked exposure the stops are counted from.
@@ -133,38 +140,50 @@ const CommandSpec kLiveSpec{
       const auto camera = cameraOptions();
       o.insert(o.end(), camera.begin(), camera.end());
       const std::string g = kCameraGroup;
+      OptionSpec bracket{"--bracket",
+                         "EV,EV,...",
+                         "HDR from an 8-bit camera: cycle 2 to 5 exposures, in stops from the "
+                         "locked one (e.g. -12,-6,0), and merge the newest of each into radiance "
+                         "every frame",
+                         false,
+                         false,
+                         g};
+      bracket.set = [](Settings& s, const std::string& v) { s.camera.bracket = bracketStops(v); };
       o.insert(o.end(),
-               {{"--bracket", "EV,EV,...",
-                 "HDR from an 8-bit camera: cycle 2 to 5 exposures, in stops from the locked one "
-                 "(e.g. -12,-6,0), and merge the newest of each into radiance every frame",
-                 false, false, g},
-                {"--record", "FILE",
-                 "save the camera stream (.mkv FFV1, .avi MJPEG, .mp4 H.264) while it runs", false,
-                 false, g},
-                {"--view-size", "WxH", "window or frame size (default 1280x720; headless 640x360)",
-                 false, false, "Output"}});
+               {bracket,
+                fileOption("--record", "FILE",
+                           "save the camera stream (.mkv FFV1, .avi MJPEG, .mp4 H.264) while it "
+                           "runs",
+                           {".mkv", ".avi", ".mp4", ".exr", ".hdr"}, LP_FIELD(stream.record), g),
+                sizeOption("--view-size", "window or frame size", 16384,
+                           "1280x720; headless 640x360", LP_FIELD(camera.viewSize), "Output")});
       auto scene = sceneOptions();
       o.insert(o.end(), scene.begin(), scene.end());
       return o;
     }(),
     1,
     1,
-    "a V4L2 video-capture node, e.g. /dev/video0"};
+    "a V4L2 video-capture node, e.g. /dev/video0",
+    [](const Settings& s) {
+      checkStreamOptions(s);
+      if (s.camera.metadata && s.camera.bracket.empty())
+        throw Error("--metadata goes with --bracket");
+    }};
 
 #if LIVEPROBE_WITH_V4L2
 int runLive(const Args& a) {
-  layoutFromArgs(a);
-  CameraSettings cs = cameraSettingsFromArgs(a);
-  const std::vector<double> stops =
-      a.has("--bracket") ? bracketStops(a.get("--bracket")) : std::vector<double>{};
-  if (a.has("--metadata") && stops.empty()) throw Error("--metadata goes with --bracket");
-  if (!stops.empty()) cs.metadataDevice = a.get("--metadata", siblingMetadataNode(cs.device));
+  const Settings& s = a.settings();
+  layoutSpec(s.panorama);
+  CameraSettings cs = cameraSettingsFrom(a.positional()[0], s.camera);
+  const std::vector<double>& stops = s.camera.bracket;
+  if (!stops.empty())
+    cs.metadataDevice = s.camera.metadata.value_or(siblingMetadataNode(cs.device));
   auto camera = std::make_unique<V4l2Source>(cs);
   camera->start();
   std::fprintf(stderr, "liveprobe live: %s%s\n", camera->describe().c_str(),
-               a.has("--frames") || a.has("--duration") ? "" : "; running until Ctrl-C");
+               s.output.frames || s.output.duration ? "" : "; running until Ctrl-C");
   // Bracketing counts its stops from a locked exposure.
-  if (a.has("--lock-exposure") || !stops.empty()) lockFromArgs(a, *camera, "live");
+  if (s.camera.lockExposure || !stops.empty()) lockExposure(s.camera, *camera, "live");
   if (!stops.empty()) startBracket(*camera, stops);
   return runStreamForLive(a, std::move(camera));
 }
@@ -174,6 +193,22 @@ int runLive(const Args&) {
   return 1;
 }
 #endif
+
+namespace {
+/// --stops LO,HI: whole stops from the locked exposure, -20 <= LO < HI <= 20.
+OptionSpec stopsOption() {
+  OptionSpec o{
+      "--stops", "LO,HI", "the sweep, in whole stops from the locked exposure (default -6,3)",
+      false,     false,   kCameraGroup};
+  o.set = [](Settings& s, const std::string& v) {
+    const auto r = parseNumberList(v, "--stops", 2, "LO,HI");
+    if (!(r[0] < r[1]) || r[0] < -20 || r[1] > 20)
+      throw Error("--stops " + v + ": expected LO,HI with -20 <= LO < HI <= 20");
+    s.camera.stops = {r[0], r[1]};
+  };
+  return o;
+}
+}  // namespace
 
 const CommandSpec kCalibrateSpec{
     "calibrate",
@@ -186,43 +221,42 @@ const CommandSpec kCalibrateSpec{
       auto o = cameraOptions();
       o.insert(
           o.end(),
-          {{"--out", "FILE.json", "where the response goes (required)", false, false, "Output"},
-           {"--stops", "LO,HI", "the sweep, in whole stops from the locked exposure (default -6,3)",
-            false, false, kCameraGroup},
-           {"--settle", "N",
-            "frames to let pass after each change before one is kept, 1 to 60 (default 8; "
-            "a camera whose metadata reports exposures keeps the first that shows the new "
-            "one)",
-            false, false, kCameraGroup}});
+          {fileOption("--out", "FILE.json", "where the response goes (required)", {".json"},
+                      LP_FIELD(output.out), "Output"),
+           stopsOption(),
+           integerOption("--settle", "N",
+                         "frames to let pass after each change before one is kept; a camera "
+                         "whose metadata reports exposures keeps the first that shows the new one",
+                         1, 60, "8", LP_FIELD(camera.settle), kCameraGroup)});
       return o;
     }(),
     1,
     1,
-    "a V4L2 video-capture node, e.g. /dev/video0"};
+    "a V4L2 video-capture node, e.g. /dev/video0",
+    [](const Settings& s) {
+      if (!s.output.out) throw Error("--out FILE.json is required");
+    }};
 
 #if LIVEPROBE_WITH_V4L2
 int runCalibrate(const Args& a) {
-  if (!a.has("--out")) throw Error("--out FILE.json is required");
-  requireExtension(a.get("--out"), "--out", {".json"});
-  CameraSettings cs = cameraSettingsFromArgs(a);
-  const auto range = parseNumberList(a.get("--stops", "-6,3"), "--stops", 2, "LO,HI");
-  if (!(range[0] < range[1]) || range[0] < -20 || range[1] > 20)
-    throw Error("--stops " + a.get("--stops") + ": expected LO,HI with -20 <= LO < HI <= 20");
-  const int settle = a.integerIn("--settle", 8, 1, 60);
+  const Settings& s = a.settings();
+  CameraSettings cs = cameraSettingsFrom(a.positional()[0], s.camera);
+  const auto& range = s.camera.stops;
+  const int settle = s.camera.settle;
   // The metadata node when there is one (frames then say their exposure); the settle otherwise.
-  cs.metadataDevice = a.get("--metadata", siblingMetadataNode(cs.device));
+  cs.metadataDevice = s.camera.metadata.value_or(siblingMetadataNode(cs.device));
   auto camera = std::make_unique<V4l2Source>(cs);
   try {
     camera->start();
   } catch (const Error&) {
-    if (a.has("--metadata")) throw;
+    if (s.camera.metadata) throw;
     cs.metadataDevice.clear();
     camera = std::make_unique<V4l2Source>(cs);
     camera->start();
   }
   std::fprintf(stderr, "liveprobe calibrate: %s%s\n", camera->describe().c_str(),
                camera->reportsExposure() ? "; frames report their exposure" : "");
-  const LockedExposure locked = lockFromArgs(a, *camera, "calibrate");
+  const LockedExposure locked = lockExposure(s.camera, *camera, "calibrate");
   if (!locked.exposure100us)
     throw Error(cs.device + ": the camera has no exposure time control " +
                 "(V4L2_CID_EXPOSURE_ABSOLUTE): it cannot be calibrated");
@@ -253,14 +287,14 @@ int runCalibrate(const Args& a) {
     throw Error(cs.device + ": the camera ignores its exposure control (mean code " +
                 formatNumber(*lo, 3) + " to " + formatNumber(*hi, 3) + " across the sweep)");
   CameraResponse r = calibrateResponse(frames);
-  AtomicTextFile out(a.get("--out"));
+  AtomicTextFile out(*s.output.out);
   out.line(r.json());
   out.commit();
   const PowerLaw like = fitPowerLaw([&](int i) { return r.linear[1][std::size_t(i)]; });
   std::fprintf(stderr,
                "liveprobe calibrate: %zu exposures; the response rises with the code (green is "
                "like a gamma of %.2f over codes 32-240); written to %s\n",
-               frames.size(), like.gamma, a.get("--out").c_str());
+               frames.size(), like.gamma, s.output.out->c_str());
   return 0;
 }
 #else

@@ -10,6 +10,7 @@
 #include "liveprobe/sh/error.h"
 #include "progress.h"
 #include "scene.h"
+#include "viewer.h"
 
 namespace lp::cli {
 
@@ -30,10 +31,9 @@ const CommandSpec kRenderSpec{
     "there\n"
     "is no display (or with --headless); otherwise in a GLFW window, read back before it is shown.",
     concat(concat(lightingOptions(), sceneOptions()),
-           {{"--size", "WxH", "image size, each side up to 16384 (default 1280x720)", false, false,
-             "Output"},
-            {"--out", "FILE.png", "output image, .png or .jpg (default render.png)", false, false,
-             "Output"},
+           {sizeOption("--size", "image size", 16384, "1280x720", LP_FIELD(output.size), "Output"),
+            fileOption("--out", "FILE.png", "output image, .png or .jpg (default render.png)",
+                       {".png", ".jpg", ".jpeg"}, LP_FIELD(output.out), "Output"),
             hudOptions("Output", false)[0]}),
     0,
     0};
@@ -41,19 +41,16 @@ const CommandSpec kRenderSpec{
 namespace {
 
 /// The lighting every drawing command needs, or an error that names the three ways to give it.
-Lighting requireLighting(const Args& a) {
-  auto l = lightingFromArgs(a);
+Lighting requireLighting(const Settings& s) {
+  auto l = lightingFrom(s);
   if (!l) throw Error("give the lighting: --env FILE, --coeffs FILE.json or --coeff NAME=VALUE");
   return std::move(*l);
 }
 
 /// A HUD that shows a still's lighting (one sample, no stage times).
-void showStill(Hud& hud, const Args& a, const Lighting& lighting) {
-  const std::string source = a.has("--env")      ? a.get("--env")
-                             : a.has("--coeffs") ? a.get("--coeffs")
-                                                 : "--coeff";
-  hud.setSource(source,
-                a.has("--env") ? std::string(layoutName(lighting.layout.layout)) : "coefficients",
+void showStill(Hud& hud, const LightingSettings& from, const Lighting& lighting) {
+  const std::string source = from.env ? *from.env : from.coeffs ? *from.coeffs : "--coeff";
+  hud.setSource(source, from.env ? std::string(layoutName(lighting.layout.layout)) : "coefficients",
                 false, true);
   HudSample s;
   s.radiance = s.unsmoothed = lighting.radiance;
@@ -64,26 +61,27 @@ void showStill(Hud& hud, const Args& a, const Lighting& lighting) {
 }  // namespace
 
 int runRender(const Args& a) {
-  const auto size = parseSize(a.get("--size", "1280x720"), "--size");
-  const std::string out = a.get("--out", "render.png");
-  requireExtension(out, "--out", {".png", ".jpg", ".jpeg"});
-  const Lighting lighting = requireLighting(a);
-  const gl::Camera camera = cameraFromArgs(a);
+  const Settings& s = a.settings();
+  const auto size = s.output.size.value_or(Size{1280, 720});
+  const std::string out = s.output.out.value_or("render.png");
+  const Lighting lighting = requireLighting(s);
+  const gl::Camera camera = cameraFrom(s.scene);
   ViewState state;
   state.camera = camera;
   state.shading =
-      shadingFromArgs(a, lighting.radiance, lighting.background.has_value(), lighting.lights);
-  const Mesh mesh = meshFromArgs(a);
-  auto ctx = openContext(backendFromArgs(a), size);
+      shadingFrom(s.scene, lighting.radiance, lighting.background.has_value(), lighting.lights);
+  const Mesh mesh = meshFrom(s.scene);
+  auto ctx = openContext(glBackend(s.scene), size);
   try {
     gl::Renderer renderer;
-    loadScene(renderer, mesh, lighting);
+    loadModel(renderer, mesh);
+    loadLighting(renderer, lighting);
     const glm::ivec2 fb = ctx->framebufferSize();
     const HudLayout layout = hudLayout(fb);
-    renderer.draw(fb, framedBesideHud(camera, layout, a.has("--hud")), state.shading);
-    if (a.has("--hud")) {
+    renderer.draw(fb, framedBesideHud(camera, layout, s.output.hud), state.shading);
+    if (s.output.hud) {
       Hud hud(*ctx);
-      showStill(hud, a, lighting);
+      showStill(hud, s.lighting, lighting);
       hud.draw(layout, renderer, state, 0.0);
     }
     const auto px = gl::Renderer::readRgb8(fb);
@@ -106,52 +104,26 @@ const CommandSpec kViewSpec{
     "them as JSON for render --coeffs. --screenshot OUT.png --frames N renders N frames, saves "
     "the\n"
     "last and exits (headless too).",
-    concat(concat(lightingOptions(), sceneOptions()),
-           {{"--size", "WxH", "window size (default 1280x720)", false, false, "Output"},
-            {"--screenshot", "FILE.png", "save the last frame here and exit (with --frames)", false,
-             false, "Output"},
-            {"--frames", "N", "number of frames to render before the screenshot (default 1)", false,
-             false, "Output"},
-            {"--save-coeffs", "FILE.json",
-             "where the coefficient panel's Save writes (default coeffs-edited.json)", false, false,
-             "Output"},
-            hudOptions("Output", true)[0],
-            hudOptions("Output", true)[1]}),
+    concat(
+        concat(lightingOptions(), sceneOptions()),
+        concat({sizeOption("--size", "window size", 16384, "1280x720", LP_FIELD(output.size),
+                           "Output"),
+                fileOption("--screenshot", "FILE.png",
+                           "save the last frame here and exit (with --frames)",
+                           {".png", ".jpg", ".jpeg"}, LP_FIELD(output.screenshot), "Output"),
+                integerOption("--frames", "N", "number of frames to render before the screenshot",
+                              1, 1000000, "1", LP_FIELD(output.frames), "Output"),
+                textOption("--save-coeffs", "FILE.json",
+                           "where the coefficient panel's Save writes (default "
+                           "coeffs-edited.json)",
+                           LP_FIELD(output.saveCoeffs), "Output")},
+               hudOptions("Output", true))),
     0,
-    0};
+    0,
+    {},
+    checkHudOptions};
 
 namespace {
-
-/// `view`'s window (or headless screenshot) and what it draws.
-struct StillViewer {
-  std::unique_ptr<gl::GlContext> ctx;
-  std::unique_ptr<WindowInput> input;      ///< before the HUD, whose ImGui backend chains to it
-  std::unique_ptr<gl::Renderer> renderer;  ///< made once ctx is current
-  std::unique_ptr<Hud> hud;
-  ViewState state;
-  DynamicResolution dynamicResolution;
-
-  /// One frame: input, the model, the HUD (and, when its editor changed the coefficients, the
-  /// model lit by them from the next frame).
-  void frame(Lighting& lighting, double lastMs) {
-    const auto keys = handleInput(*input, hud.get(), state, false);
-    if (hud && std::count(keys.begin(), keys.end(), KeyAction::Save))
-      std::fprintf(stderr, "liveprobe: %s\n", hud->saveCoefficients().c_str());
-    const glm::ivec2 fb = ctx->framebufferSize();
-    const HudLayout layout = hudLayout(fb);
-    renderer->draw(fb, framedBesideHud(state.camera, layout, hud && state.hud),
-                   dynamicResolution.apply(state.shading));
-    if (!hud || !(state.hud || state.help)) return;
-    hud->setNote(dynamicResolution.describe());
-    hud->draw(layout, *renderer, state, lastMs);
-    if (!hud->edited()) return;
-    renderer->setLighting(lighting.radiance, lighting.lights);
-    HudSample s;
-    s.radiance = s.unsmoothed = lighting.radiance;
-    s.lights = lighting.lights;
-    hud->push(s);
-  }
-};
 
 /// The last frame saved, and what it was: frames, median frame time, size, model, GL.
 void saveScreenshot(const std::string& path, const gl::GlContext& ctx, std::vector<double> frameMs,
@@ -171,54 +143,57 @@ void saveScreenshot(const std::string& path, const gl::GlContext& ctx, std::vect
 
 int runView(const Args& a) {
   installStopHandlers();
-  const auto size = parseSize(a.get("--size", "1280x720"), "--size");
-  Lighting lighting = requireLighting(a);
-  StillViewer v;
-  v.state.camera = v.state.initialCamera = cameraFromArgs(a);
-  v.state.shading =
-      shadingFromArgs(a, lighting.radiance, lighting.background.has_value(), lighting.lights);
-  const Mesh mesh = meshFromArgs(a);
-  checkHudOptions(a);
-  const bool screenshot = a.has("--screenshot");
-  if (screenshot)
-    requireExtension(a.get("--screenshot"), "--screenshot", {".png", ".jpg", ".jpeg"});
-  const int frames = a.integerIn("--frames", 1, 1, 1000000);
-  v.ctx = openContext(backendFromArgs(a), size);
-  v.input = std::make_unique<WindowInput>(*v.ctx);
-  const bool window = !v.ctx->isHeadless();
-  if (!window && !screenshot) {
-    requireBackend(OptionalBackend::Window, "", "use --screenshot, or liveprobe render");
-    throw Error("no display to open a window on (use --screenshot, or liveprobe render)");
-  }
+  const Settings& s = a.settings();
+  Lighting lighting = requireLighting(s);
+  const gl::Camera camera = cameraFrom(s.scene);
+  const gl::ShadingSettings shading =
+      shadingFrom(s.scene, lighting.radiance, lighting.background.has_value(), lighting.lights);
+  const Mesh mesh = meshFrom(s.scene);
+  const bool screenshot = s.output.screenshot.has_value();
+  const std::int64_t frames = s.output.frames.value_or(1);
   try {
-    v.renderer = std::make_unique<gl::Renderer>();
-    loadScene(*v.renderer, mesh, lighting);
-    if (window || a.has("--hud")) {
-      v.hud = std::make_unique<Hud>(*v.ctx);
-      showStill(*v.hud, a, lighting);
-      v.hud->enableEditor(&lighting.radiance, a.get("--save-coeffs", "coeffs-edited.json"));
-      v.state.hud = !window || !a.has("--no-hud");
+    // A screenshot is drawn as asked; an interactive window keeps its rate.
+    Viewer v({glBackend(s.scene),
+              s.output.size.value_or(Size{1280, 720}),
+              {},
+              s.output.hud,
+              s.output.noHud,
+              s.scene.fullResolution,
+              !screenshot},
+             mesh);
+    if (!v.window() && !screenshot) {
+      requireBackend(OptionalBackend::Window, "", "use --screenshot, or liveprobe render");
+      throw Error("no display to open a window on (use --screenshot, or liveprobe render)");
     }
-    // A screenshot is drawn as asked; an interactive window keeps its rate (dynamic_resolution.h).
-    v.dynamicResolution = DynamicResolution(
-        window && !screenshot && isSoftwareGl(v.ctx->describe()) && !a.has("--full-resolution"));
-    RateTitle rate;
+    v.state.camera = v.state.initialCamera = camera;
+    v.state.shading = shading;
+    loadLighting(*v.renderer, lighting);
+    if (v.hud) {
+      showStill(*v.hud, s.lighting, lighting);
+      v.hud->enableEditor(&lighting.radiance, s.output.saveCoeffs);
+    }
     std::vector<double> frameMs;
-    while (!v.ctx->shouldClose() && !stopRequested()) {
-      const auto start = std::chrono::steady_clock::now();
-      v.frame(lighting, frameMs.empty() ? 0.0 : frameMs.back());
-      gl::Renderer::finish();
-      frameMs.push_back(
-          std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start)
-              .count());
-      v.dynamicResolution.update(frameMs.back());
-      if (screenshot && int(frameMs.size()) >= frames) {
-        saveScreenshot(a.get("--screenshot"), *v.ctx, frameMs, mesh.triangleCount());
-        break;
+    ViewerLoop loop;
+    loop.before = [&](const std::vector<KeyAction>& keys) {
+      if (v.hud && std::count(keys.begin(), keys.end(), KeyAction::Save))
+        std::fprintf(stderr, "liveprobe: %s\n", v.hud->saveCoefficients().c_str());
+      return Turn::Draw;
+    };
+    loop.drawn = [&](double ms) {
+      frameMs.push_back(ms);
+      if (v.hud && v.hud->edited()) {  // the model lit by the edited coefficients from now on
+        v.renderer->setLighting(lighting.radiance, lighting.lights);
+        HudSample sample;
+        sample.radiance = sample.unsmoothed = lighting.radiance;
+        sample.lights = lighting.lights;
+        v.hud->push(sample);
       }
-      v.ctx->present();
-      rate.tick(*v.input, "liveprobe view");
-    }
+      if (!screenshot || std::int64_t(frameMs.size()) < frames) return true;
+      saveScreenshot(*s.output.screenshot, *v.ctx, frameMs, mesh.triangleCount());
+      return false;
+    };
+    loop.title = [] { return std::pair<std::string, std::string>{"liveprobe view", ""}; };
+    v.run(loop);
   } catch (const gl::ContextError& e) {
     throw Error(std::string("GL: ") + e.what());
   }

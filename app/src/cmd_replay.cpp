@@ -26,6 +26,7 @@
 #endif
 #include "progress.h"
 #include "scene.h"
+#include "viewer.h"
 #if LIVEPROBE_WITH_STREAM
 #include "liveprobe/exchange/stream_server.h"
 #endif
@@ -56,17 +57,10 @@ namespace {
 
 double median(const std::vector<double>& v) { return percentile(v, 0.5); }
 
-Photometry photometryFromArgs(const Args& a) {
+Photometry photometryFrom(const StreamSettings& st) {
   Photometry p;
-  const std::string g = a.get("--gamma", "srgb");
-  if (g != "srgb") {
-    p.gamma = float(parseNumber(g, "--gamma"));
-    if (!(p.gamma > 0.2f && p.gamma < 5.0f))
-      throw Error("--gamma " + g + ": expected srgb or a gamma in (0.2, 5)");
-  }
-  p.exposure = float(a.number("--input-exposure", 1.0));
-  if (!(p.exposure > 0))
-    throw Error("--input-exposure " + a.get("--input-exposure") + ": must be positive");
+  if (st.gamma) p.gamma = float(*st.gamma);
+  p.exposure = float(st.inputExposure);
   return p;
 }
 
@@ -75,62 +69,89 @@ Photometry photometryFromArgs(const Args& a) {
 std::vector<OptionSpec> streamOptions() {
   auto o = layoutOptions();
   const std::string g = "Stream";
+  OptionSpec gamma{"--gamma",
+                   "srgb|G",
+                   "8-bit decoding: the sRGB curve (default) or code^G, G above 0.2 and below 5",
+                   false,
+                   false,
+                   g};
+  gamma.set = [](Settings& s, const std::string& v) {
+    if (v == "srgb") return s.stream.gamma.reset();
+    const double x = parseNumber(v, "--gamma");
+    if (!(x > 0.2 && x < 5.0))
+      throw Error("--gamma " + v + ": expected srgb or a gamma in (0.2, 5)");
+    s.stream.gamma = x;
+  };
   o.insert(
       o.end(),
-      {{"--gamma", "srgb|G", "8-bit decoding: the sRGB curve (default) or code^G, G in (0.2, 5)",
-        false, false, g},
-       {"--input-exposure", "X", "linear radiance scale applied to the input (default 1)", false,
-        false, g},
-       {"--smooth", "SECONDS",
-        "exponential moving average of the coefficients and lights (and its latency)", false, false,
-        g},
-       {"--fps", "F",
-        "frame rate of image sequences and stills, above 0 and up to 1000 (default 30)", false,
-        false, g},
-       {"--reduce", "F",
-        "equirect: project an F x F area average, 1 to 64 (its error: docs/accuracy.md)", false,
-        false, g},
+      {gamma,
+       numberOption("--input-exposure", "X", "linear radiance scale applied to the input",
+                    {0, 1e6, true}, "1", LP_FIELD(stream.inputExposure), g),
+       numberOption("--smooth", "SECONDS",
+                    "exponential moving average of the coefficients and lights (and its latency)",
+                    {0, 3600}, "0", LP_FIELD(stream.smooth), g),
+       numberOption("--fps", "F", "frame rate of image sequences and stills", {0, 1000, true}, "30",
+                    LP_FIELD(stream.fps), g),
+       integerOption("--reduce", "F",
+                     "equirect: project an F x F area average (its error: docs/accuracy.md)", 1, 64,
+                     "1", LP_FIELD(stream.reduce), g),
        threadsOption(g),
-       {"--frames", "N", "stop after N frames", false, false, g},
-       {"--duration", "SECONDS", "stop after this much of the source's time", false, false, g},
-       {"--coeffs-out", "FILE.jsonl", "one JSON line per frame: coefficients and stage timings",
-        false, false, g},
-       {"--coeffs-format", "FORMAT",
-        "the coefficients in --coeffs-out lines: json (default), three, babylon, filament, "
-        "unity or webxr (docs/engines.md)",
-        false, false, g},
-       {"--serve", "[ADDR:]PORT",
-        "serve every frame's record over WebSocket (ws://ADDR:PORT/?format=three|babylon|...) "
-        "and a three.js page lit by it at http://ADDR:PORT/; ADDR defaults to 127.0.0.1",
-        false, false, g},
-       {"--serve-remote", "", "allow --serve on an address other machines can reach", false, false,
-        g},
-       {"--serve-clients", "N", "--serve: at most N clients at once, 1 to 1000 (default 32)", false,
-        false, g},
-       {"--serve-idle", "SECONDS",
-        "--serve: close a client that answers no ping for this long, 2 to 3600 (default 30)", false,
-        false, g},
-       {"--publish", "mqtt[s]://[USER@]HOST[:PORT]/TOPIC",
-        "publish every frame's record to an MQTT broker, retained (in --coeffs-format); the "
-        "password from USER:PASSWORD@, LIVEPROBE_MQTT_PASSWORD or --mqtt-password-file; mqtts:// "
-        "checks the broker against the system's CAs",
-        false, false, g},
-       {"--mqtt-cafile", "FILE", "mqtts://: trust the CAs in FILE (PEM) instead of the system's",
-        false, false, g},
-       {"--mqtt-password-file", "FILE", "the MQTT user's password, the file's first line", false,
-        false, g},
-       {"--response", "FILE",
-        "8-bit frames: the camera's response, from `liveprobe calibrate` (default: sRGB); a "
-        "bracketed recording's own response otherwise",
-        false, false, g},
-       {"--hold-below", "C",
-        "keep the last good lighting while a frame's confidence is below C, 0 to 1 (a hand over "
-        "the lens, a flash)",
-        false, false, g},
+       integerOption("--frames", "N", "stop after N frames", 1, 1000000000, "",
+                     LP_FIELD(output.frames), g),
+       numberOption("--duration", "SECONDS", "stop after this much of the source's time",
+                    {0.001, 1e7}, "", LP_FIELD(output.duration), g),
+       textOption("--coeffs-out", "FILE.jsonl",
+                  "one JSON line per frame: coefficients and stage timings",
+                  LP_FIELD(output.coeffsOut), g),
+       coeffFormatOption("--coeffs-format",
+                         "the coefficients in --coeffs-out lines: json (default), three, babylon, "
+                         "filament, unity or webxr (docs/engines.md)",
+                         true, LP_FIELD(output.coeffsFormat), g),
+       textOption("--serve", "[ADDR:]PORT",
+                  "serve every frame's record over WebSocket "
+                  "(ws://ADDR:PORT/?format=three|babylon|...) and a three.js page lit by it at "
+                  "http://ADDR:PORT/; ADDR defaults to 127.0.0.1",
+                  LP_FIELD(stream.serve), g),
+       flagOption("--serve-remote", "allow --serve on an address other machines can reach",
+                  LP_FIELD(stream.serveRemote), g),
+       integerOption("--serve-clients", "N", "--serve: at most N clients at once", 1, 1000, "32",
+                     LP_FIELD(stream.serveClients), g),
+       integerOption("--serve-idle", "SECONDS",
+                     "--serve: close a client that answers no ping for this long", 2, 3600, "30",
+                     LP_FIELD(stream.serveIdle), g),
+       textOption("--publish", "mqtt[s]://[USER@]HOST[:PORT]/TOPIC",
+                  "publish every frame's record to an MQTT broker, retained (in --coeffs-format); "
+                  "the password from USER:PASSWORD@, LIVEPROBE_MQTT_PASSWORD or "
+                  "--mqtt-password-file; mqtts:// checks the broker against the system's CAs",
+                  LP_FIELD(stream.publish), g),
+       textOption("--mqtt-cafile", "FILE",
+                  "mqtts://: trust the CAs in FILE (PEM) instead of the system's",
+                  LP_FIELD(stream.mqttCafile), g),
+       textOption("--mqtt-password-file", "FILE", "the MQTT user's password, the file's first line",
+                  LP_FIELD(stream.mqttPasswordFile), g),
+       textOption("--response", "FILE",
+                  "8-bit frames: the camera's response, from `liveprobe calibrate` (default: "
+                  "sRGB); a bracketed recording's own response otherwise",
+                  LP_FIELD(stream.response), g),
+       numberOption("--hold-below", "C",
+                    "keep the last good lighting while a frame's confidence is below C (a hand "
+                    "over the lens, a flash)",
+                    {0, 1}, "", LP_FIELD(stream.holdBelow), g),
        quietOption(g)});
   for (auto& shared : {lightOptionSpecs(g), hudOptions(g, true)})
     o.insert(o.end(), shared.begin(), shared.end());
   return o;
+}
+
+void checkStreamOptions(const Settings& s) {
+  checkHudOptions(s);
+  const StreamSettings& st = s.stream;
+  if (!st.serve && (st.serveRemote || st.serveClients || st.serveIdle))
+    throw Error("--serve-remote, --serve-clients and --serve-idle go with --serve");
+  if (!st.publish && (st.mqttCafile || st.mqttPasswordFile))
+    throw Error("--mqtt-cafile and --mqtt-password-file go with --publish");
+  if (st.response && st.gamma)
+    throw Error("--response and --gamma: give one of them (a response replaces the curve)");
 }
 
 const CommandSpec kReplaySpec{
@@ -149,51 +170,60 @@ const CommandSpec kReplaySpec{
       const std::string g = "Output";
       o.insert(
           o.end(),
-          {{"--loop", "", "start again at the end of the source", false, false, "Stream"},
-           {"--realtime", "",
-            "headless: play at the source's frame rate, not as fast as frames render (the "
-            "default with --serve or --publish)",
-            false, false, "Stream"},
-           {"--size", "WxH", "window or frame size (default 1280x720; headless 640x360)", false,
-            false, g},
-           {"--out-dir", "DIR", "headless: write each rendered frame as DIR/frame_NNNNNN.png",
-            false, false, g},
-           {"--out-video", "FILE",
-            "headless: write the rendered frames as a video (.mkv FFV1, .avi MJPEG, .mp4 H.264)",
-            false, false, g}});
+          {flagOption("--loop", "start again at the end of the source", LP_FIELD(stream.loop),
+                      "Stream"),
+           flagOption("--realtime",
+                      "headless: play at the source's frame rate, not as fast as frames render "
+                      "(the default with --serve or --publish)",
+                      LP_FIELD(stream.realtime), "Stream"),
+           sizeOption("--size", "window or frame size", 16384, "1280x720; headless 640x360",
+                      LP_FIELD(output.size), g),
+           textOption("--out-dir", "DIR",
+                      "headless: write each rendered frame as DIR/frame_NNNNNN.png",
+                      LP_FIELD(output.outDir), g),
+           fileOption("--out-video", "FILE",
+                      "headless: write the rendered frames as a video (.mkv FFV1, .avi MJPEG, "
+                      ".mp4 H.264)",
+                      {".mkv", ".avi", ".mp4"}, LP_FIELD(output.outVideo), g)});
       auto scene = sceneOptions();
       o.insert(o.end(), scene.begin(), scene.end());
       return o;
     }(),
     0,
     1,
-    LP_SOURCE_KINDS "; default: the bundled recording recordings/sky.mkv"};
+    LP_SOURCE_KINDS "; default: the bundled recording recordings/sky.mkv",
+    [](const Settings& s) {
+      checkStreamOptions(s);
+      const OutputSettings& o = s.output;
+      if (o.outDir && o.outVideo) throw Error("give --out-dir or --out-video, not both");
+      if ((o.outDir || o.outVideo) && s.stream.loop && !o.frames && !o.duration)
+        throw Error("--loop with --out-dir or --out-video needs --frames N or --duration S");
+    }};
 
 namespace {
 
 /// The pipeline's options from the command line.
-PipelineOptions pipelineOptionsFromArgs(const Args& a, const FrameSource& source) {
+PipelineOptions pipelineOptionsFrom(const Settings& s, const FrameSource& source) {
+  const StreamSettings& st = s.stream;
   PipelineOptions opt;
-  opt.layout = layoutFromArgs(a, &source);
-  opt.photometry = photometryFromArgs(a);
-  if (a.has("--env-rotate") || a.has("--env-flip")) opt.rotation = envOrientationFromArgs(a);
-  opt.smoothSeconds = a.numberIn("--smooth", 0.0, 0.0, 3600.0);
-  opt.loop = a.has("--loop");
-  opt.reduce = a.integerIn("--reduce", 1, 1, 64);
-  opt.lights = chooseLights(a);
-  opt.threads = unsigned(a.integerIn("--threads", 2, 1, 64));
-  opt.maxFrames = a.integerIn("--frames", -1, 1, 1000000000);
+  opt.layout = layoutSpec(s.panorama, &source);
+  opt.photometry = photometryFrom(st);
+  if (s.panorama.rotate || s.panorama.flip) opt.rotation = envOrientation(s.panorama);
+  opt.smoothSeconds = st.smooth;
+  opt.loop = st.loop;
+  opt.reduce = st.reduce;
+  opt.lights = chooseLights(s);
+  opt.threads = unsigned(st.threads);
+  opt.maxFrames = s.output.frames.value_or(-1);
   opt.interrupted = stopRequested;  // a paced wait ends within kStopPollSeconds of Ctrl-C
-  opt.holdBelow = a.numberIn("--hold-below", 0.0, 0.0, 1.0);
+  opt.holdBelow = st.holdBelow;
   // A bracketed source is merged; so is any 8-bit stream with its own response (a bracket of one
   // frame: the response's three curves decode it).
-  if (source.bracketFrames() > 0 || a.has("--response")) {
-    if (a.has("--response") && a.has("--gamma"))
-      throw Error("--response and --gamma: give one of them (a response replaces the curve)");
+  if (source.bracketFrames() > 0 || st.response) {
     MergeOptions m;
     m.frames = std::max(1, source.bracketFrames());
-    if (a.has("--response"))
-      m.response = CameraResponse::load(a.get("--response"));
+    if (st.response)
+      m.response = CameraResponse::load(*st.response);
     else if (!source.bracketResponse().empty())
       m.response =
           CameraResponse::parse(source.bracketResponse(), source.describe() + ": response");
@@ -299,22 +329,17 @@ struct StreamOutputs {
   }
 };
 
-StreamOutputs openOutputs(const Args& a, double fps, const std::string& description) {
+StreamOutputs openOutputs(const Settings& s, double fps, const std::string& description) {
+  const OutputSettings& os = s.output;
   StreamOutputs o;
-  if (a.has("--out-dir") && a.has("--out-video"))
-    throw Error("give --out-dir or --out-video, not both");
-  o.format = parseCoeffFormat(a.get("--coeffs-format", "json"), "--coeffs-format", true);
-  if (a.has("--coeffs-out")) o.coeffs = std::make_unique<AtomicTextFile>(a.get("--coeffs-out"));
-  if (a.has("--out-dir")) o.frames = std::make_unique<FrameFolder>(a.get("--out-dir"));
-  if (a.has("--out-video")) {
-    requireExtension(a.get("--out-video"), "--out-video", {".mkv", ".avi", ".mp4"});
-    o.video = std::make_unique<VideoRecorder>(a.get("--out-video"), fps,
-                                              "liveprobe replay of " + description);
-  }
-  if (a.has("--record")) {
-    requireExtension(a.get("--record"), "--record", {".mkv", ".avi", ".mp4", ".exr", ".hdr"});
-    o.record = std::make_unique<VideoRecorder>(a.get("--record"), fps, description);
-  }
+  o.format = parseCoeffFormat(os.coeffsFormat, "--coeffs-format", true);
+  if (os.coeffsOut) o.coeffs = std::make_unique<AtomicTextFile>(*os.coeffsOut);
+  if (os.outDir) o.frames = std::make_unique<FrameFolder>(*os.outDir);
+  if (os.outVideo)
+    o.video =
+        std::make_unique<VideoRecorder>(*os.outVideo, fps, "liveprobe replay of " + description);
+  if (s.stream.record)
+    o.record = std::make_unique<VideoRecorder>(*s.stream.record, fps, description);
   return o;
 }
 
@@ -331,14 +356,9 @@ struct StreamTally {
   double median(Stage s) const { return cli::median(stages[std::size_t(s)]); }
 };
 
-/// Everything the render loop holds: GL, the HUD, the interactive state.
+/// The viewer of a stream, and what it keeps of the stream's frames.
 struct StreamView {
-  std::unique_ptr<gl::GlContext> ctx;
-  std::unique_ptr<WindowInput> input;  ///< before the HUD, whose ImGui backend chains to it
-  std::unique_ptr<gl::Renderer> renderer;
-  std::unique_ptr<Hud> hud;
-  ViewState state;
-  DynamicResolution dynamicResolution;
+  std::unique_ptr<Viewer> v;
   bool autoExposure = true, haveLighting = false;
   LayoutSpec layout;
   std::string source;
@@ -357,22 +377,15 @@ struct StreamView {
         warnIfLayoutLooksWrong(source, layout, w, h, f.image ? f.image->rgb.data() : nullptr);
     }
     if (!haveLighting && autoExposure)
-      state.shading.exposure = cli::autoExposure(f.radiance, true, f.lights);
+      v->state.shading.exposure = cli::autoExposure(f.radiance, true, f.lights);
     haveLighting = true;
-    renderer->setLighting(f.radiance, f.lights);
-    if (f.image) setBackground(*renderer, *f.image, f.displayLayout, f.displayScale);
-    if (f.raw) setBackground(*renderer, *f.raw, f.displayLayout, f.rawScale);
+    gl::Renderer& r = *v->renderer;
+    r.setLighting(f.radiance, f.lights);
+    if (f.image) setBackground(r, *f.image, f.displayLayout, f.displayScale);
+    if (f.raw) setBackground(r, *f.raw, f.displayLayout, f.rawScale);
     // The time to hand the data to GL, not waiting for it (no glFinish stalling every frame);
     // `liveprobe bench` times the upload to completion.
     return std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
-  }
-  void draw(double lastFrameMs) {
-    const glm::ivec2 fb = ctx->framebufferSize();
-    const HudLayout layout = hudLayout(fb);
-    renderer->draw(fb, framedBesideHud(state.camera, layout, hud && state.hud),
-                   dynamicResolution.apply(state.shading));
-    if (hud) hud->setNote(dynamicResolution.describe());
-    if (hud && (state.hud || state.help)) hud->draw(layout, *renderer, state, lastFrameMs);
   }
 };
 
@@ -426,13 +439,13 @@ void runOffline(CapturePipeline& pipeline, StreamView& view, const StreamOutputs
   while (auto f = pipeline.waitNext()) {
     const double uploadMs = view.use(*f);
     const auto t0 = Clock::now();
-    view.draw(lastMs);
-    const glm::ivec2 fb = view.ctx->framebufferSize();
+    view.v->draw(lastMs);
+    const glm::ivec2 fb = view.v->ctx->framebufferSize();
     const auto px = gl::Renderer::readRgb8(fb);
     const double ms = std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
     const double latency = 1000.0 * (monotonicSeconds() - f->captureTime);
     ++tally.drawn;
-    recordSample(tally, *f, uploadMs, ms, latency, view.hud.get(), pipeline.stats(), &sinks);
+    recordSample(tally, *f, uploadMs, ms, latency, view.v->hud.get(), pipeline.stats(), &sinks);
     if (out.coeffs) out.coeffs->line(frameRecord(*f, out.format, {ms, latency}));
     if (out.sent) out.sent->drawn(f->index);
     out.writeFrame(*f, fb, px);
@@ -446,39 +459,40 @@ void runOffline(CapturePipeline& pipeline, StreamView& view, const StreamOutputs
 void runInteractive(CapturePipeline& pipeline, StreamView& view, StreamTally& tally,
                     Progress& progress, bool live, const std::string& title,
                     const RecordSinks& sinks) {
-  RateTitle rate;
-  double lastMs = 0;
+  Viewer& v = *view.v;
   bool wasPaused = false;
-  const bool headless = view.ctx->isHeadless();
-  while (!view.ctx->shouldClose() && !stopRequested()) {
-    handleInput(*view.input, view.hud.get(), view.state, !live);
-    if (view.state.paused != wasPaused) pipeline.setPaused(wasPaused = view.state.paused);
-    for (; view.state.steps > 0; --view.state.steps) pipeline.step();
-    double uploadMs = 0;
-    auto f = pipeline.takeLatest();
-    if (f)
+  std::optional<ProcessedFrame> f;
+  double uploadMs = 0;
+  PipelineStats st;
+  ViewerLoop loop;
+  loop.canPause = !live;
+  loop.before = [&](const std::vector<KeyAction>&) {
+    if (v.state.paused != wasPaused) pipeline.setPaused(wasPaused = v.state.paused);
+    for (; v.state.steps > 0; --v.state.steps) pipeline.step();
+    uploadMs = 0;
+    f = pipeline.takeLatest();
+    if (f) {
       uploadMs = view.use(*f);
-    else if (pipeline.finished())
-      break;
-    else if (headless) {  // live, headless: nothing new to draw yet
-      std::this_thread::sleep_for(std::chrono::milliseconds(2));
-      continue;
+      return Turn::Draw;
     }
-    const auto t0 = Clock::now();
-    view.draw(lastMs);
-    view.ctx->present();
-    lastMs = std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
-    view.dynamicResolution.update(lastMs);
-    const PipelineStats st = pipeline.stats();  // once a frame, for the HUD, progress and title
+    if (pipeline.finished()) return Turn::Stop;
+    return v.window() ? Turn::Draw : Turn::Wait;  // a window redraws (input, the HUD)
+  };
+  loop.drawn = [&](double ms) {
+    st = pipeline.stats();  // once a frame, for the HUD, progress and title
     if (f) {
       ++tally.drawn;
-      recordSample(tally, *f, uploadMs, lastMs, 1000.0 * (monotonicSeconds() - f->captureTime),
-                   view.hud.get(), st, &sinks);
+      recordSample(tally, *f, uploadMs, ms, 1000.0 * (monotonicSeconds() - f->captureTime),
+                   v.hud.get(), st, &sinks);
       progress.update(std::int64_t(st.captured));
     }
-    rate.tick(*view.input, "liveprobe - " + title + " - frame " + std::to_string(st.captured),
-              view.state.paused ? " - paused" : "");
-  }
+    return true;
+  };
+  loop.title = [&] {
+    return std::pair{"liveprobe - " + title + " - frame " + std::to_string(st.captured),
+                     std::string(v.state.paused ? " - paused" : "")};
+  };
+  v.run(loop);
 }
 
 /// "grab 0.95, convert 0.00, ...": the median of each stage up to render (merge and resample
@@ -534,13 +548,20 @@ void printSummary(const std::string& description, const PipelineStats& st, const
                  smoothSeconds, smoothSeconds);
 }
 
-std::unique_ptr<RecordSink> openStream([[maybe_unused]] const Args& a) {
+std::unique_ptr<RecordSink> openStream([[maybe_unused]] const StreamSettings& st) {
   requireBackend(OptionalBackend::Stream, "--serve");
 #if LIVEPROBE_WITH_STREAM
   StreamServerOptions o;
-  parseServeAddress(a.get("--serve"), a.has("--serve-remote"), o);
-  o.maxClients = int(a.integerIn("--serve-clients", 32, 1, 1000));
-  o.idleSeconds = int(a.integerIn("--serve-idle", 30, 2, 3600));
+  try {
+    parseServeAddress(*st.serve, o);
+  } catch (const Error& e) {
+    throw Error("--serve " + std::string(e.what()));
+  }
+  if (!isLoopback(o.host) && !st.serveRemote)
+    throw Error("--serve " + *st.serve + ": " + o.host +
+                " is reachable from other machines; add --serve-remote to listen there");
+  o.maxClients = st.serveClients.value_or(32);
+  o.idleSeconds = st.serveIdle.value_or(30);
   o.defaultFormat = parseCoeffFormat("three", "--serve", true);
   const char* web = std::getenv("LIVEPROBE_WEB_DIR");
   o.webDir = web ? web : shareDir() + "/web";
@@ -549,7 +570,12 @@ std::unique_ptr<RecordSink> openStream([[maybe_unused]] const Args& a) {
     warn("--serve: three.js is not in " + o.threeDir +
          " (the build stages it from app/web/node_modules, which scripts/build installs with "
          "npm); the page will not draw");
-  auto server = std::make_unique<StreamServer>(o);
+  std::unique_ptr<StreamServer> server;
+  try {
+    server = std::make_unique<StreamServer>(o);
+  } catch (const Error& e) {
+    throw Error("--serve " + std::string(e.what()));
+  }
   std::fprintf(stderr, "liveprobe: serving http://%s:%d/ (WebSocket ws://%s:%d/?format=three)\n",
                o.host.c_str(), server->port(), o.host.c_str(), server->port());
   return server;
@@ -558,39 +584,42 @@ std::unique_ptr<RecordSink> openStream([[maybe_unused]] const Args& a) {
 #endif
 }
 
-std::unique_ptr<RecordSink> openBroker([[maybe_unused]] const Args& a) {
+std::unique_ptr<RecordSink> openBroker([[maybe_unused]] const StreamSettings& st) {
   requireBackend(OptionalBackend::Mqtt, "--publish");
 #if LIVEPROBE_WITH_MQTT
-  MqttTarget t = parseMqttUrl(a.get("--publish"));
-  if (a.has("--mqtt-cafile")) {
+  MqttTarget t;
+  try {
+    t = parseMqttUrl(*st.publish);
+  } catch (const Error& e) {
+    throw Error("--publish " + std::string(e.what()));
+  }
+  if (st.mqttCafile) {
     if (!t.tls) throw Error("--mqtt-cafile goes with an mqtts:// broker");
-    t.cafile = a.get("--mqtt-cafile");
+    t.cafile = *st.mqttCafile;
     readInputFile(t.cafile);  // a missing or unreadable file is one line, now
   }
   if (t.password.empty() && !t.username.empty()) {
-    if (a.has("--mqtt-password-file")) {
-      const std::string text = readInputFile(a.get("--mqtt-password-file"));
+    if (st.mqttPasswordFile) {
+      const std::string text = readInputFile(*st.mqttPasswordFile);
       t.password = text.substr(0, text.find_first_of("\r\n"));  // its first line
     } else if (const char* pw = std::getenv("LIVEPROBE_MQTT_PASSWORD")) {
       t.password = pw;
     }
   }
-  return std::make_unique<MqttPublisher>(std::move(t));
+  try {
+    return std::make_unique<MqttPublisher>(std::move(t));
+  } catch (const Error& e) {
+    throw Error("--publish " + std::string(e.what()));
+  }
 #else
   return nullptr;  // (requireBackend threw)
 #endif
 }
 
-RecordSinks openSinks(const Args& a) {
+RecordSinks openSinks(const StreamSettings& st) {
   RecordSinks s;
-  if (a.has("--serve"))
-    s.all.push_back(openStream(a));
-  else if (a.has("--serve-remote") || a.has("--serve-clients") || a.has("--serve-idle"))
-    throw Error("--serve-remote, --serve-clients and --serve-idle go with --serve");
-  if (a.has("--publish"))
-    s.all.push_back(openBroker(a));
-  else if (a.has("--mqtt-cafile") || a.has("--mqtt-password-file"))
-    throw Error("--mqtt-cafile and --mqtt-password-file go with --publish");
+  if (st.serve) s.all.push_back(openStream(st));
+  if (st.publish) s.all.push_back(openBroker(st));
   return s;
 }
 
@@ -607,21 +636,20 @@ struct StreamPlan {
   Mesh mesh;
 };
 
-StreamPlan planStream(const Args& a, const FrameSource& source, bool live) {
-  checkHudOptions(a);
+StreamPlan planStream(const Settings& s, const FrameSource& source, bool live) {
   StreamPlan p;
   p.live = live;
-  p.opt = pipelineOptionsFromArgs(a, source);
-  p.camera = cameraFromArgs(a);
-  p.mesh = meshFromArgs(a);
+  p.opt = pipelineOptionsFrom(s, source);
+  p.camera = cameraFrom(s.scene);
+  p.mesh = meshFrom(s.scene);
   p.fps = source.fps();
   p.description = source.describe();
-  const std::string sizeOpt = live ? "--view-size" : "--size";  // live: --size is the camera's
-  p.size = parseSize(a.get(sizeOpt, "1280x720"), sizeOpt);
-  p.headlessSize = a.has(sizeOpt) ? p.size : std::pair{640, 360};
+  const std::optional<Size> asked = live ? s.camera.viewSize : s.output.size;  // live: --size
+  p.size = asked.value_or(Size{1280, 720});                                    // is the camera's
+  p.headlessSize = asked.value_or(Size{640, 360});
   PipelineOptions& opt = p.opt;
-  if (a.has("--duration")) {
-    const double d = a.numberIn("--duration", 0, 1e-3, 1e7);
+  if (s.output.duration) {
+    const double d = *s.output.duration;
     const std::int64_t n = std::max<std::int64_t>(1, std::llround(d * (p.fps > 0 ? p.fps : 30.0)));
     opt.maxFrames = opt.maxFrames < 0 ? n : std::min(opt.maxFrames, n);
   }
@@ -633,13 +661,12 @@ StreamPlan planStream(const Args& a, const FrameSource& source, bool live) {
 
 /// What follows from the GL context that came up, a window or headless: how frames are handed
 /// over and paced.
-void setHeadless(const Args& a, StreamPlan& p, bool headless) {
+void setHeadless(const StreamSettings& st, StreamPlan& p, bool headless) {
   p.headless = headless;
   p.opt.handoff = headless && !p.live ? Handoff::Every : Handoff::Latest;
   // A window plays in real time; so does a headless replay that serves or publishes (its readers
   // want the source's pace, not as fast as it renders), or that asks with --realtime.
-  p.opt.realtime =
-      !p.live && (!headless || a.has("--realtime") || a.has("--serve") || a.has("--publish"));
+  p.opt.realtime = !p.live && (!headless || st.realtime || st.serve || st.publish);
 }
 
 /// At capture, on capture's thread: --coeffs-out lines of a window or a camera, the stream and
@@ -670,28 +697,22 @@ void wireCaptureOutputs(StreamPlan& p, StreamOutputs& out, RecordSinks& sinks,
 
 /// The GL context, the renderer with its model, and the HUD (a window always has one: H shows
 /// it, F1 the help).
-StreamView openStreamView(const Args& a, const StreamPlan& p) {
+StreamView openStreamView(const Settings& s, const StreamPlan& p) {
   StreamView view;
-  view.state.shading = shadingFromArgs(a, Sh9{});
-  view.autoExposure = a.get("--exposure", "auto") == "auto";
+  view.v =
+      std::make_unique<Viewer>(ViewerSpec{glBackend(s.scene), p.size, p.headlessSize, s.output.hud,
+                                          s.output.noHud, s.scene.fullResolution, true},
+                               p.mesh);
+  Viewer& v = *view.v;
+  v.state.shading = shadingFrom(s.scene, Sh9{});
+  v.state.camera = v.state.initialCamera = p.camera;
+  view.autoExposure = !s.scene.exposure;
   view.layout = p.opt.layout;
   view.source = p.description;
-  view.state.camera = view.state.initialCamera = p.camera;
-  view.ctx = openContext(backendFromArgs(a), p.size, p.headlessSize);
-  view.input = std::make_unique<WindowInput>(*view.ctx);
-  const bool window = !view.ctx->isHeadless();
-  view.dynamicResolution = DynamicResolution(window && isSoftwareGl(view.ctx->describe()) &&
-                                             !a.has("--full-resolution"));
-  view.renderer = std::make_unique<gl::Renderer>();
-  loadModel(*view.renderer, p.mesh);
-  if (p.opt.rotation) view.renderer->setEnvOrientation(*p.opt.rotation);
-  const bool wantHud = window ? !a.has("--no-hud") : a.has("--hud");
-  if (wantHud || window) {
-    view.hud = std::make_unique<Hud>(*view.ctx);
-    view.hud->setSource(p.description, std::string(layoutName(p.opt.layout.layout)),
-                        p.opt.smoothSeconds > 0);
-    view.state.hud = wantHud;
-  }
+  if (p.opt.rotation) v.renderer->setEnvOrientation(*p.opt.rotation);
+  if (v.hud)
+    v.hud->setSource(p.description, std::string(layoutName(p.opt.layout.layout)),
+                     p.opt.smoothSeconds > 0);
   return view;
 }
 
@@ -732,9 +753,9 @@ int finishStream(const StreamPlan& p, const PipelineStats& st, const StreamTally
   if (out.video) out.video->finish();
   if (out.frames) out.frames->keep();
   printSummary(p.description, st, tally, p.opt.smoothSeconds, stopRequested(), sinks);
-  if (view.dynamicResolution.active())
+  if (view.v->dynamicResolution.active())
     std::fprintf(stderr, "  %s at the end (dynamic resolution; --full-resolution turns it off)\n",
-                 view.dynamicResolution.describe().c_str());
+                 view.v->dynamicResolution.describe().c_str());
   if (stopRequested()) return kExitInterrupted;
   // Publishing was asked for and nothing at all reached the broker: the run failed its purpose.
   for (const auto& sink : sinks.all)
@@ -747,13 +768,14 @@ int finishStream(const StreamPlan& p, const PipelineStats& st, const StreamTally
 // lines are written as frames are captured.
 int runStream(const Args& a, std::unique_ptr<FrameSource> source, bool live) {
   installStopHandlers();
-  StreamPlan plan = planStream(a, *source, live);
-  StreamOutputs out = openOutputs(a, plan.fps, plan.description);
-  RecordSinks sinks = openSinks(a);
-  StreamView view = openStreamView(a, plan);
-  setHeadless(a, plan, view.ctx->isHeadless());
+  const Settings& s = a.settings();
+  StreamPlan plan = planStream(s, *source, live);
+  StreamOutputs out = openOutputs(s, plan.fps, plan.description);
+  RecordSinks sinks = openSinks(s.stream);
+  StreamView view = openStreamView(s, plan);
+  setHeadless(s.stream, plan, !view.v->window());
   wireCaptureOutputs(plan, out, sinks, *source);
-  Progress progress = announceRun(plan, *source, !plan.headless, a.has("--quiet"));
+  Progress progress = announceRun(plan, *source, !plan.headless, s.output.quiet);
 
   CapturePipeline pipeline(std::move(source), plan.opt);
   pipeline.start();
@@ -780,14 +802,10 @@ int runStreamForLive(const Args& a, std::unique_ptr<FrameSource> camera) {
 
 int runReplay(const Args& a) {
   const std::string sourceName = a.positional().empty() ? defaultRecording() : a.positional()[0];
+  const Settings& s = a.settings();
   SourceOptions so;
-  so.fps = a.number("--fps", 30.0);
-  if (!(so.fps > 0 && so.fps <= 1000))
-    throw Error("--fps " + a.get("--fps") + ": expected a rate in (0, 1000]");
-  if (a.has("--out-dir") || a.has("--out-video"))
-    if (a.has("--loop") && !a.has("--frames") && !a.has("--duration"))
-      throw Error("--loop with --out-dir or --out-video needs --frames N or --duration S");
-  layoutFromArgs(a);  // option errors before the file is opened
+  so.fps = s.stream.fps.value_or(30.0);
+  layoutSpec(s.panorama);  // option errors before the file is opened
   return runStream(a, openSource(sourceName, so), false);
 }
 
@@ -800,36 +818,40 @@ const CommandSpec kRecordSpec{
     "(a sun's few pixels clip, as on a camera). Synthetic sources record 5 seconds unless\n"
     "--frames or --duration says otherwise. Ctrl-C stops cleanly: what was recorded is\n"
     "finalised, exit 130.",
-    {{"--out", "FILE",
-      "output video (.mkv, .avi or .mp4), or a frame-number pattern of .exr or .hdr frames "
-      "(frames/%04d.exr: linear radiance, a sun unclipped); required"},
-     {"--frames", "N", "number of frames to record"},
-     {"--duration", "SECONDS", "seconds of the source to record"},
-     {"--fps", "F",
-      "frame rate of image sequences and of the recording, 1 to 1000 (default: the source's)"},
+    {fileOption("--out", "FILE",
+                "output video (.mkv, .avi or .mp4), or a frame-number pattern of .exr or .hdr "
+                "frames (frames/%04d.exr: linear radiance, a sun unclipped); required",
+                {".mkv", ".avi", ".mp4", ".exr", ".hdr"}, LP_FIELD(output.out)),
+     integerOption("--frames", "N", "number of frames to record", 1, 1000000000, "",
+                   LP_FIELD(output.frames)),
+     numberOption("--duration", "SECONDS", "seconds of the source to record", {0.001, 1e7}, "",
+                  LP_FIELD(output.duration)),
+     numberOption("--fps", "F", "frame rate of image sequences and of the recording", {1, 1000},
+                  "the source's", LP_FIELD(stream.fps)),
      quietOption()},
     1,
     1,
-    LP_SOURCE_KINDS};
+    LP_SOURCE_KINDS,
+    [](const Settings& s) {
+      if (!s.output.out) throw Error("--out FILE.mkv is required");
+    }};
 
 int runRecord(const Args& a) {
   installStopHandlers();
-  if (!a.has("--out")) throw Error("--out FILE.mkv is required");
-  requireExtension(a.get("--out"), "--out", {".mkv", ".avi", ".mp4", ".exr", ".hdr"});
+  const Settings& s = a.settings();
   SourceOptions so;
-  so.fps = a.numberIn("--fps", 30.0, 1.0, 1000.0);
-  std::int64_t frames = a.integerIn("--frames", -1, 1, 1000000000);
+  so.fps = s.stream.fps.value_or(30.0);
+  std::int64_t frames = s.output.frames.value_or(-1);
   auto source = openSource(a.positional()[0], so);
-  const double fps = a.has("--fps") ? so.fps : source->fps();
-  if (a.has("--duration")) {
-    const std::int64_t n =
-        std::max<std::int64_t>(1, std::llround(a.numberIn("--duration", 0, 1e-3, 1e7) * fps));
+  const double fps = s.stream.fps ? so.fps : source->fps();
+  if (s.output.duration) {
+    const std::int64_t n = std::max<std::int64_t>(1, std::llround(*s.output.duration * fps));
     frames = frames < 0 ? n : std::min(frames, n);
   }
   if (frames < 0 && a.positional()[0].rfind("synthetic", 0) == 0)
     frames = std::int64_t(std::lround(5 * fps));
-  VideoRecorder rec(a.get("--out"), fps, source->describe());
-  Progress progress("record", frames, a.has("--quiet"));
+  VideoRecorder rec(*s.output.out, fps, source->describe());
+  Progress progress("record", frames, s.output.quiet);
   Frame f;
   while ((frames < 0 || std::int64_t(rec.frames()) < frames) && !stopRequested() &&
          source->next(f)) {
@@ -838,7 +860,7 @@ int runRecord(const Args& a) {
   }
   progress.finish();
   rec.finish();
-  std::fprintf(stderr, "liveprobe: %s: %zu frame%s at %.3g fps from %s%s\n", a.get("--out").c_str(),
+  std::fprintf(stderr, "liveprobe: %s: %zu frame%s at %.3g fps from %s%s\n", s.output.out->c_str(),
                rec.frames(), rec.frames() == 1 ? "" : "s", fps, source->describe().c_str(),
                stopRequested() ? "; stopped by a signal" : "");
   return stopRequested() ? kExitInterrupted : 0;

@@ -19,10 +19,19 @@ namespace lp::cli {
 
 namespace {
 
-const OptionSpec kWindowOpt{
-    "--window", "none|auto|cmgen|W",
-    "Hann window of width W against ringing; auto = mildest keeping E >= 0; cmgen = Filament "
-    "cmgen's default (--sh-window=auto: sinc^4, its cutoff search)"};
+/// --window: none, auto, cmgen, or a Hann width above 2.
+OptionSpec windowOption() {
+  OptionSpec o{
+      "--window", "none|auto|cmgen|W",
+      "Hann window of width W (above 2) against ringing; auto = mildest keeping E >= 0; cmgen = "
+      "Filament cmgen's default (--sh-window=auto: sinc^4, its cutoff search)"};
+  o.set = [](Settings& s, const std::string& v) {
+    if (v != "none" && v != "auto" && v != "cmgen" && !(parseNumber(v, "--window") > 2.0))
+      throw Error("--window " + v + ": the Hann width must be greater than 2");
+    s.still.window = v;
+  };
+  return o;
+}
 
 std::vector<OptionSpec> withLayout(std::vector<OptionSpec> o) {
   const auto l = layoutOptions();
@@ -31,12 +40,12 @@ std::vector<OptionSpec> withLayout(std::vector<OptionSpec> o) {
 }
 
 Environment loadEnvironment(const Args& a, const LightOptions& lights = {.maxLights = 0}) {
-  return cli::loadEnvironment(a.positional().at(0), a, lights);
+  return cli::loadEnvironment(a.positional().at(0), a.settings().panorama, lights);
 }
 
 /// Resolves --window against the coefficients; reports an automatic choice on stderr.
-BandWindow chooseWindow(const Args& a, const Sh9& radiance) {
-  const std::string w = a.get("--window", "none");
+BandWindow chooseWindow(const StillSettings& s, const Sh9& radiance) {
+  const std::string& w = s.window;
   if (w == "none") return {};
   if (w == "auto") {
     const AutoWindow aw = autoWindow(radiance);
@@ -53,9 +62,7 @@ BandWindow chooseWindow(const Args& a, const Sh9& radiance) {
            << cw.window.sigma1 << ", sigma2 " << cw.window.sigma2 << ")\n";
     return cw.window;
   }
-  const double width = parseNumber(w, "--window");
-  if (width <= 2.0) throw Error("--window " + w + ": the Hann width must be greater than 2");
-  return hannWindow(float(width));
+  return hannWindow(float(parseNumber(w, "--window")));
 }
 
 }  // namespace
@@ -67,10 +74,11 @@ const CommandSpec kCoeffsSpec{
     "environment map (.hdr, .exr, or 8-bit PNG/JPEG decoded from sRGB).",
     [] {
       auto o = withLayout(
-          {{"--format", "FORMAT",
-            "json (default), text, glsl, or an engine's: three, babylon, filament, unity, gltf, "
-            "webxr (docs/engines.md)"},
-           kWindowOpt});
+          {coeffFormatOption("--format",
+                             "json (default), text, glsl, or an engine's: three, babylon, "
+                             "filament, unity, gltf, webxr (docs/engines.md)",
+                             false, LP_FIELD(output.format)),
+           windowOption()});
       for (auto& l : lightOptionSpecs()) o.push_back(l);
       return o;
     }(),
@@ -79,11 +87,12 @@ const CommandSpec kCoeffsSpec{
     "an environment map (.hdr, .exr, .png, .jpg), or a folder of six cube faces"};
 
 int runCoeffs(const Args& a) {
-  const CoeffFormat cf = parseCoeffFormat(a.get("--format", "json"), "--format", false);
+  const Settings& s = a.settings();
+  const CoeffFormat cf = parseCoeffFormat(s.output.format, "--format", false);
   const std::string& format = cf.name;
-  const LightOptions lights = chooseLights(a);
+  const LightOptions lights = chooseLights(s);
   const Environment env = loadEnvironment(a, lights);
-  const Sh9 L = applyWindow(env.radiance, chooseWindow(a, env.radiance));
+  const Sh9 L = applyWindow(env.radiance, chooseWindow(s.still, env.radiance));
   if (cf.engine == Engine::Gltf) {
     std::cout << gltfDocument(env.image, env.layout, env.orientation, L, env.lights).dump() << "\n";
   } else if (cf.engine) {
@@ -127,40 +136,47 @@ const CommandSpec kIrradianceSpec{
     "map with --cube), computed from nine coefficients (sh) or by brute-force hemispherical\n"
     "integration (brute).\n"
     "PNG output is sRGB-encoded E/pi (the radiance of a white diffuse surface), clamped to 1.",
-    withLayout({{"--out", "FILE", "output image (.hdr, .exr: linear irradiance; .png: 8-bit)"},
-                {"--size", "WxH", "output size, each side up to 8192 (default 256x128)"},
-                {"--cube", "N",
-                 "write a cube map instead: six N x N faces in OpenGL's convention, as a 4N x 3N "
-                 "horizontal cross (N up to 4096)"},
-                {"--method", "sh|brute", "how to compute E (default sh)"},
-                kWindowOpt}),
+    withLayout({fileOption("--out", "FILE",
+                           "output image (.hdr, .exr: linear irradiance; .png: 8-bit); required",
+                           {".hdr", ".exr", ".png"}, LP_FIELD(output.out)),
+                sizeOption("--size", "output size", 8192, "256x128", LP_FIELD(output.size)),
+                integerOption("--cube", "N",
+                              "write a cube map instead: six N x N faces in OpenGL's convention, "
+                              "as a 4N x 3N horizontal cross",
+                              1, 4096, "", LP_FIELD(still.cube)),
+                choiceOption("--method", "how to compute E", {"sh", "brute"}, "sh",
+                             LP_FIELD(still.method)),
+                windowOption()}),
     1,
     1,
-    "an environment map (.hdr, .exr, .png, .jpg), or a folder of six cube faces"};
+    "an environment map (.hdr, .exr, .png, .jpg), or a folder of six cube faces",
+    [](const Settings& s) {
+      if (!s.output.out) throw Error("--out FILE is required");
+      if (s.still.cube && s.output.size) throw Error("give --size or --cube, not both");
+      if (s.still.method == "brute" && s.still.window != "none")
+        throw Error("--window applies to --method sh only");
+    }};
 
 int runIrradiance(const Args& a) {
-  if (!a.has("--out")) throw Error("--out FILE is required");
-  const std::string ext = requireExtension(a.get("--out"), "--out", {".hdr", ".exr", ".png"});
-  if (a.has("--cube") && a.has("--size")) throw Error("give --size or --cube, not both");
+  const Settings& s = a.settings();
+  const std::string ext = requireExtension(*s.output.out, "--out", {".hdr", ".exr", ".png"});
   // The equirect indexed by normal, or (--cube N) the six faces as a 4N x 3N horizontal cross in
   // OpenGL's face convention: the cube layout that liveprobe reads (liveprobe/sh/layout.h).
-  const bool cube = a.has("--cube");
-  const int faceSize = int(a.integerIn("--cube", 0, 1, 4096));
-  const auto [w, h] = cube ? std::pair{4 * faceSize, 3 * faceSize}
-                           : parseSize(a.get("--size", "256x128"), "--size", 8192);
-  const std::string method = a.get("--method", "sh");
-  if (method != "sh" && method != "brute")
-    throw Error("--method " + method + ": expected sh or brute");
+  const bool cube = s.still.cube.has_value();
+  const int faceSize = s.still.cube.value_or(0);
+  const auto [w, h] =
+      cube ? std::pair{4 * faceSize, 3 * faceSize} : s.output.size.value_or(Size{256, 128});
+  const std::string& method = s.still.method;
   Environment env = loadEnvironment(a);
   const auto grid = cube ? layoutSamples(LayoutSpec(Layout::Cube), w, h) : equirectSamples(w, h);
   std::vector<glm::vec3> normals(grid.size());
   for (std::size_t i = 0; i < grid.size(); ++i) normals[i] = grid[i].dir;
   std::vector<Rgb> e(grid.size());
   if (method == "sh") {
-    const auto m = irradianceMatrices(applyWindow(env.radiance, chooseWindow(a, env.radiance)));
+    const auto m =
+        irradianceMatrices(applyWindow(env.radiance, chooseWindow(s.still, env.radiance)));
     for (std::size_t i = 0; i < normals.size(); ++i) e[i] = evalIrradianceQuadratic(m, normals[i]);
   } else {
-    if (a.has("--window")) throw Error("--window applies to --method sh only");
     auto samples = layoutSamples(env.layout, env.image.width, env.image.height);
     for (auto& smp : samples) smp.dir = env.orientation * smp.dir;
     ThreadPool pool(0);
@@ -171,7 +187,7 @@ int runIrradiance(const Args& a) {
     if (grid[i].solidAngle > 0) std::copy_n(&e[i].x, 3, out.rgb.data() + 3 * i);
   if (ext != ".hdr" && ext != ".exr")
     for (float& v : out.rgb) v /= kA0;  // 8-bit: the radiance of a white Lambertian surface
-  saveImage(a.get("--out"), out);
+  saveImage(*s.output.out, out);
   return 0;
 }
 
@@ -182,26 +198,25 @@ const CommandSpec kCompareSpec{
     "(luminance, solid-angle weighted). Errors are given as a fraction of the total intensity\n"
     "(the paper's measure) and of the mean irradiance. With --sun, SH of the rest plus the\n"
     "lights is measured beside SH alone.",
-    withLayout({{"--size", "WxH", "grid of normals, each side up to 4096 (default 64x32)"},
-                {"--out", "PNG", "figure: SH map, brute-force map and error, with a colour scale"},
-                {"--json", "", "print JSON instead of text"},
-                quietOption(),
-                kWindowOpt,
-                lightOptionSpecs()[0],
-                lightOptionSpecs()[1]}),
+    withLayout({sizeOption("--size", "grid of normals", 4096, "64x32", LP_FIELD(output.size)),
+                fileOption("--out", "PNG",
+                           "figure: SH map, brute-force map and error, with a colour scale",
+                           {".png"}, LP_FIELD(output.out)),
+                flagOption("--json", "print JSON instead of text", LP_FIELD(output.json)),
+                quietOption(), windowOption(), lightOptionSpecs()[0], lightOptionSpecs()[1]}),
     1,
     1,
     "an environment map (.hdr, .exr, .png, .jpg), or a folder of six cube faces"};
 
 int runCompare(const Args& a) {
-  const auto [w, h] = parseSize(a.get("--size", "64x32"), "--size", 4096);
-  if (a.has("--out")) requireExtension(a.get("--out"), "--out", {".png"});
+  const Settings& s = a.settings();
+  const auto [w, h] = s.output.size.value_or(Size{64, 32});
   Environment env = loadEnvironment(a);
   installStopHandlers();
-  Progress progress("compare: brute force", std::int64_t(w) * h, a.has("--quiet"), "normals");
-  const LightOptions lights = chooseLights(a);
+  Progress progress("compare: brute force", std::int64_t(w) * h, s.output.quiet, "normals");
+  const LightOptions lights = chooseLights(s);
   const CompareResult r = compareIrradiance(
-      env.image, env.layout, w, h, chooseWindow(a, env.radiance), 0, env.orientation,
+      env.image, env.layout, w, h, chooseWindow(s.still, env.radiance), 0, env.orientation,
       [&](std::size_t done) {
         progress.update(std::int64_t(done));
         return !stopRequested();
@@ -212,8 +227,8 @@ int runCompare(const Args& a) {
     std::fprintf(stderr, "liveprobe: compare stopped by a signal after %s\n", "part of the grid");
     return kExitInterrupted;
   }
-  if (a.has("--out")) saveCompareFigure(a.get("--out"), r);
-  if (a.has("--json")) {
+  if (s.output.out) saveCompareFigure(*s.output.out, r);
+  if (s.output.json) {
     nlohmann::ordered_json j;
     j["source"] = a.positional()[0];
     j["layout"] = std::string(layoutName(env.layout.layout));

@@ -1,47 +1,53 @@
 #include "commands.h"
 
 #include "liveprobe/backends.h"
+#include "liveprobe/exchange/engine_export.h"
 #include "liveprobe/sh/error.h"
+#include "settings.h"
 
 namespace lp::cli {
 
 std::vector<OptionSpec> lightOptionSpecs(const std::string& group) {
-  return {{"--sun", "",
-           "take the dominant compact source (sun, lamp, window) out of the coefficients and keep "
-           "it as a disc light",
-           false, false, group},
-          {"--lights", "K",
-           "up to K such lights (implies --sun; 1.." + std::to_string(kMaxLights) + ", default 1)",
-           false, false, group}};
+  return {flagOption("--sun",
+                     "take the dominant compact source (sun, lamp, window) out of the "
+                     "coefficients and keep it as a disc light",
+                     LP_FIELD(lights.sun), group),
+          integerOption("--lights", "K", "up to K such lights, implying --sun", 1, kMaxLights, "1",
+                        LP_FIELD(lights.count), group)};
 }
 
 OptionSpec threadsOption(const std::string& group) {
-  return {"--threads", "N",   "threads for one frame's projection, 1 to 64 (default 2)",
-          false,       false, group};
+  return integerOption("--threads", "N", "threads for one frame's projection", 1, 64, "2",
+                       LP_FIELD(stream.threads), group);
 }
 
 OptionSpec quietOption(const std::string& group) {
-  return {"--quiet", "", "no progress on stderr", false, false, group};
+  return flagOption("--quiet", "no progress on stderr", LP_FIELD(output.quiet), group);
 }
 
 std::vector<OptionSpec> hudOptions(const std::string& group, bool window) {
-  std::vector<OptionSpec> o = {{"--hud", "",
-                                "draw the HUD (the panorama, the probes, the coefficients) into "
-                                "headless output too",
-                                false, false, group}};
+  std::vector<OptionSpec> o = {
+      flagOption("--hud",
+                 "draw the HUD (the panorama, the probes, the coefficients) into headless output "
+                 "too",
+                 LP_FIELD(output.hud), group)};
   if (window)
-    o.push_back({"--no-hud", "", "start with the HUD hidden (H shows it)", false, false, group});
+    o.push_back(flagOption("--no-hud", "start with the HUD hidden (H shows it)",
+                           LP_FIELD(output.noHud), group));
   return o;
 }
 
-void checkHudOptions(const Args& a) {
-  if (a.has("--hud") && a.has("--no-hud")) throw Error("--hud and --no-hud: give one of them");
+void checkCoeffFormat(const std::string& name, const std::string& value, bool streaming) {
+  parseCoeffFormat(value, name, streaming);
 }
 
-LightOptions chooseLights(const Args& a) {
+void checkHudOptions(const Settings& s) {
+  if (s.output.hud && s.output.noHud) throw Error("--hud and --no-hud: give one of them");
+}
+
+LightOptions chooseLights(const Settings& s) {
   LightOptions o;
-  o.maxLights =
-      a.has("--lights") ? a.integerIn("--lights", 1, 1, kMaxLights) : (a.has("--sun") ? 1 : 0);
+  o.maxLights = s.lights.count ? *s.lights.count : (s.lights.sun ? 1 : 0);
   return o;
 }
 

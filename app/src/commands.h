@@ -9,6 +9,7 @@
 #include "args.h"
 #include "liveprobe/capture/frame.h"
 #include "liveprobe/sh/lights.h"
+#include "settings.h"
 
 namespace lp::cli {
 
@@ -45,6 +46,8 @@ int runCalibrate(const Args&);
 /// The replay pipeline with an opened camera as its source (cmd_replay.cpp).
 int runStreamForLive(const Args& a, std::unique_ptr<FrameSource> camera);
 std::vector<OptionSpec> streamOptions();
+/// What goes together among them: --serve-* with --serve, --mqtt-* with --publish, --hud.
+void checkStreamOptions(const Settings& s);
 // Options more than one command takes, each declared once here with its one help text (a
 // command adds them to its list, under its own help section `group`).
 /// --sun and --lights K: extraction of the dominant compact lights (liveprobe/sh/lights.h).
@@ -55,10 +58,24 @@ OptionSpec threadsOption(const std::string& group = {});
 OptionSpec quietOption(const std::string& group = {});
 /// --hud (into headless output) and, where there can be a window, --no-hud.
 std::vector<OptionSpec> hudOptions(const std::string& group, bool window);
+void checkCoeffFormat(const std::string& name, const std::string& value, bool streaming);
+/// A coefficient format (exchange/coeffs_io.h: parseCoeffFormat), checked as the line is read;
+/// `streaming`: the formats a stream's records take (no glsl, no text, no gltf).
+template <class F>
+OptionSpec coeffFormatOption(const std::string& name, const std::string& help, bool streaming,
+                             F field, const std::string& group = {}) {
+  OptionSpec o = textOption(name, "FORMAT", help, field, group);
+  o.set = [name, streaming, field](Settings& s, const std::string& v) {
+    checkCoeffFormat(name, v, streaming);
+    field(s) = v;
+  };
+  return o;
+}
+
 /// Refuses --hud with --no-hud (one line).
-void checkHudOptions(const Args& a);
+void checkHudOptions(const Settings& s);
 /// The extraction asked for: maxLights = K with --lights K, 1 with --sun alone, 0 without either.
-LightOptions chooseLights(const Args& a);
+LightOptions chooseLights(const Settings& s);
 
 /// Run-time data beside the program: <the executable's folder>/../share/liveprobe, in the build
 /// tree as in an install (the build stages it there).

@@ -15,113 +15,155 @@
 #include "liveprobe/exchange/coeffs_io.h"
 #include "liveprobe/sh/error.h"
 #include "progress.h"
+#include "settings.h"
 
 namespace lp::cli {
 
 std::vector<OptionSpec> sceneOptions() {
   const std::string m = "Model and camera", l = "Look";
-  return {{"--model", "FILE|sphere", "model to light (OBJ, PLY, glTF, ...; default: a UV sphere)",
-           false, false, m},
-          {"--model-rotate", "YAW,PITCH,ROLL",
-           "turn the model (degrees, about its up, right and view axes)", false, false, m},
-          {"--up", "y|z", "the model file's up axis (default y, as OBJ and glTF)", false, false, m},
-          {"--yaw", "DEG", "camera yaw around the vertical axis (default 0: front view)", false,
-           false, m},
-          {"--pitch", "DEG", "camera pitch, -89.9 to 89.9 (default 0)", false, false, m},
-          {"--distance", "D", "camera distance; the model fits the unit sphere (default 3.2)",
-           false, false, m},
-          {"--exposure", "X|auto",
-           "exposure multiplier; auto (default): mean radiance to 0.18, or from the irradiance "
-           "without an environment",
-           false, false, l},
-          {"--tonemap", "aces|reinhard|linear", "tone map (default aces)", false, false, l},
-          {"--tonemap-background", "",
-           "expose and tone-map an 8-bit background like HDR (default: shown as the source looks)",
-           false, false, l},
-          {"--no-background", "", "do not draw the panorama behind the model", false, false, l},
-          {"--msaa", "1|2|4|8", "multisample anti-aliasing, samples per pixel (default 4)", false,
-           false, l},
-          {"--full-resolution", "",
-           "a window on a software GL (llvmpipe) keeps its full resolution and MSAA, however slow "
-           "(default: dynamic resolution keeps about 30 frames/s)",
-           false, false, l},
-          {"--shadows", "",
-           "the first light (--sun) casts the model's shadow, sharp or soft as its angular radius",
-           false, false, l},
-          {"--ground", "",
-           "a shadow catcher under the model: the background darkened by its shadow and occlusion",
-           false, false, l},
-          {"--headless", "", "render offscreen through OSMesa even when a display exists", false,
-           false, l}};
+  std::vector<OptionSpec> o = {
+      textOption("--model", "FILE|sphere",
+                 "model to light (OBJ, PLY, glTF, ...; default: a UV sphere)",
+                 LP_FIELD(scene.model), m),
+      tripleOption("--model-rotate", "YAW,PITCH,ROLL",
+                   "turn the model (degrees, about its up, right and view axes)",
+                   "yaw,pitch,roll in degrees", LP_FIELD(scene.modelRotate), m),
+      choiceOption("--up", "the model file's up axis, y as in OBJ and glTF", {"y", "z"}, "y",
+                   LP_FIELD(scene.upZ), m, [](const std::string& v) { return v == "z"; }),
+      numberOption("--yaw", "DEG", "camera yaw around the vertical axis", {-360, 360},
+                   "0: front view", LP_FIELD(scene.yaw), m),
+      numberOption("--pitch", "DEG", "camera pitch", {-89.9, 89.9}, "0", LP_FIELD(scene.pitch), m),
+      numberOption("--distance", "D", "camera distance; the model fits the unit sphere",
+                   {0.05, 1000, true}, "3.2", LP_FIELD(scene.distance), m),
+      [&] {
+        OptionSpec o{"--exposure",
+                     "X|auto",
+                     "exposure multiplier, above 0; auto (default): mean radiance to 0.18, or from "
+                     "the irradiance without an environment",
+                     false,
+                     false,
+                     l};
+        o.set = [](Settings& s, const std::string& v) {
+          if (v == "auto")
+            s.scene.exposure.reset();
+          else if (!((s.scene.exposure = parseNumber(v, "--exposure")) > 0))
+            throw Error("--exposure " + v + ": must be positive or auto");
+        };
+        return o;
+      }(),
+      choiceOption("--tonemap", "tone map", {"aces", "reinhard", "linear"}, "aces",
+                   LP_FIELD(scene.tonemap), l),
+      choiceOption("--msaa", "multisample anti-aliasing, samples per pixel", {"1", "2", "4", "8"},
+                   "4", LP_FIELD(scene.msaa), l,
+                   [](const std::string& v) { return std::stoi(v); })};
+  struct Flag {
+    const char* name;
+    const char* help;
+    bool SceneSettings::*field;
+  };
+  for (const Flag& f : std::initializer_list<Flag>{
+           {"--tonemap-background",
+            "expose and tone-map an 8-bit background like HDR (default: shown as the source looks)",
+            &SceneSettings::tonemapBackground},
+           {"--no-background", "do not draw the panorama behind the model",
+            &SceneSettings::noBackground},
+           {"--full-resolution",
+            "a window on a software GL (llvmpipe) keeps its full resolution and MSAA, however slow "
+            "(default: dynamic resolution keeps about 30 frames/s)",
+            &SceneSettings::fullResolution},
+           {"--shadows",
+            "the first light (--sun) casts the model's shadow, sharp or soft as its angular radius",
+            &SceneSettings::shadows},
+           {"--ground",
+            "a shadow catcher under the model: the background darkened by its shadow and occlusion",
+            &SceneSettings::ground},
+           {"--headless", "render offscreen through OSMesa even when a display exists",
+            &SceneSettings::headless}})
+    o.push_back(flagOption(
+        f.name, f.help, [field = f.field](Settings& s) -> bool& { return s.scene.*field; }, l));
+  return o;
 }
 
 std::vector<OptionSpec> layoutOptions() {
   const std::string g = "Panorama";
-  return {{"--layout", "equirect|angular|mirrorball|cube|fisheye",
-           "panorama layout (default equirect)", false, false, g},
-          {"--circle", "CX,CY,R", "mirrorball: the ball's circle in pixels", false, false, g},
-          {"--fov", "DEG", "fisheye: field of view of each lens, 180 to 360 (default 190)", false,
-           false, g},
-          {"--env-rotate,--rotate", "YAW,PITCH,ROLL",
-           "turn the environment, lighting and background together (degrees, about +z, +y, +x)",
-           false, false, g},
-          {"--env-flip", "",
-           "the panorama is stored upside down: mirror it top to bottom (before --env-rotate)",
-           false, false, g}};
-}
-
-glm::mat3 envOrientationFromArgs(const Args& a) {
-  glm::mat3 o(1.0f);
-  if (a.has("--env-rotate")) {
-    const auto v =
-        parseNumberList(a.get("--env-rotate"), "--env-rotate", 3, "yaw,pitch,roll in degrees");
-    o = rotationYawPitchRoll(float(v[0]), float(v[1]), float(v[2]));
-  }
-  if (a.has("--env-flip"))
-    o = o * glm::mat3(glm::vec3(1, 0, 0), glm::vec3(0, 1, 0), glm::vec3(0, 0, -1));
-  return o;
-}
-
-LayoutSpec layoutFromArgs(const Args& a, const FrameSource* source) {
-  const bool known = source && source->layout();
-  const Layout native = known ? *source->layout() : Layout::Equirect;
-  LayoutSpec spec(native);
-  if (a.has("--layout")) {
+  OptionSpec layout{"--layout",
+                    "equirect|angular|mirrorball|cube|fisheye",
+                    "panorama layout (default equirect)",
+                    false,
+                    false,
+                    g};
+  layout.set = [](Settings& s, const std::string& v) {
     try {
-      spec.layout = parseLayout(a.get("--layout"));
+      s.panorama.layout = parseLayout(v);
     } catch (const Error& e) {
       throw Error("--layout: " + std::string(e.what()));
     }
+  };
+  OptionSpec circle = tripleOption("--circle", "CX,CY,R", "mirrorball: the ball's circle in pixels",
+                                   "cx,cy,r with r > 0", LP_FIELD(panorama.circle), g);
+  circle.set = [](Settings& s, const std::string& v) {
+    const Triple c = parseTriple("--circle", v, "cx,cy,r with r > 0");
+    if (!(c[2] > 0)) throw Error("--circle " + v + ": expected cx,cy,r with r > 0");
+    s.panorama.circle = c;
+  };
+  return {layout, circle,
+          numberOption("--fov", "DEG", "fisheye: field of view of each lens", {180, 360}, "190",
+                       LP_FIELD(panorama.fov), g),
+          tripleOption("--env-rotate,--rotate", "YAW,PITCH,ROLL",
+                       "turn the environment, lighting and background together (degrees, about "
+                       "+z, +y, +x)",
+                       "yaw,pitch,roll in degrees", LP_FIELD(panorama.rotate), g),
+          flagOption("--env-flip",
+                     "the panorama is stored upside down: mirror it top to bottom (before "
+                     "--env-rotate)",
+                     LP_FIELD(panorama.flip), g)};
+}
+
+glm::mat3 envOrientation(const PanoramaSettings& p) {
+  glm::mat3 o(1.0f);
+  if (p.rotate) {
+    const Triple& v = *p.rotate;
+    o = rotationYawPitchRoll(float(v[0]), float(v[1]), float(v[2]));
+  }
+  if (p.flip) o = o * glm::mat3(glm::vec3(1, 0, 0), glm::vec3(0, 1, 0), glm::vec3(0, 0, -1));
+  return o;
+}
+
+LayoutSpec layoutSpec(const PanoramaSettings& p, const FrameSource* source) {
+  const bool known = source && source->layout();
+  const Layout native = known ? *source->layout() : Layout::Equirect;
+  LayoutSpec spec(native);
+  if (p.layout) {
+    spec.layout = *p.layout;
     if (known && spec.layout != native)
       throw Error(source->describe() + ": the frames are a " + std::string(layoutName(native)) +
-                  " layout; --layout " + a.get("--layout") + " does not apply");
+                  " layout; --layout " + std::string(layoutName(*p.layout)) + " does not apply");
   }
-  if (a.has("--circle")) {
+  if (p.circle) {
     if (spec.layout != Layout::MirrorBall)
       throw Error("--circle applies to --layout mirrorball only");
-    const auto v = parseNumberList(a.get("--circle"), "--circle", 3, "cx,cy,r with r > 0");
-    if (!(v[2] > 0)) throw Error("--circle " + a.get("--circle") + ": expected cx,cy,r with r > 0");
-    spec.circle = {float(v[0]), float(v[1]), float(v[2])};
+    spec.circle = {float((*p.circle)[0]), float((*p.circle)[1]), float((*p.circle)[2])};
   } else if (spec.layout == Layout::MirrorBall) {
     throw Error(
         "--layout mirrorball needs --circle cx,cy,r: the mirror ball's centre and radius "
         "in pixels");
   }
-  if (a.has("--fov")) {
+  if (p.fov) {
     if (spec.layout != Layout::DualFisheye) throw Error("--fov applies to --layout fisheye only");
-    spec.fisheyeFovDeg = float(a.numberIn("--fov", 190, 180, 360));
+    spec.fisheyeFovDeg = float(*p.fov);
   }
   return spec;
 }
 
-Environment loadEnvironment(const std::string& source, const Args& a, const LightOptions& lights) {
-  layoutFromArgs(a);  // option errors before the file is read
+Environment loadEnvironment(const std::string& source, const PanoramaSettings& p,
+                            const LightOptions& lights) {
+  layoutSpec(p);  // option errors before the file is read
   auto src = openSource(source);
   Frame frame;
   if (!src->next(frame)) throw Error(source + ": no frame to read");
   Environment env;
-  env.layout = layoutFromArgs(a, src.get());
-  env.orientation = envOrientationFromArgs(a);
+  env.layout = layoutSpec(p, src.get());
+  env.orientation = envOrientation(p);
   FrameProcessor processor({env.layout, Photometry{}, env.orientation, 1, lights});
   FrameLighting lit;
   try {
@@ -189,12 +231,21 @@ void setBackground(gl::Renderer& r, const Frame& frame, Layout drawn, float scal
 
 std::vector<OptionSpec> lightingOptions() {
   std::vector<OptionSpec> o = {
-      {"--env", "FILE", "environment map that lights the model and is drawn behind it"}};
+      textOption("--env", "FILE", "environment map that lights the model and is drawn behind it",
+                 LP_FIELD(lighting.env))};
   for (auto& l : layoutOptions()) o.push_back(l);
-  o.insert(o.end(),
-           {{"--coeffs", "FILE.json", "coefficients (and lights) written by liveprobe coeffs"},
-            {"--coeff", "NAME=VALUE",
-             "set one coefficient (VALUE or r,g,b), others zero; repeatable", true}});
+  OptionSpec coeff = textOption("--coeff", "NAME=VALUE",
+                                "set one coefficient (VALUE or r,g,b), others zero; repeatable",
+                                LP_FIELD(lighting.coeff), {}, true);
+  coeff.set = [](Settings& s, const std::string& v) {
+    Sh9 check;
+    applyCoeffAssignment(v, check);  // a bad name or value is refused as the line is read
+    s.lighting.coeff.push_back(v);
+  };
+  o.insert(o.end(), {textOption("--coeffs", "FILE.json",
+                                "coefficients (and lights) written by liveprobe coeffs",
+                                LP_FIELD(lighting.coeffs)),
+                     coeff});
   for (auto& l : lightOptionSpecs()) o.push_back(l);
   return o;
 }
@@ -221,17 +272,19 @@ void applyCoeffAssignment(const std::string& text, Sh9& sh) {
   sh.c[k] = {v[0], v[1], v[2]};
 }
 
-std::optional<Lighting> lightingFromArgs(const Args& a) {
-  const int kinds = int(a.has("--env")) + int(a.has("--coeffs")) + int(a.has("--coeff"));
+std::optional<Lighting> lightingFrom(const Settings& st) {
+  const LightingSettings& ls = st.lighting;
+  const int kinds = int(ls.env.has_value()) + int(ls.coeffs.has_value()) + int(!ls.coeff.empty());
   if (kinds > 1) throw Error("give only one of --env, --coeffs and --coeff");
   if (kinds == 0) return std::nullopt;
-  if (chooseLights(a).maxLights > 0 && !a.has("--env"))
+  const LightOptions lights = chooseLights(st);
+  if (lights.maxLights > 0 && !ls.env)
     throw Error(
         "--sun and --lights take the lights out of an --env map (a --coeffs file carries "
         "its own)");
   Lighting l;
-  if (a.has("--env")) {
-    Environment env = loadEnvironment(a.get("--env"), a, chooseLights(a));
+  if (ls.env) {
+    Environment env = loadEnvironment(*ls.env, st.panorama, lights);
     l.lights = env.lights;
     l.layout = env.layout;
     l.orientation = env.orientation;
@@ -239,11 +292,11 @@ std::optional<Lighting> lightingFromArgs(const Args& a) {
     l.radiance = env.radiance;
     l.background = std::move(env.image);
   } else {
-    if (a.has("--coeffs")) {
-      l.radiance = loadCoefficients(a.get("--coeffs"), &l.lights);
+    if (ls.coeffs) {
+      l.radiance = loadCoefficients(*ls.coeffs, &l.lights);
     } else {
       std::vector<int> seen;
-      for (const auto& c : a.all("--coeff")) {
+      for (const auto& c : ls.coeff) {
         Sh9 one;
         applyCoeffAssignment(c, one);
         const int k = shIndex(c.substr(0, c.find('=')));
@@ -253,15 +306,15 @@ std::optional<Lighting> lightingFromArgs(const Args& a) {
         l.radiance.c[std::size_t(k)] = one.c[std::size_t(k)];
       }
     }
-    LightSplit turned = rotateSplit({l.radiance, l.lights}, envOrientationFromArgs(a));
+    LightSplit turned = rotateSplit({l.radiance, l.lights}, envOrientation(st.panorama));
     l.radiance = turned.residual;
     l.lights = std::move(turned.lights);
   }
   return l;
 }
 
-Mesh meshFromArgs(const Args& a) {
-  const std::string model = a.get("--model", "sphere");
+Mesh meshFrom(const SceneSettings& sc) {
+  const std::string& model = sc.model;
   Mesh m;
   if (model == "sphere") {
     m = makeUvSphere();
@@ -273,40 +326,31 @@ Mesh meshFromArgs(const Args& a) {
       throw Error(e.what());
     }
   }
-  const std::string up = a.get("--up", "y");
-  if (up != "y" && up != "z") throw Error("--up " + up + ": expected y or z");
   glm::mat3 turn(1.0f);
-  if (up == "z")
+  if (sc.upZ)
     turn =
         glm::mat3(glm::vec3(1, 0, 0), glm::vec3(0, 0, -1), glm::vec3(0, 1, 0));  // file z -> GL y
   // The bundled test models face the camera by default; spot.obj (Keenan Crane's cow) is stored
   // facing -z, away from the default camera on +z. --model-rotate replaces this default.
   const std::string file = std::filesystem::path(model).filename().string();
-  const std::string defaultTurn = file == "spot.obj" ? "180,0,0" : "0,0,0";
-  {
-    const auto v = parseNumberList(a.get("--model-rotate", defaultTurn), "--model-rotate", 3,
-                                   "yaw,pitch,roll in degrees");
-    // About the model's own up (GL y), right (x) and view (z) axes, applied yaw first.
-    const glm::mat4 r =
-        glm::rotate(glm::mat4(1.0f), glm::radians(float(v[2])), glm::vec3(0, 0, 1)) *
-        glm::rotate(glm::mat4(1.0f), glm::radians(float(v[1])), glm::vec3(1, 0, 0)) *
-        glm::rotate(glm::mat4(1.0f), glm::radians(float(v[0])), glm::vec3(0, 1, 0));
-    turn = glm::mat3(r) * turn;
-  }
+  const Triple v =
+      sc.modelRotate ? *sc.modelRotate : Triple{file == "spot.obj" ? 180.0 : 0.0, 0, 0};
+  // About the model's own up (GL y), right (x) and view (z) axes, applied yaw first.
+  const glm::mat4 r = glm::rotate(glm::mat4(1.0f), glm::radians(float(v[2])), glm::vec3(0, 0, 1)) *
+                      glm::rotate(glm::mat4(1.0f), glm::radians(float(v[1])), glm::vec3(1, 0, 0)) *
+                      glm::rotate(glm::mat4(1.0f), glm::radians(float(v[0])), glm::vec3(0, 1, 0));
+  turn = glm::mat3(r) * turn;
   for (auto& p : m.positions) p = turn * p;
   for (auto& n : m.normals) n = turn * n;
   fitToUnitSphere(m);
   return m;
 }
 
-gl::Camera cameraFromArgs(const Args& a) {
+gl::Camera cameraFrom(const SceneSettings& sc) {
   gl::Camera c;
-  c.yawDeg = float(a.number("--yaw", c.yawDeg));
-  c.pitchDeg = float(a.number("--pitch", c.pitchDeg));
-  c.distance = float(a.number("--distance", c.distance));
-  if (!(c.distance > 0.05f)) throw Error("--distance " + a.get("--distance") + ": must be > 0.05");
-  if (std::abs(c.pitchDeg) > 89.9f)
-    throw Error("--pitch " + a.get("--pitch") + ": must be within +-89.9");
+  c.yawDeg = float(sc.yaw.value_or(c.yawDeg));
+  c.pitchDeg = float(sc.pitch.value_or(c.pitchDeg));
+  c.distance = float(sc.distance.value_or(c.distance));
   return c;
 }
 
@@ -326,34 +370,23 @@ float autoExposure(const Sh9& withoutLights, bool environment, const std::vector
   return peakRadiance > 1e-12f ? 1.0f / peakRadiance : 1.0f;
 }
 
-gl::ShadingSettings shadingFromArgs(const Args& a, const Sh9& radiance, bool environment,
-                                    const std::vector<Light>& lights) {
+gl::ShadingSettings shadingFrom(const SceneSettings& sc, const Sh9& radiance, bool environment,
+                                const std::vector<Light>& lights) {
   gl::ShadingSettings s;
-  const std::string e = a.get("--exposure", "auto");
-  s.exposure = e == "auto" ? autoExposure(radiance, environment, lights)
-                           : float(parseNumber(e, "--exposure"));
-  if (!(s.exposure > 0)) throw Error("--exposure " + e + ": must be positive or auto");
-  const std::string tm = a.get("--tonemap", "aces");
-  if (tm == "aces")
-    s.toneMap = gl::ToneMap::Aces;
-  else if (tm == "reinhard")
-    s.toneMap = gl::ToneMap::Reinhard;
-  else if (tm == "linear")
-    s.toneMap = gl::ToneMap::Linear;
-  else
-    throw Error("--tonemap " + tm + ": expected aces, reinhard or linear");
-  s.background = !a.has("--no-background");
-  s.displayReferredBackground = !a.has("--tonemap-background");
-  s.shadows = a.has("--shadows");
-  s.ground = a.has("--ground");
-  s.samples = a.integer("--msaa", 4);
-  if (s.samples != 1 && s.samples != 2 && s.samples != 4 && s.samples != 8)
-    throw Error("--msaa " + a.get("--msaa") + ": expected 1, 2, 4 or 8");
+  s.exposure = sc.exposure ? float(*sc.exposure) : autoExposure(radiance, environment, lights);
+  s.toneMap = sc.tonemap == "reinhard" ? gl::ToneMap::Reinhard
+              : sc.tonemap == "linear" ? gl::ToneMap::Linear
+                                       : gl::ToneMap::Aces;
+  s.background = !sc.noBackground;
+  s.displayReferredBackground = !sc.tonemapBackground;
+  s.shadows = sc.shadows;
+  s.ground = sc.ground;
+  s.samples = sc.msaa;
   return s;
 }
 
-gl::Backend backendFromArgs(const Args& a) {
-  return a.has("--headless") ? gl::Backend::Headless : gl::Backend::Auto;
+gl::Backend glBackend(const SceneSettings& sc) {
+  return sc.headless ? gl::Backend::Headless : gl::Backend::Auto;
 }
 
 std::unique_ptr<gl::GlContext> openContext(gl::Backend backend, std::pair<int, int> size,
@@ -374,8 +407,7 @@ void loadModel(gl::Renderer& r, const Mesh& mesh) {
   }
 }
 
-void loadScene(gl::Renderer& r, const Mesh& mesh, const Lighting& lighting) {
-  loadModel(r, mesh);
+void loadLighting(gl::Renderer& r, const Lighting& lighting) {
   r.setLighting(lighting.radiance, lighting.lights);
   r.setEnvOrientation(lighting.orientation);
   if (!lighting.background) return;

@@ -12,6 +12,7 @@
 #include "liveprobe/gl/renderer.h"
 #include "liveprobe/sh/layout.h"
 #include "liveprobe/sh/sh.h"
+#include "settings.h"
 
 /// What a stream command's SOURCE may be, for the commands' help.
 #define LP_SOURCE_KINDS                                                                        \
@@ -29,26 +30,26 @@ std::vector<OptionSpec> layoutOptions();
 /// --env-rotate YAW,PITCH,ROLL and --env-flip as one orthogonal matrix O: a light at file
 /// direction d lies in world direction O d, with O = Rz(yaw) Ry(pitch) Rx(roll) * F, F the
 /// flip z -> -z (a panorama stored upside down) or the identity. Identity when neither is given.
-glm::mat3 envOrientationFromArgs(const Args& a);
+glm::mat3 envOrientation(const PanoramaSettings& p);
 /// The layout options as a spec (option errors are reported before any file is read). A source
 /// that knows its own layout (six cube faces) gives the default, and a --layout that contradicts
 /// it is refused.
-LayoutSpec layoutFromArgs(const Args& a, const FrameSource* source = nullptr);
+LayoutSpec layoutSpec(const PanoramaSettings& p, const FrameSource* source = nullptr);
 
 /// A still environment in any layout: FILE is an image, or a folder of six cube faces.
 struct Environment {
   Image image;  ///< linear RGB, as stored in the file
   LayoutSpec layout;
-  glm::mat3 orientation{1.0f};  ///< world from file (envOrientationFromArgs)
+  glm::mat3 orientation{1.0f};  ///< world from file (envOrientation)
   Sh9 radiance;                 ///< unwindowed, turned by `orientation` (with lights: the rest)
   std::vector<Light> lights;    ///< the dominant compact lights, when asked, turned likewise
   float displayScale = 0.0f;    ///< an 8-bit file: the scale its decoded values carry; 0 for HDR
 };
 /// Reads the first frame of `source` and takes it through the frame path (FrameProcessor: one
 /// projection, the lights split out when `lights` asks), in the layout and orientation the
-/// options give (layoutFromArgs, envOrientationFromArgs). Warns (one line) about a likely layout
+/// options give (layoutSpec, envOrientation). Warns (one line) about a likely layout
 /// mistake. Throws lp::Error naming the source.
-Environment loadEnvironment(const std::string& source, const Args& a,
+Environment loadEnvironment(const std::string& source, const PanoramaSettings& p,
                             const LightOptions& lights = {.maxLights = 0});
 
 /// One warning line when the frame's shape suggests another layout than the one given: a square
@@ -74,18 +75,18 @@ void setBackground(gl::Renderer& r, const Image& panorama, Layout drawn, float d
 void setBackground(gl::Renderer& r, const Frame& frame, Layout drawn, float scale);
 
 /// From --env FILE [--layout], --coeffs FILE.json or --coeff NAME=VALUE...; nullopt if none given.
-std::optional<Lighting> lightingFromArgs(const Args& a);
+std::optional<Lighting> lightingFrom(const Settings& s);
 
 /// "L20=-0.2" or "L22=0.1,0.2,0.3" into `sh`. Throws lp::Error on an unknown name or bad value.
 void applyCoeffAssignment(const std::string& text, Sh9& sh);
 
 /// --model FILE|sphere (default sphere), fitted to the unit sphere. Throws lp::Error.
-Mesh meshFromArgs(const Args& a);
-gl::Camera cameraFromArgs(const Args& a);
+Mesh meshFrom(const SceneSettings& s);
+gl::Camera cameraFrom(const SceneSettings& s);
 /// --exposure X|auto (default auto: the environment's mean radiance maps to 0.18), --tonemap,
 /// --no-background.
-gl::ShadingSettings shadingFromArgs(const Args& a, const Sh9& radiance, bool environment = true,
-                                    const std::vector<Light>& lights = {});
+gl::ShadingSettings shadingFrom(const SceneSettings& s, const Sh9& radiance,
+                                bool environment = true, const std::vector<Light>& lights = {});
 
 /// The automatic exposure. With an environment (a background to match): the photographic rule,
 /// the mean radiance (L00 Y00, luminance) maps to 0.18. Without one (coefficients only), from the
@@ -93,7 +94,7 @@ gl::ShadingSettings shadingFromArgs(const Args& a, const Sh9& radiance, bool env
 /// 1.0, so any set of coefficients, a single one included, is visible. 1 if all is dark.
 float autoExposure(const Sh9& radiance, bool environment = true,
                    const std::vector<Light>& lights = {});
-gl::Backend backendFromArgs(const Args& a);
+gl::Backend glBackend(const SceneSettings& s);
 
 /// Creates a GL context (lp::Error on failure); `headlessSize`, where given, is its size when
 /// Auto finds no display. Whether it is headless is the context's to say (isHeadless()).
@@ -103,7 +104,8 @@ std::unique_ptr<gl::GlContext> openContext(gl::Backend backend, std::pair<int, i
 /// Uploads the mesh and its albedo texture.
 void loadModel(gl::Renderer& r, const Mesh& mesh);
 
-/// Uploads mesh (and its albedo texture), lighting and background into `r`.
-void loadScene(gl::Renderer& r, const Mesh& mesh, const Lighting& lighting);
+/// Uploads the lighting, its orientation and its background (resampled to equirect where GL does
+/// not draw its layout as it is).
+void loadLighting(gl::Renderer& r, const Lighting& lighting);
 
 }  // namespace lp::cli

@@ -277,8 +277,8 @@ void CapturePipeline::run() {
       // The display's copy in a layout GL draws as it is, made here rather than on the viewer's
       // thread.
       out.displayLayout = displayLayout(opt_.layout);
-      if (s.image && !displayDrawsAsIs(opt_.layout))
-        *s.image = displayEquirect(*s.image, opt_.layout);
+      const bool resample = s.image && !displayDrawsAsIs(opt_.layout);
+      if (resample) *s.image = displayEquirect(*s.image, opt_.layout);
       const auto t4 = Clock::now();
       if (opt_.keepImages && !out.raw) out.image = std::move(s.image);  // one background a frame
       s.image.reset();
@@ -286,8 +286,7 @@ void CapturePipeline::run() {
       if (s.merger) out.times[Stage::Merge] = msBetween(t1, tm);
       out.times[Stage::Convert] = msBetween(tm, t2);
       out.times[Stage::Project] = msBetween(t2, t3);
-      if (out.image && !displayDrawsAsIs(opt_.layout))
-        out.times[Stage::Resample] = msBetween(t3, t4);
+      if (resample && out.image) out.times[Stage::Resample] = msBetween(t3, t4);
       out.captureTime = s.frame.captureTime >= 0 ? s.frame.captureTime : grabbed;
       out.coefficientsLatencyMs = 1000.0 * (monotonicSeconds() - out.captureTime);
       if (opt_.onCaptured) opt_.onCaptured(out);

@@ -135,8 +135,7 @@ CoeffFormat parseCoeffFormat(const std::string& name, const std::string& flag, b
   if (!ok)
     throw Error(flag + " " + name + ": expected " + coeffFormatNames(perFrame) +
                 (perFrame && (name == "gltf" || name == "text" || name == "glsl")
-                     ? " (a per-frame record is one JSON line; use coeffs --format " + name +
-                           " for a still)"
+                     ? " (a per-frame record is one JSON line; " + name + " is a still's format)"
                      : ""));
   return f;
 }

@@ -39,9 +39,9 @@ MqttTarget parseMqttUrl(const std::string& url) {
     authority = authority.substr(at + 1);
     shown = std::string(t.tls ? "mqtts://" : "mqtt://") + t.username + "@" + authority +
             (slash == std::string::npos ? "" : rest.substr(slash));
-    if (t.username.empty()) throw Error("--publish " + shown + ": an empty user name");
+    if (t.username.empty()) throw Error(shown + ": an empty user name");
   }
-  const std::string what = "--publish " + shown;
+  const std::string& what = shown;
   if (rest.empty() && url.rfind("mqtt", 0) != 0)
     throw Error(what + ": expected mqtt://HOST[:PORT]/TOPIC or mqtts://...");
   if (slash == std::string::npos || slash + 1 >= rest.size())
@@ -52,7 +52,8 @@ MqttTarget parseMqttUrl(const std::string& url) {
                 " bytes; MQTT allows 65535");
   if (t.topic.find('\0') != std::string::npos ||
       mosquitto_validate_utf8(t.topic.data(), int(t.topic.size())) != MOSQ_ERR_SUCCESS)
-    throw Error("--publish: the topic is not valid UTF-8");
+    throw Error(what.substr(0, what.find('/', what.find("//") + 2)) +
+                "/...: the topic is not valid UTF-8");
   if (t.topic.find_first_of("+#") != std::string::npos)
     throw Error(what + ": a topic to publish to has no wildcards (+, #)");
   const auto colon = authority.rfind(':');
@@ -75,7 +76,7 @@ std::once_flag initOnce;
 
 MqttPublisher::MqttPublisher(MqttTarget target) : target_(std::move(target)) {
   std::call_once(initOnce, [] { mosquitto_lib_init(); });
-  const std::string what = "--publish " + target_.describe();
+  const std::string what = target_.describe();
   mosq_ = mosquitto_new(nullptr, true, this);
   if (!mosq_) throw Error(what + ": cannot create an MQTT client (out of memory)");
   const auto fail = [&](const std::string& why) {
@@ -96,8 +97,8 @@ MqttPublisher::MqttPublisher(MqttTarget target) : target_(std::move(target)) {
             : mosquitto_tls_set(mosq_, target_.cafile.c_str(), nullptr, nullptr, nullptr, nullptr);
     if (rc != MOSQ_ERR_SUCCESS)
       fail("cannot set up TLS" +
-           (target_.cafile.empty() ? std::string() : " with --mqtt-cafile " + target_.cafile) +
-           " (" + mosquitto_strerror(rc) + ")");
+           (target_.cafile.empty() ? std::string() : " with the CA file " + target_.cafile) + " (" +
+           mosquitto_strerror(rc) + ")");
   }
   mosquitto_connect_callback_set(mosq_, [](mosquitto*, void* obj, int rc) {
     auto* self = static_cast<MqttPublisher*>(obj);
@@ -164,7 +165,7 @@ std::string MqttPublisher::summary() const {
   const MqttStats m = stats();
   return target_.describe() + ": " + std::to_string(m.published) + " published, " +
          std::to_string(m.lost) + " lost (no broker connection), " + std::to_string(m.reconnects) +
-         " reconnects" + (m.published == 0 ? "; no message reached the broker" : "");
+         " reconnects" + (m.published == 0 && m.lost > 0 ? "; no message reached the broker" : "");
 }
 
 }  // namespace lp

@@ -67,12 +67,16 @@ std::optional<CoeffFormat> formatFromQuery(lws* wsi) {
   return format;
 }
 
+}  // namespace
+
 bool isLoopback(const std::string& host) {
   if (host == "localhost") return true;
   in_addr a{};
   if (inet_pton(AF_INET, host.c_str(), &a) != 1) return false;
   return (ntohl(a.s_addr) >> 24) == 127;
 }
+
+namespace {
 
 /// Binds a socket to the address as the server will, and says in one line why it can't: an
 /// address this machine does not have (EADDRNOTAVAIL), a port in use, a privileged port.
@@ -96,20 +100,17 @@ void checkBindable(const std::string& host, int port, const std::string& where) 
 
 }  // namespace
 
-void parseServeAddress(const std::string& text, bool remote, StreamServerOptions& o) {
+void parseServeAddress(const std::string& text, StreamServerOptions& o) {
   const auto colon = text.rfind(':');
   const std::string host = colon == std::string::npos ? "127.0.0.1" : text.substr(0, colon);
   const std::string port = colon == std::string::npos ? text : text.substr(colon + 1);
   char* end = nullptr;
   const long p = std::strtol(port.c_str(), &end, 10);
   if (port.empty() || *end != '\0' || p < 0 || p > 65535)
-    throw Error("--serve " + text + ": expected [ADDR:]PORT with PORT in 0..65535");
+    throw Error(text + ": expected [ADDR:]PORT with PORT in 0..65535");
   in_addr a{};
   if (host != "localhost" && inet_pton(AF_INET, host.c_str(), &a) != 1)
-    throw Error("--serve " + text + ": " + host + " is not an IPv4 address or localhost");
-  if (!isLoopback(host) && !remote)
-    throw Error("--serve " + text + ": " + host +
-                " is reachable from other machines; add --serve-remote to listen there");
+    throw Error(text + ": " + host + " is not an IPv4 address or localhost");
   o.host = host == "localhost" ? "127.0.0.1" : host;
   o.port = int(p);
 }
@@ -367,7 +368,7 @@ StreamServer::StreamServer(StreamServerOptions options) : impl_(std::make_unique
   // upgrade) within timeout_secs, and frees a header buffer held idle as long.
   info.timeout_secs = unsigned(m.opt.handshakeSeconds);
   info.timeout_secs_ah_idle = unsigned(m.opt.handshakeSeconds);
-  const std::string where = "--serve " + m.opt.host + ":" + std::to_string(m.opt.port);
+  const std::string where = m.opt.host + ":" + std::to_string(m.opt.port);
   checkBindable(m.opt.host, m.opt.port, where);
   m.context = lws_create_context(&info);
   if (!m.context) throw Error(where + ": cannot listen there");

@@ -1,7 +1,7 @@
 // libFuzzer target: the command line of every subcommand. The first byte picks the command, the
-// rest is its arguments, one per line. Parsing, then every value through the parsers the
-// commands use (sizes, numbers, lists, ranges, the scene's options), must end in values or in
-// lp::Error: never a crash, a hang or another exception.
+// rest is its arguments, one per line. Parsing (every value into its typed setting: sizes,
+// numbers, lists, ranges, choices), then what the scene derives from the settings, must end in
+// values or in lp::Error: never a crash, a hang or another exception.
 #include <cstdint>
 #include <string>
 #include <vector>
@@ -41,23 +41,15 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
       (void)usage(spec);
       return;
     }
-    for (const auto& o : spec.options) {
-      if (o.value.empty()) continue;
-      const std::string name = o.name.substr(0, o.name.find(','));
-      for (const auto& v : a.all(name)) {
-        tryParse([&] { (void)parseSize(v, name); });
-        tryParse([&] { (void)parseNumber(v, name); });
-        tryParse([&] { (void)parseNumberList(v, name, 3, "three numbers"); });
-      }
-      tryParse([&] { (void)a.numberIn(name, 0.0, -1e6, 1e6); });
-      tryParse([&] { (void)a.integerIn(name, 0, -1000000, 1000000); });
-    }
-    // The scene's options, parsed as render, view, replay and live parse them (no file opened).
-    tryParse([&] { (void)envOrientationFromArgs(a); });
-    tryParse([&] { (void)layoutFromArgs(a); });
-    tryParse([&] { (void)cameraFromArgs(a); });
-    tryParse([&] { (void)backendFromArgs(a); });
-    tryParse([&] { (void)shadingFromArgs(a, lp::Sh9{}, false); });
+    // Every value was parsed into its typed field as the line was read; what the commands derive
+    // from the settings without opening a file must end in values or lp::Error too.
+    const Settings& st = a.settings();
+    tryParse([&] { (void)envOrientation(st.panorama); });
+    tryParse([&] { (void)layoutSpec(st.panorama); });
+    tryParse([&] { (void)cameraFrom(st.scene); });
+    tryParse([&] { (void)glBackend(st.scene); });
+    tryParse([&] { (void)shadingFrom(st.scene, lp::Sh9{}, false); });
+    tryParse([&] { (void)chooseLights(st); });
   });
   return 0;
 }

@@ -28,7 +28,7 @@ struct MqttTarget {
 
 /// Parses mqtt[s]://[USER[:PASSWORD]@]HOST[:PORT]/TOPIC. The topic must be one MQTT can publish
 /// to: valid UTF-8 of at most 65535 bytes, without the wildcards + and # or a NUL. Throws
-/// lp::Error naming --publish, never echoing the password.
+/// lp::Error that quotes the URL, never its password.
 MqttTarget parseMqttUrl(const std::string& url);
 
 struct MqttStats {

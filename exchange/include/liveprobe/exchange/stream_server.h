@@ -29,9 +29,11 @@ struct StreamServerOptions {
   std::string threeDir;       ///< three.js's build folder, served at /three/
 };
 
-/// "[ADDR:]PORT" of --serve: ADDR defaults to 127.0.0.1. An address beyond the loopback is
-/// refused unless `remote` (--serve-remote). Throws lp::Error naming the flag.
-void parseServeAddress(const std::string& text, bool remote, StreamServerOptions& o);
+/// "[ADDR:]PORT": ADDR (an IPv4 address or localhost) defaults to 127.0.0.1. Throws lp::Error
+/// quoting the text.
+void parseServeAddress(const std::string& text, StreamServerOptions& o);
+/// Whether `host` (an IPv4 address or localhost) is on the loopback, out of other machines' reach.
+bool isLoopback(const std::string& host);
 
 struct StreamStats {
   std::uint64_t connected = 0;  ///< clients served, in all

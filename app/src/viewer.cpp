@@ -1,0 +1,60 @@
+#include "viewer.h"
+
+#include <chrono>
+#include <thread>
+
+#include "progress.h"
+#include "scene.h"
+
+namespace lp::cli {
+
+Viewer::Viewer(const ViewerSpec& spec, const Mesh& mesh) {
+  ctx = openContext(spec.backend, spec.size, spec.headlessSize);
+  input = std::make_unique<WindowInput>(*ctx);
+  const bool windowed = window();
+  dynamicResolution = DynamicResolution(windowed && spec.keepRate && !spec.fullResolution &&
+                                        isSoftwareGl(ctx->describe()));
+  renderer = std::make_unique<gl::Renderer>();
+  loadModel(*renderer, mesh);
+  const bool shown = windowed ? !spec.noHud : spec.hud;
+  if (shown || windowed) {
+    hud = std::make_unique<Hud>(*ctx);
+    state.hud = shown;
+  }
+}
+
+void Viewer::draw(double lastFrameMs) {
+  const glm::ivec2 fb = ctx->framebufferSize();
+  const HudLayout layout = hudLayout(fb);
+  renderer->draw(fb, framedBesideHud(state.camera, layout, hud && state.hud),
+                 dynamicResolution.apply(state.shading));
+  if (!hud || !(state.hud || state.help)) return;
+  hud->setNote(dynamicResolution.describe());
+  hud->draw(layout, *renderer, state, lastFrameMs);
+}
+
+void Viewer::run(const ViewerLoop& loop) {
+  using Clock = std::chrono::steady_clock;
+  RateTitle rate;
+  double lastMs = 0;
+  while (!ctx->shouldClose() && !stopRequested()) {
+    const auto keys = handleInput(*input, hud.get(), state, loop.canPause);
+    const Turn turn = loop.before ? loop.before(keys) : Turn::Draw;
+    if (turn == Turn::Stop) break;
+    if (turn == Turn::Wait) {
+      std::this_thread::sleep_for(std::chrono::milliseconds(2));
+      continue;
+    }
+    const auto t0 = Clock::now();
+    draw(lastMs);
+    gl::Renderer::finish();
+    lastMs = std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
+    dynamicResolution.update(lastMs);
+    if (loop.drawn && !loop.drawn(lastMs)) break;
+    ctx->present();
+    const auto [prefix, suffix] = loop.title();
+    rate.tick(*input, prefix, suffix);
+  }
+}
+
+}  // namespace lp::cli
