@@ -29,6 +29,7 @@
 #include "liveprobe/sh/simd.h"
 #include "progress.h"
 #include "scene.h"
+#include "viewer.h"
 
 namespace lp::cli {
 
@@ -298,8 +299,7 @@ using BenchTimes = std::array<double, kStageCount>;  // by position in kBenchSta
 
 /// What the bench draws into, made once for every run.
 struct BenchScene {
-  std::unique_ptr<gl::GlContext> ctx;  // made before the renderer, which needs it current
-  gl::Renderer renderer;
+  Viewer viewer;  ///< headless: the context, the renderer with the model, the one draw
   LayoutSpec layout;
   glm::mat3 orientation;
   std::array<double, kStageCount> inject{};
@@ -353,20 +353,20 @@ BenchTimes timeFrame(BenchScene& scene, RunState& run, FrameSource& source,
   if (!asIs && !displayDrawsAsIs(scene.layout)) image = displayEquirect(image, scene.layout);
   lap(3);
   if (first) run.exposure = autoExposure(sh);
-  scene.renderer.setLighting(sh);
+  gl::Renderer& renderer = *scene.viewer.renderer;
+  renderer.setLighting(sh);
   if (asIs)
-    setBackground(scene.renderer, frame, displayLayout(scene.layout), lin.exposure() * scale);
+    setBackground(renderer, frame, displayLayout(scene.layout), lin.exposure() * scale);
   else
-    setBackground(scene.renderer, image, displayLayout(scene.layout),
+    setBackground(renderer, image, displayLayout(scene.layout),
                   frame.format == PanoramaFormat::BgrU8 ? lin.exposure() * scale : 0.0f);
   gl::Renderer::finish();
   lap(4);
-  gl::ShadingSettings shading;
-  shading.exposure = run.exposure;
-  scene.renderer.draw(scene.ctx->framebufferSize(), gl::Camera{}, shading);
+  scene.viewer.state.shading.exposure = run.exposure;
+  scene.viewer.draw(0.0);
   gl::Renderer::finish();
   lap(5);
-  auto px = gl::Renderer::readRgb8(scene.ctx->framebufferSize());
+  auto px = gl::Renderer::readRgb8(scene.viewer.ctx->framebufferSize());
   lap(6);
   return t;
 }
@@ -464,13 +464,10 @@ int runBench(const Args& a) {
     baseline = parseBaseline(readInputFile(*s.bench.baseline), *s.bench.baseline);
   layoutSpec(s.panorama);  // option errors before the source is opened
   std::unique_ptr<FrameSource> source = openSource(sourceName);
-  BenchScene scene{openContext(gl::Backend::Headless, size),
-                   {},
-                   layoutSpec(s.panorama, source.get()),
-                   envOrientation(s.panorama),
+  BenchScene scene{Viewer(ViewerSpec{gl::Backend::Headless, size}, meshFrom(s.scene)),
+                   layoutSpec(s.panorama, source.get()), envOrientation(s.panorama),
                    parseInjections(s.bench)};
-  loadModel(scene.renderer, meshFrom(s.scene));
-  scene.renderer.setEnvOrientation(scene.orientation);
+  scene.viewer.renderer->setEnvOrientation(scene.orientation);
   ThreadPool pool(threads);
 
   // The runs: each starts the source from its first frame (rewound, or opened again where it

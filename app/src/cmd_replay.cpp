@@ -435,24 +435,30 @@ void recordSample(StreamTally& t, const ProcessedFrame& f, double uploadMs, doub
 /// Headless replay: every frame drawn, in order, and written.
 void runOffline(CapturePipeline& pipeline, StreamView& view, const StreamOutputs& out,
                 StreamTally& tally, Progress& progress, const RecordSinks& sinks) {
-  double lastMs = 0;
-  while (auto f = pipeline.waitNext()) {
-    const double uploadMs = view.use(*f);
-    const auto t0 = Clock::now();
-    view.v->draw(lastMs);
-    const glm::ivec2 fb = view.v->ctx->framebufferSize();
+  Viewer& v = *view.v;
+  std::optional<ProcessedFrame> f;
+  double uploadMs = 0;
+  ViewerLoop loop;
+  loop.before = [&](const std::vector<KeyAction>&) {
+    f = pipeline.waitNext();
+    if (!f) return Turn::Stop;
+    uploadMs = view.use(*f);
+    return Turn::Draw;
+  };
+  loop.drawn = [&](double ms) {  // (a Ctrl-C after this frame ends the loop: the rest is dropped)
+    const glm::ivec2 fb = v.ctx->framebufferSize();
     const auto px = gl::Renderer::readRgb8(fb);
-    const double ms = std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
     const double latency = 1000.0 * (monotonicSeconds() - f->captureTime);
     ++tally.drawn;
-    recordSample(tally, *f, uploadMs, ms, latency, view.v->hud.get(), pipeline.stats(), &sinks);
+    recordSample(tally, *f, uploadMs, ms, latency, v.hud.get(), pipeline.stats(), &sinks);
     if (out.coeffs) out.coeffs->line(frameRecord(*f, out.format, {ms, latency}));
     if (out.sent) out.sent->drawn(f->index);
     out.writeFrame(*f, fb, px);
-    lastMs = ms;
     progress.update(std::int64_t(tally.drawn));
-    if (stopRequested()) break;  // this frame is complete; the rest is dropped
-  }
+    return true;
+  };
+  loop.title = [] { return std::pair<std::string, std::string>{}; };  // (headless: none)
+  v.run(loop);
 }
 
 /// A window (or a camera headless): the newest coefficients, never waiting for capture.

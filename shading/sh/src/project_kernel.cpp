@@ -80,6 +80,18 @@ void EquirectRowImpl(const EquirectTables& t, const float* HWY_RESTRICT row, int
       s20 = hn::MulAdd(w2, dx, s20), s21 = hn::MulAdd(w2, dy, s21), s22 = hn::MulAdd(w2, dz, s22);
     };
     int j = 0;
+    if (w >= 1024) {
+      // A large row streams from memory in two places at once (j and j + W/2), which the
+      // hardware prefetchers follow late: ask for both 6 KB ahead.
+      constexpr int kAhead = 6144;
+      for (; j + n <= half; j += n) {
+        const char* a = reinterpret_cast<const char*>(row + 3 * j) + kAhead;
+        const char* b = reinterpret_cast<const char*>(row + 3 * (j + half)) + kAhead;
+        for (int line = 0; line < 12 * n; line += 64)
+          __builtin_prefetch(a + line), __builtin_prefetch(b + line);
+        pair(row + 3 * j, row + 3 * (j + half), j, true);
+      }
+    }
     for (; j + n <= half; j += n) pair(row + 3 * j, row + 3 * (j + half), j, true);
     if (j < half) {  // the last pairs, zero-padded (zero pixels: the weights past W/2 add nothing)
       alignas(64) float ta[3 * kMaxLanes] = {}, tb[3 * kMaxLanes] = {};
@@ -195,18 +207,39 @@ void WeightedSums(const float* rgb, std::size_t n, const float* blocked, double*
   }
 }
 
-// Table lookups, one at a time, each a scalar load and store: on AVX2 a gather (GatherIndex)
-// measured slower (17.6 against 13.2 ms for a 3840x1920 frame on one thread), fusing the lookups
-// into the projection's loads stalls on store forwarding. On AVX-512 the compiler's own
-// vectorisation (scalar loads inserted lane by lane into a 16-lane vector) made the 8-bit
-// projection a fifth slower than AVX2's in the same run (liveprobe-bench, u8 3840x1920 one
-// thread: 10.4 against 8.2 ms on an Intel Xeon); plain scalar stores put it level.
+// Table lookups. AVX2: one at a time, each a scalar load and store (a gather, GatherIndex,
+// measured slower: 17.6 against 13.2 ms for a 3840x1920 frame on one thread; fusing the lookups
+// into the projection's loads stalls on store forwarding). AVX-512: the table held in registers
+// (below); the compiler's own vectorisation there (scalar loads inserted lane by lane) made the
+// 8-bit projection a fifth slower than AVX2's, so the scalar tail is kept from it.
 #if HWY_COMPILER_GCC_ACTUAL && HWY_ARCH_X86 && HWY_TARGET <= HWY_AVX3
 __attribute__((optimize("no-tree-vectorize")))
 #endif
 void DecodeU8(const std::uint8_t* HWY_RESTRICT src, const float* HWY_RESTRICT lut,
               float* HWY_RESTRICT dst, std::size_t n) {
-  for (std::size_t i = 0; i < n; ++i) dst[i] = lut[src[i]];
+  std::size_t i = 0;
+#if HWY_TARGET == HWY_AVX3
+  // The 256-entry table in 16 registers: 8 two-register permutes look up 32 entries each by a
+  // code's low 5 bits, and bits 5-7 choose among them in three blends; 16 codes a step.
+  __m512 t[16];
+  for (int k = 0; k < 16; ++k) t[k] = _mm512_loadu_ps(lut + 16 * k);
+  for (; i + 16 <= n; i += 16) {
+    const __m512i idx =
+        _mm512_cvtepu8_epi32(_mm_loadu_si128(reinterpret_cast<const __m128i*>(src + i)));
+    __m512 r[8];
+    for (int p = 0; p < 8; ++p) r[p] = _mm512_permutex2var_ps(t[2 * p], idx, t[2 * p + 1]);
+    const __mmask16 b5 = _mm512_test_epi32_mask(idx, _mm512_set1_epi32(32));
+    const __mmask16 b6 = _mm512_test_epi32_mask(idx, _mm512_set1_epi32(64));
+    const __mmask16 b7 = _mm512_test_epi32_mask(idx, _mm512_set1_epi32(128));
+    const __m512 a0 = _mm512_mask_blend_ps(b5, r[0], r[1]),
+                 a1 = _mm512_mask_blend_ps(b5, r[2], r[3]);
+    const __m512 a2 = _mm512_mask_blend_ps(b5, r[4], r[5]),
+                 a3 = _mm512_mask_blend_ps(b5, r[6], r[7]);
+    const __m512 c0 = _mm512_mask_blend_ps(b6, a0, a1), c1 = _mm512_mask_blend_ps(b6, a2, a3);
+    _mm512_storeu_ps(dst + i, _mm512_mask_blend_ps(b7, c0, c1));
+  }
+#endif
+  for (; i < n; ++i) dst[i] = lut[src[i]];
 }
 
 void DecodeF16(const std::uint16_t* HWY_RESTRICT src, float* HWY_RESTRICT dst, std::size_t n) {
