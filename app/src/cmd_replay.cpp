@@ -457,7 +457,6 @@ void runOffline(CapturePipeline& pipeline, StreamView& view, const StreamOutputs
     progress.update(std::int64_t(tally.drawn));
     return true;
   };
-  loop.title = [] { return std::pair<std::string, std::string>{}; };  // (headless: none)
   v.run(loop);
 }
 

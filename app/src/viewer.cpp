@@ -52,6 +52,7 @@ void Viewer::run(const ViewerLoop& loop) {
     dynamicResolution.update(lastMs);
     if (loop.drawn && !loop.drawn(lastMs)) break;
     ctx->present();
+    if (!loop.title) continue;
     const auto [prefix, suffix] = loop.title();
     rate.tick(*input, prefix, suffix);
   }

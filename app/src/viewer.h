@@ -45,7 +45,7 @@ struct ViewerLoop {
   /// After drawing, the frame's time to completion in ms, before it is presented; false: stop
   /// with this frame drawn and not presented (a screenshot reads it back).
   std::function<bool(double ms)> drawn;
-  /// The window title's prefix and suffix around its frame rate.
+  /// The window title's prefix and suffix around its frame rate (none: the title is left).
   std::function<std::pair<std::string, std::string>()> title;
 };
 
