@@ -153,9 +153,10 @@ TEST(Hud, NeverCoversTheModelAtAnySize) {
 // squared). Kept at 30 frames/s, the controller drops MSAA, then finds the scale whose frame
 // time meets the target, and gives the resolution back when the cost falls.
 TEST(DynamicResolution, KeepsTheFrameRateOfASoftwareRasterizer) {
-  EXPECT_TRUE(lp::cli::isSoftwareGl("GLFW window, llvmpipe (LLVM 15.0.6, 256 bits), GL 4.5"));
-  EXPECT_TRUE(lp::cli::isSoftwareGl("OSMesa offscreen, softpipe, GL 3.3"));
-  EXPECT_FALSE(lp::cli::isSoftwareGl("GLFW window, NVIDIA GeForce RTX 4090/PCIe/SSE2, GL 4.6"));
+  EXPECT_TRUE(lp::gl::isSoftwareRenderer("GLFW window, llvmpipe (LLVM 15.0.6, 256 bits), GL 4.5"));
+  EXPECT_TRUE(lp::gl::isSoftwareRenderer("OSMesa offscreen, softpipe, GL 3.3"));
+  EXPECT_FALSE(
+      lp::gl::isSoftwareRenderer("GLFW window, NVIDIA GeForce RTX 4090/PCIe/SSE2, GL 4.6"));
 
   const double target = 1000.0 / 30.0;
   lp::cli::DynamicResolution d(true, target);

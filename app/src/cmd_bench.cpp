@@ -22,6 +22,8 @@
 #include "liveprobe/capture/resample.h"
 #include "liveprobe/capture/stages.h"
 #include "liveprobe/exchange/coeffs_io.h"
+#include "liveprobe/gl/gpu_projector.h"
+#include "liveprobe/gl/gpu_timer.h"
 #include "liveprobe/sh/error.h"
 #include "liveprobe/sh/executor.h"
 #include "liveprobe/sh/layout.h"
@@ -275,7 +277,19 @@ const CommandSpec kBenchSpec{
                         "25", LP_FIELD(bench.threshold), g),
            injectDelayOption(g),
            sizeOption("--size", "render size", 16384, "640x360", LP_FIELD(output.size), g),
+           choiceOption("--projection",
+                        "where the frame is projected: on the GPU (the frame uploaded, a compute "
+                        "pass), on the CPU, or auto: the GPU where the context is a GPU with "
+                        "compute shaders",
+                        {"auto", "cpu", "gpu"}, "auto", LP_FIELD(bench.projection), g,
+                        [](const std::string& v) {
+                          return v == "cpu"   ? ProjectOn::Cpu
+                                 : v == "gpu" ? ProjectOn::Gpu
+                                              : ProjectOn::Auto;
+                        }),
            threadsOption(g), sceneOptions()[0], quietOption(g)});
+      const auto gl = glOptions(g);
+      o.insert(o.end(), gl.begin(), gl.end());
       return o;
     }(),
     0,
@@ -303,9 +317,22 @@ struct BenchScene {
   LayoutSpec layout;
   glm::mat3 orientation;
   std::array<double, kStageCount> inject{};
-  Photometry photometry;  // as the pipeline: one lookup table, each frame's exposure scales it
+  bool gpuProjection = false;  ///< --projection, as decided for the context that came up
+  Photometry photometry;       // as the pipeline: one lookup table, each frame's exposure scales it
   Linearizer lin{photometry};
+  /// GPU time of the upload, the projection and the render, by timer queries read three frames
+  /// late: every frame's, by stage, as they came back.
+  std::unique_ptr<gl::GpuTimer> timer;
+  std::array<std::vector<double>, gl::GpuTimer::kStages> gpuTimes;
 };
+
+/// Times a frame's GL work of one stage on the GPU.
+template <class F>
+void onGpuTimer(BenchScene& scene, gl::GpuTimer::Stage stage, F work) {
+  scene.timer->begin(stage);
+  work();
+  scene.timer->end();
+}
 
 /// What one run keeps from frame to frame.
 struct RunState {
@@ -315,7 +342,23 @@ struct RunState {
   Image image;
   FrameProcessor processor;  ///< the frame path every command shares
   float exposure = 1.0f;     ///< from the first frame's irradiance
+  Sh9 last;                  ///< the last frame's coefficients (in the report)
+  // --projection gpu: the frame as the projection reads it, uploaded, and the compute passes.
+  gl::FrameTexture gpuFrame;
+  std::unique_ptr<gl::GpuProjector> gpu;
 };
+
+/// The projection on the GPU: view() of the frame uploaded (8-bit codes as they are), the two
+/// compute passes, the coefficients read back, then scaled and turned as on the CPU.
+Sh9 projectOnGpu(RunState& run, const LayoutSpec& layout) {
+  const FrameProcessor::ProjectedView v = run.processor.view(run.frame);
+  if (!run.gpu || run.gpuFrame.width() != v.view.width || run.gpuFrame.height() != v.view.height)
+    run.gpu = std::make_unique<gl::GpuProjector>(layout, v.view.width, v.view.height);
+  run.gpuFrame.upload(v.view);
+  const Sh9 whole =
+      run.gpu->project(run.gpuFrame, v.view.decode, v.view.format == PanoramaFormat::BgrU8);
+  return run.processor.fromProjected(whole, v.scale).radiance;
+}
 
 /// One frame through the pipeline, stage by stage, as the replay pipeline does it: grab, convert
 /// (only frames the display cannot take as they are get a linear copy), project, resample (a
@@ -343,27 +386,38 @@ BenchTimes timeFrame(BenchScene& scene, RunState& run, FrameSource& source,
       for (float& v : image.rgb) v *= scale;
   }
   lap(1);
+  scene.timer->beginFrame();
+  for (int k = 0; k < gl::GpuTimer::kStages; ++k)
+    if (auto ms = scene.timer->justRead(gl::GpuTimer::Stage(k)))
+      scene.gpuTimes[std::size_t(k)].push_back(*ms);
   Sh9 sh;
   try {
-    sh = run.processor.process(frame, &pool).radiance;
+    if (scene.gpuProjection) {
+      onGpuTimer(scene, gl::GpuTimer::Project, [&] { sh = projectOnGpu(run, scene.layout); });
+    } else {
+      sh = run.processor.process(frame, &pool).radiance;
+    }
   } catch (const Error& e) {
     throw Error(sourceName + ": " + e.what());
   }
+  run.last = sh;
   lap(2);
   if (!asIs && !displayDrawsAsIs(scene.layout)) image = displayEquirect(image, scene.layout);
   lap(3);
   if (first) run.exposure = autoExposure(sh);
   gl::Renderer& renderer = *scene.viewer.renderer;
   renderer.setLighting(sh);
-  if (asIs)
-    setBackground(renderer, frame, displayLayout(scene.layout), lin.exposure() * scale);
-  else
-    setBackground(renderer, image, displayLayout(scene.layout),
-                  frame.format == PanoramaFormat::BgrU8 ? lin.exposure() * scale : 0.0f);
+  onGpuTimer(scene, gl::GpuTimer::Upload, [&] {
+    if (asIs)
+      setBackground(renderer, frame, displayLayout(scene.layout), lin.exposure() * scale);
+    else
+      setBackground(renderer, image, displayLayout(scene.layout),
+                    frame.format == PanoramaFormat::BgrU8 ? lin.exposure() * scale : 0.0f);
+  });
   gl::Renderer::finish();
   lap(4);
   scene.viewer.state.shading.exposure = run.exposure;
-  scene.viewer.draw(0.0);
+  onGpuTimer(scene, gl::GpuTimer::Render, [&] { scene.viewer.draw(0.0); });
   gl::Renderer::finish();
   lap(5);
   auto px = gl::Renderer::readRgb8(scene.viewer.ctx->framebufferSize());
@@ -391,6 +445,54 @@ nlohmann::ordered_json stageSummary(const std::vector<BenchTimes>& all,
                 percentile(v, 0.99), percentile(v, 1.0));
   }
   return stages;
+}
+
+/// The GPU's time per stage (timer queries): medians over every frame that came back, printed
+/// and returned; {"timer": false} where the context has no GPU timer (a software rasterizer).
+nlohmann::ordered_json gpuSummary(const BenchScene& scene) {
+  nlohmann::ordered_json g;
+  if (!scene.timer->hasTimer()) {
+    std::printf("GPU time: no GPU timer (%s)\n", scene.viewer.ctx->describe().c_str());
+    g["timer"] = false;
+    return g;
+  }
+  g["timer"] = true;
+  std::string line;
+  for (int k = 0; k < gl::GpuTimer::kStages; ++k) {
+    const auto& v = scene.gpuTimes[std::size_t(k)];
+    if (v.empty()) continue;
+    const double med = percentile(v, 0.5);
+    g[gl::GpuTimer::kNames[k]] = {{"median_ms", med}, {"frames", v.size()}};
+    char b[96];
+    std::snprintf(b, sizeof b, "%s%s %.3f ms", line.empty() ? "" : ", ", gl::GpuTimer::kNames[k],
+                  med);
+    line += b;
+  }
+  std::printf("GPU time (medians, timer queries): %s\n", line.empty() ? "none read" : line.c_str());
+  return g;
+}
+
+/// The GPU stages against the baseline's, where both have a GPU timer: as measured (a GPU's time
+/// does not follow the CPU's calibration kernel), the same thresholds.
+void compareGpu(const nlohmann::ordered_json& gpu, const nlohmann::json& baseline, double threshold,
+                nlohmann::ordered_json& regressions, int& compared) {
+  if (!gpu.value("timer", false) || !baseline.contains("gpu") ||
+      !baseline["gpu"].value("timer", false))
+    return;
+  for (const char* name : gl::GpuTimer::kNames) {
+    if (!gpu.contains(name) || !baseline["gpu"].contains(name)) continue;
+    const double now = gpu[name]["median_ms"].get<double>();
+    const double base = baseline["gpu"][name]["median_ms"].get<double>();
+    const double change = base > 0 ? 100.0 * (now - base) / base : 0.0;
+    ++compared;
+    std::printf("%-11s %8.3f ms vs %.3f ms  %+7.1f%% (GPU time)\n", name, now, base, change);
+    if (now - base > 0.5 && change > threshold)
+      regressions.push_back({{"stage", name},
+                             {"change_pct", change},
+                             {"change_ms", now - base},
+                             {"median_ms", now},
+                             {"baseline_median_ms", base}});
+  }
 }
 
 /// Each stage against the baseline, both normalised by their calibration kernels and expressed
@@ -464,10 +566,20 @@ int runBench(const Args& a) {
     baseline = parseBaseline(readInputFile(*s.bench.baseline), *s.bench.baseline);
   layoutSpec(s.panorama);  // option errors before the source is opened
   std::unique_ptr<FrameSource> source = openSource(sourceName);
-  BenchScene scene{Viewer(ViewerSpec{gl::Backend::Headless, size}, meshFrom(s.scene)),
+  // Headless: EGL on a GPU where there is one (the GPU a user ships on), else OSMesa; --gl picks.
+  const gl::Backend backend = s.scene.gl == gl::Backend::Auto ? gl::Backend::Headless : s.scene.gl;
+  BenchScene scene{Viewer(ViewerSpec{backend, size, {}, false, false, false, true, s.scene.gpu},
+                          meshFrom(s.scene)),
                    layoutSpec(s.panorama, source.get()), envOrientation(s.panorama),
                    parseInjections(s.bench)};
   scene.viewer.renderer->setEnvOrientation(scene.orientation);
+  scene.timer = std::make_unique<gl::GpuTimer>();
+  const std::string glName = scene.viewer.ctx->describe();
+  const bool gpuContext = !gl::isSoftwareRenderer(glName) && gl::hasCompute();
+  scene.gpuProjection =
+      s.bench.projection == ProjectOn::Gpu || (s.bench.projection == ProjectOn::Auto && gpuContext);
+  if (scene.gpuProjection && !gl::hasCompute())
+    throw Error("--projection gpu: " + glName + " has no compute shaders (GL 4.3)");
   ThreadPool pool(threads);
 
   // The runs: each starts the source from its first frame (rewound, or opened again where it
@@ -476,6 +588,7 @@ int runBench(const Args& a) {
   std::array<std::vector<double>, kStageCount> runMedians;
   std::vector<double> calibrations;
   std::string description;
+  std::array<Rgb, kShCount> lastCoefficients{};
   Progress progress("bench", std::int64_t(frames) * repeat, s.output.quiet);
   for (int run = 0; run < repeat && !stopRequested(); ++run) {
     calibrations.push_back(calibrationMs());
@@ -487,6 +600,7 @@ int runBench(const Args& a) {
       times.push_back(timeFrame(scene, state, *source, sourceName, pool, i == 0));
       progress.update(std::int64_t(all.size() + times.size()));
     }
+    lastCoefficients = state.last.c;
     if (times.empty()) break;
     for (int s = 0; s < kStageCount; ++s) {
       std::vector<double> v;
@@ -508,6 +622,10 @@ int runBench(const Args& a) {
   out["frames"] = frames;
   out["runs"] = repeat;
   out["source"] = description;
+  // Which GL drew and where the projection ran, before the table (after the runs, so that a
+  // source that fails is still one line).
+  std::printf("drawn with %s; projection on the %s\n", glName.c_str(),
+              scene.gpuProjection ? "GPU" : "CPU");
   out["stages"] = stageSummary(all, runMedians, repeat, frames, description);
   // Latency, as replay measures it: from the frame's grab to the frame shown (read back).
   std::vector<double> latency;
@@ -519,10 +637,18 @@ int runBench(const Args& a) {
               percentile(latency, 0.5), percentile(latency, 0.95), percentile(latency, 0.99));
   out["calibration_ms"] = calibration;
   std::printf("calibration kernel: %.3f ms\n", calibration);
+  out["gl"] = glName;
+  out["projection"] = scene.gpuProjection ? "gpu" : "cpu";
+  out["gpu"] = gpuSummary(scene);
+  nlohmann::ordered_json last = nlohmann::ordered_json::array();
+  for (const Rgb& c : lastCoefficients) last.push_back({c.x, c.y, c.z});
+  out["last_coefficients"] = last;
   int compared = 0;
   out["regressions"] = baseline.is_null() ? nlohmann::ordered_json::array()
                                           : compareWithBaseline(out["stages"], calibration,
                                                                 baseline, threshold, compared);
+  if (!baseline.is_null())
+    compareGpu(out["gpu"], baseline, threshold, out["regressions"], compared);
   if (s.output.jsonFile) writeFileAtomically(*s.output.jsonFile, out.dump(2) + "\n");
   if (s.output.plot)
     drawPlot(*s.output.plot, all, frames,

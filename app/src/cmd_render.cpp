@@ -71,7 +71,7 @@ int runRender(const Args& a) {
   state.shading =
       shadingFrom(s.scene, lighting.radiance, lighting.background.has_value(), lighting.lights);
   const Mesh mesh = meshFrom(s.scene);
-  auto ctx = openContext(glBackend(s.scene), size);
+  auto ctx = openContext(glBackend(s.scene), size, {0, 0}, s.scene.gpu);
   try {
     gl::Renderer renderer;
     loadModel(renderer, mesh);
@@ -159,7 +159,8 @@ int runView(const Args& a) {
               s.output.hud,
               s.output.noHud,
               s.scene.fullResolution,
-              !screenshot},
+              !screenshot,
+              s.scene.gpu},
              mesh);
     if (!v.window() && !screenshot) {
       requireBackend(OptionalBackend::Window, "", "use --screenshot, or liveprobe render");

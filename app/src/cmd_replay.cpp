@@ -704,10 +704,10 @@ void wireCaptureOutputs(StreamPlan& p, StreamOutputs& out, RecordSinks& sinks,
 /// it, F1 the help).
 StreamView openStreamView(const Settings& s, const StreamPlan& p) {
   StreamView view;
-  view.v =
-      std::make_unique<Viewer>(ViewerSpec{glBackend(s.scene), p.size, p.headlessSize, s.output.hud,
-                                          s.output.noHud, s.scene.fullResolution, true},
-                               p.mesh);
+  view.v = std::make_unique<Viewer>(
+      ViewerSpec{glBackend(s.scene), p.size, p.headlessSize, s.output.hud, s.output.noHud,
+                 s.scene.fullResolution, true, s.scene.gpu},
+      p.mesh);
   Viewer& v = *view.v;
   v.state.shading = shadingFrom(s.scene, Sh9{});
   v.state.camera = v.state.initialCamera = p.camera;

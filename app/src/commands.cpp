@@ -2,6 +2,7 @@
 
 #include "liveprobe/backends.h"
 #include "liveprobe/exchange/engine_export.h"
+#include "liveprobe/gl/context.h"
 #include "liveprobe/sh/error.h"
 #include "settings.h"
 
@@ -111,6 +112,21 @@ std::string backendsLine() {
     list += std::string(list.empty() ? "" : ", ") + info.label;
   }
   return (with.empty() ? "none" : with) + (without.empty() ? "" : "; built without " + without);
+}
+
+std::string glLine() {
+  std::string line = LIVEPROBE_WITH_GLFW ? "window (GLFW)" : "";
+  if (LIVEPROBE_WITH_EGL) {
+    std::string devices;
+    const auto list = gl::eglDevices();
+    for (std::size_t i = 0; i < list.size(); ++i)
+      devices += (i ? ", " : "") + std::to_string(i) + " " + list[i];
+    line += std::string(line.empty() ? "" : ", ") +
+            "EGL headless (devices: " + (devices.empty() ? "none" : devices) + ")";
+  }
+  if (LIVEPROBE_WITH_OSMESA)
+    line += std::string(line.empty() ? "" : ", ") + "OSMesa headless (CPU)";
+  return line.empty() ? "none" : line;
 }
 
 }  // namespace lp::cli

@@ -25,6 +25,9 @@ const std::vector<Command>& commands();
 enum class OptionalBackend : std::uint8_t { Window, V4l2, Stream, Mqtt };
 /// Whether this build has it.
 bool builtIn(OptionalBackend b);
+/// The GL contexts this build can open, for --version: "window (GLFW), EGL headless (devices:
+/// 0 software), OSMesa headless (CPU)".
+std::string glLine();
 /// Throws lp::Error "WHAT: this liveprobe was built without NAME (ITS CMAKE OPTION); INSTEAD"
 /// unless it is built in (an empty `what` for a whole command, which main() names).
 void requireBackend(OptionalBackend b, const std::string& what, const std::string& instead = {});

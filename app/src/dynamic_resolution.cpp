@@ -11,12 +11,6 @@ constexpr float kMinScale = 0.3f;  // below this the model is a blur
 constexpr int kSettleFrames = 8;   // the smoothed time follows a change within about this
 }  // namespace
 
-bool isSoftwareGl(const std::string& d) {
-  for (const char* name : {"llvmpipe", "softpipe", "SwiftShader", "swrast"})
-    if (d.find(name) != std::string::npos) return true;
-  return false;
-}
-
 DynamicResolution::DynamicResolution(bool active, double targetMs)
     : active_(active), targetMs_(targetMs) {}
 

@@ -9,10 +9,6 @@
 
 namespace lp::cli {
 
-/// Whether a context's description (GlContext::describe, which holds GL_RENDERER) names a
-/// software rasterizer.
-bool isSoftwareGl(const std::string& contextDescription);
-
 class DynamicResolution {
  public:
   /// `active`: a window on a software GL. `targetMs`: the frame time to keep (30 frames/s).

@@ -73,6 +73,7 @@ int main(int argc, char** argv) {
       for (const auto& p : lp::simd::available()) all += (all.empty() ? "" : " ") + p;
       std::cout << "simd: " << lp::simd::current() << " (this CPU runs: " << all << ")\n";
       std::cout << "backends: " << lp::cli::backendsLine() << "\n";
+      std::cout << "gl: " << lp::cli::glLine() << "\n";
     } catch (const lp::Error& e) {
       lp::cli::errs() << "liveprobe: " << e.what() << "\n";
       return 1;

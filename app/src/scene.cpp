@@ -19,6 +19,24 @@
 
 namespace lp::cli {
 
+std::vector<OptionSpec> glOptions(const std::string& group) {
+  return {
+      choiceOption("--gl",
+                   "which GL draws: a window, EGL (headless, on a GPU; on Mesa's llvmpipe where "
+                   "there is none), OSMesa (headless, on the CPU), or auto: a window where "
+                   "there is a display, else EGL on a GPU, else OSMesa",
+                   {"auto", "window", "egl", "osmesa"}, "auto", LP_FIELD(scene.gl), group,
+                   [](const std::string& v) {
+                     return v == "window"   ? gl::Backend::Window
+                            : v == "egl"    ? gl::Backend::Egl
+                            : v == "osmesa" ? gl::Backend::OsMesa
+                                            : gl::Backend::Auto;
+                   }),
+      integerOption("--gpu", "N",
+                    "--gl egl: the EGL device to draw on (liveprobe --version lists them)", 0, 63,
+                    "the first GPU", LP_FIELD(scene.gpu), group)};
+}
+
 std::vector<OptionSpec> sceneOptions() {
   const std::string m = "Model and camera", l = "Look";
   std::vector<OptionSpec> o = {
@@ -56,6 +74,8 @@ std::vector<OptionSpec> sceneOptions() {
       choiceOption("--msaa", "multisample anti-aliasing, samples per pixel", {"1", "2", "4", "8"},
                    "4", LP_FIELD(scene.msaa), l,
                    [](const std::string& v) { return std::stoi(v); })};
+  const auto gl = glOptions(l);
+  o.insert(o.end(), gl.begin(), gl.end());
   struct Flag {
     const char* name;
     const char* help;
@@ -77,7 +97,9 @@ std::vector<OptionSpec> sceneOptions() {
            {"--ground",
             "a shadow catcher under the model: the background darkened by its shadow and occlusion",
             &SceneSettings::ground},
-           {"--headless", "render offscreen through OSMesa even when a display exists",
+           {"--headless",
+            "render offscreen even when a display exists (EGL on a GPU, else OSMesa; --gl picks "
+            "one)",
             &SceneSettings::headless}})
     o.push_back(flagOption(
         f.name, f.help, [field = f.field](Settings& s) -> bool& { return s.scene.*field; }, l));
@@ -386,14 +408,15 @@ gl::ShadingSettings shadingFrom(const SceneSettings& sc, const Sh9& radiance, bo
 }
 
 gl::Backend glBackend(const SceneSettings& sc) {
+  if (sc.gl != gl::Backend::Auto) return sc.gl;
   return sc.headless ? gl::Backend::Headless : gl::Backend::Auto;
 }
 
 std::unique_ptr<gl::GlContext> openContext(gl::Backend backend, std::pair<int, int> size,
-                                           std::pair<int, int> headlessSize) {
+                                           std::pair<int, int> headlessSize, int gpu) {
   try {
     return gl::createGlContext({backend, size.first, size.second, "liveprobe", true,
-                                headlessSize.first, headlessSize.second});
+                                headlessSize.first, headlessSize.second, gpu});
   } catch (const gl::ContextError& e) {
     throw Error(std::string("GL context: ") + e.what());
   }

@@ -23,6 +23,8 @@ namespace lp::cli {
 
 /// Options for the model, camera and look (appended to a command's own).
 std::vector<OptionSpec> sceneOptions();
+/// --gl and --gpu: which GL context draws (part of sceneOptions(); bench takes them alone).
+std::vector<OptionSpec> glOptions(const std::string& group);
 /// Options choosing the lighting: --env and the layout options, --coeffs, --coeff.
 std::vector<OptionSpec> lightingOptions();
 /// --layout, --circle, --fov, and the environment's orientation (--env-rotate, --env-flip).
@@ -97,9 +99,10 @@ float autoExposure(const Sh9& radiance, bool environment = true,
 gl::Backend glBackend(const SceneSettings& s);
 
 /// Creates a GL context (lp::Error on failure); `headlessSize`, where given, is its size when
-/// Auto finds no display. Whether it is headless is the context's to say (isHeadless()).
+/// Auto finds no display; `gpu`, an EGL device (--gpu). Whether it is headless is the context's
+/// to say (isHeadless()).
 std::unique_ptr<gl::GlContext> openContext(gl::Backend backend, std::pair<int, int> size,
-                                           std::pair<int, int> headlessSize = {0, 0});
+                                           std::pair<int, int> headlessSize = {0, 0}, int gpu = -1);
 
 /// Uploads the mesh and its albedo texture.
 void loadModel(gl::Renderer& r, const Mesh& mesh);

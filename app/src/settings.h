@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "args.h"
+#include "liveprobe/gl/context.h"
 #include "liveprobe/sh/layout.h"
 
 namespace lp::cli {
@@ -51,6 +52,8 @@ struct SceneSettings {
   bool tonemapBackground = false, noBackground = false, fullResolution = false;
   bool shadows = false, ground = false, headless = false;
   int msaa = 4;
+  gl::Backend gl = gl::Backend::Auto;  ///< --gl
+  int gpu = -1;                        ///< --gpu: an EGL device (-1: the first GPU)
 };
 
 /// What a command writes and how much it runs.
@@ -104,7 +107,11 @@ struct StillSettings {
 };
 
 /// bench.
+/// Where a frame is projected (--projection).
+enum class ProjectOn : std::uint8_t { Auto, Cpu, Gpu };
+
 struct BenchSettings {
+  ProjectOn projection = ProjectOn::Auto;
   int repeat = 3;
   double threshold = 25.0;
   std::optional<std::string> baseline;

@@ -9,11 +9,11 @@
 namespace lp::cli {
 
 Viewer::Viewer(const ViewerSpec& spec, const Mesh& mesh) {
-  ctx = openContext(spec.backend, spec.size, spec.headlessSize);
+  ctx = openContext(spec.backend, spec.size, spec.headlessSize, spec.gpu);
   input = std::make_unique<WindowInput>(*ctx);
   const bool windowed = window();
   dynamicResolution = DynamicResolution(windowed && spec.keepRate && !spec.fullResolution &&
-                                        isSoftwareGl(ctx->describe()));
+                                        gl::isSoftwareRenderer(ctx->describe()));
   renderer = std::make_unique<gl::Renderer>();
   loadModel(*renderer, mesh);
   const bool shown = windowed ? !spec.noHud : spec.hud;

@@ -29,6 +29,7 @@ struct ViewerSpec {
   bool noHud = false;           ///< --no-hud: a window starts with the HUD hidden
   bool fullResolution = false;  ///< --full-resolution: no dynamic resolution
   bool keepRate = true;         ///< a window on software GL keeps its rate (dynamic_resolution.h)
+  int gpu = -1;                 ///< --gpu: the EGL device
 };
 
 /// What a turn of the loop does once the input is read.

@@ -73,11 +73,10 @@ FrameConfidence FrameProcessor::confidence(const Frame& frame, const FrameLighti
   return c;
 }
 
-FrameLighting FrameProcessor::process(const Frame& frame, Executor* executor, const Image* linear) {
+FrameProcessor::ProjectedView FrameProcessor::view(const Frame& frame, const Image* linear) {
   fit(frame);
-  // The view: an 8-bit frame through the lookup table (the photometry's exposure in it) inside
-  // the projection; a float frame as it is, scaled after; a reduction reads the linear copy.
-  PanoramaView view;
+  // An 8-bit frame through the lookup table (the photometry's exposure in it) inside the
+  // projection; a float frame as it is, scaled after; a reduction reads the linear copy.
   float scale = float(frame.radianceScale);
   if (opt_.reduce > 1) {
     if (!linear) {
@@ -85,23 +84,41 @@ FrameLighting FrameProcessor::process(const Frame& frame, Executor* executor, co
       linear = &converted_;
     }
     reduceEquirect(linear->rgb.data(), linear->width, linear->height, opt_.reduce, reduced_);
-    view = PanoramaView::rgbF32(reduced_.rgb.data(), reduced_.width, reduced_.height,
-                                projector_->spec());
-  } else if (frame.format == PanoramaFormat::BgrU8) {
-    view = PanoramaView::bgrU8(frame.bgr8.data(), frame.width, frame.height,
-                               linearizer_.table().data(), projector_->spec());
-  } else {
-    view = PanoramaView::rgbF32(frame.rgb.data(), frame.width, frame.height, projector_->spec());
-    scale *= linearizer_.exposure();
+    return {PanoramaView::rgbF32(reduced_.rgb.data(), reduced_.width, reduced_.height,
+                                 projector_->spec()),
+            scale};
   }
+  if (frame.format == PanoramaFormat::BgrU8)
+    return {PanoramaView::bgrU8(frame.bgr8.data(), frame.width, frame.height,
+                                linearizer_.table().data(), projector_->spec()),
+            scale};
+  return {PanoramaView::rgbF32(frame.rgb.data(), frame.width, frame.height, projector_->spec()),
+          scale * linearizer_.exposure()};
+}
+
+FrameLighting FrameProcessor::process(const Frame& frame, Executor* executor, const Image* linear) {
+  const ProjectedView v = view(frame, linear);
   std::vector<float> peaks;
-  FrameLighting out;
+  const Sh9 whole = projector_->project(v.view, executor, extractor_ ? &peaks : nullptr);
   LightSplit split;
-  out.whole = projector_->project(view, executor, extractor_ ? &peaks : nullptr);
   if (extractor_)
-    split = extractor_->extract(view, out.whole, peaks, opt_.lights);
+    split = extractor_->extract(v.view, whole, peaks, opt_.lights);
   else
-    split.residual = out.whole;
+    split.residual = whole;
+  return finish(whole, std::move(split), v.scale);
+}
+
+FrameLighting FrameProcessor::fromProjected(const Sh9& whole, float scale) const {
+  if (opt_.lights.maxLights > 0)
+    throw Error("lights are searched in the frame: project it with process()");
+  LightSplit split;
+  split.residual = whole;
+  return finish(whole, std::move(split), scale);
+}
+
+FrameLighting FrameProcessor::finish(Sh9 whole, LightSplit split, float scale) const {
+  FrameLighting out;
+  out.whole = whole;
   if (scale != 1.0f) {
     out.whole *= scale;
     split.residual *= scale;

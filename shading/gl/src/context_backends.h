@@ -1,7 +1,8 @@
 #pragma once
 // The GL context backends behind createGlContext() (context_factory.cpp), one file each: the
-// GLFW window (glfw_context.cpp, built with LIVEPROBE_WITH_GLFW) and OSMesa offscreen
-// (osmesa_context.cpp). Only those two files include GLFW or OSMesa.
+// GLFW window (glfw_context.cpp, built with LIVEPROBE_WITH_GLFW), EGL headless
+// (egl_context.cpp, LIVEPROBE_WITH_EGL) and OSMesa offscreen (osmesa_context.cpp,
+// LIVEPROBE_WITH_OSMESA). Only those three files include GLFW, EGL or OSMesa.
 #include <memory>
 #include <string>
 
@@ -17,7 +18,14 @@ std::string rendererString();
 /// window or its GL cannot be made.
 std::unique_ptr<GlContext> openWindow(const ContextSpec& spec, std::string& whyNot);
 
-/// An offscreen context of spec.width x spec.height (Mesa llvmpipe).
-std::unique_ptr<GlContext> openOffscreen(const ContextSpec& spec);
+/// A surfaceless EGL context drawing into a spec.width x spec.height framebuffer object of its
+/// own: on device spec.gpu, else the first GPU, else (unless `hardwareOnly`) a software device or
+/// Mesa's surfaceless platform. nullptr with the reason in `whyNot` when EGL has none of these;
+/// throws ContextError when the one chosen fails.
+std::unique_ptr<GlContext> openEgl(const ContextSpec& spec, bool hardwareOnly, std::string& whyNot);
+
+/// An offscreen context of spec.width x spec.height (Mesa llvmpipe), or nullptr with the reason
+/// in `whyNot` where the build has no OSMesa.
+std::unique_ptr<GlContext> openOffscreen(const ContextSpec& spec, std::string& whyNot);
 
 }  // namespace lp::gl

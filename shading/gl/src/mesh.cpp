@@ -1,16 +1,9 @@
+// Meshes made in memory: the UV sphere, OBJ text (vertices and faces), fitting to the view.
 #include "liveprobe/gl/mesh.h"
 
-#include <assimp/postprocess.h>
-#include <assimp/scene.h>
-
 #include <algorithm>
-#include <assimp/Importer.hpp>
-#include <cctype>
+#include <charconv>
 #include <cmath>
-#include <cstdlib>
-#include <filesystem>
-#include <fstream>
-#include <sstream>
 
 #include "liveprobe/sh/sh.h"
 
@@ -39,89 +32,56 @@ Mesh makeUvSphere(int segments, int rings) {
   return m;
 }
 
-namespace {
-
-// assimp reads a coordinate it cannot parse ("nan", "1.2.3") as a number all the same, so an OBJ's
-// vertex lines are checked first: every coordinate must be a whole, finite number.
-void checkObjCoordinates(const std::string& path) {
-  std::ifstream in(path);
-  std::string line;
-  for (int n = 1; std::getline(in, line); ++n) {
-    if (line.size() < 2 || line[0] != 'v' || (line[1] != ' ' && line[1] != 't' && line[1] != 'n'))
-      continue;
-    std::istringstream tokens(line.substr(line[1] == ' ' ? 1 : 2));
-    for (std::string t; tokens >> t;) {
-      char* end = nullptr;
-      const double v = std::strtod(t.c_str(), &end);
-      if (end != t.c_str() + t.size() || !std::isfinite(v))
-        throw MeshError(path + ": line " + std::to_string(n) + ": coordinate '" + t +
-                        "' is not a finite number");
-    }
-  }
-}
-
-}  // namespace
-
-Mesh loadMesh(const std::string& path) {
-  std::error_code ec;
-  if (!std::filesystem::exists(path, ec)) throw MeshError(path + ": no such file");
-  std::string ext = std::filesystem::path(path).extension().string();
-  for (auto& c : ext) c = char(std::tolower(static_cast<unsigned char>(c)));
-  if (ext == ".obj") checkObjCoordinates(path);
-  Assimp::Importer importer;
-  // Smooth normals are generated only where the file has none (assimp skips meshes with normals).
-  const aiScene* scene = importer.ReadFile(
-      path, aiProcess_Triangulate | aiProcess_JoinIdenticalVertices | aiProcess_GenSmoothNormals |
-                aiProcess_PreTransformVertices | aiProcess_SortByPType);
-  if (!scene || (scene->mFlags & AI_SCENE_FLAGS_INCOMPLETE)) {
-    const std::string why = importer.GetErrorString();
-    // assimp's words for a file that parsed but holds no faces.
-    if (why.find("No output meshes") != std::string::npos ||
-        why.find("no meshes") != std::string::npos)
-      throw MeshError(path + ": model has no triangles (assimp: " + why + ")");
-    throw MeshError(path + ": cannot read model (" + why + ")");
-  }
+Mesh meshFromObjText(std::string_view text) {
   Mesh out;
-  for (unsigned mi = 0; mi < scene->mNumMeshes; ++mi) {
-    const aiMesh* am = scene->mMeshes[mi];
-    if (!(am->mPrimitiveTypes & aiPrimitiveType_TRIANGLE) || !am->HasNormals()) continue;
-    const auto base = std::uint32_t(out.positions.size());
-    const bool uv = am->HasTextureCoords(0);
-    for (unsigned v = 0; v < am->mNumVertices; ++v) {
-      const glm::vec3 p(am->mVertices[v].x, am->mVertices[v].y, am->mVertices[v].z);
-      if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z))
-        throw MeshError(path + ": vertex " + std::to_string(out.positions.size() + 1) +
-                        " is not a finite number");
+  std::vector<std::uint32_t> face;
+  auto number = [](std::string_view& rest, auto& value) {
+    while (!rest.empty() && (rest.front() == ' ' || rest.front() == '\t')) rest.remove_prefix(1);
+    const auto [end, ec] = std::from_chars(rest.data(), rest.data() + rest.size(), value);
+    if (ec != std::errc()) return false;
+    rest.remove_prefix(std::size_t(end - rest.data()));
+    return true;
+  };
+  for (std::size_t at = 0, n = 1; at < text.size(); ++n) {
+    const std::size_t eol = std::min(text.find('\n', at), text.size());
+    std::string_view line = text.substr(at, eol - at);
+    at = eol + 1;
+    if (line.starts_with("v ")) {
+      line.remove_prefix(2);
+      glm::vec3 p;
+      if (!number(line, p.x) || !number(line, p.y) || !number(line, p.z) ||
+          !std::isfinite(p.x + p.y + p.z))
+        throw MeshError("OBJ line " + std::to_string(n) + ": a vertex needs three finite numbers");
       out.positions.push_back(p);
-      glm::vec3 n(am->mNormals[v].x, am->mNormals[v].y, am->mNormals[v].z);
-      const float len = glm::length(n);
-      out.normals.push_back(len > 0 && std::isfinite(len) ? n / len : glm::vec3(0, 1, 0));
-      if (uv) out.uvs.emplace_back(am->mTextureCoords[0][v].x, am->mTextureCoords[0][v].y);
-    }
-    if (!uv && !out.uvs.empty()) out.uvs.resize(out.positions.size(), glm::vec2(0));
-    for (unsigned f = 0; f < am->mNumFaces; ++f) {
-      const aiFace& face = am->mFaces[f];
-      if (face.mNumIndices != 3) continue;
-      for (int k = 0; k < 3; ++k) out.indices.push_back(base + face.mIndices[k]);
-    }
-    if (out.albedoTexture.empty() && am->mMaterialIndex < scene->mNumMaterials) {
-      const aiMaterial* mat = scene->mMaterials[am->mMaterialIndex];
-      aiString tex;
-      if (mat->GetTexture(aiTextureType_BASE_COLOR, 0, &tex) == AI_SUCCESS ||
-          mat->GetTexture(aiTextureType_DIFFUSE, 0, &tex) == AI_SUCCESS) {
-        const std::string t = tex.C_Str();
-        if (!t.empty() && t[0] != '*')  // '*n' is an embedded texture: not supported
-          out.albedoTexture = (std::filesystem::path(path).parent_path() / t).string();
+    } else if (line.starts_with("f ")) {
+      line.remove_prefix(2);
+      face.clear();
+      for (long v = 0; number(line, v);) {
+        // v, v/vt, v/vt/vn or v//vn: only the vertex is read; negative counts from the end.
+        const long index = v < 0 ? long(out.positions.size()) + v : v - 1;
+        if (index < 0 || index >= long(out.positions.size()))
+          throw MeshError("OBJ line " + std::to_string(n) + ": vertex " + std::to_string(v) +
+                          " does not exist");
+        face.push_back(std::uint32_t(index));
+        while (!line.empty() && line.front() != ' ' && line.front() != '\t') line.remove_prefix(1);
       }
-      aiColor4D c;
-      if (mat->Get(AI_MATKEY_COLOR_DIFFUSE, c) == AI_SUCCESS && (c.r + c.g + c.b) > 0)
-        out.albedo = {c.r, c.g, c.b};
+      for (std::size_t k = 2; k < face.size(); ++k)  // a fan
+        out.indices.insert(out.indices.end(), {face[0], face[k - 1], face[k]});
     }
   }
-  // Meshes without uvs after one with uvs were padded above; uvs shorter than positions means
-  // a uv-less mesh came first: drop uvs entirely then.
-  if (out.uvs.size() != out.positions.size()) out.uvs.clear();
-  if (out.indices.empty()) throw MeshError(path + ": model has no triangles");
+  if (out.indices.empty()) throw MeshError("OBJ text has no triangles");
+  // Smooth normals: each vertex the sum of its faces' area-weighted normals.
+  out.normals.assign(out.positions.size(), glm::vec3(0.0f));
+  for (std::size_t t = 0; t + 2 < out.indices.size(); t += 3) {
+    const auto a = out.indices[t], b = out.indices[t + 1], c = out.indices[t + 2];
+    const glm::vec3 nrm =
+        glm::cross(out.positions[b] - out.positions[a], out.positions[c] - out.positions[a]);
+    out.normals[a] += nrm, out.normals[b] += nrm, out.normals[c] += nrm;
+  }
+  for (auto& nrm : out.normals) {
+    const float len = glm::length(nrm);
+    nrm = len > 0 ? nrm / len : glm::vec3(0, 1, 0);
+  }
   return out;
 }
 

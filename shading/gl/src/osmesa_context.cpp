@@ -62,7 +62,7 @@ class OsMesaContext final : public GlContext {
 
 }  // namespace
 
-std::unique_ptr<GlContext> openOffscreen(const ContextSpec& spec) {
+std::unique_ptr<GlContext> openOffscreen(const ContextSpec& spec, std::string&) {
   return std::make_unique<OsMesaContext>(spec);
 }
 

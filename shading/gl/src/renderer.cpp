@@ -9,6 +9,7 @@
 
 #include "liveprobe/gl/context.h"
 #include "liveprobe/sh/axes.h"
+#include "programs.h"
 #include "shaders.h"
 
 namespace lp::gl {
@@ -44,36 +45,6 @@ glm::mat4 Camera::projection(float aspect) const {
 }
 
 namespace {
-
-Shader compile(GLenum type, const char* src, const char* name) {
-  Shader s(glCreateShader(type));
-  glShaderSource(s.get(), 1, &src, nullptr);
-  glCompileShader(s.get());
-  GLint ok = 0;
-  glGetShaderiv(s.get(), GL_COMPILE_STATUS, &ok);
-  if (!ok) {
-    char log[2048];
-    glGetShaderInfoLog(s.get(), sizeof log, nullptr, log);
-    throw ContextError(std::string("compiling ") + name + ": " + log);
-  }
-  return s;
-}
-
-Program link(const char* vs, const char* fs, const char* name) {
-  const Shader v = compile(GL_VERTEX_SHADER, vs, name), f = compile(GL_FRAGMENT_SHADER, fs, name);
-  Program p(glCreateProgram());
-  glAttachShader(p.get(), v.get());
-  glAttachShader(p.get(), f.get());
-  glLinkProgram(p.get());
-  GLint ok = 0;
-  glGetProgramiv(p.get(), GL_LINK_STATUS, &ok);
-  if (!ok) {
-    char log[2048];
-    glGetProgramInfoLog(p.get(), sizeof log, nullptr, log);
-    throw ContextError(std::string("linking ") + name + ": " + log);
-  }
-  return p;
-}
 
 GLint loc(const Program& p, const char* name) { return glGetUniformLocation(p.get(), name); }
 
@@ -120,6 +91,8 @@ Texture makeFloatTexture(const float* rgb, int width, int height, GLint wrapS) {
 }  // namespace
 
 FloatTarget::FloatTarget(int width, int height) : width_(width), height_(height) {
+  GLint previous = 0;  // the context's own framebuffer (EGL's is not 0)
+  glGetIntegerv(GL_FRAMEBUFFER_BINDING, &previous);
   GLuint id = 0;
   glGenFramebuffers(1, &id);
   fbo_.reset(id);
@@ -138,7 +111,7 @@ FloatTarget::FloatTarget(int width, int height) : width_(width), height_(height)
   glFramebufferRenderbuffer(GL_FRAMEBUFFER, GL_DEPTH_ATTACHMENT, GL_RENDERBUFFER, depth_.get());
   if (glCheckFramebufferStatus(GL_FRAMEBUFFER) != GL_FRAMEBUFFER_COMPLETE)
     throw ContextError("float framebuffer is incomplete");
-  glBindFramebuffer(GL_FRAMEBUFFER, 0);
+  glBindFramebuffer(GL_FRAMEBUFFER, GLuint(previous));
 }
 
 void FloatTarget::bind() const { glBindFramebuffer(GL_FRAMEBUFFER, fbo_.get()); }
@@ -162,20 +135,22 @@ std::string withDefine(const char* source, const std::string& name) {
 }  // namespace
 
 Renderer::Renderer()
-    : modelProgram_(link(shaders::kModelVs, shaders::kModelFs, "model shader")),
-      modelLitProgram_(link(shaders::kModelVs, withDefine(shaders::kModelFs, "LP_LIGHTS").c_str(),
-                            "model shader with lights")),
-      modelShadowProgram_(
-          link(shaders::kModelVs,
-               withDefine(withDefine(shaders::kModelFs, "LP_LIGHTS").c_str(), "LP_SHADOWS").c_str(),
-               "model shader with shadows")),
-      backgroundProgram_(link(shaders::kBackgroundVs, shaders::kBackgroundFs, "background shader")),
-      probeProgram_(link(shaders::kBackgroundVs, shaders::kProbeFs, "probe view shader")),
-      depthProgram_(link(shaders::kDepthVs, shaders::kDepthFs, "shadow depth shader")),
-      groundProgram_(link(shaders::kGroundVs, shaders::kGroundFs, "ground shader")),
-      groundShadowProgram_(link(shaders::kGroundVs,
-                                withDefine(shaders::kGroundFs, "LP_SHADOWS").c_str(),
-                                "ground shader with shadows")) {
+    : modelProgram_(linkProgram(shaders::kModelVs, shaders::kModelFs, "model shader")),
+      modelLitProgram_(linkProgram(shaders::kModelVs,
+                                   withDefine(shaders::kModelFs, "LP_LIGHTS").c_str(),
+                                   "model shader with lights")),
+      modelShadowProgram_(linkProgram(
+          shaders::kModelVs,
+          withDefine(withDefine(shaders::kModelFs, "LP_LIGHTS").c_str(), "LP_SHADOWS").c_str(),
+          "model shader with shadows")),
+      backgroundProgram_(
+          linkProgram(shaders::kBackgroundVs, shaders::kBackgroundFs, "background shader")),
+      probeProgram_(linkProgram(shaders::kBackgroundVs, shaders::kProbeFs, "probe view shader")),
+      depthProgram_(linkProgram(shaders::kDepthVs, shaders::kDepthFs, "shadow depth shader")),
+      groundProgram_(linkProgram(shaders::kGroundVs, shaders::kGroundFs, "ground shader")),
+      groundShadowProgram_(linkProgram(shaders::kGroundVs,
+                                       withDefine(shaders::kGroundFs, "LP_SHADOWS").c_str(),
+                                       "ground shader with shadows")) {
   GLuint id = 0;
   glGenVertexArrays(1, &id);
   emptyVao_.reset(id);

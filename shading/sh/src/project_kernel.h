@@ -8,23 +8,17 @@
 #include <cstdint>
 #include <vector>
 
+#include "liveprobe/sh/projector.h"
+
 namespace lp::kernel {
 
 /// The widest vector of any path, in floats (AVX-512).
 inline constexpr int kMaxLanes = 16;
 
-/// Per-column integrals of 1, cos p, sin p, cos 2p, sin 2p, zero-padded to a multiple of 16, and
-/// per-row integrals of the six t-factors with the basis constants folded in (projector.cpp
-/// derives them).
-struct EquirectTables {
-  int width = 0, height = 0;
-  std::array<std::vector<float>, 5> col;
-  std::array<std::vector<float>, 6> row;
-};
-
-/// Coefficient k of an equirect takes row factor kRowOf[k] times column sum kColOf[k].
-inline constexpr int kRowOf[9] = {0, 2, 1, 2, 4, 3, 5, 3, 4};
-inline constexpr int kColOf[9] = {0, 2, 0, 1, 4, 2, 0, 1, 3};
+/// The equirect tables (liveprobe/sh/projector.h has them, for the GPU projection too).
+using EquirectTables = EquirectIntegrals;
+inline constexpr const int* kRowOf = EquirectIntegrals::kRowOf;
+inline constexpr const int* kColOf = EquirectIntegrals::kColOf;
 
 /// Float lanes of the 27 sums (coefficient-major, then the frame's channels), kMaxLanes each; a
 /// path uses as many lanes as its vectors have and leaves the rest zero.

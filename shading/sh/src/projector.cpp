@@ -66,7 +66,7 @@ kernel::EquirectTables equirectTables(int width, int height) {
 }
 
 /// Sample layouts: nine weights Y_lm(dir) dw per pixel, in blocks of 16 (kernel::Kernels).
-std::vector<float> blockedWeights(const std::vector<SphereSample>& samples) {
+std::vector<float> weightsInBlocks(const std::vector<SphereSample>& samples) {
   const std::size_t count = samples.size();
   std::vector<float> w((count + 15) / 16 * 16 * kShCount, 0.0f);
   for (std::size_t i = 0; i < count; ++i) {
@@ -153,12 +153,17 @@ Projector::Projector(const LayoutSpec& spec, int width, int height)
   if (spec.layout == Layout::Equirect)
     t->equirect = equirectTables(width, height);
   else
-    t->weights = blockedWeights(samples_);
+    t->weights = weightsInBlocks(samples_);
   t->blockUsed.assign((samples_.size() + 15) / 16, 0);
   for (std::size_t i = 0; i < samples_.size(); ++i)
     if (samples_[i].solidAngle != 0.0f) t->blockUsed[i / 16] = 1;
   tables_ = std::move(t);
 }
+
+const EquirectIntegrals* Projector::equirectIntegrals() const {
+  return tables_->equirect ? &*tables_->equirect : nullptr;
+}
+const std::vector<float>& Projector::blockedWeights() const { return tables_->weights; }
 
 Projector::~Projector() = default;
 Projector::Projector(Projector&&) noexcept = default;

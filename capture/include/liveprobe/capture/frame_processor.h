@@ -52,6 +52,20 @@ class FrameProcessor {
   FrameLighting process(const Frame& frame, Executor* executor = nullptr,
                         const Image* linear = nullptr);
 
+  /// The frame as the projection reads it (an 8-bit frame with the lookup table that carries
+  /// the photometry, a float frame as it is, a reduction's average) and the scale its
+  /// coefficients take afterwards: what process() projects, for a projection made elsewhere (the
+  /// GPU, liveprobe/gl/gpu_projector.h). Valid until the next call.
+  struct ProjectedView {
+    PanoramaView view;
+    float scale = 1.0f;
+  };
+  ProjectedView view(const Frame& frame, const Image* linear = nullptr);
+  /// The lighting from the coefficients of view(frame) projected elsewhere: scaled and turned as
+  /// process() does. Without lights (they are searched in the frame's pixels): throws lp::Error
+  /// where the options ask for them.
+  FrameLighting fromProjected(const Sh9& whole, float scale) const;
+
   /// How far one frame's lighting (from process()) can be trusted: an 8-bit frame's pixels with
   /// a channel at 255 are clipped, their power (by solid angle) a lower bound against the whole
   /// map's (from L00), and then the brightest source is not known to be measured. Reads only the
@@ -69,6 +83,8 @@ class FrameProcessor {
   const FrameProcessorOptions& options() const { return opt_; }
 
  private:
+  /// Scale, finiteness and orientation: the end of process() and fromProjected().
+  FrameLighting finish(Sh9 whole, LightSplit split, float scale) const;
   FrameProcessorOptions opt_;
   Linearizer linearizer_;
   // On the heap: the extractor points at the projector, and both survive a move.

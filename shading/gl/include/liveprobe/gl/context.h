@@ -1,13 +1,16 @@
 #pragma once
-// One GL context interface, two backends in the same binary: a GLFW window (X11; where the build
-// has LIVEPROBE_WITH_GLFW) and OSMesa offscreen (Mesa llvmpipe). Each lives in its own file of
-// src/, picked by context_factory.cpp; the renderer never sees GLFW or OSMesa. createGlContext()
-// loads GL 3.3 core through glad for either.
+// One GL context interface, three backends in the same binary: a GLFW window (X11; where the
+// build has LIVEPROBE_WITH_GLFW), EGL headless on a GPU (where it has LIVEPROBE_WITH_EGL) and
+// OSMesa offscreen (Mesa llvmpipe, where it has LIVEPROBE_WITH_OSMESA). Each lives in its own
+// file of src/, picked by context_factory.cpp; the renderer never sees GLFW, EGL or OSMesa.
+// createGlContext() loads GL (3.3 core at least; 4.3 for the compute passes) through glad.
 #include <cstdint>
 #include <glm/glm.hpp>
 #include <memory>
 #include <stdexcept>
 #include <string>
+#include <string_view>
+#include <vector>
 
 namespace lp::gl {
 
@@ -15,16 +18,29 @@ struct ContextError : std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
-enum class Backend : std::uint8_t { Auto, Window, Headless };
+/// Which context createGlContext() opens.
+///   Auto:     a window when a display opens, else as Headless;
+///   Headless: EGL on a GPU where EGL finds one, else OSMesa (the CPU rasterizer);
+///   Window, Egl, OsMesa: that one or a ContextError (Egl takes a software device too).
+enum class Backend : std::uint8_t { Auto, Window, Headless, Egl, OsMesa };
+
+/// "auto", "window", "headless", "egl", "osmesa".
+const char* backendName(Backend backend);
+
+/// The EGL devices in EGL's order ("/dev/dri/renderD128", "GPU", "software (software)"); empty
+/// where the build has no EGL or EGL enumerates none. ContextSpec::gpu indexes this list.
+std::vector<std::string> eglDevices();
 
 struct ContextSpec {
-  Backend backend = Backend::Auto;  ///< Auto: a window when a display opens, else headless
+  Backend backend = Backend::Auto;
   int width = 1280;
   int height = 720;
   std::string title = "liveprobe";
   bool vsync = true;
   /// The framebuffer's size when Auto comes up headless (0: width x height).
   int headlessWidth = 0, headlessHeight = 0;
+  /// EGL: the device to open (an index of eglDevices()); -1 takes the first GPU.
+  int gpu = -1;
 };
 
 /// What a platform provides for liveprobe to draw into (as Filament's OpenGLPlatform): a current
@@ -41,7 +57,8 @@ class GlContext {
   /// Processes the window's pending events (a headless context has none).
   virtual void pollEvents() = 0;
   virtual bool isHeadless() const = 0;
-  /// "GLFW window" or "OSMesa offscreen", plus GL_RENDERER.
+  /// "GLFW window", "EGL device 0, /dev/dri/renderD128" or "OSMesa offscreen", plus
+  /// GL_RENDERER and GL_VERSION.
   virtual std::string describe() const = 0;
   /// The GLFWwindow* of a window (for the app's input and Dear ImGui's GLFW backend); nullptr
   /// headless.
@@ -49,6 +66,10 @@ class GlContext {
   /// Asks the window to close (as Esc does).
   virtual void requestClose() = 0;
 };
+
+/// Whether a GL_RENDERER string (or a describe() holding one) names a software rasterizer
+/// (llvmpipe, softpipe, swrast, SwiftShader): no GPU, no GPU timer.
+bool isSoftwareRenderer(std::string_view renderer);
 
 /// Creates a context and loads GL into it. Throws ContextError with the cause.
 std::unique_ptr<GlContext> createGlContext(const ContextSpec& spec);

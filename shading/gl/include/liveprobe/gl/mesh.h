@@ -1,10 +1,12 @@
 #pragma once
 // Triangle meshes on the CPU: loading through assimp (OBJ, PLY, glTF 2.0, and whatever else it
-// reads), a built-in UV sphere, and fitting a model to the view. No GL here.
+// reads; where the build has assimp), OBJ text read without it, a built-in UV sphere, and
+// fitting a model to the view. No GL here.
 #include <cstdint>
 #include <glm/glm.hpp>
 #include <stdexcept>
 #include <string>
+#include <string_view>
 #include <vector>
 
 namespace lp {
@@ -28,6 +30,11 @@ Mesh makeUvSphere(int segments = 128, int rings = 64);
 /// the file has none. Throws lp::MeshError naming the file on a missing or unreadable file and
 /// on a file with no triangles.
 Mesh loadMesh(const std::string& path);
+
+/// The vertices and faces of OBJ text (polygons as fans; texture coordinates, normals, groups and
+/// materials ignored), with smooth normals: for builds without assimp (the GPU benchmark bakes
+/// its model in). Throws lp::MeshError naming the line of a bad vertex or face.
+Mesh meshFromObjText(std::string_view text);
 
 /// Centres the mesh's bounding box at the origin and scales it to fit the unit sphere.
 void fitToUnitSphere(Mesh& mesh);

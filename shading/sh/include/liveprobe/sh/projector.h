@@ -48,6 +48,20 @@ struct PanoramaView {
   std::size_t strideBytes() const { return rowStride ? rowStride : bytesPerPixel() * width; }
 };
 
+/// The equirect projection's exact pixel integrals, what Projector weighs pixels with: pixel
+/// (i, j) adds value * row[kRowOf[k]][i] * col[kColOf[k]][j] to coefficient k.
+///   col: per column the integrals of 1, cos p, sin p, cos 2p, sin 2p, zero-padded to a
+///        multiple of 16;
+///   row: per row the integrals of the six t-factors with the basis constants folded in
+///        (projector.cpp derives them).
+struct EquirectIntegrals {
+  int width = 0, height = 0;
+  std::array<std::vector<float>, 5> col;
+  std::array<std::vector<float>, 6> row;
+  static constexpr int kRowOf[9] = {0, 2, 1, 2, 4, 3, 5, 3, 4};
+  static constexpr int kColOf[9] = {0, 2, 0, 1, 4, 2, 0, 1, 3};
+};
+
 /// Projects frames of one (layout, size) to radiance coefficients L_lm (liveprobe/sh/sh.h). The
 /// per-pixel directions and solid angles (for equirect, the exact separable row and column
 /// integrals of the basis) are computed once here and reused for every frame.
@@ -78,6 +92,12 @@ class Projector {
   /// each row while the projection holds it in cache; other layouts read the frame once more.
   Sh9 project(const PanoramaView& frame, Executor* executor = nullptr,
               std::vector<float>* rowPeaks = nullptr) const;
+
+  /// The equirect layout's pixel integrals; nullptr for the other layouts.
+  const EquirectIntegrals* equirectIntegrals() const;
+  /// The other layouts' weights Y_lm(dir) dw, in blocks of 16 pixels: weight k of pixel p at
+  /// [((p / 16) * 9 + k) * 16 + p % 16], zero-padded to a whole block; empty for equirect.
+  const std::vector<float>& blockedWeights() const;
 
   /// Adds to `sums` (per coefficient, R G B in double) the coefficients of `values`, radiance
   /// given to the `count` pixels of row `row` from column `col` on, with the weights

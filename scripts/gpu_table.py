@@ -1,0 +1,72 @@
+#!/usr/bin/env python3
+"""docs/speed.md's GPU table from liveprobe-gpu-bench JSON files (medians; a later file's row
+replaces an earlier one's of the same name): per frame size and pixel type, the upload (direct
+and through the pixel-buffer objects), the read floor, the GPU and CPU projections; then the
+bunny renders and the frame loop. Usage: scripts/gpu_table.py RUN.json [RUN.json ...]"""
+import json
+import sys
+
+rows, machine, gl = {}, [], ""
+for path in sys.argv[1:]:
+    d = json.load(open(path))
+    machine = d["context"].get("machine", machine)
+    gl = d["context"].get("gl", gl)
+    for b in d["benchmarks"]:
+        if b.get("aggregate_name", "median") == "median":
+            rows[b["run_name"].removesuffix("/real_time")] = b
+
+UNIT = {"ns": 1e-3, "us": 1.0, "ms": 1e3}
+
+
+def us(name, counter=None):
+    b = rows.get(name)
+    if b is None:
+        return None
+    return b.get(counter) if counter else b["real_time"] * UNIT[b["time_unit"]]
+
+
+def fmt(v):
+    if v is None:
+        return "-"
+    return f"{v / 1e3:.3g} ms" if v >= 1e3 else f"{v:.3g} us"
+
+
+gpu = machine[0].split(", ") if machine else ["?", "?"]
+cpu = next((l.split(":", 1)[1].strip() for l in machine if l.startswith("Model name")), "?")
+cores = next((l.split(":", 1)[1].strip() for l in machine if l.startswith("CPU(s)")), "?")
+print(f"_GPU {gpu[0]}, driver {gpu[1]}; CPU {cpu}, {cores} cores; drawn through {gl}._")
+print()
+print("| frame | upload, direct | upload through PBOs: CPU write + GPU transfer | read floor (GPU) "
+      "| projection on the GPU (GPU time; with readback) | / read floor | CPU projection (16 threads) |")
+print("|---|---|---|---|---|---|---|")
+for size in ["300x300", "1920x960", "3840x1920", "7680x3840"]:
+    for t in ["f32", "u8"]:
+        p = f"{t}/{size}"
+        gpu, floor = us(f"Project/{p}/gpu", "gpu_us"), us(f"ReadFloor/{p}/gpu", "gpu_us")
+        ratio = f"{gpu / floor:.1f}x" if gpu and floor else "-"
+        pbo = (f"{fmt(us(f'Upload/{p}/pbo', 'cpu_write_us'))} + {fmt(us(f'Upload/{p}/pbo', 'gpu_us'))}"
+               if f"Upload/{p}/pbo" in rows else "-")
+        print(f"| {t} {size} | {fmt(us(f'Upload/{p}/direct'))} | {pbo} | {fmt(floor)} | "
+              f"{fmt(gpu)}; {fmt(us(f'Project/{p}/gpu'))} | {ratio} | {fmt(us(f'Project/{p}/cpu'))} |")
+print()
+print("| rows per group (f32 projection, GPU time) | 16 | 32 | 64 (default) | 128 | 256 |")
+print("|---|---|---|---|---|---|")
+for size in ["3840x1920", "7680x3840"]:
+    cells = [fmt(us(f"Project/f32/{size}/gpu/rows:{r}", "gpu_us")) for r in (16, 32)]
+    cells.append(fmt(us(f"Project/f32/{size}/gpu", "gpu_us")))
+    cells += [fmt(us(f"Project/f32/{size}/gpu/rows:{r}", "gpu_us")) for r in (128, 256)]
+    print(f"| {size} | " + " | ".join(cells) + " |")
+print()
+print("| render, the bunny with 4x MSAA | wall | GPU time |")
+print("|---|---|---|")
+for size in ["1920x1080", "3840x2160"]:
+    n = f"Render/bunny/{size}/msaa:4"
+    print(f"| {size} | {fmt(us(n))} | {fmt(us(n, 'gpu_us'))} |")
+print()
+print("| 8-bit 3840x1920 frame, 1920x1080 render | frame time | CPU write | GPU: transfer | "
+      "projection | render |")
+print("|---|---|---|---|---|---|")
+for mode in ["serial", "overlapped"]:
+    n = f"Frame/u8/3840x1920/render:1920x1080/{mode}"
+    print(f"| {mode} | {fmt(us(n))} | {fmt(us(n, 'cpu_write_us'))} | {fmt(us(n, 'gpu_upload_us'))} | "
+          f"{fmt(us(n, 'gpu_project_us'))} | {fmt(us(n, 'gpu_render_us'))} |")

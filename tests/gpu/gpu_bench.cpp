@@ -1,0 +1,453 @@
+// liveprobe-gpu-bench: what the GPU costs, per frame size and pixel type, beside the CPU.
+//   Upload/.../direct  glTexSubImage2D from ordinary memory, waited for (glFinish)
+//   Upload/.../pbo     the frame copied into a mapped pixel-buffer object, then the transfer
+//   ReadFloor/...      a compute pass that only reads every texel: the memory floor
+//   Project/.../gpu    the projection's two compute passes on the uploaded frame, waited for
+//   Project/.../cpu    lp::Projector on every hardware thread
+//   Render/bunny/...   the baked Stanford bunny, 4x MSAA, with the background, waited for
+//   Frame/u8/.../serial      write, transfer, project and render one after another
+//   Frame/u8/.../overlapped  the same with nothing waited for: the CPU writes frame n + 1 while
+//                            the GPU works on frame n; coefficients read one frame late
+// gpu_us counters are GL timer queries (absent where the GL has no timer, as llvmpipe).
+// Every Project/gpu run first checks the GPU's coefficients against the CPU's (1e-5 of L00)
+// and stops the benchmark with an error where they differ.
+#include <benchmark/benchmark.h>
+
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <map>
+#include <memory>
+#include <string>
+#include <thread>
+#include <tuple>
+#include <vector>
+
+#include "liveprobe/gl/context.h"
+#include "liveprobe/gl/gpu_projector.h"
+#include "liveprobe/gl/gpu_timer.h"
+#include "liveprobe/gl/mesh.h"
+#include "liveprobe/gl/renderer.h"
+#include "liveprobe/sh/executor.h"
+#include "liveprobe/sh/projector.h"
+
+extern "C" const char lp_baked_model[];
+extern "C" const char lp_baked_model_end[];
+
+namespace {
+
+using lp::gl::GpuTimer;
+
+/// Set where a GPU projection disagrees with the CPU's: the run then exits 1.
+bool gMismatch = false;
+
+struct Size {
+  int w, h;
+};
+std::string sizeName(Size s) { return std::to_string(s.w) + "x" + std::to_string(s.h); }
+
+/// One context for the whole run, as large as the largest render.
+lp::gl::GlContext& context() {
+  static auto ctx = [] {
+    lp::gl::ContextSpec spec;
+    spec.backend = lp::gl::Backend::Headless;
+    spec.width = 3840, spec.height = 2160;
+    spec.title = "liveprobe-gpu-bench";
+    return lp::gl::createGlContext(spec);
+  }();
+  return *ctx;
+}
+
+/// A sky: a blue gradient, a bright ground band and a sun of 2e4 (a real one's ratio).
+std::vector<float> skyF32(Size s) {
+  std::vector<float> px(std::size_t(s.w) * std::size_t(s.h) * 3);
+  for (int i = 0; i < s.h; ++i)
+    for (int j = 0; j < s.w; ++j) {
+      const float v = (i + 0.5f) / float(s.h), u = (j + 0.5f) / float(s.w);
+      float* p = &px[(std::size_t(i) * std::size_t(s.w) + std::size_t(j)) * 3];
+      const float du = u - 0.3f, dv = v - 0.25f;
+      const bool sun = du * du * 4.0f + dv * dv < 0.0004f;
+      p[0] = sun ? 2e4f : (v < 0.5f ? 0.3f + 0.4f * v : 0.2f);
+      p[1] = sun ? 1.8e4f : (v < 0.5f ? 0.5f + 0.3f * v : 0.18f);
+      p[2] = sun ? 1.5e4f : (v < 0.5f ? 0.9f - 0.2f * v : 0.12f);
+    }
+  return px;
+}
+
+/// The same sky as 8-bit codes (clipped, gamma 2.2) and the table that decodes them.
+struct FrameU8 {
+  std::vector<std::uint8_t> codes;
+  std::array<float, 256> decode;
+};
+FrameU8 skyU8(Size s) {
+  const auto f = skyF32(s);
+  FrameU8 out;
+  out.codes.resize(f.size());
+  for (std::size_t i = 0; i < f.size(); ++i)
+    out.codes[i] = std::uint8_t(std::lround(255.0f * std::pow(std::min(f[i], 1.0f), 1 / 2.2f)));
+  for (int c = 0; c < 256; ++c) out.decode[std::size_t(c)] = std::pow(c / 255.0f, 2.2f);
+  return out;
+}
+
+/// A frame of either type, in memory, with its view.
+struct TestFrame {
+  std::vector<float> f32;
+  FrameU8 u8;
+  lp::PanoramaView view;
+};
+void fillFrame(TestFrame& t, Size s, bool u8) {
+  if (u8) {
+    t.u8 = skyU8(s);
+    t.view = lp::PanoramaView{t.u8.codes.data(), lp::PanoramaFormat::RgbU8, s.w, s.h, 0, {},
+                              t.u8.decode.data()};
+  } else {
+    t.f32 = skyF32(s);
+    t.view = lp::PanoramaView::rgbF32(t.f32.data(), s.w, s.h);
+  }
+}
+
+/// Frames are made once per size and type (an 8K one takes seconds), kept for the run.
+const TestFrame& makeFrame(Size s, bool u8) {
+  static std::map<std::tuple<int, int, bool>, std::unique_ptr<TestFrame>> frames;
+  auto& f = frames[{s.w, s.h, u8}];
+  if (!f) {
+    f = std::make_unique<TestFrame>();  // the view points into it: made in place
+    fillFrame(*f, s, u8);
+  }
+  return *f;
+}
+
+/// Timer-query milliseconds of one stage, averaged over the frames that answered.
+struct GpuMs {
+  double sum = 0;
+  int n = 0;
+  void add(const GpuTimer& t, GpuTimer::Stage s) {
+    if (auto ms = t.ms(s)) sum += *ms, ++n;
+  }
+  void report(benchmark::State& state, const char* name) const {
+    if (n > 0) state.counters[name] = sum / n * 1e3;
+  }
+};
+
+/// Runs `work` once an iteration under the stage's timer query, then `after` (glFinish, or the
+/// wait for a result), and reports the stage's GPU time as gpu_us.
+template <class Work, class After>
+void timedLoop(benchmark::State& state, GpuTimer::Stage stage, Work work, After after) {
+  GpuTimer timer;
+  GpuMs gpu;
+  glFinish();
+  for (auto _ : state) {
+    timer.beginFrame();
+    gpu.add(timer, stage);
+    timer.begin(stage);
+    work();
+    timer.end();
+    after();
+  }
+  gpu.report(state, "gpu_us");
+}
+
+/// The CPU's write of a frame into the mapped buffer (its seconds returned), then the transfer
+/// queued under the upload timer.
+double writeAndCommit(lp::gl::FrameTexture& tex, const lp::PanoramaView& frame, GpuTimer& timer) {
+  const auto t0 = std::chrono::steady_clock::now();
+  void* dst = tex.map(frame.format, frame.width, frame.height);
+  std::memcpy(dst, frame.data, tex.frameBytes());
+  const double seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  timer.begin(GpuTimer::Upload);
+  tex.commit();
+  timer.end();
+  return seconds;
+}
+
+void uploadDirect(benchmark::State& state, Size s, bool u8) {
+  context();
+  const TestFrame& frame = makeFrame(s, u8);
+  lp::gl::FrameTexture tex;
+  tex.upload(frame.view);  // the texture, allocated once
+  const GLenum type = u8 ? GL_UNSIGNED_BYTE : GL_FLOAT;
+  glPixelStorei(GL_UNPACK_ALIGNMENT, 1);
+  timedLoop(
+      state, GpuTimer::Upload,
+      [&] {
+        glBindTexture(GL_TEXTURE_2D, tex.texture());
+        glTexSubImage2D(GL_TEXTURE_2D, 0, 0, 0, s.w, s.h, GL_RGB, type, frame.view.data);
+      },
+      glFinish);
+  glPixelStorei(GL_UNPACK_ALIGNMENT, 4);
+  state.SetBytesProcessed(std::int64_t(state.iterations()) * std::int64_t(tex.frameBytes()));
+}
+
+void uploadPbo(benchmark::State& state, Size s, bool u8) {
+  context();
+  const TestFrame& frame = makeFrame(s, u8);
+  lp::gl::FrameTexture tex;
+  tex.upload(frame.view);
+  GpuTimer timer;
+  GpuMs gpu;
+  double writeSeconds = 0;
+  for (auto _ : state) {
+    timer.beginFrame();
+    gpu.add(timer, GpuTimer::Upload);
+    writeSeconds += writeAndCommit(tex, frame.view, timer);
+    glFinish();
+  }
+  gpu.report(state, "gpu_us");
+  state.counters["cpu_write_us"] = writeSeconds / double(state.iterations()) * 1e6;
+  state.counters["persistent"] = tex.persistent() ? 1 : 0;
+  state.SetBytesProcessed(std::int64_t(state.iterations()) * std::int64_t(tex.frameBytes()));
+}
+
+// Reads every texel once and writes one sum per workgroup: the least a pass over the frame costs.
+const char* const kFloorCs = R"(#version 430
+layout(local_size_x = 256) in;
+layout(binding = 0) uniform sampler2D frame;
+layout(std430, binding = 0) writeonly buffer Out { float outv[]; };
+uniform int width, height, rowsPerGroup;
+shared float red[256];
+void main() {
+  const uint lid = gl_LocalInvocationID.x;
+  const int j = int(gl_WorkGroupID.x) * 256 + int(lid);
+  const int i0 = int(gl_WorkGroupID.y) * rowsPerGroup, i1 = min(i0 + rowsPerGroup, height);
+  vec3 acc = vec3(0.0);
+  if (j < width)
+    for (int i = i0; i < i1; ++i) acc += texelFetch(frame, ivec2(j, i), 0).rgb;
+  red[lid] = acc.r + acc.g + acc.b;
+  barrier();
+  for (uint s = 128u; s > 0u; s >>= 1) {
+    if (lid < s) red[lid] += red[lid + s];
+    barrier();
+  }
+  if (lid == 0u) outv[gl_WorkGroupID.y * gl_NumWorkGroups.x + gl_WorkGroupID.x] = red[0];
+}
+)";
+
+GLuint floorProgram() {
+  static GLuint program = [] {
+    const GLuint sh = glCreateShader(GL_COMPUTE_SHADER);
+    glShaderSource(sh, 1, &kFloorCs, nullptr);
+    glCompileShader(sh);
+    const GLuint p = glCreateProgram();
+    glAttachShader(p, sh);
+    glLinkProgram(p);
+    glDeleteShader(sh);
+    GLint ok = 0;
+    glGetProgramiv(p, GL_LINK_STATUS, &ok);
+    if (!ok) throw std::runtime_error("the floor's compute shader does not link");
+    return p;
+  }();
+  return program;
+}
+
+/// The context, the frame and its texture, for a run that needs compute shaders: nullptr (and
+/// the run marked) where the context has none.
+struct Uploaded {
+  const TestFrame& frame;
+  lp::gl::FrameTexture tex;
+};
+std::unique_ptr<Uploaded> uploaded(benchmark::State& state, Size s, bool u8) {
+  context();
+  if (!lp::gl::hasCompute()) {
+    state.SkipWithError("no compute shaders (GL 4.3)");
+    return nullptr;
+  }
+  auto u = std::unique_ptr<Uploaded>(new Uploaded{makeFrame(s, u8), {}});
+  u->tex.upload(u->frame.view);
+  return u;
+}
+
+void readFloor(benchmark::State& state, Size s, bool u8) {
+  auto up = uploaded(state, s, u8);
+  if (!up) return;
+  const TestFrame& frame = up->frame;
+  lp::gl::FrameTexture& tex = up->tex;
+  const int rows = std::clamp(s.h * ((s.w + 255) / 256) / 512, 4, 64);
+  const int gx = (s.w + 255) / 256, gy = (s.h + rows - 1) / rows;
+  GLuint out = 0;
+  glGenBuffers(1, &out);
+  glBindBuffer(GL_SHADER_STORAGE_BUFFER, out);
+  glBufferData(GL_SHADER_STORAGE_BUFFER, GLsizeiptr(gx) * gy * 4, nullptr, GL_DYNAMIC_COPY);
+  const GLuint p = floorProgram();
+  glUseProgram(p);
+  glUniform1i(glGetUniformLocation(p, "width"), s.w);
+  glUniform1i(glGetUniformLocation(p, "height"), s.h);
+  glUniform1i(glGetUniformLocation(p, "rowsPerGroup"), rows);
+  glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, out);
+  glActiveTexture(GL_TEXTURE0);
+  glBindTexture(GL_TEXTURE_2D, tex.texture());
+  timedLoop(
+      state, GpuTimer::Project, [&] { glDispatchCompute(GLuint(gx), GLuint(gy), 1); }, glFinish);
+  glUseProgram(0);
+  glDeleteBuffers(1, &out);
+}
+
+/// Largest |a - b| over the 27 values, over |L00| of b (its largest channel).
+double relativeError(const lp::Sh9& a, const lp::Sh9& b) {
+  double worst = 0;
+  for (int k = 0; k < lp::kShCount; ++k)
+    for (int c = 0; c < 3; ++c) worst = std::max(worst, double(std::abs(a.c[k][c] - b.c[k][c])));
+  const float l00 = std::max({std::abs(b.c[0].x), std::abs(b.c[0].y), std::abs(b.c[0].z)});
+  return worst / double(l00);
+}
+
+void projectGpu(benchmark::State& state, Size s, bool u8, int rows = 0) {
+  auto up = uploaded(state, s, u8);
+  if (!up) return;
+  const TestFrame& frame = up->frame;
+  lp::gl::FrameTexture& tex = up->tex;
+  lp::gl::GpuProjector gpu(lp::Layout::Equirect, s.w, s.h, rows);
+  lp::ThreadPool pool(0);
+  const lp::Sh9 cpu = lp::Projector(lp::Layout::Equirect, s.w, s.h).project(frame.view, &pool);
+  const double error = relativeError(gpu.project(tex, frame.view.decode), cpu);
+  if (!(error <= 1e-5)) {
+    char why[128];
+    std::snprintf(why, sizeof why, "the GPU's coefficients are %.3g of L00 from the CPU's", error);
+    gMismatch = true;
+    return state.SkipWithError(why);
+  }
+  timedLoop(
+      state, GpuTimer::Project, [&] { gpu.dispatch(tex, frame.view.decode); },
+      [&] { benchmark::DoNotOptimize(gpu.read(true)); });
+  state.counters["error_of_L00"] = error;
+  state.counters["groups"] = gpu.groups();
+}
+
+void projectCpu(benchmark::State& state, Size s, bool u8) {
+  const TestFrame& frame = makeFrame(s, u8);
+  lp::ThreadPool pool(0);
+  const lp::Projector projector(lp::Layout::Equirect, s.w, s.h);
+  for (auto _ : state) benchmark::DoNotOptimize(projector.project(frame.view, &pool));
+  state.counters["threads"] = pool.concurrency();
+}
+
+/// The bunny, lit by the sky, over the sky's background, at `size` with 4x MSAA.
+struct BunnyScene {
+  lp::gl::Renderer renderer;
+  explicit BunnyScene(Size background) {
+    lp::Mesh mesh = lp::meshFromObjText(
+        std::string_view(lp_baked_model, std::size_t(lp_baked_model_end - lp_baked_model)));
+    lp::fitToUnitSphere(mesh);
+    renderer.setMesh(mesh);
+    const auto sky = skyF32(background);
+    renderer.setLighting(
+        lp::project(lp::PanoramaView::rgbF32(sky.data(), background.w, background.h)));
+    renderer.setBackground(sky.data(), background.w, background.h,
+                           lp::gl::BackgroundMapping::Equirect);
+  }
+  void draw(Size s) {
+    lp::gl::ShadingSettings settings;
+    settings.samples = 4;
+    renderer.draw({s.w, s.h}, lp::gl::Camera{}, settings);
+  }
+};
+
+void renderBunny(benchmark::State& state, Size s) {
+  context();
+  BunnyScene scene({1920, 960});
+  timedLoop(
+      state, GpuTimer::Render, [&] { scene.draw(s); }, glFinish);
+}
+
+/// A camera's 8-bit frame: the CPU writes it into the mapped buffer, the GPU transfers it,
+/// projects it and renders the bunny at 1080p lit by the coefficients of the frame before.
+void frameLoop(benchmark::State& state, Size s, bool overlapped) {
+  auto up = uploaded(state, s, true);
+  if (!up) return;
+  const TestFrame& frame = up->frame;
+  lp::gl::FrameTexture& tex = up->tex;
+  lp::gl::GpuProjector gpu(lp::Layout::Equirect, s.w, s.h);
+  BunnyScene scene({1920, 960});
+  GpuTimer timer;
+  GpuMs upload, project, render;
+  double writeSeconds = 0;
+  int late = 0;
+  glFinish();
+  for (auto _ : state) {
+    timer.beginFrame();
+    upload.add(timer, GpuTimer::Upload);
+    project.add(timer, GpuTimer::Project);
+    render.add(timer, GpuTimer::Render);
+    writeSeconds += writeAndCommit(tex, frame.view, timer);
+    if (!overlapped) glFinish();
+    // The coefficients of the frame before, if the GPU has them (never waited for here).
+    if (auto sh = gpu.read(false))
+      scene.renderer.setLighting(*sh);
+    else if (gpu.pending() > 0)
+      ++late;
+    timer.begin(GpuTimer::Project);
+    gpu.dispatch(tex, frame.view.decode);
+    timer.end();
+    if (!overlapped) glFinish();
+    timer.begin(GpuTimer::Render);
+    scene.draw({1920, 1080});
+    timer.end();
+    if (!overlapped) glFinish();
+  }
+  glFinish();
+  while (gpu.pending() > 0) gpu.read(true);
+  upload.report(state, "gpu_upload_us");
+  project.report(state, "gpu_project_us");
+  render.report(state, "gpu_render_us");
+  state.counters["cpu_write_us"] = writeSeconds / double(state.iterations()) * 1e6;
+  state.counters["coeffs_late"] = late;
+}
+
+void registerAll() {
+  for (Size s : {Size{300, 300}, Size{1920, 960}, Size{3840, 1920}, Size{7680, 3840}})
+    for (bool u8 : {false, true}) {
+      const std::string tail = (u8 ? "u8/" : "f32/") + sizeName(s);
+      auto reg = [&](const std::string& name, auto fn) {
+        benchmark::RegisterBenchmark(name.c_str(), [=](benchmark::State& st) { fn(st, s, u8); })
+            ->UseRealTime()
+            ->Unit(benchmark::kMicrosecond);
+      };
+      reg("Upload/" + tail + "/direct", uploadDirect);
+      reg("Upload/" + tail + "/pbo", uploadPbo);
+      reg("ReadFloor/" + tail + "/gpu", readFloor);
+      reg("Project/" + tail + "/gpu",
+          [](benchmark::State& st, Size sz, bool b) { projectGpu(st, sz, b); });
+      reg("Project/" + tail + "/cpu", projectCpu);
+    }
+  // The first pass's rows per invocation, at 4K and 8K float (the default takes 64).
+  for (Size s : {Size{3840, 1920}, Size{7680, 3840}})
+    for (int rows : {16, 32, 128, 256})
+      benchmark::RegisterBenchmark(
+          ("Project/f32/" + sizeName(s) + "/gpu/rows:" + std::to_string(rows)).c_str(),
+          [=](benchmark::State& st) { projectGpu(st, s, false, rows); })
+          ->UseRealTime()
+          ->Unit(benchmark::kMicrosecond);
+  for (Size s : {Size{1920, 1080}, Size{3840, 2160}})
+    benchmark::RegisterBenchmark(("Render/bunny/" + sizeName(s) + "/msaa:4").c_str(),
+                                 [=](benchmark::State& st) { renderBunny(st, s); })
+        ->UseRealTime()
+        ->Unit(benchmark::kMicrosecond);
+  for (bool overlapped : {false, true})
+    benchmark::RegisterBenchmark((std::string("Frame/u8/3840x1920/render:1920x1080/") +
+                                  (overlapped ? "overlapped" : "serial"))
+                                     .c_str(),
+                                 [=](benchmark::State& st) {
+                                   frameLoop(st, {3840, 1920}, overlapped);
+                                 })
+        ->UseRealTime()
+        ->Unit(benchmark::kMicrosecond);
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  benchmark::Initialize(&argc, argv);
+  if (benchmark::ReportUnrecognizedArguments(argc, argv)) return 1;
+  try {
+    std::fprintf(stderr, "liveprobe-gpu-bench: %s\n", context().describe().c_str());
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "liveprobe-gpu-bench: %s\n", e.what());
+    return 1;
+  }
+  benchmark::AddCustomContext("gl", context().describe());
+  registerAll();
+  benchmark::RunSpecifiedBenchmarks();
+  benchmark::Shutdown();
+  return gMismatch ? 1 : 0;
+}
