@@ -269,6 +269,10 @@ int runCalibrate(const Args& a) {
         camera->setExposure(std::int32_t(std::lround(*locked.exposure100us * std::exp2(stop))));
     if (asked == previous) continue;  // clamped to the control's limit: already taken
     previous = asked;
+    if (stopRequested()) {
+      std::fprintf(stderr, "liveprobe calibrate: stopped by a signal; nothing written\n");
+      return exitStatusFor(stopSignal());
+    }
     Frame f;
     for (int i = 0; i < settle; ++i) {
       if (!camera->next(f)) throw Error(cs.device + ": the stream ended");

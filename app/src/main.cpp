@@ -39,7 +39,16 @@ void printOverview() {
 
 }  // namespace
 
+// The stop handlers go in before anything else of the program's runs: a constructor of the
+// highest priority, ahead of every static initialiser of this binary (the shared libraries'
+// own initialisation, before it, is the only window left: nothing of liveprobe's exists then).
+__attribute__((constructor(101))) static void installHandlersFirst() {
+  lp::cli::installStopHandlers();
+}
+
 int main(int argc, char** argv) {
+  // First of all: a signal from here on is the clean stop (lp::cli::installStopHandlers).
+  lp::cli::installStopHandlers();
   // OpenCV's and FFmpeg's own log lines would break the one-line error promise; errors are
   // reported by us. Set once, here, before any decoding (library code sets no environment).
   ::setenv("OPENCV_FFMPEG_LOGLEVEL", "-8", 0);
@@ -97,6 +106,10 @@ int main(int argc, char** argv) {
                         (errno == ENOSPC
                              ? "no space left on the device"
                              : "write failed (" + std::string(std::strerror(errno)) + ")"));
+      // A stop asked for by a signal is the run's status, whatever the command made of it (one
+      // that finished its work before it looked at the flag, one that says 130 for a SIGHUP).
+      if (lp::cli::stopRequested() && (rc == 0 || rc == lp::cli::kExitInterrupted))
+        return lp::cli::exitStatusFor(lp::cli::stopSignal());
       return rc;
     } catch (const lp::Error& e) {
       lp::cli::errs() << "liveprobe " << c.spec.name << ": " << e.what() << "\n";

@@ -10,16 +10,21 @@
 #include <cstdlib>
 #include <iostream>
 
+#include "liveprobe/capture/atomic_file.h"
+
 namespace lp::cli {
 
 namespace {
 
 std::atomic<int> gStopSignal{0};
 
+// The first signal sets the flag that every loop polls. The second ends the process at once,
+// after removing the temporaries of the outputs not yet complete (unlink alone: signal-safe). The
+// stop signals are blocked while the handler runs, so a third waits for that and changes nothing.
 extern "C" void onStopSignal(int sig) {
-  if (gStopSignal.exchange(sig) != 0) {  // the second signal: no more waiting
-    std::signal(sig, SIG_DFL);
-    std::raise(sig);
+  if (gStopSignal.exchange(sig) != 0) {
+    lp::removeTemporariesNow();
+    ::_exit(exitStatusFor(sig));
   }
 }
 
@@ -38,13 +43,19 @@ std::string formatSeconds(double s) {
 }  // namespace
 
 void installStopHandlers() {
-  struct sigaction sa {};
-  sa.sa_handler = onStopSignal;
-  sigemptyset(&sa.sa_mask);
-  sa.sa_flags = 0;  // no SA_RESTART: a blocking read returns EINTR and the loop sees the flag
-  sigaction(SIGINT, &sa, nullptr);
-  sigaction(SIGTERM, &sa, nullptr);
+  static const bool once = [] {
+    struct sigaction sa {};
+    sa.sa_handler = onStopSignal;
+    sigemptyset(&sa.sa_mask);
+    for (int sig : {SIGINT, SIGTERM, SIGHUP}) sigaddset(&sa.sa_mask, sig);
+    sa.sa_flags = 0;  // no SA_RESTART: a blocking read returns EINTR and the loop sees the flag
+    for (int sig : {SIGINT, SIGTERM, SIGHUP}) sigaction(sig, &sa, nullptr);
+    return true;
+  }();
+  (void)once;
 }
+
+int exitStatusFor(int sig) { return sig == SIGHUP ? kExitHangup : kExitInterrupted; }
 
 std::ostream& errs() {
   static std::ostream out(std::cerr.rdbuf());

@@ -1,7 +1,10 @@
 #pragma once
-// Progress of long runs, and clean stops. SIGINT and SIGTERM set a flag that every long loop
-// polls: the loop finishes or drops its current frame, the command finalises its outputs, prints
-// its summary and exits with kExitInterrupted. A second signal ends the process at once.
+// Progress of long runs, and clean stops. SIGINT, SIGTERM and SIGHUP set a flag that every long
+// loop polls: the loop finishes or drops its current frame, the command finalises its outputs,
+// prints its summary and exits with kExitInterrupted (kExitHangup for SIGHUP). main() installs
+// the handlers before any other work, so a signal at any moment is that clean stop. A second
+// signal ends the process at once, its unfinished outputs' temporaries removed first; a third
+// changes nothing.
 #include <chrono>
 #include <cstdint>
 #include <ostream>
@@ -11,10 +14,13 @@
 namespace lp::cli {
 
 inline constexpr int kExitInterrupted = 130;  ///< 128 + SIGINT, as shells report it
+inline constexpr int kExitHangup = 129;       ///< 128 + SIGHUP (the terminal closed)
 inline constexpr int kExitRuntime = 3;  ///< the run failed at run time (an internal error too)
 
-/// Installs the SIGINT/SIGTERM handlers (idempotent).
+/// Installs the SIGINT/SIGTERM/SIGHUP handlers (once; later calls do nothing).
 void installStopHandlers();
+/// The exit status of a run stopped by `sig`: kExitHangup for SIGHUP, else kExitInterrupted.
+int exitStatusFor(int sig);
 
 /// liveprobe's own error stream, on stderr. silenceLibraryStderr() points std::cerr nowhere, so
 /// that a library's own line (OpenCV's "imread_(...)" before it returns its failure to us) never

@@ -3,15 +3,54 @@
 #include <sys/resource.h>
 #include <unistd.h>
 
+#include <atomic>
 #include <cerrno>
 #include <cstring>
 #include <filesystem>
+#include <utility>
 
 #include "liveprobe/sh/error.h"
 
 namespace lp {
 
 namespace fs = std::filesystem;
+
+namespace {
+
+// The temporaries a signal handler may have to remove. A slot is claimed (free -> writing), its
+// path written, then published (ready); the handler reads only ready slots. Releasing goes back
+// through writing to free, so a handler never sees a path being rewritten as ready.
+enum SlotState : int { kFree, kWriting, kReady };
+struct TemporarySlot {
+  std::atomic<int> state{kFree};
+  char path[4096];
+};
+TemporarySlot gTemporaries[kMaxTemporaries];
+
+int claimTemporary(const std::string& path) {
+  if (path.size() >= sizeof(TemporarySlot::path)) return -1;
+  for (int i = 0; i < kMaxTemporaries; ++i) {
+    int expected = kFree;
+    if (!gTemporaries[i].state.compare_exchange_strong(expected, kWriting)) continue;
+    std::memcpy(gTemporaries[i].path, path.c_str(), path.size() + 1);
+    gTemporaries[i].state.store(kReady, std::memory_order_release);
+    return i;
+  }
+  return -1;
+}
+
+void releaseTemporary(int slot) {
+  if (slot < 0) return;
+  gTemporaries[slot].state.store(kWriting, std::memory_order_release);
+  gTemporaries[slot].state.store(kFree, std::memory_order_release);
+}
+
+}  // namespace
+
+void removeTemporariesNow() noexcept {
+  for (TemporarySlot& t : gTemporaries)
+    if (t.state.load(std::memory_order_acquire) == kReady) ::unlink(t.path);
+}
 
 AtomicOutput::AtomicOutput(std::string path) : path_(std::move(path)) {
   const fs::path p(path_);
@@ -23,6 +62,7 @@ AtomicOutput::AtomicOutput(std::string path) : path_(std::move(path)) {
   tmp_ = (dir /
           ("." + p.stem().string() + ".tmp" + std::to_string(::getpid()) + p.extension().string()))
              .string();
+  slot_ = claimTemporary(tmp_);
 }
 
 AtomicOutput::~AtomicOutput() { discard(); }
@@ -32,6 +72,7 @@ void AtomicOutput::discard() {
   done_ = true;
   std::error_code ec;
   fs::remove(tmp_, ec);
+  releaseTemporary(std::exchange(slot_, -1));
 }
 
 void AtomicOutput::commit() {
@@ -43,6 +84,7 @@ void AtomicOutput::commit() {
     throw Error(path_ + ": cannot rename into place (" + ec.message() + ")");
   }
   done_ = true;
+  releaseTemporary(std::exchange(slot_, -1));
 }
 
 std::optional<std::uintmax_t> fileSizeLimit() {

@@ -32,6 +32,7 @@ class AtomicOutput {
  private:
   std::string path_, tmp_;
   bool done_ = false;
+  int slot_ = -1;  ///< its place in removeTemporariesNow()'s table (-1: none)
 };
 
 /// A text file written line by line (thread-safe) through an AtomicOutput.
@@ -56,6 +57,13 @@ class AtomicTextFile {
   std::mutex mutex_;
   int fault_ = 0;
 };
+
+/// Removes every temporary of an AtomicOutput not yet committed or discarded, with unlink(2)
+/// alone: async-signal-safe, for a signal handler that ends the process at once (a second
+/// Ctrl-C) to leave nothing half-written behind. The temporaries are kept in a fixed table of
+/// kMaxTemporaries paths; one beyond it is still removed by its owner, not by this.
+void removeTemporariesNow() noexcept;
+inline constexpr int kMaxTemporaries = 64;
 
 /// The whole of `text` to `path`, atomically.
 void writeFileAtomically(const std::string& path, const std::string& text);
