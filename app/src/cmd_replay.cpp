@@ -612,7 +612,7 @@ std::unique_ptr<RecordSink> openBroker([[maybe_unused]] const StreamSettings& st
     }
   }
   try {
-    return std::make_unique<MqttPublisher>(std::move(t));
+    return std::make_unique<MqttPublisher>(std::move(t), stopRequested);
   } catch (const Error& e) {
     throw Error("--publish " + std::string(e.what()));
   }

@@ -1,7 +1,12 @@
 #include "liveprobe/exchange/mqtt_publisher.h"
 
 #include <mosquitto.h>
+#include <netdb.h>
+#include <poll.h>
+#include <sys/socket.h>
+#include <unistd.h>
 
+#include <cerrno>
 #include <chrono>
 #include <cstdio>
 #include <mutex>
@@ -72,9 +77,40 @@ MqttTarget parseMqttUrl(const std::string& url) {
 
 namespace {
 std::once_flag initOnce;
-}
 
-MqttPublisher::MqttPublisher(MqttTarget target) : target_(std::move(target)) {
+/// Whether a TCP connection to host:port is refused at once (nothing listens there): a
+/// non-blocking connect, answered within `patience`. False for anything else (accepted, no
+/// answer yet, a name that does not resolve): the broker may still come up.
+bool refusedNow(const std::string& host, int port, std::chrono::milliseconds patience) {
+  addrinfo hints{};
+  hints.ai_socktype = SOCK_STREAM;
+  addrinfo* found = nullptr;
+  if (::getaddrinfo(host.c_str(), std::to_string(port).c_str(), &hints, &found) != 0) return false;
+  bool refused = false;
+  for (addrinfo* a = found; a && !refused; a = a->ai_next) {
+    const int fd = ::socket(a->ai_family, a->ai_socktype | SOCK_NONBLOCK | SOCK_CLOEXEC, 0);
+    if (fd < 0) continue;
+    if (::connect(fd, a->ai_addr, a->ai_addrlen) != 0) {
+      if (errno == ECONNREFUSED) {
+        refused = true;
+      } else if (errno == EINPROGRESS) {
+        pollfd p{fd, POLLOUT, 0};
+        int err = 0;
+        socklen_t len = sizeof err;
+        if (::poll(&p, 1, int(patience.count())) == 1 &&
+            ::getsockopt(fd, SOL_SOCKET, SO_ERROR, &err, &len) == 0 && err == ECONNREFUSED)
+          refused = true;
+      }
+    }
+    ::close(fd);
+  }
+  ::freeaddrinfo(found);
+  return refused;
+}
+}  // namespace
+
+MqttPublisher::MqttPublisher(MqttTarget target, const std::function<bool()>& interrupted)
+    : target_(std::move(target)) {
   std::call_once(initOnce, [] { mosquitto_lib_init(); });
   const std::string what = target_.describe();
   mosq_ = mosquitto_new(nullptr, true, this);
@@ -118,17 +154,24 @@ MqttPublisher::MqttPublisher(MqttTarget target) : target_(std::move(target)) {
   mosquitto_connect_async(mosq_, target_.host.c_str(), target_.port, 10);
   if (mosquitto_loop_start(mosq_) != MOSQ_ERR_SUCCESS)
     fail("cannot start the MQTT client's thread");
-  // The first frames should reach a broker that is up: wait for the connection up to 3 s.
+  // The first frames should reach a broker that is up: wait for the connection up to 3 s,
+  // unless nothing listens there (the connection refused at once) or a stop is asked for.
+  const bool nothingListens =
+      refusedNow(target_.host, target_.port, std::chrono::milliseconds(200));
   const auto until = std::chrono::steady_clock::now() + std::chrono::seconds(3);
-  while (!connected_ && !refusal_ && std::chrono::steady_clock::now() < until)
+  bool stopped = false;
+  while (!nothingListens && !connected_ && !refusal_ && std::chrono::steady_clock::now() < until &&
+         !(stopped = interrupted && interrupted()))
     std::this_thread::sleep_for(std::chrono::milliseconds(5));
   if (const int rc = refusal_)
     fail(std::string("the broker refused the connection: ") + mosquitto_connack_string(rc));
-  if (!connected_)
-    std::fprintf(stderr,
-                 "liveprobe: warning: %s: no broker answers yet; frames are counted as lost "
-                 "until one does (retrying in the background)\n",
-                 what.c_str());
+  if (!connected_ && !stopped)
+    std::fprintf(
+        stderr,
+        "liveprobe: warning: %s: %s; frames are counted as lost until one does "
+        "(retrying in the background)\n",
+        what.c_str(),
+        nothingListens ? "no broker listens there (connection refused)" : "no broker answers yet");
 }
 
 MqttPublisher::~MqttPublisher() {

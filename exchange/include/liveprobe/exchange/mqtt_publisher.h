@@ -6,6 +6,7 @@
 // broker meanwhile is counted.
 #include <atomic>
 #include <cstdint>
+#include <functional>
 #include <string>
 
 #include "liveprobe/exchange/record_sink.h"
@@ -41,9 +42,11 @@ struct MqttStats {
 class MqttPublisher final : public RecordSink {
  public:
   /// Starts connecting (in the background: a broker that is down is retried, not an error).
-  /// Waits up to 3 s for the first connection; a broker that refuses the credentials (or the
-  /// TLS handshake) in that time throws lp::Error.
-  explicit MqttPublisher(MqttTarget target);
+  /// Waits up to 3 s for the first connection, not at all where nothing listens at the address
+  /// (the connection refused at once), and no longer once `interrupted` (polled every 5 ms; the
+  /// app passes its signal flag) says so. A broker that refuses the credentials (or the TLS
+  /// handshake) in that time throws lp::Error.
+  explicit MqttPublisher(MqttTarget target, const std::function<bool()>& interrupted = {});
   ~MqttPublisher() override;
   MqttPublisher(const MqttPublisher&) = delete;
   MqttPublisher& operator=(const MqttPublisher&) = delete;
