@@ -415,6 +415,26 @@ TEST(Hostile, TruncatedExrIsOneLine) {
     expectRefused(tmp, args, "t.exr", "not a readable image");
 }
 
+// A source that fails at its first frame is one line with --serve and --publish too: where the
+// stream is served and a broker that does not answer are said once the source has given a frame.
+TEST(Hostile, AFailingSourceIsOneLineWithTheStreamAndTheBroker) {
+  lpt::TempDir tmp;
+  fs::create_directory(tmp.path / "seq");
+  for (const char* f : {"seq/0000.exr", "seq/0001.exr"})
+    writeTruncatedCopy(lpt::dataPath("probes/latlong_full/grace_latlong.exr"), tmp / f, 5000);
+#if LIVEPROBE_WITH_STREAM
+  expectRefused(tmp, "replay 'seq/%04d.exr' --headless --serve 0 --frames 2", "0000.exr",
+                "not a readable image");
+#endif
+#if LIVEPROBE_WITH_MQTT
+  expectRefused(tmp, "replay 'seq/%04d.exr' --headless --publish mqtt://127.0.0.1:1/t --frames 2",
+                "0000.exr", "not a readable image");
+#endif
+  if (!LIVEPROBE_WITH_STREAM && !LIVEPROBE_WITH_MQTT)
+    expectRefused(tmp, "replay 'seq/%04d.exr' --headless --frames 2", "0000.exr",
+                  "not a readable image");
+}
+
 // Links that loop or lead nowhere, as the input or among a folder's frames: one line, exit 1.
 TEST(Hostile, LoopingLinksAreOneLine) {
   lpt::TempDir tmp;

@@ -393,6 +393,10 @@ struct StreamView {
 /// file of a window or a camera (record_sink.h).
 struct RecordSinks {
   std::vector<std::unique_ptr<RecordSink>> all;
+  /// What the sinks say about themselves (where the stream is served, a broker that does not
+  /// answer), said once the source has given its first frame: a source that fails at once is
+  /// its one line alone.
+  std::vector<std::string> opening;
 
   void fill(HudCounters& c) const {
     for (const auto& s : all)
@@ -553,7 +557,8 @@ void printSummary(const std::string& description, const PipelineStats& st, const
                  smoothSeconds, smoothSeconds);
 }
 
-std::unique_ptr<RecordSink> openStream([[maybe_unused]] const StreamSettings& st) {
+std::unique_ptr<RecordSink> openStream([[maybe_unused]] const StreamSettings& st,
+                                       [[maybe_unused]] std::vector<std::string>& opening) {
   requireBackend(OptionalBackend::Stream, "--serve");
 #if LIVEPROBE_WITH_STREAM
   StreamServerOptions o;
@@ -581,15 +586,17 @@ std::unique_ptr<RecordSink> openStream([[maybe_unused]] const StreamSettings& st
   } catch (const Error& e) {
     throw Error("--serve " + std::string(e.what()));
   }
-  std::fprintf(stderr, "liveprobe: serving http://%s:%d/ (WebSocket ws://%s:%d/?format=three)\n",
-               o.host.c_str(), server->port(), o.host.c_str(), server->port());
+  const std::string url = o.host + ":" + std::to_string(server->port());
+  opening.push_back("liveprobe: serving http://" + url + "/ (WebSocket ws://" + url +
+                    "/?format=three)");
   return server;
 #else
   return nullptr;  // (requireBackend threw)
 #endif
 }
 
-std::unique_ptr<RecordSink> openBroker([[maybe_unused]] const StreamSettings& st) {
+std::unique_ptr<RecordSink> openBroker([[maybe_unused]] const StreamSettings& st,
+                                       [[maybe_unused]] std::vector<std::string>& opening) {
   requireBackend(OptionalBackend::Mqtt, "--publish");
 #if LIVEPROBE_WITH_MQTT
   MqttTarget t;
@@ -611,11 +618,15 @@ std::unique_ptr<RecordSink> openBroker([[maybe_unused]] const StreamSettings& st
       t.password = pw;
     }
   }
+  std::unique_ptr<MqttPublisher> publisher;
   try {
-    return std::make_unique<MqttPublisher>(std::move(t), stopRequested);
+    publisher = std::make_unique<MqttPublisher>(std::move(t), stopRequested);
   } catch (const Error& e) {
     throw Error("--publish " + std::string(e.what()));
   }
+  if (!publisher->startupWarning().empty())
+    opening.push_back("liveprobe: warning: " + publisher->startupWarning());
+  return publisher;
 #else
   return nullptr;  // (requireBackend threw)
 #endif
@@ -623,8 +634,8 @@ std::unique_ptr<RecordSink> openBroker([[maybe_unused]] const StreamSettings& st
 
 RecordSinks openSinks(const StreamSettings& st) {
   RecordSinks s;
-  if (st.serve) s.all.push_back(openStream(st));
-  if (st.publish) s.all.push_back(openBroker(st));
+  if (st.serve) s.all.push_back(openStream(st, s.opening));
+  if (st.publish) s.all.push_back(openBroker(st, s.opening));
   return s;
 }
 
@@ -687,7 +698,11 @@ void wireCaptureOutputs(StreamPlan& p, StreamOutputs& out, RecordSinks& sinks,
   for (const auto& sink : sinks.all) to.push_back(sink.get());
   SentRecords* sent = out.sent.get();
   if (!to.empty())
-    p.opt.onCaptured = [to, sent, format = out.format](const ProcessedFrame& f) {
+    p.opt.onCaptured = [to, sent, format = out.format, opening = sinks.opening,
+                        said = std::make_shared<std::once_flag>()](const ProcessedFrame& f) {
+      std::call_once(*said, [&] {
+        for (const std::string& line : opening) std::fprintf(stderr, "%s\n", line.c_str());
+      });
       FrameRecord record(f, format);
       for (RecordSink* sink : to) sink->publish(record);
       if (sent) sent->sent(f.index, record.text());

@@ -166,12 +166,10 @@ MqttPublisher::MqttPublisher(MqttTarget target, const std::function<bool()>& int
   if (const int rc = refusal_)
     fail(std::string("the broker refused the connection: ") + mosquitto_connack_string(rc));
   if (!connected_ && !stopped)
-    std::fprintf(
-        stderr,
-        "liveprobe: warning: %s: %s; frames are counted as lost until one does "
-        "(retrying in the background)\n",
-        what.c_str(),
-        nothingListens ? "no broker listens there (connection refused)" : "no broker answers yet");
+    startupWarning_ = what + ": " +
+                      (nothingListens ? "no broker listens there (connection refused)"
+                                      : "no broker answers yet") +
+                      "; frames are counted as lost until one does (retrying in the background)";
 }
 
 MqttPublisher::~MqttPublisher() {

@@ -60,6 +60,9 @@ class MqttPublisher final : public RecordSink {
   /// Some message reached the broker.
   bool delivered() const override { return published_ > 0; }
   const MqttTarget& target() const { return target_; }
+  /// Why the wait for the first connection ended without one ("mqtt://...: no broker answers
+  /// yet; ..."), for the caller to say; empty when connected or stopped.
+  const std::string& startupWarning() const { return startupWarning_; }
 
  private:
   MqttTarget target_;
@@ -67,6 +70,7 @@ class MqttPublisher final : public RecordSink {
   std::atomic<std::uint64_t> published_{0}, lost_{0}, connects_{0};
   std::atomic<bool> connected_{false};
   std::atomic<int> refusal_{0};  ///< the broker's CONNACK code when it refused the connection
+  std::string startupWarning_;
 };
 
 }  // namespace lp
