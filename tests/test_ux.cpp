@@ -526,6 +526,39 @@ TEST(Stops, ASignalEndsTheWaitForABroker) {
 }
 #endif
 
+// Counts that add up however a run is stopped: frames captured = drawn + dropped, records
+// offered to the broker (published + lost) = captured, and --coeffs-out's lines = captured. A
+// replay that publishes is paced: a stop during a frame's wait must neither count nor send it.
+TEST(Stops, CountsAddUpWhereverTheRunIsStopped) {
+  lpt::TempDir tmp;
+  const std::string d = tmp.path.string();
+  const std::string publish = LIVEPROBE_WITH_MQTT ? " --publish mqtt://127.0.0.1:1/t" : "";
+  for (const char* delay : {"0.4", "0.9", "1.3", "2.1"}) {
+    const auto r =
+        runShell("cd " + lpt::shellQuote(d) +
+                 "; rm -f c.jsonl; \"$LP\" replay synthetic:64x32@30 --headless "
+                 "--msaa 1 --size 64x36 --realtime --frames 100000 --coeffs-out "
+                 "c.jsonl" +
+                 publish + " & pid=$!; sleep " + delay + "; kill -INT $pid; wait $pid; echo rc=$?");
+    ASSERT_NE(r.output.find("rc=130"), std::string::npos) << r.output;
+    std::smatch m;
+    ASSERT_TRUE(std::regex_search(
+        r.output, m, std::regex(R"((\d+) frames captured, (\d+) drawn, (\d+) dropped)")))
+        << r.output;
+    const int captured = std::stoi(m[1]), drawn = std::stoi(m[2]), dropped = std::stoi(m[3]);
+    EXPECT_EQ(captured, drawn + dropped) << delay << " s: " << r.output;
+    if (LIVEPROBE_WITH_MQTT) {
+      ASSERT_TRUE(std::regex_search(r.output, m, std::regex(R"((\d+) published, (\d+) lost)")))
+          << r.output;
+      EXPECT_EQ(std::stoi(m[1]) + std::stoi(m[2]), captured) << delay << " s: " << r.output;
+    }
+    std::ifstream in(d + "/c.jsonl");
+    int lines = 0;
+    for (std::string line; std::getline(in, line);) ++lines;
+    EXPECT_EQ(lines, captured) << delay << " s: " << r.output;
+  }
+}
+
 TEST(Stops, SigintDuringRecordFinalisesTheRecording) {
   lpt::TempDir tmp;
   const std::string out = tmp / "rec.mkv";

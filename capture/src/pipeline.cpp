@@ -95,6 +95,13 @@ void CapturePipeline::stop() {
   }
   cv_.notify_all();
   if (thread_.joinable()) thread_.join();
+  // A frame handed over that the consumer never took before the stop: dropped, so that the
+  // frames captured are those drawn plus those dropped.
+  std::lock_guard lock(mutex_);
+  if (slot_) {
+    ++stats_.dropped;
+    slot_.reset();
+  }
 }
 
 void CapturePipeline::publish(ProcessedFrame&& f) {
@@ -289,9 +296,11 @@ void CapturePipeline::run() {
       if (resample && out.image) out.times[Stage::Resample] = msBetween(t3, t4);
       out.captureTime = s.frame.captureTime >= 0 ? s.frame.captureTime : grabbed;
       out.coefficientsLatencyMs = 1000.0 * (monotonicSeconds() - out.captureTime);
-      if (opt_.onCaptured) opt_.onCaptured(out);
       pace(s, out.timestamp);
       if (interrupted_) break;  // the frame whose time had not come is not handed over
+      // Its record goes out at its time, and only when it is handed over: the sinks' counts
+      // and --coeffs-out's lines are the frames captured.
+      if (opt_.onCaptured) opt_.onCaptured(out);
       publish(std::move(out));
     }
   } catch (const std::exception& e) {

@@ -84,7 +84,8 @@ struct PipelineOptions {
   std::optional<MergeOptions> bracket;
   /// A frame whose confidence is below this keeps the last good frame's lighting (0: off).
   double holdBelow = 0;
-  /// Called on the capture thread for every processed frame, before the handoff.
+  /// Called on the capture thread for every frame handed over (at its time where capture is
+  /// paced), just before the handoff: as many calls as PipelineStats::captured.
   std::function<void(const ProcessedFrame&)> onCaptured;
   /// Called on the capture thread with every raw frame as the source gave it (for recording).
   std::function<void(const Frame&)> onFrame;
@@ -103,7 +104,8 @@ inline constexpr double kStopPollSeconds = 0.02;
 struct PipelineStats {
   std::size_t captured = 0;       ///< frames processed
   std::size_t taken = 0;          ///< frames the consumer took
-  std::size_t dropped = 0;        ///< frames replaced in the slot before anyone took them
+  std::size_t dropped = 0;        ///< frames replaced in the slot, or left in it at the stop,
+                                  ///< before anyone took them: captured = taken + dropped
   std::size_t skipped = 0;        ///< frames the source could not decode
   std::size_t gapsShortened = 0;  ///< timestamp gaps over PipelineOptions::maxGapSeconds
   std::size_t held = 0;           ///< frames that kept the last good lighting (holdBelow)
