@@ -241,23 +241,23 @@ std::unique_ptr<GlContext> openEgl(const ContextSpec& spec, bool hardwareOnly,
     return std::make_unique<EglContext>(dpy, "device " + std::to_string(spec.gpu) + ", " + d.name,
                                         spec);
   }
-  for (std::size_t i = 0; i < devices.size(); ++i) {
-    if (devices[i].software) continue;
-    EGLDisplay dpy = getDisplay(EGL_PLATFORM_DEVICE_EXT, devices[i].handle, nullptr);
-    if (dpy == EGL_NO_DISPLAY) continue;
-    return std::make_unique<EglContext>(dpy, "device " + std::to_string(i) + ", " + devices[i].name,
-                                        spec);
-  }
+  // The first device that opens: a GPU, then (unless only hardware will do) a software one.
+  const auto firstDevice = [&](bool software) -> std::unique_ptr<GlContext> {
+    for (std::size_t i = 0; i < devices.size(); ++i) {
+      if (devices[i].software != software) continue;
+      EGLDisplay dpy = getDisplay(EGL_PLATFORM_DEVICE_EXT, devices[i].handle, nullptr);
+      if (dpy != EGL_NO_DISPLAY)
+        return std::make_unique<EglContext>(
+            dpy, "device " + std::to_string(i) + ", " + devices[i].name, spec);
+    }
+    return nullptr;
+  };
+  if (auto gpu = firstDevice(false)) return gpu;
   if (hardwareOnly) {
     whyNot = devices.empty() ? "EGL offers no device" : "EGL finds no GPU, only a software device";
     return nullptr;
   }
-  for (std::size_t i = 0; i < devices.size(); ++i) {
-    EGLDisplay dpy = getDisplay(EGL_PLATFORM_DEVICE_EXT, devices[i].handle, nullptr);
-    if (dpy != EGL_NO_DISPLAY)
-      return std::make_unique<EglContext>(
-          dpy, "device " + std::to_string(i) + ", " + devices[i].name, spec);
-  }
+  if (auto software = firstDevice(true)) return software;
   if (hasExtension(client, "EGL_MESA_platform_surfaceless")) {
     EGLDisplay dpy = getDisplay(EGL_PLATFORM_SURFACELESS_MESA, EGL_DEFAULT_DISPLAY, nullptr);
     if (dpy != EGL_NO_DISPLAY) return std::make_unique<EglContext>(dpy, "surfaceless", spec);
