@@ -7,7 +7,7 @@
 // of the page.
 import { test } from 'node:test';
 import assert from 'node:assert/strict';
-import { mkdirSync } from 'node:fs';
+import { mkdirSync, writeFileSync } from 'node:fs';
 import { join } from 'node:path';
 import { chromium } from 'playwright-core';
 import { SphericalHarmonics3, Vector3 } from 'three';
@@ -73,7 +73,12 @@ test('the page draws the model lit by the stream', async () => {
       mkdirSync(out, { recursive: true });
       await page.goto(`http://127.0.0.1:${port}/`);
       await page.waitForTimeout(4000);
-      await page.screenshot({ path: join(out, 'web_page.png') });
+      // The DevTools protocol's capture of the compositor's frame: Playwright's page.screenshot
+      // does not return on a page that redraws its WebGL canvas every animation frame on
+      // SwiftShader (Chromium 156), while this takes the frame on screen.
+      const cdp = await page.context().newCDPSession(page);
+      const shot = await cdp.send('Page.captureScreenshot', { format: 'png' });
+      writeFileSync(join(out, 'web_page.png'), Buffer.from(shot.data, 'base64'));
     }
   } finally {
     await browser.close();
