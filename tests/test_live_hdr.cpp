@@ -274,6 +274,52 @@ TEST(LiveHdr, CamerasThatCannotBracketAreRefused) {
   }
 }
 
+// The plan says why a stop is not the one asked: the control's range clamps -14 EV of the
+// locked 3859 x 100 us to 1 (-11.9 EV), while -11.5 EV (1.33) is 1 because the control counts
+// whole 100 us.
+TEST(LiveHdr, TheBracketPlanSaysWhyAStopMoved) {
+  Emulator emu("RGB3_256x128", {skyFrame(30)});
+  for (const auto& [stops, says] : std::vector<std::pair<std::string, std::string>>{
+           {"-14,-6,0", "-14 EV is -11.9 EV, the control's limit"},
+           {"-11.5,-6,0", "-11.5 EV is -11.9 EV, the nearest whole 100 us"}}) {
+    const auto r = emu.run("live /dev/video7 --bracket " + stops +
+                           " --lock-exposure 0.3 --headless --view-size 64x36 --frames 2");
+    EXPECT_EQ(r.exitCode, 0) << r.output;
+    EXPECT_NE(r.output.find(says), std::string::npos) << r.output;
+  }
+}
+
+// A camera whose response is a gamma of 2.6: --gamma 2.6 is the merge's curve, and the still
+// sky's targets hold in every complete bracket (the sun's share within 10%, L00 within 2%).
+// Merged as sRGB, the exposures contradict each other and no frame comes near.
+TEST(LiveHdr, GammaIsTheMergesResponse) {
+  const json truth = truthOf(skyFrame(30));
+  const double share = truth["lights"][0]["share"].get<double>();
+  const double l00 = truth["coefficients"]["L00"][1].get<double>();
+  for (const std::string gamma : {"--gamma 2.6 ", ""}) {
+    Emulator emu("RGB3_256x128", {skyFrame(30)}, "control_delay=2");
+    emu.env = "LPEMU_RESPONSE=gamma=2.6 ";
+    const auto r = emu.run("live /dev/video7" + kBracket + gamma +
+                           "--frames 18 --sun --coeffs-out " + emu.tmp / "c.jsonl");
+    ASSERT_EQ(r.exitCode, 0) << r.output;
+    const double gain = gainOf(r.output);
+    int complete = 0, near = 0;
+    for (const json& f : readJsonl(emu.tmp / "c.jsonl")) {
+      const double ratio = f["coefficients"]["L00"][1].get<double>() / gain / l00;
+      near += std::abs(ratio - 1.0) <= 0.02;
+      if (gamma.empty() || f["confidence"]["exposures"] != 3) continue;
+      ++complete;
+      EXPECT_NEAR(ratio, 1.0, 0.02) << "frame " << f["frame"];
+      ASSERT_TRUE(f.contains("lights")) << "frame " << f["frame"];
+      EXPECT_NEAR(f["lights"][0]["share"].get<double>(), share, 0.1 * share);
+    }
+    if (gamma.empty())
+      EXPECT_EQ(near, 0) << r.output;
+    else
+      EXPECT_GE(complete, 8) << r.output;
+  }
+}
+
 // A bracketed recording replays through the same merge, frame for frame: the coefficients are
 // the live run's, to the last digit.
 TEST(LiveHdr, ABracketedRecordingReplaysAsLive) {

@@ -104,20 +104,23 @@ std::vector<double> bracketStops(const std::string& text) {
 }
 
 #if LIVEPROBE_WITH_V4L2
-void startBracket(V4l2Source& camera, const std::vector<double>& stops) {
+void startBracket(V4l2Source& camera, const std::vector<double>& stops, double locked) {
   const std::vector<std::int32_t> asked = camera.bracket(stops);
-  // The locked exposure the stops are counted from.
-  const double base = double(asked.back()) / std::exp2(stops.back());
-  std::string plan, clamped;
+  // Each stop as the control gives it: its whole units (100 us) round a short exposure; its
+  // range clamps the ends.
+  std::string plan, moved;
   for (std::size_t i = 0; i < stops.size(); ++i) {
     plan += (i ? ", " : "") + formatNumber(stops[i]) + " EV " + std::to_string(asked[i]);
-    const double actual = std::log2(double(asked[i]) / base);
+    const double want = locked * std::exp2(stops[i]);
+    const double actual = std::log2(double(asked[i]) / locked);
     if (std::abs(actual - stops[i]) > 0.1)
-      clamped += " " + formatNumber(stops[i]) + " EV is " + formatNumber(actual, 3) +
-                 " EV, the control's limit;";
+      moved += " " + formatNumber(stops[i]) + " EV is " + formatNumber(actual, 3) + " EV, " +
+               (std::abs(double(asked[i]) - want) <= 0.5 ? "the nearest whole 100 us"
+                                                         : "the control's limit") +
+               ";";
   }
   std::fprintf(stderr, "liveprobe live: bracket %s (x 100 us)%s\n", plan.c_str(),
-               clamped.empty() ? "" : (";" + clamped).c_str());
+               moved.empty() ? "" : (";" + moved).c_str());
 }
 
 #endif  // LIVEPROBE_WITH_V4L2
@@ -183,8 +186,9 @@ int runLive(const Args& a) {
   std::fprintf(stderr, "liveprobe live: %s%s\n", camera->describe().c_str(),
                s.output.frames || s.output.duration ? "" : "; running until Ctrl-C");
   // Bracketing counts its stops from a locked exposure.
-  if (s.camera.lockExposure || !stops.empty()) lockExposure(s.camera, *camera, "live");
-  if (!stops.empty()) startBracket(*camera, stops);
+  LockedExposure locked;
+  if (s.camera.lockExposure || !stops.empty()) locked = lockExposure(s.camera, *camera, "live");
+  if (!stops.empty()) startBracket(*camera, stops, locked.exposure100us.value_or(1));
   return runStreamForLive(a, std::move(camera));
 }
 #else

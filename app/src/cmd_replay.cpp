@@ -69,12 +69,14 @@ Photometry photometryFrom(const StreamSettings& st) {
 std::vector<OptionSpec> streamOptions() {
   auto o = layoutOptions();
   const std::string g = "Stream";
-  OptionSpec gamma{"--gamma",
-                   "srgb|G",
-                   "8-bit decoding: the sRGB curve (default) or code^G, G above 0.2 and below 5",
-                   false,
-                   false,
-                   g};
+  OptionSpec gamma{
+      "--gamma",
+      "srgb|G",
+      "8-bit decoding, a bracket's merge included: the sRGB curve (default) or code^G, G "
+      "above 0.2 and below 5",
+      false,
+      false,
+      g};
   gamma.set = [](Settings& s, const std::string& v) {
     if (v == "srgb") return s.stream.gamma.reset();
     const double x = parseNumber(v, "--gamma");
@@ -224,6 +226,8 @@ PipelineOptions pipelineOptionsFrom(const Settings& s, const FrameSource& source
     m.frames = std::max(1, source.bracketFrames());
     if (st.response)
       m.response = CameraResponse::load(*st.response);
+    else if (st.gamma)  // the merge decodes with the curve it is told
+      m.response = CameraResponse::gamma(float(*st.gamma));
     else if (!source.bracketResponse().empty())
       m.response =
           CameraResponse::parse(source.bracketResponse(), source.describe() + ": response");
