@@ -320,25 +320,49 @@ TEST(LiveHdr, GammaIsTheMergesResponse) {
   }
 }
 
-// A bracketed recording replays through the same merge, frame for frame: the coefficients are
-// the live run's, to the last digit.
+// A bracketed recording replays through the same merge, frame for frame: the coefficients,
+// lights and confidence are the live run's, to the last digit. In each container that keeps the
+// codes losslessly with every frame's exposure: .mkv (FFV1), .png frames (their sidecar beside
+// them, replayed by pattern or by folder).
 TEST(LiveHdr, ABracketedRecordingReplaysAsLive) {
-  Emulator emu("MJPG_256x128", {skyFrame(10), skyFrame(11), skyFrame(12)}, "control_delay=2");
-  const auto live = emu.run("live /dev/video7" + kBracket + "--frames 20 --sun --coeffs-out " +
-                            emu.tmp / "live.jsonl --record " + emu.tmp / "b.mkv");
-  ASSERT_EQ(live.exitCode, 0) << live.output;
-  const auto replay = lpt::runLiveprobe("replay " + emu.tmp / "b.mkv" +
-                                        " --sun --headless --size 64x36 --no-background --quiet "
-                                        "--coeffs-out " +
-                                        emu.tmp / "replay.jsonl");
-  ASSERT_EQ(replay.exitCode, 0) << replay.output;
-  const auto a = readJsonl(emu.tmp / "live.jsonl"), b = readJsonl(emu.tmp / "replay.jsonl");
-  ASSERT_EQ(a.size(), b.size());
-  for (std::size_t i = 0; i < a.size(); ++i) {
-    EXPECT_EQ(a[i]["coefficients"], b[i]["coefficients"]) << "frame " << i;
-    EXPECT_EQ(a[i].value("lights", json()), b[i].value("lights", json())) << "frame " << i;
-    EXPECT_EQ(a[i]["confidence"], b[i]["confidence"]) << "frame " << i;
+  for (const auto& [record, replayed] : std::vector<std::pair<std::string, std::string>>{
+           {"b.mkv", "b.mkv"}, {"png/%04d.png", "png/%04d.png"}, {"dir/%04d.png", "dir"}}) {
+    Emulator emu("MJPG_256x128", {skyFrame(10), skyFrame(11), skyFrame(12)}, "control_delay=2");
+    fs::create_directories(emu.tmp.path / fs::path(record).parent_path());
+    const auto live = emu.run("live /dev/video7" + kBracket + "--frames 20 --sun --coeffs-out " +
+                              emu.tmp / "live.jsonl --record " + emu.tmp / record);
+    ASSERT_EQ(live.exitCode, 0) << live.output;
+    const auto replay = lpt::runLiveprobe("replay " + emu.tmp / replayed +
+                                          " --sun --headless --size 64x36 --no-background --quiet "
+                                          "--coeffs-out " +
+                                          emu.tmp / "replay.jsonl");
+    ASSERT_EQ(replay.exitCode, 0) << replay.output;
+    const auto a = readJsonl(emu.tmp / "live.jsonl"), b = readJsonl(emu.tmp / "replay.jsonl");
+    ASSERT_EQ(a.size(), b.size()) << record;
+    for (std::size_t i = 0; i < a.size(); ++i) {
+      EXPECT_EQ(a[i]["coefficients"], b[i]["coefficients"]) << record << " frame " << i;
+      EXPECT_EQ(a[i].value("lights", json()), b[i].value("lights", json())) << record << " " << i;
+      EXPECT_EQ(a[i]["confidence"], b[i]["confidence"]) << record << " frame " << i;
+    }
   }
+}
+
+// A container that would not replay the merge is refused before the camera opens, in one line
+// that names it, and nothing is written: MJPEG (.avi) and H.264 (.mp4) are lossy; .exr frames
+// keep radiance, not the codes.
+TEST(LiveHdr, ABracketGoesOnlyWhereItReplays) {
+  Emulator emu("MJPG_256x128", {skyFrame(30)});
+  for (const std::string record : {"b.avi", "b.mp4", "%04d.exr"}) {
+    const auto r =
+        emu.run("live /dev/video7" + kBracket + "--frames 5 --record " + emu.tmp / record);
+    EXPECT_EQ(r.exitCode, 1) << r.output;
+    EXPECT_EQ(lpt::lineCount(r.output), 1) << r.output;
+    EXPECT_NE(r.output.find(record + ": a bracket is recorded losslessly"), std::string::npos)
+        << r.output;
+  }
+  EXPECT_EQ(emu.logText().find("open"), std::string::npos) << emu.logText();
+  for (const auto& e : fs::directory_iterator(emu.tmp.path))  // the modes, the call log
+    EXPECT_TRUE(e.path().filename() == "modes" || e.path() == emu.log()) << e.path();
 }
 
 // A hand over the lens (10 frames gone dark, or white): --hold-below keeps the last good

@@ -12,6 +12,7 @@
 #include "liveprobe/backends.h"
 #include "liveprobe/capture/atomic_file.h"
 #include "liveprobe/capture/hdr_merge.h"
+#include "liveprobe/capture/recorder.h"
 #include "liveprobe/capture/v4l2.h"
 #include "liveprobe/sh/error.h"
 #include "progress.h"
@@ -152,14 +153,16 @@ const CommandSpec kLiveSpec{
                          false,
                          g};
       bracket.set = [](Settings& s, const std::string& v) { s.camera.bracket = bracketStops(v); };
-      o.insert(o.end(),
-               {bracket,
-                fileOption("--record", "FILE",
-                           "save the camera stream (.mkv FFV1, .avi MJPEG, .mp4 H.264) while it "
-                           "runs",
-                           {".mkv", ".avi", ".mp4", ".exr", ".hdr"}, LP_FIELD(stream.record), g),
-                sizeOption("--view-size", "window or frame size", 16384,
-                           "1280x720; headless 640x360", LP_FIELD(camera.viewSize), "Output")});
+      o.insert(
+          o.end(),
+          {bracket,
+           fileOption("--record", "FILE",
+                      "save the camera stream while it runs: .mkv (FFV1), .avi (MJPEG), "
+                      ".mp4 (H.264), or frames: %04d.png (the codes), %04d.exr (radiance); "
+                      "a bracket: .mkv or .png frames",
+                      {".mkv", ".avi", ".mp4", ".exr", ".hdr", ".png"}, LP_FIELD(stream.record), g),
+           sizeOption("--view-size", "window or frame size", 16384, "1280x720; headless 640x360",
+                      LP_FIELD(camera.viewSize), "Output")});
       auto scene = sceneOptions();
       o.insert(o.end(), scene.begin(), scene.end());
       return o;
@@ -171,6 +174,8 @@ const CommandSpec kLiveSpec{
       checkStreamOptions(s);
       if (s.camera.metadata && s.camera.bracket.empty())
         throw Error("--metadata goes with --bracket");
+      if (!s.camera.bracket.empty() && s.stream.record)
+        checkBracketRecording("--record " + *s.stream.record);
     }};
 
 #if LIVEPROBE_WITH_V4L2

@@ -27,6 +27,7 @@ struct VideoRecorder::Impl {
   // finish().
   std::optional<SequencePattern> pattern;
   fs::path partial;
+  bool codes = false;     ///< .png frames: the camera's 8-bit codes, each exposure in the sidecar
   Linearizer linearizer;  ///< sRGB, for 8-bit frames
   Image image;
 };
@@ -45,10 +46,11 @@ VideoRecorder::VideoRecorder(std::string path, double fps, std::string sourceDes
       throw Error(path_ + ": the frame-number pattern goes in the file name, not the folder");
     const auto dot = pattern->suffix.rfind('.');  // the suffix may be ".exr" alone
     const std::string ext = lower(dot == std::string::npos ? "" : pattern->suffix.substr(dot));
-    if (ext != ".exr" && ext != ".hdr")
+    if (ext != ".exr" && ext != ".hdr" && ext != ".png")
       throw Error(path_ +
-                  ": an image-sequence recording keeps linear radiance: .exr or .hdr "
-                  "frames (like frames/%04d.exr)");
+                  ": an image-sequence recording keeps linear radiance in .exr or .hdr frames "
+                  "(like frames/%04d.exr), or a camera's 8-bit codes in .png frames");
+    impl_->codes = ext == ".png";
     const fs::path dir = fs::path(pattern->at(0)).parent_path();
     std::error_code ec;
     if (!dir.empty() && !fs::is_directory(dir, ec))
@@ -56,6 +58,7 @@ VideoRecorder::VideoRecorder(std::string path, double fps, std::string sourceDes
     impl_->pattern = std::move(pattern);
     impl_->partial = (dir.empty() ? fs::path(".") : dir) /
                      (".liveprobe-recording." + std::to_string(::getpid()));
+    if (impl_->codes) sidecar_ = std::make_unique<AtomicTextFile>(path_ + ".json");
     return;
   }
   const std::string ext = lower(fs::path(path_).extension().string());
@@ -143,17 +146,30 @@ void VideoRecorder::write(const Frame& f) {
 }
 
 void VideoRecorder::writeSequenceFrame(const Frame& f) {
+  if (impl_->codes && f.format != PanoramaFormat::BgrU8) {
+    failed_ = true;
+    throw Error(path_ + ": .png frames keep a camera's 8-bit codes; this stream is radiance: " +
+                "record .exr frames (like frames/%04d.exr)");
+  }
+  std::error_code ec;
+  if (stamps_.empty() && !fs::create_directory(impl_->partial, ec) && ec)
+    throw Error(path_ + ": cannot create " + impl_->partial.string() + " (" + ec.message() + ")");
+  const std::string file =
+      (impl_->partial / fs::path(impl_->pattern->at(int(stamps_.size()))).filename()).string();
+  if (impl_->codes) {
+    // The codes as they came; the sidecar keeps each frame's exposure.
+    saveImage8(file, f.width, f.height, 3, f.bgr8.data());
+    stamps_.push_back(f.timestamp);
+    exposures_.push_back(1.0 / f.radianceScale);
+    return;
+  }
   // Linear radiance as the replay would see it: 8-bit frames decoded from sRGB, every frame
   // times its radiance scale, so the files need no exposure of their own.
   Image& img = impl_->image;
   impl_->linearizer.convert(f, img);
   if (f.radianceScale != 1.0)
     for (float& v : img.rgb) v *= float(f.radianceScale);
-  std::error_code ec;
-  if (stamps_.empty() && !fs::create_directory(impl_->partial, ec) && ec)
-    throw Error(path_ + ": cannot create " + impl_->partial.string() + " (" + ec.message() + ")");
-  const int n = int(stamps_.size());
-  saveImage((impl_->partial / fs::path(impl_->pattern->at(n)).filename()).string(), img, true);
+  saveImage(file, img, true);
   stamps_.push_back(f.timestamp);
   exposures_.push_back(1.0);
 }
@@ -164,6 +180,7 @@ void VideoRecorder::discard() {
   if (impl_->pattern) {
     std::error_code ec;
     fs::remove_all(impl_->partial, ec);
+    sidecar_.reset();
     return;
   }
   impl_->writer.release();
@@ -171,7 +188,19 @@ void VideoRecorder::discard() {
   sidecar_.reset();  // its destructor removes the temporary
 }
 
+void checkBracketRecording(const std::string& path) {
+  std::string ext = fs::path(path).extension().string();
+  for (auto& c : ext) c = char(std::tolower(static_cast<unsigned char>(c)));
+  const bool sequence = parseSequencePattern(path).has_value();
+  if ((sequence && ext == ".png") || (!sequence && ext == ".mkv")) return;
+  throw Error(path + ": a bracket is recorded losslessly, each frame with its exposure: .mkv " +
+              "(FFV1) or .png frames (like frames/%04d.png); " +
+              (sequence ? ext + " frames keep radiance, not the codes the merge reads"
+                        : ext + " is lossy"));
+}
+
 void VideoRecorder::setBracket(int frames, std::string responseJson) {
+  checkBracketRecording(path_);
   bracket_ = frames;
   response_ = std::move(responseJson);
 }
@@ -216,6 +245,11 @@ void VideoRecorder::finish() {
                                    : std::string("is the disk full?")));
     }
   }
+  writeSidecar();  // the sidecar first: a video in place always has its timing beside it
+  video_->commit();
+}
+
+void VideoRecorder::writeSidecar() {
   nlohmann::ordered_json j;
   j["source"] = source_;
   j["fps"] = fps_;
@@ -229,8 +263,7 @@ void VideoRecorder::finish() {
     j["response"] = nlohmann::json::parse(response_).at("response");
   }
   sidecar_->line(j.dump());
-  sidecar_->commit();  // the sidecar first: a video in place always has its timing beside it
-  video_->commit();
+  sidecar_->commit();
 }
 
 void VideoRecorder::finishSequence() {
@@ -249,11 +282,15 @@ void VideoRecorder::finishSequence() {
                   "than a file is there)");
     }
   }
+  // .png frames: their exposures and timing go in place before the frames.
+  if (sidecar_ && count > 0) writeSidecar();
+  sidecar_.reset();
   for (int n = 0; n < count; ++n) {
     fs::rename(impl_->partial / fs::path(pattern.at(n)).filename(), pattern.at(n), ec);
     if (ec) {
       const std::string why = ec.message();
       fs::remove_all(impl_->partial, ec);
+      if (impl_->codes) fs::remove(path_ + ".json", ec);
       throw Error(pattern.at(n) + ": cannot put the recorded frame in place (" + why + ")");
     }
   }

@@ -44,10 +44,15 @@ class ListSource : public FrameSource {
                   "x" + std::to_string(h_));
     w_ = f.width, h_ = f.height;
     f.sequence = i_;
-    f.timestamp = double(i_) / fps_;
+    f.timestamp = i_ < sidecar_.stamps.size() ? sidecar_.stamps[i_] : double(i_) / fps_;
+    if (i_ < sidecar_.scales.size()) f.radianceScale = sidecar_.scales[i_];
     ++i_;
     return true;
   }
+  /// A recording's sidecar (.png frames): each frame's time and exposure, its bracket.
+  void setSidecar(RecordingSidecar sidecar) { sidecar_ = std::move(sidecar); }
+  int bracketFrames() const override { return sidecar_.bracket; }
+  std::string bracketResponse() const override { return sidecar_.response; }
   bool rewind() override {
     i_ = 0;
     return true;
@@ -62,6 +67,7 @@ class ListSource : public FrameSource {
   std::string what_;
   std::size_t i_ = 0;
   int w_ = 0, h_ = 0;
+  RecordingSidecar sidecar_;
 };
 
 // Six face files assembled into a horizontal cross (liveprobe/sh/layout.h, cube).
@@ -260,8 +266,8 @@ std::optional<SequencePattern> parseSequencePattern(const std::string& spec) {
   return SequencePattern{spec.substr(0, pos), spec.substr(i + 1), width};
 }
 
-std::unique_ptr<FrameSource> openSequence(const std::string& name, std::vector<std::string> files,
-                                          double fps) {
+std::unique_ptr<ListSource> openSequence(const std::string& name, std::vector<std::string> files,
+                                         double fps) {
   if (files.empty()) throw Error(name + ": no image files in this sequence");
   const std::string what =
       "image sequence " + name + " (" + std::to_string(files.size()) + " frames)";
@@ -301,12 +307,22 @@ std::unique_ptr<FrameSource> openPatternSequence(const std::string& spec,
   if (beyond >= 0 && !files.empty())
     throw Error(spec + ": " + pattern.at(i - 2) + " and " + pattern.at(i - 1) +
                 " are missing, but the sequence goes on (" + pattern.at(int(beyond)) + ")");
-  return openSequence(spec, std::move(files), fps);
+  auto source = openSequence(spec, std::move(files), fps);
+  // A recording of .png frames has its sidecar beside them, named after the pattern.
+  if (fs::exists(spec + ".json", ec))
+    source->setSidecar(parseRecordingSidecar(readInputFile(spec + ".json"), spec + ".json"));
+  return source;
 }
 
 std::unique_ptr<FrameSource> openFolderSequence(const std::string& dir, double fps) {
-  std::vector<std::string> files;
+  std::vector<std::string> files, recordings;
   for (const auto& e : fs::directory_iterator(dir)) {
+    // A recording's sidecar, named after its frames' pattern (%04d.png.json): the folder
+    // replays as that recording, with its exposures.
+    const std::string name = e.path().filename().string();
+    if (name.size() > 5 && name.compare(name.size() - 5, 5, ".json") == 0 &&
+        parseSequencePattern(name.substr(0, name.size() - 5)))
+      recordings.push_back(e.path().string());
     if (!isImageFile(e.path())) continue;
     std::error_code ec;
     const bool regular = e.is_regular_file(ec);
@@ -314,6 +330,14 @@ std::unique_ptr<FrameSource> openFolderSequence(const std::string& dir, double f
       throw Error(e.path().string() + ": cannot read (" + ec.message() + ")");
     if (regular) files.push_back(e.path().string());
   }
+  if (recordings.size() == 1) {
+    const std::string spec = recordings[0].substr(0, recordings[0].size() - 5);
+    return openPatternSequence(spec, *parseSequencePattern(spec), fps);
+  }
+  if (recordings.size() > 1)
+    throw Error(dir + ": " + std::to_string(recordings.size()) +
+                " recordings in one folder; replay one by its pattern, e.g. " +
+                recordings[0].substr(0, recordings[0].size() - 5));
   std::sort(files.begin(), files.end());
   return openSequence(dir, std::move(files), fps);
 }

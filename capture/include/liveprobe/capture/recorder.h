@@ -6,7 +6,8 @@
 // or below 95% (a sun's few pixels clip, as on a camera).
 // Or an image sequence (a frame-number pattern, like frames/%04d.exr: .exr frames as 16-bit
 // floats, or .hdr), which keeps linear radiance whole, a sun included: frames numbered from 0,
-// replayed at --fps (no sidecar).
+// replayed at --fps (no sidecar). Or .png frames (frames/%04d.png): a camera's 8-bit codes as
+// they came, with a sidecar (frames/%04d.png.json) as a video's.
 // The video is written under a temporary name and renamed, with its sidecar, only by finish()
 // (a sequence's frames go to a hidden folder beside them first): a caller that keeps what was
 // recorded up to a fault (a camera unplugged mid-stream) says so. Otherwise (an error, an
@@ -37,7 +38,8 @@ class VideoRecorder {
   /// Appends a frame (its timestamp goes to the sidecar). Throws lp::Error on a write failure.
   void write(const Frame& frame);
   /// The frames come in exposure brackets of `frames`, from a camera with this response
-  /// (CameraResponse::json()): the sidecar says so, and a replay merges them as live did.
+  /// (CameraResponse::json()): the sidecar says so, and a replay merges them as live did. Throws
+  /// lp::Error where the recording could not replay the merge (checkBracketRecording).
   void setBracket(int frames, std::string responseJson);
   /// Closes the video, writes the sidecar, renames both into place. Idempotent. After a refused
   /// write it discards instead and throws lp::Error.
@@ -50,6 +52,7 @@ class VideoRecorder {
  private:
   void writeSequenceFrame(const Frame& frame);
   void finishSequence();
+  void writeSidecar();
   struct Impl;
   std::unique_ptr<Impl> impl_;
   std::string path_, source_;
@@ -62,6 +65,10 @@ class VideoRecorder {
   std::string response_;
   bool finished_ = false, failed_ = false;  ///< failed: a write was refused; never finalised
 };
+
+/// A bracket replays as it ran only from its codes as they came, with each frame's exposure:
+/// .mkv (FFV1) or .png frames. Throws lp::Error naming `path` for any other recording.
+void checkBracketRecording(const std::string& path);
 
 /// What a recording's sidecar (FILE.json) holds, as the replay reads it.
 struct RecordingSidecar {
