@@ -138,21 +138,25 @@ CameraResponse calibrateResponse(const std::vector<Frame>& frames) {
 // Sums over a merged frame, for its confidence.
 struct MergeTally {
   double power = 0, clippedPower = 0;
+  /// What the clipped pixels held in the last trusted merge, where more than now (their lower
+  /// bound): the light a bracket missing its shortest reading cannot vouch for.
+  double clippedEstimate = 0;
   double disagreedPower = 0;
   std::size_t dark = 0;
   float brightest = -1;
   bool brightestClipped = false;
   void add(const MergeTally& o) {
-    power += o.power, clippedPower += o.clippedPower;
+    power += o.power, clippedPower += o.clippedPower, clippedEstimate += o.clippedEstimate;
     dark += o.dark, disagreedPower += o.disagreedPower;
     if (o.brightest > brightest) brightest = o.brightest, brightestClipped = o.brightestClipped;
   }
   FrameConfidence confidence(std::size_t pixels, int exposures) const {
     FrameConfidence c;
-    c.clippedShare = power > 0 ? clippedPower / power : 0.0;
+    const double estimated = power - clippedPower + clippedEstimate;
+    c.clippedShare = estimated > 0 ? clippedEstimate / estimated : 0.0;
     c.darkShare = pixels ? double(dark) / double(pixels) : 0.0;
     c.brightestMeasured = !brightestClipped;
-    c.agreement = 1.0 - disagreedPower / std::max(power + disagreedPower, 1e-30);
+    c.agreement = disagreedPower > 0 ? std::max(0.0, 1.0 - disagreedPower / power) : 1.0;
     c.exposures = exposures;
     return c;
   }
@@ -350,17 +354,26 @@ FrameConfidence BracketMerger::add(const Frame& in, Frame& out, Executor* execut
   const BracketView view = prepare(exposures);
   const bool fresh = previous_.size() == std::size_t(w) * std::size_t(h);
   previous_.resize(std::size_t(w) * std::size_t(h));
+  if (reference_.size() != previous_.size()) reference_.assign(previous_.size(), 0.0f);
   const MergeTally total = parallelReduce(
       executor, std::size_t(h), Split{.grain = 1, .perThread = 4}, MergeTally{},
       [&](std::size_t y0, std::size_t y1) {
         MergeTally t;
         for (std::size_t y = y0; y < y1; ++y)
           t.add(mergeRow(view, y, out.rgb.data() + y * std::size_t(w) * 3,
-                         previous_.data() + y * std::size_t(w), fresh));
+                         previous_.data() + y * std::size_t(w),
+                         reference_.data() + y * std::size_t(w), fresh));
         return t;
       },
       [](MergeTally& into, const MergeTally& part) { into.add(part); });
-  return total.confidence(std::size_t(w) * h, exposures);
+  FrameConfidence c = total.confidence(std::size_t(w) * h, exposures);
+  c.complete =
+      int(window_.size()) == opt_.frames && exposures == opt_.frames &&
+      std::all_of(view.usable.begin(), view.usable.begin() + view.n, [](bool u) { return u; });
+  // A trusted merge (complete, its brightest pixel read unclipped, its confidence 0.9 or more)
+  // is what later clipped pixels are measured against.
+  if (c.complete && c.brightestMeasured && c.value() >= 0.9) reference_ = previous_;
+  return c;
 }
 
 BracketView BracketMerger::prepare(int& exposures) const {
@@ -393,11 +406,11 @@ BracketView BracketMerger::prepare(int& exposures) const {
 }
 
 MergeTally BracketMerger::mergeRow(const BracketView& v, std::size_t y, float* out, float* previous,
-                                   bool fresh) const {
+                                   const float* reference, bool fresh) const {
   const int w = window_.back().width, h = window_.back().height;
   const float rw = rowWeight(int(y), h, opt_.equirect);
   // Sums in locals (registers); the row's total goes to the tally once.
-  double power = 0, clippedPower = 0, lostPower = 0;
+  double power = 0, clippedPower = 0, clippedEstimate = 0, lostPower = 0;
   std::size_t dark = 0;
   float brightest = -1;
   bool brightestClipped = false;
@@ -413,11 +426,12 @@ MergeTally BracketMerger::mergeRow(const BracketView& v, std::size_t y, float* o
       lostPower += std::max(std::max(px.lost, seen) - l, 0.0f);
     previous[x] = l;
     power += l;
-    if (px.clipped) clippedPower += l;
+    if (px.clipped) clippedPower += l, clippedEstimate += std::max(l, reference[x]);
     if (l > brightest) brightest = l, brightestClipped = px.clipped;
   }
   MergeTally t;
   t.power = power * rw, t.clippedPower = clippedPower * rw, t.disagreedPower = lostPower * rw;
+  t.clippedEstimate = clippedEstimate * rw;
   t.dark = dark;
   t.brightest = brightest, t.brightestClipped = brightestClipped;
   return t;

@@ -130,8 +130,10 @@ struct CapturePipeline::Loop {
   struct Lit {
     Sh9 radiance, unsmoothed;
     std::vector<Light> lights;
+    bool brightestMeasured = true;
   };
-  std::optional<Lit> lastGood;  ///< the last frame over PipelineOptions::holdBelow
+  std::optional<Lit> lastGood;  ///< the last complete frame over PipelineOptions::holdBelow
+  bool holding = false;         ///< lastGood stands in for the frames
   ShSmoother smoother;
   LightSmoother lightSmoother;
   std::unique_ptr<ThreadPool> pool;
@@ -169,8 +171,15 @@ void CapturePipeline::merge(Loop& s, ProcessedFrame& out) const {
 }
 
 bool CapturePipeline::hold(Loop& s, ProcessedFrame& out) {
-  // Nothing good yet: the frame as it is.
-  if (opt_.holdBelow <= 0 || out.confidence.value() >= opt_.holdBelow || !s.lastGood) return false;
+  // Nothing good yet: the frame as it is. Once held, only a complete bracket that agrees again
+  // lets go (a window still holding a frame of the occluder, or missing one, does not).
+  if (opt_.holdBelow <= 0 || !s.lastGood) return false;
+  const FrameConfidence& c = out.confidence;
+  const bool good = c.value() >= opt_.holdBelow;
+  // Agreeing again: whole, and measuring the brightest source where the last good frame did.
+  const bool agrees = c.complete && (c.brightestMeasured || !s.lastGood->brightestMeasured);
+  s.holding = s.holding ? !(good && agrees) : !good;
+  if (!s.holding) return false;
   out.radiance = s.lastGood->radiance;
   out.unsmoothed = s.lastGood->unsmoothed;
   out.lights = s.lastGood->lights;
@@ -220,8 +229,9 @@ void CapturePipeline::project(Loop& s, ProcessedFrame& out) {
   out.unsmoothed = lit.radiance;
   out.lights = s.lightSmoother.update(lit.lights, out.timestamp);
   out.radiance = s.smoother.update(lit.radiance, out.timestamp);
-  if (opt_.holdBelow > 0 && out.confidence.value() >= opt_.holdBelow)
-    s.lastGood = Loop::Lit{out.radiance, out.unsmoothed, out.lights};
+  if (opt_.holdBelow > 0 && out.confidence.value() >= opt_.holdBelow && out.confidence.complete)
+    s.lastGood =
+        Loop::Lit{out.radiance, out.unsmoothed, out.lights, out.confidence.brightestMeasured};
 }
 
 template <class Ready>

@@ -66,19 +66,25 @@ CameraResponse calibrateResponse(const std::vector<Frame>& frames);
 
 /// How far a frame's lighting can be trusted.
 struct FrameConfidence {
-  /// Fraction of the map's power in pixels clipped in every exposure: a lower bound, since their
-  /// true radiance is unknown (weighted by solid angle for equirect frames, by pixel otherwise).
+  /// Fraction of the map's power in pixels clipped in every exposure, each at the most of its
+  /// lower bound and what the last trusted merge measured there (a bracket missing its shortest
+  /// reading loses the sun it held): still a lower bound, since their true radiance is unknown
+  /// (weighted by solid angle for equirect frames, by pixel otherwise).
   double clippedShare = 0;
   /// Fraction of pixels no exposure read at a well-exposed code (16 and up): in the noise floor,
   /// or measured only in the few lowest codes (a covered lens, a bracket missing its longest).
   double darkShare = 0;
   /// The brightest pixel was measured unclipped in at least one exposure.
   bool brightestMeasured = true;
-  /// 1 minus the share of the power that older frames of the bracket saw and the newest
+  /// 1 minus the power that older frames of the bracket (or the last merge) saw and the newest
   /// contradicts (radiances more than 25% apart, or dark or clipped where the other predicts
-  /// otherwise: motion, flicker, a hand over the lens); 1 for a single frame.
+  /// otherwise: motion, flicker, a hand over the lens), relative to the power the merge keeps;
+  /// 0 when as much is contradicted as is kept. 1 for a single frame.
   double agreement = 1;
   int exposures = 1;  ///< distinct exposure times merged
+  /// Every frame of a full window merged, each at its own exposure: none missing (start-up) or
+  /// left out whole (a hand over the lens, a flash). A hold ends only on a complete merge.
+  bool complete = true;
 
   /// One number in [0, 1]: (1 - clippedShare) (1 - darkShare) agreement.
   double value() const { return (1.0 - clippedShare) * (1.0 - darkShare) * agreement; }
@@ -122,10 +128,11 @@ class BracketMerger {
   std::array<bool, kMaxBracket> usableFrames(const BracketView& view) const;
   /// One row merged into `out` (RGB) and its luminance into `previous`; the row's sums.
   MergeTally mergeRow(const BracketView& view, std::size_t y, float* out, float* previous,
-                      bool fresh) const;
+                      const float* reference, bool fresh) const;
   MergeOptions opt_;
-  std::deque<Frame> window_;     ///< oldest first
-  std::vector<float> previous_;  ///< the last merge's luminance, per pixel
+  std::deque<Frame> window_;      ///< oldest first
+  std::vector<float> previous_;   ///< the last merge's luminance, per pixel
+  std::vector<float> reference_;  ///< the last trusted merge's (complete, in agreement)
 };
 
 }  // namespace lp
