@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "liveprobe/backends.h"
+#include "liveprobe/capture/exposure_estimate.h"
 #include "liveprobe/capture/frame_processor.h"
 #include "liveprobe/capture/hdr_merge.h"
 #include "liveprobe/capture/image.h"
@@ -65,6 +66,40 @@ Frame shootSrgb(const std::vector<float>& radiance, double t) {
 
 // The truth merged against: pixels some exposure read between codes 16 and 249.
 double relativeError(float merged, float truth) { return std::abs(merged - truth) / truth; }
+
+// Exposures told from the pixels alone (a camera without per-frame metadata), against frames
+// shot at known times: the anchor at 1 s; 1/64 s shares well-measured sky with it and is
+// measured by ratio; 1/4096 s reads only the sun and its glow, clipped in the others, and is
+// named by what the known frames contradict least; a camera that rounded 1/64 to 1/60 is measured
+// as 1/60; a frame half at one exposure and half at another (the sensor changing) agrees with none.
+TEST(HdrMerge, ExposuresAreToldFromThePixels) {
+  // The sky with the glow a real sun has around it (falling from 30 to the sky's level within
+  // 10 pixels): the tones between the sky and the sun that tell 1/4096 s from 1/64 s.
+  auto radiance = scene();
+  for (int y = 0; y < kH / 2; ++y)
+    for (int x = 0; x < kW; ++x) {
+      const float d2 = float((x - 40) * (x - 40) + (y - 12) * (y - 12));
+      for (int c = 0; c < 3; ++c)
+        radiance[(std::size_t(y) * kW + x) * 3 + std::size_t(c)] += 30.0f * std::exp(-d2 / 20.0f);
+    }
+  const double base = 1.0, mid = 1.0 / 64, shortest = 1.0 / 4096;
+  lp::ExposureIdentifier id({shortest, mid, base}, base, CameraResponse::srgb());
+  id.seed(shootSrgb(radiance, base));
+  for (int cycle = 0; cycle < 3; ++cycle)
+    for (const double t : {shortest, mid, base}) {
+      const auto told = id.identify(shootSrgb(radiance, t));
+      ASSERT_TRUE(told.has_value()) << "t " << t << " cycle " << cycle;
+      EXPECT_EQ(*told, t) << "cycle " << cycle;  // within the estimate's precision: as asked
+    }
+  const auto rounded = id.identify(shootSrgb(radiance, 1.0 / 60));
+  ASSERT_TRUE(rounded.has_value());
+  EXPECT_NEAR(*rounded, 1.0 / 60, 0.01 / 60);
+  Frame torn = shootSrgb(radiance, 1.0 / 8);
+  const Frame top = shootSrgb(radiance, base);
+  std::copy(top.bgr8.begin(), top.bgr8.begin() + long(top.bgr8.size() / 2), torn.bgr8.begin());
+  EXPECT_FALSE(id.identify(torn).has_value()) << id.lastEstimate();
+  EXPECT_THROW(lp::ExposureIdentifier({1.0}, 0.0, CameraResponse::srgb()), lp::Error);
+}
 
 TEST(HdrMerge, TwelveStopsOfRadianceComeBack) {
   const auto radiance = scene();

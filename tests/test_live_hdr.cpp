@@ -250,6 +250,41 @@ TEST(LiveHdr, LateAndRoundedExposuresAreTakenAsReported) {
     EXPECT_LT(worstCoefficient(f["coefficients"], truth["coefficients"], gain), 0.005);
 }
 
+// A camera without a metadata node (most webcams), taking each exposure 1 to 3 frames late, or
+// rounding it to a power of two: each frame's exposure is told from its pixels, and every
+// complete bracket of the still sky meets the targets of the camera that reports them (the sun's
+// share within 10% and 1 degree, L00 within 2%).
+TEST(LiveHdr, ABracketWithoutMetadataToldFromThePixels) {
+  const json truth = truthOf(skyFrame(30));
+  const json& sun = truth["lights"][0];
+  const double l00 = truth["coefficients"]["L00"][1].get<double>();
+  for (const std::string faults :
+       {"control_delay=1", "control_delay=2", "control_delay=3", "control_delay=3,exposure_pow2"}) {
+    Emulator emu("MJPG_256x128", {skyFrame(30)}, faults);
+    emu.env = "LPEMU_META_DEVICE= ";  // no metadata node beside the camera
+    const auto r = emu.run("live /dev/video7" + kBracket + "--frames 30 --sun --coeffs-out " +
+                           emu.tmp / "c.jsonl");
+    ASSERT_EQ(r.exitCode, 0) << r.output;
+    EXPECT_NE(r.output.find("each frame's exposure measured from its pixels"), std::string::npos)
+        << r.output;
+    const double gain = gainOf(r.output);
+    int complete = 0;
+    for (const json& f : readJsonl(emu.tmp / "c.jsonl")) {
+      if (f["confidence"]["exposures"] != 3) continue;
+      ++complete;
+      ASSERT_TRUE(f.contains("lights")) << faults << " frame " << f["frame"];
+      const json& l = f["lights"][0];
+      EXPECT_NEAR(l["share"].get<double>(), sun["share"].get<double>(),
+                  0.1 * sun["share"].get<double>())
+          << faults << " frame " << f["frame"];
+      EXPECT_LT(angleDeg(l["direction"], sun["direction"]), 1.0) << faults;
+      EXPECT_NEAR(f["coefficients"]["L00"][1].get<double>() / gain, l00, 0.02 * l00)
+          << faults << " frame " << f["frame"];
+    }
+    EXPECT_GE(complete, 20) << faults << "\n" << r.output;
+  }
+}
+
 // Cameras that cannot bracket say so in one line and exit 1.
 TEST(LiveHdr, CamerasThatCannotBracketAreRefused) {
   const std::vector<std::tuple<std::string, std::string, std::string>> cases = {

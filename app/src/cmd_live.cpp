@@ -105,8 +105,9 @@ std::vector<double> bracketStops(const std::string& text) {
 }
 
 #if LIVEPROBE_WITH_V4L2
-void startBracket(V4l2Source& camera, const std::vector<double>& stops, double locked) {
-  const std::vector<std::int32_t> asked = camera.bracket(stops);
+void startBracket(V4l2Source& camera, const std::vector<double>& stops, double locked,
+                  const CameraResponse& response) {
+  const std::vector<std::int32_t> asked = camera.bracket(stops, response);
   // Each stop as the control gives it: its whole units (100 us) round a short exposure; its
   // range clamps the ends.
   std::string plan, moved;
@@ -120,8 +121,13 @@ void startBracket(V4l2Source& camera, const std::vector<double>& stops, double l
                                                          : "the control's limit") +
                ";";
   }
-  std::fprintf(stderr, "liveprobe live: bracket %s (x 100 us)%s\n", plan.c_str(),
-               moved.empty() ? "" : (";" + moved).c_str());
+  std::fprintf(stderr, "liveprobe live: bracket %s (x 100 us)%s; %s\n", plan.c_str(),
+               moved.empty() ? "" : (";" + moved).c_str(),
+               camera.reportsExposure()
+                   ? "each frame's exposure from the camera's metadata"
+                   : ("each frame's exposure measured from its pixels (" + response.name +
+                      " response; the camera sends no per-frame exposure times)")
+                         .c_str());
 }
 
 #endif  // LIVEPROBE_WITH_V4L2
@@ -187,13 +193,24 @@ int runLive(const Args& a) {
   if (!stops.empty())
     cs.metadataDevice = s.camera.metadata.value_or(siblingMetadataNode(cs.device));
   auto camera = std::make_unique<V4l2Source>(cs);
-  camera->start();
+  try {
+    camera->start();
+  } catch (const Error&) {
+    // Without a metadata node (most webcams), exposures are measured from the frames; one named
+    // with --metadata must work.
+    if (cs.metadataDevice.empty() || s.camera.metadata) throw;
+    cs.metadataDevice.clear();
+    camera = std::make_unique<V4l2Source>(cs);
+    camera->start();
+  }
   std::fprintf(stderr, "liveprobe live: %s%s\n", camera->describe().c_str(),
                s.output.frames || s.output.duration ? "" : "; running until Ctrl-C");
   // Bracketing counts its stops from a locked exposure.
   LockedExposure locked;
   if (s.camera.lockExposure || !stops.empty()) locked = lockExposure(s.camera, *camera, "live");
-  if (!stops.empty()) startBracket(*camera, stops, locked.exposure100us.value_or(1));
+  if (!stops.empty())
+    startBracket(*camera, stops, locked.exposure100us.value_or(1),
+                 responseOption(s.stream).value_or(CameraResponse::srgb()));
   return runStreamForLive(a, std::move(camera));
 }
 #else

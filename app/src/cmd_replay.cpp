@@ -145,6 +145,12 @@ std::vector<OptionSpec> streamOptions() {
   return o;
 }
 
+std::optional<CameraResponse> responseOption(const StreamSettings& st) {
+  if (st.response) return CameraResponse::load(*st.response);
+  if (st.gamma) return CameraResponse::gamma(float(*st.gamma));
+  return std::nullopt;
+}
+
 void checkStreamOptions(const Settings& s) {
   checkHudOptions(s);
   const StreamSettings& st = s.stream;
@@ -224,10 +230,8 @@ PipelineOptions pipelineOptionsFrom(const Settings& s, const FrameSource& source
   if (source.bracketFrames() > 0 || st.response) {
     MergeOptions m;
     m.frames = std::max(1, source.bracketFrames());
-    if (st.response)
-      m.response = CameraResponse::load(*st.response);
-    else if (st.gamma)  // the merge decodes with the curve it is told
-      m.response = CameraResponse::gamma(float(*st.gamma));
+    if (auto told = responseOption(st))  // the merge decodes with the curve it is told
+      m.response = std::move(*told);
     else if (!source.bracketResponse().empty())
       m.response =
           CameraResponse::parse(source.bracketResponse(), source.describe() + ": response");
@@ -526,9 +530,13 @@ void printSummary(const std::string& description, const PipelineStats& st, const
                   double smoothSeconds, bool interrupted, const RecordSinks& sinks) {
   std::fprintf(stderr,
                "liveprobe: %s: %zu frames captured, %zu drawn, %zu dropped (stale), %zu skipped "
-               "(corrupt)%s%s%s\n"
+               "(corrupt)%s%s%s%s\n"
                "  median ms: %s; saturated values %.1f per frame\n",
                description.c_str(), st.captured, t.drawn, st.dropped, st.skipped,
+               st.unidentified == 0 ? ""
+                                    : (", " + std::to_string(st.unidentified) +
+                                       " left out of the bracket (exposure not told)")
+                                          .c_str(),
                st.endReason.empty() ? "" : "; ", st.endReason.c_str(),
                interrupted ? "; stopped by a signal" : "", stageMedians(t).c_str(),
                t.frames() == 0 ? 0.0 : double(t.saturated) / double(t.frames()));

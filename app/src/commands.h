@@ -3,11 +3,13 @@
 // thrown as lp::Error and printed by main() as one line.
 #include <cstdint>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
 #include "args.h"
 #include "liveprobe/capture/frame.h"
+#include "liveprobe/capture/hdr_merge.h"
 #include "liveprobe/sh/lights.h"
 #include "settings.h"
 
@@ -51,6 +53,8 @@ int runStreamForLive(const Args& a, std::unique_ptr<FrameSource> camera);
 std::vector<OptionSpec> streamOptions();
 /// What goes together among them: --serve-* with --serve, --mqtt-* with --publish, --hud.
 void checkStreamOptions(const Settings& s);
+/// The camera response --response FILE or --gamma G names; none when neither is given.
+std::optional<CameraResponse> responseOption(const StreamSettings& st);
 // Options more than one command takes, each declared once here with its one help text (a
 // command adds them to its list, under its own help section `group`).
 /// --sun and --lights K: extraction of the dominant compact lights (liveprobe/sh/lights.h).

@@ -320,6 +320,7 @@ void CapturePipeline::run() {
   {
     std::lock_guard lock(mutex_);
     stats_.skipped = source_->skippedFrames();
+    stats_.unidentified = source_->unidentifiedFrames();
     stats_.endReason = source_->endReason();
     finished_ = true;
   }

@@ -15,6 +15,7 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
+#include "liveprobe/capture/exposure_estimate.h"
 #include "liveprobe/sh/error.h"
 #include "uvc_metadata.h"
 
@@ -425,10 +426,16 @@ bool V4l2Source::next(Frame& frame) {
     // and runs with different exposures.
     frame.radianceScale =
         frame.exposure100us && *frame.exposure100us > 0 ? 1.0 / (*frame.exposure100us * 1e-4) : 1.0;
-    // What the camera says this frame was taken with, where it says it: always wins.
+    // What the camera says this frame was taken with, where it says it: always wins. Else, in a
+    // bracket, what the frame's pixels say against the frames before it.
     if (!readFrameExposure(frame, sequence) && !bracket_.empty()) {
-      ++dropped_;  // a bracketed frame of unknown exposure cannot be merged
-      continue;
+      const auto seconds = identifier_ ? identifier_->identify(frame) : std::nullopt;
+      if (!seconds) {
+        ++unidentified_;  // a bracketed frame of unknown exposure cannot be merged
+        continue;
+      }
+      frame.radianceScale = 1.0 / *seconds;
+      frame.exposure100us = std::int32_t(std::lround(*seconds * 1e4));
     }
     if (!bracket_.empty()) nextBracketExposure(frame);
     return true;
@@ -444,11 +451,9 @@ bool V4l2Source::readFrameExposure(Frame& frame, std::uint32_t sequence) {
   return true;
 }
 
-std::vector<std::int32_t> V4l2Source::bracket(const std::vector<double>& stops) {
+std::vector<std::int32_t> V4l2Source::bracket(const std::vector<double>& stops,
+                                              const CameraResponse& response) {
   require(State::Streaming, "bracket");
-  if (!metadata_)
-    throw Error(settings_.device + ": bracketing needs each frame's exposure time, from the " +
-                "camera's metadata node");
   v4l2_queryctrl q{};
   q.id = V4L2_CID_EXPOSURE_ABSOLUTE;
   if (xioctl(VIDIOC_QUERYCTRL, &q) < 0 || (q.flags & V4L2_CTRL_FLAG_DISABLED))
@@ -461,8 +466,21 @@ std::vector<std::int32_t> V4l2Source::bracket(const std::vector<double>& stops) 
     const double want = *lockedExposure_ * std::exp2(stop);
     bracket_.push_back(std::int32_t(std::clamp<double>(std::lround(want), q.minimum, q.maximum)));
   }
-  bracketAt_ = 0, bracketFrames_ = 0;
+  bracketAt_ = 0, bracketFrames_ = 0, unidentified_ = 0;
   reported_.clear();
+  identifier_.reset();
+  if (!metadata_) {
+    // The anchor: a frame at the locked exposure, taken before the control moves.
+    std::vector<double> asked;
+    for (const std::int32_t e : bracket_) asked.push_back(e * 1e-4);
+    identifier_ =
+        std::make_unique<ExposureIdentifier>(std::move(asked), *lockedExposure_ * 1e-4, response);
+    const std::vector<std::int32_t> cycle = std::exchange(bracket_, {});
+    Frame anchor;
+    if (!next(anchor)) throw Error(settings_.device + ": the stream ended");
+    identifier_->seed(anchor);
+    bracket_ = cycle;
+  }
   v4l2_control c{V4L2_CID_EXPOSURE_ABSOLUTE, bracket_[0]};
   if (xioctl(VIDIOC_S_CTRL, &c) < 0)
     fail("VIDIOC_S_CTRL " + controlName(V4L2_CID_EXPOSURE_ABSOLUTE) + " = " +

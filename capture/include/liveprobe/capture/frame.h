@@ -68,6 +68,9 @@ class FrameSource {
   /// The camera response the bracket was recorded with (CameraResponse::json()); empty: none
   /// recorded.
   virtual std::string bracketResponse() const { return {}; }
+  /// Bracketed frames left out because their exposure could not be told (a camera without
+  /// per-frame exposure times, a frame taken while its sensor changed).
+  virtual std::size_t unidentifiedFrames() const { return 0; }
 };
 
 struct SourceOptions {

@@ -107,6 +107,7 @@ struct PipelineStats {
   std::size_t dropped = 0;        ///< frames replaced in the slot, or left in it at the stop,
                                   ///< before anyone took them: captured = taken + dropped
   std::size_t skipped = 0;        ///< frames the source could not decode
+  std::size_t unidentified = 0;   ///< bracketed frames of an exposure not told (left out)
   std::size_t gapsShortened = 0;  ///< timestamp gaps over PipelineOptions::maxGapSeconds
   std::size_t held = 0;           ///< frames that kept the last good lighting (holdBelow)
   std::string endReason;          ///< why the source ended early, if it did

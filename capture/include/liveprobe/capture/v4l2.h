@@ -17,6 +17,7 @@
 #include <vector>
 
 #include "liveprobe/capture/frame.h"
+#include "liveprobe/capture/hdr_merge.h"
 
 namespace lp {
 
@@ -88,6 +89,7 @@ std::optional<double> parseUvcExposure(const std::uint8_t* data, std::size_t byt
 std::string siblingMetadataNode(const std::string& videoNode);
 
 class UvcMetadata;
+class ExposureIdentifier;
 
 struct CameraControl {
   std::uint32_t id = 0;
@@ -165,11 +167,15 @@ class V4l2Source final : public FrameSource {
 
   /// Exposure bracketing: from the next frame on, cycles V4L2_CID_EXPOSURE_ABSOLUTE through the
   /// locked exposure times 2^stop (one frame each, clamped to the control's range), and delivers
-  /// only frames whose exposure the metadata node reported. Needs lockExposure() and
-  /// CameraSettings::metadataDevice. Returns the exposures asked for, in 100 us. Throws lp::Error
-  /// (one line) when the camera has no exposure control or refuses it; next() throws when every
-  /// frame reports the same exposure (the camera ignores the control).
-  std::vector<std::int32_t> bracket(const std::vector<double>& stops);
+  /// only frames whose exposure is known: reported by the metadata node where there is one, else
+  /// estimated from the frame's pixels against the frames before it (ExposureIdentifier, through
+  /// `response`; the first frame is taken at the locked exposure, as the anchor). Needs
+  /// lockExposure(). Returns the exposures asked for, in 100 us. Throws lp::Error (one line)
+  /// when the camera has no exposure control or refuses it; next() throws when every frame has
+  /// the same exposure (the camera ignores the control).
+  std::vector<std::int32_t> bracket(const std::vector<double>& stops,
+                                    const CameraResponse& response = CameraResponse::srgb());
+  std::size_t unidentifiedFrames() const override { return unidentified_; }
 
   /// After lockExposure(): asks for an exposure time (100 us), clamped to the control's range;
   /// returns what was asked. The camera may apply it some frames later, or round it: frames say
@@ -234,6 +240,9 @@ class V4l2Source final : public FrameSource {
   std::vector<std::int32_t> bracket_;  ///< the cycle, in 100 us (empty: not bracketing)
   std::size_t bracketAt_ = 0, bracketFrames_ = 0;
   std::vector<double> reported_;  ///< distinct exposures seen while bracketing (seconds)
+  /// Without per-frame metadata: each bracketed frame's exposure from its pixels.
+  std::unique_ptr<ExposureIdentifier> identifier_;
+  std::size_t unidentified_ = 0;
 };
 
 }  // namespace lp

@@ -1,0 +1,60 @@
+#pragma once
+// Which exposure time each frame of a bracket was taken with, from its pixels, for a camera that
+// does not say (most webcams: no UVC metadata). Comparametric (Mann and Picard; Grossberg and
+// Nayar): two frames of one scene at exposures t1 and t2 read response^-1(code) = L t / t_clip at
+// each pixel both measured well, so the median of log(linear2 / linear1) over those pixels is
+// log(t2 / t1), whatever the scene, robust to the few pixels that moved. A camera takes a new
+// exposure some frames after it is asked and may round it; neither is assumed: each frame is
+// measured against the frames before it whose exposure is known, and named after the exposure
+// asked (or the one in force before the bracket) that its estimate agrees with.
+// Stops far apart share few well-measured pixels (a -12 EV frame of a sunlit sky reads only the
+// sun, which clips at -6 EV): such a frame is named after the exposure the known frames
+// contradict least, each pixel read as an interval (a clipped code a lower bound, a dark one an
+// upper bound), when one exposure explains it and the others do not; it is then taken at the
+// exposure asked. A frame whose exposure the known frames contradict on more than 5% of it, or
+// that agrees with no exposure (taken while the sensor changed), is left out, and counted.
+#include <cstddef>
+#include <deque>
+#include <optional>
+#include <vector>
+
+#include "liveprobe/capture/frame.h"
+#include "liveprobe/capture/hdr_merge.h"
+
+namespace lp {
+
+class ExposureIdentifier {
+ public:
+  /// `asked`: the bracket's exposure times (seconds) as the control was set; `base`: the one in
+  /// force before (the locked exposure, read back from the camera); `response`: the camera's.
+  ExposureIdentifier(std::vector<double> asked, double base, CameraResponse response);
+
+  /// A frame known to be taken at the base exposure (the last before the bracket starts).
+  void seed(const Frame& frame);
+  /// The exposure time (seconds) `frame` (8-bit) was taken with, or nullopt when its estimate
+  /// agrees with no exposure asked. A frame at the base exposure is given the base exactly (the
+  /// anchor); the others their estimate, which a camera's rounding moves off what was asked.
+  std::optional<double> identify(const Frame& frame);
+  /// The last frame's estimate before it was named (seconds; 0 when it could not be measured).
+  double lastEstimate() const { return lastEstimate_; }
+
+ private:
+  struct Known {
+    std::vector<float> linear;  ///< green, response^-1, per sample; 0 where not well measured
+    std::vector<float> lo, hi;  ///< what each sample's code allows of response^-1
+    double seconds = 0;
+  };
+  Known sample(const Frame& frame) const;
+  std::optional<double> byRatio(Known& now);
+  std::optional<double> byContradiction(const Known& now) const;
+  /// Per exposure in `times`: the share of samples the known frames contradict were this frame
+  /// taken at it (empty when nothing is known to compare with).
+  std::vector<double> contradicted(const Known& now, const std::vector<double>& times) const;
+  std::vector<double> candidates_;  ///< asked and base, seconds
+  double base_, tolerance_;         ///< tolerance: in stops
+  CameraResponse response_;
+  std::deque<Known> known_;  ///< newest last
+  double lastEstimate_ = 0;
+};
+
+}  // namespace lp
