@@ -22,10 +22,13 @@ constexpr std::size_t kKnown = 6;
 constexpr double kPrecision = 0.02;
 }  // namespace
 
-ExposureIdentifier::ExposureIdentifier(std::vector<double> asked, double base,
-                                       CameraResponse response)
-    : candidates_(std::move(asked)), base_(base), response_(std::move(response)) {
-  if (!(base_ > 0)) throw Error("the exposure in force before a bracket must be positive");
+ExposureIdentifier::ExposureIdentifier(std::vector<double> asked, CameraResponse response)
+    : asked_(std::move(asked)), response_(std::move(response)) {}
+
+void ExposureIdentifier::seed(const Frame& frame, double base) {
+  if (!(base > 0)) throw Error("the exposure in force before a bracket must be positive");
+  base_ = base;
+  candidates_ = asked_;
   candidates_.push_back(base_);
   std::sort(candidates_.begin(), candidates_.end());
   candidates_.erase(std::unique(candidates_.begin(), candidates_.end()), candidates_.end());
@@ -34,6 +37,8 @@ ExposureIdentifier::ExposureIdentifier(std::vector<double> asked, double base,
   tolerance_ = 0.3;
   for (std::size_t i = 1; i < candidates_.size(); ++i)
     tolerance_ = std::min(tolerance_, 0.5 * std::log2(candidates_[i] / candidates_[i - 1]));
+  known_.clear();
+  remember(frame, base_);
 }
 
 ExposureIdentifier::Known ExposureIdentifier::sample(const Frame& f) const {
@@ -63,16 +68,17 @@ ExposureIdentifier::Known ExposureIdentifier::sample(const Frame& f) const {
   return k;
 }
 
-void ExposureIdentifier::seed(const Frame& frame) {
-  known_.clear();
+void ExposureIdentifier::remember(const Frame& frame, double seconds) {
   Known k = sample(frame);
-  k.seconds = base_;
+  k.seconds = seconds;
   known_.push_back(std::move(k));
+  if (known_.size() > kKnown) known_.pop_front();
 }
 
 std::optional<double> ExposureIdentifier::identify(const Frame& frame) {
   Known now = sample(frame);
   lastEstimate_ = 0;
+  if (known_.empty()) return std::nullopt;  // not seeded
   std::optional<double> seconds = byRatio(now);
   // A ratio speaks for the pixels both frames measured well; the rest must not contradict it
   // (a frame torn between two exposures can have one half the ratio cannot see).
@@ -144,12 +150,13 @@ std::optional<double> ExposureIdentifier::byContradiction(const Known& now) cons
   const std::vector<double> share = contradicted(now, candidates_);
   if (share.empty()) return std::nullopt;
   // One exposure explains the frame (at most 2% of it contradicted: motion), and every other
-  // is contradicted clearly more (by 1% of the frame, and three times as much).
+  // is contradicted clearly more: three times as much, and 8 samples more (two dark frames of
+  // a sunlit sky differ at the sun alone, a few pixels).
   const auto best = std::size_t(std::min_element(share.begin(), share.end()) - share.begin());
   if (share[best] > 0.02) return std::nullopt;
+  const double margin = 8.0 / double(now.lo.size());
   for (std::size_t i = 0; i < share.size(); ++i)
-    if (i != best && (share[i] < share[best] + 0.01 || share[i] < 3 * share[best]))
-      return std::nullopt;
+    if (i != best && share[i] < 3 * share[best] + margin) return std::nullopt;
   return candidates_[best];
 }
 

@@ -145,10 +145,13 @@ struct MergeTally {
   std::size_t dark = 0;
   float brightest = -1;
   bool brightestClipped = false;
+  bool brightestFresh = true;  ///< the newest frame itself read the brightest pixel
   void add(const MergeTally& o) {
     power += o.power, clippedPower += o.clippedPower, clippedEstimate += o.clippedEstimate;
     dark += o.dark, disagreedPower += o.disagreedPower;
-    if (o.brightest > brightest) brightest = o.brightest, brightestClipped = o.brightestClipped;
+    if (o.brightest > brightest)
+      brightest = o.brightest, brightestClipped = o.brightestClipped,
+      brightestFresh = o.brightestFresh;
   }
   FrameConfidence confidence(std::size_t pixels, int exposures) const {
     FrameConfidence c;
@@ -193,12 +196,13 @@ void BracketMerger::push(const Frame& in) {
   if (in.format != PanoramaFormat::BgrU8)
     throw Error("an exposure bracket merges 8-bit frames; this frame is already radiance");
   if (!window_.empty() && (window_.back().width != in.width || window_.back().height != in.height))
-    window_.clear();
+    window_.clear(), agreements_.clear();
   // The window keeps copies; the oldest frame's buffer is reused for the newest.
   Frame kept;
   if (window_.size() == std::size_t(opt_.frames)) {
     kept.bgr8 = std::move(window_.front().bgr8);
     window_.pop_front();
+    agreements_.pop_front();
   }
   kept.bgr8.assign(in.bgr8.begin(), in.bgr8.end());
   kept.sequence = in.sequence, kept.timestamp = in.timestamp;
@@ -206,6 +210,7 @@ void BracketMerger::push(const Frame& in) {
   kept.radianceScale = in.radianceScale, kept.captureTime = in.captureTime;
   kept.exposure100us = in.exposure100us, kept.gain = in.gain;
   window_.push_back(std::move(kept));
+  agreements_.push_back(1.0);  // its merge's own agreement, once measured
 }
 
 namespace {
@@ -302,6 +307,7 @@ struct BracketView {
   /// frame allows there.
   struct Pixel {
     bool clipped = false, wellSeen = false;
+    bool fresh = false;  ///< the newest frame's own reading counts in it
     float lost = -1, ceiling = 0;
   };
   Pixel merge(std::size_t at, float* c) const {
@@ -319,6 +325,7 @@ struct BracketView {
     px.ceiling = judge.bounds(r[newest]).second;
     float sw = 0;
     c[0] = c[1] = c[2] = 0;
+    px.fresh = r[newest].w > 0;
     for (int i = 0; i < n; ++i) {
       sw += r[i].w;
       px.wellSeen |= r[i].w > 0 && judge.well(r[i]);
@@ -367,6 +374,16 @@ FrameConfidence BracketMerger::add(const Frame& in, Frame& out, Executor* execut
       },
       [](MergeTally& into, const MergeTally& part) { into.add(part); });
   FrameConfidence c = total.confidence(std::size_t(w) * h, exposures);
+  // The strongest light read only by older frames (the newest clips it) is what the scene was
+  // then: where the last merges found light contradicted (the scene moving), as much of it may
+  // have moved since, unconfirmed.
+  // (Frames left out whole, a hand over the lens, cast no doubt: they are not merged.)
+  const double measured = c.agreement;
+  if (!total.brightestFresh)
+    for (int i = 0; i < view.newest; ++i)
+      if (view.usable[std::size_t(i)])
+        c.agreement = std::min(c.agreement, agreements_[std::size_t(i)]);
+  agreements_.back() = measured;
   c.complete =
       int(window_.size()) == opt_.frames && exposures == opt_.frames &&
       std::all_of(view.usable.begin(), view.usable.begin() + view.n, [](bool u) { return u; });
@@ -413,7 +430,7 @@ MergeTally BracketMerger::mergeRow(const BracketView& v, std::size_t y, float* o
   double power = 0, clippedPower = 0, clippedEstimate = 0, lostPower = 0;
   std::size_t dark = 0;
   float brightest = -1;
-  bool brightestClipped = false;
+  bool brightestClipped = false, brightestFresh = true;
   for (int x = 0; x < w; ++x, out += 3) {
     const BracketView::Pixel px = v.merge((y * std::size_t(w) + std::size_t(x)) * 3, out);
     const float l = luminance(out[0], out[1], out[2]);
@@ -427,13 +444,14 @@ MergeTally BracketMerger::mergeRow(const BracketView& v, std::size_t y, float* o
     previous[x] = l;
     power += l;
     if (px.clipped) clippedPower += l, clippedEstimate += std::max(l, reference[x]);
-    if (l > brightest) brightest = l, brightestClipped = px.clipped;
+    if (l > brightest) brightest = l, brightestClipped = px.clipped, brightestFresh = px.fresh;
   }
   MergeTally t;
   t.power = power * rw, t.clippedPower = clippedPower * rw, t.disagreedPower = lostPower * rw;
   t.clippedEstimate = clippedEstimate * rw;
   t.dark = dark;
   t.brightest = brightest, t.brightestClipped = brightestClipped;
+  t.brightestFresh = brightestFresh;
   return t;
 }
 

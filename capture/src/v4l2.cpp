@@ -426,18 +426,32 @@ bool V4l2Source::next(Frame& frame) {
     // and runs with different exposures.
     frame.radianceScale =
         frame.exposure100us && *frame.exposure100us > 0 ? 1.0 / (*frame.exposure100us * 1e-4) : 1.0;
-    // What the camera says this frame was taken with, where it says it: always wins. Else, in a
-    // bracket, what the frame's pixels say against the frames before it.
-    if (!readFrameExposure(frame, sequence) && !bracket_.empty()) {
-      const auto seconds = identifier_ ? identifier_->identify(frame) : std::nullopt;
-      if (!seconds) {
+    // What the camera says this frame was taken with, where it says it: always wins (a frame
+    // whose metadata block was lost is left out: the exposure written is not the one taken, and
+    // pixels measured against the reported exposures of a camera that rounds would disagree).
+    // Without a metadata node, in a bracket, what the frame's pixels say against the frames
+    // before it.
+    const bool reported = readFrameExposure(frame, sequence);
+    if (!bracket_.empty() && !reported) {
+      if (const auto seconds = identifier_ ? identifier_->identify(frame) : std::nullopt) {
+        frame.radianceScale = 1.0 / *seconds;
+        frame.exposure100us = std::int32_t(std::lround(*seconds * 1e4));
+      } else {
         ++unidentified_;  // a bracketed frame of unknown exposure cannot be merged
+        // A bracket that tells no exposure for many frames would stall the stream silently.
+        if (++unidentifiedRun_ > 4 * bracket_.size() + 10)
+          throw Error(settings_.device + ": " + std::to_string(unidentifiedRun_) +
+                      " bracketed frames in a row of an exposure " +
+                      (metadata_ ? "the metadata node did not report"
+                                 : "the pixels did not show (is the scene changing faster than "
+                                   "the bracket?)"));
         continue;
       }
-      frame.radianceScale = 1.0 / *seconds;
-      frame.exposure100us = std::int32_t(std::lround(*seconds * 1e4));
     }
-    if (!bracket_.empty()) nextBracketExposure(frame);
+    if (!bracket_.empty()) {
+      unidentifiedRun_ = 0;
+      nextBracketExposure(frame);
+    }
     return true;
   }
 }
@@ -469,16 +483,16 @@ std::vector<std::int32_t> V4l2Source::bracket(const std::vector<double>& stops,
   bracketAt_ = 0, bracketFrames_ = 0, unidentified_ = 0;
   reported_.clear();
   identifier_.reset();
+  unidentifiedRun_ = 0;
   if (!metadata_) {
     // The anchor: a frame at the locked exposure, taken before the control moves.
     std::vector<double> asked;
     for (const std::int32_t e : bracket_) asked.push_back(e * 1e-4);
-    identifier_ =
-        std::make_unique<ExposureIdentifier>(std::move(asked), *lockedExposure_ * 1e-4, response);
+    identifier_ = std::make_unique<ExposureIdentifier>(std::move(asked), response);
     const std::vector<std::int32_t> cycle = std::exchange(bracket_, {});
     Frame anchor;
     if (!next(anchor)) throw Error(settings_.device + ": the stream ended");
-    identifier_->seed(anchor);
+    identifier_->seed(anchor, 1.0 / anchor.radianceScale);  // the locked exposure, as written
     bracket_ = cycle;
   }
   v4l2_control c{V4L2_CID_EXPOSURE_ABSOLUTE, bracket_[0]};

@@ -25,12 +25,14 @@ namespace lp {
 
 class ExposureIdentifier {
  public:
-  /// `asked`: the bracket's exposure times (seconds) as the control was set; `base`: the one in
-  /// force before (the locked exposure, read back from the camera); `response`: the camera's.
-  ExposureIdentifier(std::vector<double> asked, double base, CameraResponse response);
+  /// `asked`: the bracket's exposure times (seconds) as the control was set; `response`: the
+  /// camera's.
+  ExposureIdentifier(std::vector<double> asked, CameraResponse response);
 
-  /// A frame known to be taken at the base exposure (the last before the bracket starts).
-  void seed(const Frame& frame);
+  /// The anchor: a frame taken at `base` seconds, the exposure in force before the bracket (the
+  /// locked one, as the camera reports it or as it was written), itself a candidate; what was
+  /// known before is forgotten. Throws lp::Error unless `base` is positive.
+  void seed(const Frame& frame, double base);
   /// The exposure time (seconds) `frame` (8-bit) was taken with, or nullopt when its estimate
   /// agrees with no exposure asked. A frame at the base exposure is given the base exactly (the
   /// anchor); the others their estimate, which a camera's rounding moves off what was asked.
@@ -45,13 +47,14 @@ class ExposureIdentifier {
     double seconds = 0;
   };
   Known sample(const Frame& frame) const;
+  void remember(const Frame& frame, double seconds);  ///< known, for the frames after it
   std::optional<double> byRatio(Known& now);
   std::optional<double> byContradiction(const Known& now) const;
   /// Per exposure in `times`: the share of samples the known frames contradict were this frame
   /// taken at it (empty when nothing is known to compare with).
   std::vector<double> contradicted(const Known& now, const std::vector<double>& times) const;
-  std::vector<double> candidates_;  ///< asked and base, seconds
-  double base_, tolerance_;         ///< tolerance: in stops
+  std::vector<double> asked_, candidates_;  ///< candidates: asked and base, seconds
+  double base_ = 0, tolerance_ = 0.3;       ///< tolerance: in stops
   CameraResponse response_;
   std::deque<Known> known_;  ///< newest last
   double lastEstimate_ = 0;

@@ -79,7 +79,10 @@ struct FrameConfidence {
   /// 1 minus the power that older frames of the bracket (or the last merge) saw and the newest
   /// contradicts (radiances more than 25% apart, or dark or clipped where the other predicts
   /// otherwise: motion, flicker, a hand over the lens), relative to the power the merge keeps;
-  /// 0 when as much is contradicted as is kept. 1 for a single frame.
+  /// 0 when as much is contradicted as is kept. 1 for a single frame. Where the brightest pixel
+  /// is read by older frames only (the newest clips it), at most the agreement each merged frame
+  /// of the window had when it was the newest: a scene that was moving then may have moved the
+  /// light since.
   double agreement = 1;
   int exposures = 1;  ///< distinct exposure times merged
   /// Every frame of a full window merged, each at its own exposure: none missing (start-up) or
@@ -130,9 +133,10 @@ class BracketMerger {
   MergeTally mergeRow(const BracketView& view, std::size_t y, float* out, float* previous,
                       const float* reference, bool fresh) const;
   MergeOptions opt_;
-  std::deque<Frame> window_;      ///< oldest first
-  std::vector<float> previous_;   ///< the last merge's luminance, per pixel
-  std::vector<float> reference_;  ///< the last trusted merge's (complete, in agreement)
+  std::deque<Frame> window_;       ///< oldest first
+  std::vector<float> previous_;    ///< the last merge's luminance, per pixel
+  std::vector<float> reference_;   ///< the last trusted merge's (complete, in agreement)
+  std::deque<double> agreements_;  ///< per window frame: the agreement of its own merge
 };
 
 }  // namespace lp

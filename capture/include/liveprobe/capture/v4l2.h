@@ -167,12 +167,13 @@ class V4l2Source final : public FrameSource {
 
   /// Exposure bracketing: from the next frame on, cycles V4L2_CID_EXPOSURE_ABSOLUTE through the
   /// locked exposure times 2^stop (one frame each, clamped to the control's range), and delivers
-  /// only frames whose exposure is known: reported by the metadata node where there is one, else
-  /// estimated from the frame's pixels against the frames before it (ExposureIdentifier, through
-  /// `response`; the first frame is taken at the locked exposure, as the anchor). Needs
+  /// only frames whose exposure is known: reported by the metadata node where it reports one,
+  /// else estimated from the frame's pixels against the frames before it (ExposureIdentifier,
+  /// through `response`; the first frame is taken at the locked exposure, as the anchor). Needs
   /// lockExposure(). Returns the exposures asked for, in 100 us. Throws lp::Error (one line)
   /// when the camera has no exposure control or refuses it; next() throws when every frame has
-  /// the same exposure (the camera ignores the control).
+  /// the same exposure (the camera ignores the control), or when 4 N + 10 frames in a row have
+  /// an exposure neither reported nor shown.
   std::vector<std::int32_t> bracket(const std::vector<double>& stops,
                                     const CameraResponse& response = CameraResponse::srgb());
   std::size_t unidentifiedFrames() const override { return unidentified_; }
@@ -242,7 +243,7 @@ class V4l2Source final : public FrameSource {
   std::vector<double> reported_;  ///< distinct exposures seen while bracketing (seconds)
   /// Without per-frame metadata: each bracketed frame's exposure from its pixels.
   std::unique_ptr<ExposureIdentifier> identifier_;
-  std::size_t unidentified_ = 0;
+  std::size_t unidentified_ = 0, unidentifiedRun_ = 0;
 };
 
 }  // namespace lp
