@@ -150,18 +150,23 @@ function drawPlot() {
 }
 
 /// Where the sphere's centre casts its shadow on the ground, and a ground point beside it that
-/// the sun lights, in canvas pixels (for tests): null when the sun is too low for it to show.
+/// the sun lights, in canvas pixels (for tests): null when the sun is too low for it to show, or
+/// the shadow falls off the canvas.
 function shadowPoints(c) {
   const l = (c.directionalLights || [])[0];
   if (!l || l.direction[1] < 0.2) return null;
   const d = new THREE.Vector3(...l.direction);
   const inShadow = d.clone().multiplyScalar(-1 / d.y);  // from (0, 0, 0) away from the sun to y = -1
-  const lit = inShadow.clone().add(new THREE.Vector3(0, 0, 2.5));
   const px = (p) => {
     const v = p.clone().project(camera);
     return [Math.round((v.x + 1) / 2 * innerWidth), Math.round((1 - v.y) / 2 * innerHeight)];
   };
-  return { inShadow: px(inShadow), lit: px(lit) };
+  const onCanvas = ([x, y]) => x >= 0 && x < innerWidth && y >= 0 && y < innerHeight;
+  // The lit point 2.5 units beside the shadow, on whichever side is still on the canvas.
+  const lit = [[0, 2.5], [2.5, 0], [-2.5, 0], [0, -2.5]]
+                  .map(([x, z]) => px(inShadow.clone().add(new THREE.Vector3(x, 0, z))))
+                  .find(onCanvas);
+  return onCanvas(px(inShadow)) && lit ? { inShadow: px(inShadow), lit } : null;
 }
 
 function connect() {
