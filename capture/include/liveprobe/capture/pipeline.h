@@ -19,6 +19,7 @@
 #include "liveprobe/capture/hdr_merge.h"
 #include "liveprobe/capture/image.h"
 #include "liveprobe/capture/photometry.h"
+#include "liveprobe/capture/processed_frame.h"
 #include "liveprobe/capture/stages.h"
 #include "liveprobe/sh/executor.h"
 #include "liveprobe/sh/layout.h"
@@ -27,39 +28,6 @@
 #include "liveprobe/sh/sh.h"
 
 namespace lp {
-
-struct ProcessedFrame {
-  std::uint64_t index = 0;     ///< position in this pipeline's output, from 0
-  std::uint64_t sequence = 0;  ///< the source's frame number
-  double timestamp = 0;        ///< the source's timestamp, seconds
-  Sh9 radiance;    ///< after orientation and smoothing (with lights: the residual, the sky)
-  Sh9 unsmoothed;  ///< after orientation, before smoothing
-  /// With PipelineOptions::lights: the dominant compact lights (liveprobe/sh/lights.h), after
-  /// orientation and smoothing, beside the residual `radiance`.
-  std::vector<Light> lights;
-  std::shared_ptr<const Image> image;  ///< the linear frame (when PipelineOptions::keepImages)
-  /// Instead of `image`, for sRGB 8-bit frames: the frame as captured, with the linear scale
-  /// (exposure) that applies to its decoded values. The GPU decodes sRGB for display.
-  std::shared_ptr<const Frame> raw;
-  float rawScale = 1.0f;
-  /// For `image` made from an 8-bit frame: the scale its decoded values carry (0 for HDR frames),
-  /// so the display can show it as the source looks (gl::Renderer::setBackground).
-  float displayScale = 0.0f;
-  /// The layout `image` or `raw` is drawn in: equirect or angular (a frame of any other layout
-  /// is resampled to equirect on capture's thread, Stage::Resample).
-  Layout displayLayout = Layout::Equirect;
-  StageTimes times;  ///< capture's stages; the viewer adds its own
-  std::size_t saturated = 0;
-  /// How far this frame's lighting can be trusted (clipped power, the bracket's agreement).
-  FrameConfidence confidence;
-  /// The confidence was below PipelineOptions::holdBelow: the lighting is the last good frame's.
-  bool held = false;
-  /// Where glass-to-light latency starts, CLOCK_MONOTONIC seconds: the driver's capture time
-  /// for a camera, the moment the frame was grabbed for a file.
-  double captureTime = 0;
-  /// Capture to coefficients ready, ms.
-  double coefficientsLatencyMs = 0;
-};
 
 enum class Handoff : std::uint8_t { Latest, Every };
 

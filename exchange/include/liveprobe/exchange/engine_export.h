@@ -7,7 +7,7 @@
 #include <vector>
 
 #include "liveprobe/capture/image.h"
-#include "liveprobe/capture/pipeline.h"
+#include "liveprobe/capture/processed_frame.h"
 #include "liveprobe/sh/engines.h"
 #include "liveprobe/sh/layout.h"
 #include "liveprobe/sh/lights.h"

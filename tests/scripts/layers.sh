@@ -1,0 +1,23 @@
+#!/usr/bin/env bash
+# The modules' dependencies go one way (docs/development.md): the SH core includes no GL, no
+# OpenCV and nothing of capture; what reads a frame's record (exchange) includes the frame it
+# reads (liveprobe/capture/processed_frame.h), never the pipeline that makes it. Each rule is a
+# grep over the module's own sources; a line that breaks one is printed and fails the test.
+set -euo pipefail
+root=$1
+status=0
+forbid() {  # FOLDER PATTERN WHY
+  local hits
+  hits=$(grep -rnE "$2" "$root/$1" --include='*.h' --include='*.cpp' || true)
+  if [[ -n $hits ]]; then
+    echo "$1: $3:" >&2
+    echo "$hits" >&2
+    status=1
+  fi
+}
+forbid shading/sh '#include [<"](GL/|glad/|EGL/|GLFW/|opencv2/|liveprobe/(capture|gl|exchange)/)' \
+  'the SH core knows no GL, no OpenCV and no capture'
+forbid exchange '#include "liveprobe/capture/pipeline\.h"' \
+  'exchange reads frames (processed_frame.h), not the pipeline'
+forbid capture '#include "liveprobe/(gl|exchange)/' 'capture knows no GL and no exchange'
+exit $status
