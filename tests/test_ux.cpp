@@ -28,6 +28,12 @@
 
 namespace {
 
+// Shell: waits until process $pid catches SIGINT (bit 2 of SigCgt in /proc/PID/status); a signal
+// sent before, while the dynamic loader still runs, would end it without its summary.
+const std::string kAwaitSigintHandler =
+    "for i in $(seq 2000); do m=$(awk '/^SigCgt/{print $2}' /proc/$pid/status 2>/dev/null); "
+    "[ -n \"$m\" ] && (( 16#$m & 2 )) && break; done; ";
+
 namespace fs = std::filesystem;
 using lpt::expectOneLineError;
 using lpt::runLiveprobe;
@@ -457,16 +463,12 @@ TEST(Stops, ASignalAtAnyMomentIsACleanStop) {
       "replay synthetic:64x32@30 --headless --msaa 1 --size 64x36 --coeffs-out c.jsonl "
       "--frames 100000",
       "record synthetic:256x128@30 --frames 100000 --out seq/%04d.exr"};
-  // Waits until the process catches SIGINT (bit 2 of SigCgt), then the delay.
-  const std::string handlerIn =
-      "for i in $(seq 2000); do m=$(awk '/^SigCgt/{print $2}' /proc/$pid/status 2>/dev/null); "
-      "[ -n \"$m\" ] && (( 16#$m & 2 )) && break; done; ";
   for (const std::string& command : commands)
     for (const char* delay : {"0", "0.01", "0.05", "0.2", "0.5"})
       for (const char* sig : {"INT", "HUP"}) {
         const auto r =
             runShell("cd " + lpt::shellQuote(d) + "; rm -rf seq c.jsonl; mkdir seq; \"$LP\" " +
-                     command + " 2>/dev/null & pid=$!; " + handlerIn + "sleep " + delay +
+                     command + " 2>/dev/null & pid=$!; " + kAwaitSigintHandler + "sleep " + delay +
                      "; kill -" + sig + " $pid; wait $pid; echo rc=$?");
         const std::string want = std::string(sig) == "HUP" ? "rc=129" : "rc=130";
         EXPECT_NE(r.output.find(want), std::string::npos)
@@ -515,9 +517,9 @@ TEST(Stops, ASignalEndsTheWaitForABroker) {
       "s.bind((\"127.0.0.1\", 0)); s.listen(); print(s.getsockname()[1], flush=True); "
       "time.sleep(20)'); py=$!; read port <&3; \"$LP\" replay synthetic:64x32@30 --headless --msaa "
       "1 "
-      "--size 64x36 --frames 100000 --publish mqtt://127.0.0.1:$port/t 2>err.txt & pid=$!; "
-      "for i in $(seq 2000); do m=$(awk '/^SigCgt/{print $2}' /proc/$pid/status 2>/dev/null); "
-      "[ -n \"$m\" ] && (( 16#$m & 2 )) && break; done; sleep 0.5; kill -INT $pid; wait $pid; "
+      "--size 64x36 --frames 100000 --publish mqtt://127.0.0.1:$port/t 2>err.txt & pid=$!; " +
+      kAwaitSigintHandler +
+      "sleep 0.5; kill -INT $pid; wait $pid; "
       "echo rc=$?; cat err.txt; rm -f err.txt; kill $py");
   EXPECT_NE(r.output.find("rc=130"), std::string::npos) << r.output;
   EXPECT_EQ(r.output.find("no broker answers yet"), std::string::npos)
@@ -535,12 +537,12 @@ TEST(Stops, CountsAddUpWhereverTheRunIsStopped) {
   const std::string d = tmp.path.string();
   const std::string publish = LIVEPROBE_WITH_MQTT ? " --publish mqtt://127.0.0.1:1/t" : "";
   for (const char* delay : {"0.4", "0.9", "1.3", "2.1"}) {
-    const auto r =
-        runShell("cd " + lpt::shellQuote(d) +
-                 "; rm -f c.jsonl; \"$LP\" replay synthetic:64x32@30 --headless "
-                 "--msaa 1 --size 64x36 --realtime --frames 100000 --coeffs-out "
-                 "c.jsonl" +
-                 publish + " & pid=$!; sleep " + delay + "; kill -INT $pid; wait $pid; echo rc=$?");
+    const auto r = runShell("cd " + lpt::shellQuote(d) +
+                            "; rm -f c.jsonl; \"$LP\" replay synthetic:64x32@30 --headless "
+                            "--msaa 1 --size 64x36 --realtime --frames 100000 --coeffs-out "
+                            "c.jsonl" +
+                            publish + " & pid=$!; " + kAwaitSigintHandler + "sleep " + delay +
+                            "; kill -INT $pid; wait $pid; echo rc=$?");
     ASSERT_NE(r.output.find("rc=130"), std::string::npos) << r.output;
     std::smatch m;
     ASSERT_TRUE(std::regex_search(
