@@ -180,8 +180,11 @@ const CommandSpec kLiveSpec{
       checkStreamOptions(s);
       if (s.camera.metadata && s.camera.bracket.empty())
         throw Error("--metadata goes with --bracket");
-      if (!s.camera.bracket.empty() && s.stream.record)
-        checkBracketRecording("--record " + *s.stream.record);
+      if (!s.camera.bracket.empty() && s.stream.record) try {
+          checkBracketRecording(*s.stream.record);
+        } catch (const Error& e) {
+          throw Error(std::string("--record ") + e.what());
+        }
     }};
 
 #if LIVEPROBE_WITH_V4L2

@@ -359,17 +359,25 @@ FrameConfidence BracketMerger::add(const Frame& in, Frame& out, Executor* execut
   out.exposure100us = in.exposure100us, out.gain = in.gain;
   int exposures = 0;
   const BracketView view = prepare(exposures);
-  const bool fresh = previous_.size() == std::size_t(w) * std::size_t(h);
-  previous_.resize(std::size_t(w) * std::size_t(h));
-  if (reference_.size() != previous_.size()) reference_.assign(previous_.size(), 0.0f);
+  const std::size_t pixels = std::size_t(w) * std::size_t(h);
+  const bool fresh = previous_.size() == pixels;
+  if (!fresh) {
+    previous_.assign(pixels, 0.0f), reference_.assign(pixels, 0.0f);
+    referenceIsPrevious_ = false;
+  }
+  // Where the last merge was trusted, its luminance is the reference: this merge's goes into the
+  // other buffer, and neither is copied.
+  float* luminanceOut = referenceIsPrevious_ ? reference_.data() : previous_.data();
+  const float* reference = referenceIsPrevious_ ? previous_.data() : reference_.data();
   const MergeTally total = parallelReduce(
       executor, std::size_t(h), Split{.grain = 1, .perThread = 4}, MergeTally{},
       [&](std::size_t y0, std::size_t y1) {
         MergeTally t;
         for (std::size_t y = y0; y < y1; ++y)
           t.add(mergeRow(view, y, out.rgb.data() + y * std::size_t(w) * 3,
-                         previous_.data() + y * std::size_t(w),
-                         reference_.data() + y * std::size_t(w), fresh));
+                         {previous_.data() + y * std::size_t(w), luminanceOut + y * std::size_t(w),
+                          reference + y * std::size_t(w)},
+                         fresh));
         return t;
       },
       [](MergeTally& into, const MergeTally& part) { into.add(part); });
@@ -389,7 +397,8 @@ FrameConfidence BracketMerger::add(const Frame& in, Frame& out, Executor* execut
       std::all_of(view.usable.begin(), view.usable.begin() + view.n, [](bool u) { return u; });
   // A trusted merge (complete, its brightest pixel read unclipped, its confidence 0.9 or more)
   // is what later clipped pixels are measured against.
-  if (c.complete && c.brightestMeasured && c.value() >= 0.9) reference_ = previous_;
+  if (referenceIsPrevious_) std::swap(previous_, reference_);  // this merge's is the last
+  referenceIsPrevious_ = c.complete && c.brightestMeasured && c.value() >= 0.9;
   return c;
 }
 
@@ -422,8 +431,8 @@ BracketView BracketMerger::prepare(int& exposures) const {
   return v;
 }
 
-MergeTally BracketMerger::mergeRow(const BracketView& v, std::size_t y, float* out, float* previous,
-                                   const float* reference, bool fresh) const {
+MergeTally BracketMerger::mergeRow(const BracketView& v, std::size_t y, float* out,
+                                   const LuminanceRow& lum, bool fresh) const {
   const int w = window_.back().width, h = window_.back().height;
   const float rw = rowWeight(int(y), h, opt_.equirect);
   // Sums in locals (registers); the row's total goes to the tally once.
@@ -438,12 +447,13 @@ MergeTally BracketMerger::mergeRow(const BracketView& v, std::size_t y, float* o
     // What was lost: at least what the older readings say, and what the last merge saw where
     // the newest frame rules that out (older frames that all missed it, as a window of repeated
     // long exposures misses the sun, cannot vouch for it).
-    const float seen = fresh ? previous[x] : 0.0f;
+    const float seen = fresh ? lum.previous[x] : 0.0f;  // read before lum.out (in place) is written
+    const float trusted = lum.reference[x];
     if (px.lost >= 0 || seen > 1.25f * px.ceiling)
       lostPower += std::max(std::max(px.lost, seen) - l, 0.0f);
-    previous[x] = l;
+    lum.out[x] = l;
     power += l;
-    if (px.clipped) clippedPower += l, clippedEstimate += std::max(l, reference[x]);
+    if (px.clipped) clippedPower += l, clippedEstimate += std::max(l, trusted);
     if (l > brightest) brightest = l, brightestClipped = px.clipped, brightestFresh = px.fresh;
   }
   MergeTally t;

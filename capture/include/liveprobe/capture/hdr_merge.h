@@ -130,13 +130,21 @@ class BracketMerger {
   /// The frames of the window that do not contradict the newest as a whole.
   std::array<bool, kMaxBracket> usableFrames(const BracketView& view) const;
   /// One row merged into `out` (RGB) and its luminance into `previous`; the row's sums.
-  MergeTally mergeRow(const BracketView& view, std::size_t y, float* out, float* previous,
-                      const float* reference, bool fresh) const;
+  /// One row's luminance: the last merge's, this merge's (possibly the same buffer), and the
+  /// last trusted merge's.
+  struct LuminanceRow {
+    const float* previous;
+    float* out;
+    const float* reference;
+  };
+  MergeTally mergeRow(const BracketView& view, std::size_t y, float* out, const LuminanceRow& lum,
+                      bool fresh) const;
   MergeOptions opt_;
-  std::deque<Frame> window_;       ///< oldest first
-  std::vector<float> previous_;    ///< the last merge's luminance, per pixel
-  std::vector<float> reference_;   ///< the last trusted merge's (complete, in agreement)
-  std::deque<double> agreements_;  ///< per window frame: the agreement of its own merge
+  std::deque<Frame> window_;          ///< oldest first
+  std::vector<float> previous_;       ///< the last merge's luminance, per pixel
+  std::vector<float> reference_;      ///< the last trusted merge's (complete, in agreement)
+  bool referenceIsPrevious_ = false;  ///< the last merge was trusted: reference_ is stale
+  std::deque<double> agreements_;     ///< per window frame: the agreement of its own merge
 };
 
 }  // namespace lp
