@@ -7,6 +7,7 @@
 
 #include <filesystem>
 #include <fstream>
+#include <nlohmann/json.hpp>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/videoio.hpp>
 #include <regex>
@@ -128,15 +129,21 @@ TEST(Hostile, TrailingTextAfterJsonIsRefused) {
                 "not a liveprobe bench JSON");
 }
 
+/// `record` of `frames` synthetic frames into DIR/rec.mkv; the text of its sidecar (empty, with a
+/// test failure, where the recording failed).
+std::string recordedSidecar(const lpt::TempDir& dir, int frames) {
+  const auto r = lpt::runLiveprobe("record synthetic:64x32 --frames " + std::to_string(frames) +
+                                   " --quiet --out " + (dir / "rec.mkv"));
+  EXPECT_EQ(r.exitCode, 0) << r.output;
+  std::ifstream in(dir / "rec.mkv.json");
+  return {std::istreambuf_iterator<char>(in), {}};
+}
+
 // A recording's sidecar exposures divide its frames: zero, denormal, negative or non-numbers
 // are refused, never turned into infinite or null coefficients.
 TEST(Hostile, SidecarExposuresMustBePositiveAndFinite) {
   lpt::TempDir tmp;
-  const auto r =
-      lpt::runLiveprobe("record synthetic:64x32 --frames 2 --quiet --out " + (tmp / "rec.mkv"));
-  ASSERT_EQ(r.exitCode, 0) << r.output;
-  std::ifstream in(tmp / "rec.mkv.json");
-  const std::string sidecar((std::istreambuf_iterator<char>(in)), {});
+  const std::string sidecar = recordedSidecar(tmp, 2);
   const auto at = sidecar.find("\"exposure\":");
   ASSERT_NE(at, std::string::npos) << sidecar;
   const auto end = sidecar.find(',', at);
@@ -144,6 +151,50 @@ TEST(Hostile, SidecarExposuresMustBePositiveAndFinite) {
     std::ofstream(tmp / "rec.mkv.json")
         << sidecar.substr(0, at) << "\"exposure\":" << bad << sidecar.substr(end);
     expectRefused(tmp, "replay --headless --frames 1 rec.mkv", "rec.mkv.json", "exposure");
+  }
+}
+
+// A bracketed recording's sidecar: a bracket of 1 to 5 frames, every frame's exposure (the merge
+// weighs each frame by its own), and a camera response of three rising curves of 256 values.
+TEST(Hostile, BracketSidecarsAreChecked) {
+  lpt::TempDir tmp;
+  const std::string sidecar = recordedSidecar(tmp, 3);
+  ASSERT_FALSE(sidecar.empty());
+  nlohmann::json good = nlohmann::json::parse(sidecar);
+  ASSERT_EQ(good.at("timestamps").size(), 3u) << good.dump();
+  good["bracket"] = 3;
+  good["exposures"] = {0.001, 0.01, 0.1};
+  nlohmann::json curve = nlohmann::json::array();
+  for (int c = 0; c < 256; ++c) curve.push_back(c / 255.0);
+  good["response"] = {curve, curve, curve};
+  std::ofstream(tmp / "rec.mkv.json") << good.dump();
+  const auto ok = lpt::runCommand("cd " + lpt::shellQuote(tmp.path.string()) + " && " +
+                                  LIVEPROBE_BIN + " replay rec.mkv --headless --frames 3 --quiet");
+  ASSERT_EQ(ok.exitCode, 0) << "the well-formed bracket replays: " << ok.output;
+  struct Case {
+    const char* field;
+    nlohmann::json value;
+    const char* says;
+  };
+  nlohmann::json falling = curve;
+  falling[200] = 0.1;
+  const Case cases[] = {
+      {"bracket", 7, "not 1 to 5 frames"},
+      {"bracket", 0, "not 1 to 5 frames"},
+      {"exposures", {0.001, 0.01}, "one exposure per frame"},
+      {"exposures", nullptr, "one exposure per frame"},
+      {"response", {curve, curve}, "3 curves"},
+      {"response", {curve, curve, {1, 2}}, "256 values"},
+      {"response", {curve, curve, falling}, "response"},
+  };
+  for (const Case& c : cases) {
+    nlohmann::json bad = good;
+    if (c.value.is_null())
+      bad.erase(c.field);
+    else
+      bad[c.field] = c.value;
+    std::ofstream(tmp / "rec.mkv.json") << bad.dump();
+    expectRefused(tmp, "replay --headless --frames 3 rec.mkv", "rec.mkv", c.says);
   }
 }
 

@@ -325,6 +325,11 @@ RecordingSidecar parseRecordingSidecar(std::string_view text, const std::string&
       out.bracket = j.at("bracket").get<int>();
       if (out.bracket < 1 || out.bracket > 5)
         throw Error(name + ": bracket " + j.at("bracket").dump() + " is not 1 to 5 frames");
+      // The merge weighs each frame by its own exposure: a bracket keeps every frame's.
+      if (out.scales.size() != out.stamps.size())
+        throw Error(name + ": a bracket needs one exposure per frame (" +
+                    std::to_string(out.scales.size()) + " exposures for " +
+                    std::to_string(out.stamps.size()) + " timestamps)");
       if (j.contains("response"))
         out.response = nlohmann::json{{"response", j.at("response")}}.dump();
     }

@@ -79,7 +79,8 @@ struct RecordingSidecar {
 };
 
 /// Parses a sidecar's text (the whole of it: trailing text is an error). Exposures must be
-/// positive and finite with a finite inverse, timestamps finite. Throws lp::Error naming `name`.
+/// positive and finite with a finite inverse, timestamps finite; a bracket of 1 to 5 frames with
+/// one exposure per timestamp. Throws lp::Error naming `name`.
 RecordingSidecar parseRecordingSidecar(std::string_view text, const std::string& name);
 
 }  // namespace lp
