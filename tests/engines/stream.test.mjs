@@ -84,23 +84,34 @@ test('a client that reads nothing for 10 s slows nothing and grows no memory', a
   await slow.open;
   slow.ws._socket.pause();  // reads nothing from here on
   const fast = client(port);
+  const arrivals = [];
+  fast.ws.on('message', () => arrivals.push(Date.now()));
   await fast.open;
   await sleep(2000);
-  const before = usage(s.proc.pid);
+  const before = usage(s.proc.pid), from = Date.now();
   await sleep(9000);
-  const after = usage(s.proc.pid);
+  const after = usage(s.proc.pid), to = Date.now();
   const fastCount = fast.messages.length;
+  // The longest wait of the reading client between two frames while the silent one held its
+  // socket full (the edges of the window count as arrivals).
+  const times = [from, ...arrivals.filter((t) => t > from && t < to), to];
+  const longestGap = Math.max(...times.slice(1).map((t, i) => t - times[i]));
+  const frames = fast.messages.map((m) => m.frame);
   const end = await s.exited;
   assert.equal(end.code, 0, end.stderr);
   const captured = Number(end.stderr.match(/(\d+) frames captured/)[1]);
   const dropped = Number(end.stderr.match(/(\d+) dropped for slow clients/)[1]);
-  console.log(`captured ${captured} frames in 13 s; the reading client got ${fastCount}; ` +
-              `${dropped} dropped for the slow one; RSS ${before.rss} -> ${after.rss} kB`);
-  // Margins a loaded machine does not cross (two cores busy with other work halve what this
-  // process gets): what is asserted is that the silent client slows neither capture nor the
-  // reading client, which get the bulk of the frames while it gets none.
+  console.log(`captured ${captured} frames in 13 s; the reading client got ${fastCount}, ` +
+              `at most ${longestGap} ms apart; ${dropped} dropped for the slow one; ` +
+              `RSS ${before.rss} -> ${after.rss} kB`);
+  // What is asserted is that the silent client blocks neither capture nor the reading client:
+  // capture keeps its rate (a margin a loaded machine does not cross), and the reading client gets
+  // newer and newer frames all along (how many depends on the CPU its own process gets: the
+  // latest-value stream skips what it has no time to read; a server stuck writing to the silent
+  // client would send it nothing for seconds).
   assert.ok(captured >= 13 * 60 * 0.75, `capture held its rate: ${captured}`);
-  assert.ok(fastCount >= (captured * 11) / 13 / 2, `the reading client kept up: ${fastCount} of ${captured}`);
+  assert.ok(frames.every((f, i) => i === 0 || f > frames[i - 1]), 'frames in order, never repeated');
+  assert.ok(longestGap < 2000, `the reading client waited ${longestGap} ms for a frame`);
   assert.ok(dropped > 100, `the slow client's frames were dropped, not queued: ${dropped}`);
   assert.ok(after.rss - before.rss < 4096, `RSS grew ${after.rss - before.rss} kB`);
 });
