@@ -3,6 +3,7 @@
 #include <arpa/inet.h>
 #include <libwebsockets.h>
 #include <linux/sockios.h>
+#include <poll.h>
 #include <sys/ioctl.h>
 #include <sys/socket.h>
 #include <unistd.h>
@@ -17,6 +18,8 @@
 #include <mutex>
 #include <optional>
 #include <thread>
+#include <unordered_map>
+#include <unordered_set>
 
 #include "liveprobe/sh/error.h"
 
@@ -42,6 +45,8 @@ struct SessionSlot {
 
 /// The longest query a client may send (?format=NAME needs a few dozen bytes).
 constexpr int kMaxQuery = 256;
+// The oldest pending connections looked at for a silent one to close when a limit is reached.
+constexpr int kEvictLook = 16;
 
 /// The format a WebSocket client asked for with ?format=NAME; nullopt when it asked for none.
 /// Anything else in the query (another key, a repeated or empty format, an over-long query, a
@@ -146,11 +151,43 @@ struct StreamServer::Impl {
     std::string peer;
   };
   std::list<Pending> pending;
+  std::unordered_map<lws*, std::list<Pending>::iterator> pendingAt;  // O(1) to forget one
+  std::unordered_map<std::string, std::size_t> pendingPerPeer;       // O(1) to count a peer's
+  void forget(std::list<Pending>::iterator it) {
+    const auto n = pendingPerPeer.find(it->peer);
+    if (--n->second == 0) pendingPerPeer.erase(n);
+    pendingAt.erase(it->wsi);
+    pending.erase(it);
+  }
+  // Every accepted connection that is not a client (pending, or being sent the page), oldest
+  // first, and those of them already told to close. At maxPending of them a new one makes room
+  // by closing the oldest whose peer has hung up (a flood's connect, GET, close), or is itself
+  // closed as it is accepted, before it costs a round of the service loop: a flood of short
+  // connections is turned away as fast as it comes and never fills the kernel's accept queue in
+  // front of a real client.
+  std::list<lws*> open;
+  std::unordered_map<lws*, std::list<lws*>::iterator> openAt;
+  std::unordered_set<lws*> dying;
+  void opened(lws* wsi) { openAt[wsi] = open.insert(open.end(), wsi); }
+  void notOpen(lws* wsi) {
+    if (const auto at = openAt.find(wsi); at != openAt.end()) {
+      open.erase(at->second);
+      openAt.erase(at);
+    }
+    dying.erase(wsi);
+  }
+  void kill(lws* wsi) {
+    lws_set_timeout(wsi, PENDING_TIMEOUT_USER_OK, LWS_TO_KILL_ASYNC);
+    dying.insert(wsi);
+    std::lock_guard lock(mutex);
+    ++stats.evicted;
+  }
   std::size_t pendingFrom(const std::string& peer) const {
-    return std::size_t(std::count_if(pending.begin(), pending.end(),
-                                     [&](const Pending& p) { return p.peer == peer; }));
+    const auto n = pendingPerPeer.find(peer);
+    return n == pendingPerPeer.end() ? 0 : n->second;
   }
   void admit(lws* wsi);
+  bool full();  // at the limit of open connections with none to close (counts the one turned away)
   void handshakeDone(lws* wsi);
   void evictOldest(const std::string* peer);
 
@@ -170,32 +207,58 @@ struct StreamServer::Impl {
 
 void StreamServer::Impl::evictOldest(const std::string* peer) {
   // A connection whose request is already waiting in its socket is read in this round of the
-  // service loop: it is a client about to be served, not a silent one.
+  // service loop: it is a client about to be served, not a silent one. Only the oldest few are
+  // looked at: under a flood every one has its request waiting, and a look at all of them for
+  // every new connection would slow the loop that serves them.
   const auto waiting = [](lws* wsi) {
     int unread = 0;
     return ioctl(lws_get_socket_fd(wsi), FIONREAD, &unread) == 0 && unread > 0;
   };
-  for (auto it = pending.begin(); it != pending.end(); ++it)
-    if ((!peer || it->peer == *peer) && !waiting(it->wsi)) {
-      lws_set_timeout(it->wsi, PENDING_TIMEOUT_USER_OK, LWS_TO_KILL_ASYNC);
-      pending.erase(it);
-      std::lock_guard lock(mutex);
-      ++stats.evicted;
+  int looked = 0;
+  for (auto it = pending.begin(); it != pending.end() && looked < kEvictLook; ++it) {
+    if (peer && it->peer != *peer) continue;
+    ++looked;
+    if (!waiting(it->wsi)) {
+      lws* const wsi = it->wsi;
+      forget(it);
+      kill(wsi);
       return;
     }
+  }
 }
 
 void StreamServer::Impl::admit(lws* wsi) {
   char addr[64] = "";
   if (!lws_get_peer_simple(wsi, addr, sizeof addr)) return;  // the listening socket
   const std::string peer = addr;
+  opened(wsi);
   if (pendingFrom(peer) >= opt.maxPendingPerAddress) evictOldest(&peer);
   if (pending.size() >= opt.maxPending) evictOldest(nullptr);
   pending.push_back({wsi, peer});
+  pendingAt[wsi] = std::prev(pending.end());
+  ++pendingPerPeer[peer];
+}
+
+bool StreamServer::Impl::full() {
+  if (open.size() - dying.size() < opt.maxPending) return false;
+  int looked = 0;
+  for (auto it = open.begin(); it != open.end() && looked < kEvictLook; ++it) {
+    if (dying.count(*it)) continue;
+    ++looked;
+    pollfd p{lws_get_socket_fd(*it), POLLRDHUP, 0};
+    if (::poll(&p, 1, 0) == 1 && (p.revents & (POLLRDHUP | POLLHUP | POLLERR))) {
+      handshakeDone(*it);
+      kill(*it);
+      return false;
+    }
+  }
+  std::lock_guard lock(mutex);
+  ++stats.evicted;
+  return true;
 }
 
 void StreamServer::Impl::handshakeDone(lws* wsi) {
-  pending.remove_if([wsi](const Pending& p) { return p.wsi == wsi; });
+  if (const auto at = pendingAt.find(wsi); at != pendingAt.end()) forget(at->second);
 }
 
 int StreamServer::Impl::onWriteable(lws* wsi, Session& s) {
@@ -268,8 +331,11 @@ int StreamServer::Impl::callback(lws* wsi, lws_callback_reasons reason, void* us
     case LWS_CALLBACK_WSI_CREATE:  // accepted: it has handshakeSeconds to say what it wants
       self->admit(wsi);
       return 0;
+    case LWS_CALLBACK_FILTER_NETWORK_CONNECTION:  // accepted, not yet adopted: 1 closes it
+      return self->full() ? 1 : 0;
     case LWS_CALLBACK_WSI_DESTROY:
       self->handshakeDone(wsi);
+      self->notOpen(wsi);
       return 0;
     case LWS_CALLBACK_FILTER_HTTP_CONNECTION:  // a whole request came: no longer pending
       self->handshakeDone(wsi);
@@ -284,6 +350,7 @@ int StreamServer::Impl::callback(lws* wsi, lws_callback_reasons reason, void* us
       return 0;
     }
     case LWS_CALLBACK_ESTABLISHED: {
+      self->notOpen(wsi);  // a client: counted against --serve-clients, never evicted
       slot->s = new Session;
       slot->s->format = self->opt.defaultFormat;
       try {
@@ -357,9 +424,10 @@ StreamServer::StreamServer(StreamServerOptions options) : impl_(std::make_unique
   info.retry_and_idle_policy = &m.retry;
   info.options = LWS_SERVER_OPTION_DISABLE_IPV6 | LWS_SERVER_OPTION_VALIDATE_UTF8 |
                  LWS_SERVER_OPTION_FAIL_UPON_UNABLE_TO_BIND;
-  // Every client and every pending connection has a descriptor and a header buffer.
-  // (Twice the pending budget: a closed connection holds its descriptor until the next round.)
-  info.fd_limit_per_thread = unsigned(m.opt.maxClients) + 2 * unsigned(m.opt.maxPending) + 32;
+  // Every client and every pending connection has a descriptor and a header buffer. lws accepts
+  // while the listening socket has connections and its descriptors are under this limit: the
+  // limit is what bounds a flood's descriptors (the rest wait in the kernel's accept queue).
+  info.fd_limit_per_thread = unsigned(m.opt.maxClients) + unsigned(m.opt.maxPending) + 16;
   info.max_http_header_pool = std::uint16_t(m.opt.maxPending + 8);
   // Room for a request with a long query, so that it reaches formatFromQuery and is refused
   // there with its reason (1008) instead of being cut off by lws.

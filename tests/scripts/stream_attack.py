@@ -10,15 +10,13 @@ reopens every one the server closes. Meanwhile a real client every half second a
 while the attack holds; the server must close the silent sockets (a handshake deadline), and
 answer at exit with its summary.
 """
-import base64
-import os
-import re
 import select
-import signal
 import socket
-import subprocess
 import sys
 import time
+
+sys.dont_write_bytecode = True  # nothing written beside the sources
+from stream_clients import http_get, start_server, stop_server, websocket_frame  # noqa: E402
 
 LIVEPROBE = sys.argv[1]
 SILENT = int(sys.argv[2]) if len(sys.argv) > 2 else 200
@@ -26,55 +24,8 @@ ATTACK_SECONDS = 14
 ATTACKER = sys.argv[3] if len(sys.argv) > 3 else "127.0.0.2"
 
 
-def start_server():
-    p = subprocess.Popen(
-        [LIVEPROBE, "replay", "synthetic:64x32@30", "--headless", "--quiet", "--serve", "127.0.0.1:0"],
-        stderr=subprocess.PIPE, text=True)
-    line = p.stderr.readline()
-    m = re.search(r"serving http://127\.0\.0\.1:(\d+)/", line)
-    if not m:
-        p.kill()
-        sys.exit(f"FAIL: no 'serving' line: {line!r}")
-    return p, int(m.group(1))
-
-
-def http_get(port):
-    with socket.create_connection(("127.0.0.1", port), timeout=5) as s:
-        s.sendall(b"GET / HTTP/1.1\r\nHost: 127.0.0.1\r\nConnection: close\r\n\r\n")
-        data = b""
-        while b"</html>" not in data.lower():
-            chunk = s.recv(65536)
-            if not chunk:
-                break
-            data += chunk
-    if not (data.startswith(b"HTTP/1.1 200") and b"<html" in data.lower()):
-        print(f"# GET / answered {data[:80]!r}")
-    return data.startswith(b"HTTP/1.1 200") and b"<html" in data.lower()
-
-
-def websocket_frame(port):
-    """The upgrade and the first message (a text frame holding a JSON record)."""
-    key = base64.b64encode(os.urandom(16)).decode()
-    with socket.create_connection(("127.0.0.1", port), timeout=5) as s:
-        s.sendall((f"GET /?format=json HTTP/1.1\r\nHost: 127.0.0.1\r\nUpgrade: websocket\r\n"
-                   f"Connection: Upgrade\r\nSec-WebSocket-Key: {key}\r\n"
-                   f"Sec-WebSocket-Protocol: liveprobe\r\nSec-WebSocket-Version: 13\r\n\r\n").encode())
-        data = b""
-        while b"\r\n\r\n" not in data:
-            chunk = s.recv(4096)
-            if not chunk:
-                return False
-            data += chunk
-        head, rest = data.split(b"\r\n\r\n", 1)
-        if not head.startswith(b"HTTP/1.1 101"):
-            return False
-        while len(rest) < 2:
-            rest += s.recv(4096)
-        return rest[0] == 0x81  # FIN + text
-
-
 def main():
-    server, port = start_server()
+    server, port = start_server(LIVEPROBE)
     silent = []
 
     def open_silent():
@@ -129,12 +80,7 @@ def main():
             failed += not ok
     for s, _ in silent:
         s.close()
-    server.send_signal(signal.SIGINT)
-    try:
-        _, err = server.communicate(timeout=10)
-    except subprocess.TimeoutExpired:
-        server.kill()
-        sys.exit("FAIL: the server did not stop within 10 s of SIGINT")
+    err = stop_server(server)
     print(f"# {SILENT} silent sockets held for {ATTACK_SECONDS} s, {reopened} reopened after the "
           f"server closed them; real clients served {served}, failed {failed}")
     if failed or served < 2 * (ATTACK_SECONDS - 2):

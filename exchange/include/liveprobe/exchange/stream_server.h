@@ -22,7 +22,9 @@ struct StreamServerOptions {
   /// A connection must send a whole HTTP request or WebSocket upgrade within this long.
   int handshakeSeconds = 3;
   /// Connections still in their handshake, in all and from one address: over either limit the
-  /// oldest such connection (of that address) is closed, so a new client is always heard.
+  /// oldest silent one (of that address) is closed, so a new client is always heard. maxPending
+  /// also bounds every connection that is not a client (pending, or being sent the page): at it a
+  /// new one closes the oldest whose peer has hung up, or is closed as it is accepted.
   std::size_t maxPending = 256, maxPendingPerAddress = 64;
   CoeffFormat defaultFormat;  ///< for clients that ask for none (?format=)
   std::string webDir;         ///< the page (index.html, main.js)

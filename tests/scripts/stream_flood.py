@@ -1,0 +1,131 @@
+#!/usr/bin/env python3
+"""The stream server under a flood of short connections: connect, `GET /`, close, as fast as one
+process can (thousands a second), for FLOOD seconds.
+
+Usage: stream_flood.py LIVEPROBE [FLOOD_SECONDS]
+
+Starts `liveprobe replay synthetic --serve 127.0.0.1:0` with its default limits (256 pending
+connections, 32 clients) and, while the flood runs and for 3 s after it, samples the server's open
+descriptors every 10 ms and sends a real client every quarter second: GET / (the whole page) and
+a WebSocket (the upgrade, then one frame). A thousand connections a second must be made; the
+sockets must stay within the pending cap and the clients' (and the few the server holds anyway)
+at every sample, and all descriptors within a socket and a file (the page on its way out) for
+each of those; every real client must be served, each within WITHIN seconds.
+"""
+import multiprocessing
+import os
+import socket
+import sys
+import threading
+import time
+
+sys.dont_write_bytecode = True  # nothing written beside the sources
+from stream_clients import http_get, start_server, stop_server, websocket_frame  # noqa: E402
+
+LIVEPROBE = sys.argv[1]
+FLOOD_SECONDS = float(sys.argv[2]) if len(sys.argv) > 2 else 6.0
+PENDING_CAP = 256   # StreamServerOptions::maxPending, the default
+CLIENTS = 32        # --serve-clients, the default
+MARGIN = 16         # the listening socket, the service loop's own, the process's files
+# Seconds a real client may take. Idle, the slowest takes 0.1 to 0.3 s; with the flood on one of
+# two cores and builds running beside the test (the server's thread then shares the other core
+# with the renderer and the builds), up to 1.4 s.
+WITHIN = 3.0
+
+
+def flood(port, seconds, count):
+    """The flooding process: connect, send GET /, close (without reading), as fast as it can
+    until time is up."""
+    end = time.monotonic() + seconds
+    n = 0
+    request = b"GET / HTTP/1.1\r\nHost: 127.0.0.1\r\n\r\n"
+    while time.monotonic() < end:
+        try:
+            s = socket.create_connection(("127.0.0.1", port), timeout=2)
+            s.sendall(request)
+            s.close()
+            n += 1
+        except OSError:
+            pass
+    with count.get_lock():
+        count.value += n
+
+
+def real_client(port):
+    """GET / to the end of the page, then a WebSocket's upgrade and first frame; the seconds it
+    took, or None where it was not served."""
+    t0 = time.monotonic()
+    try:
+        if not (http_get(port) and websocket_frame(port)):
+            return None
+    except OSError:
+        return None
+    return time.monotonic() - t0
+
+
+def main():
+    server, port = start_server(LIVEPROBE, "--size", "64x36")
+    fd_dir = f"/proc/{server.pid}/fd"
+    time.sleep(0.5)
+    base = len(os.listdir(fd_dir))  # the listening socket, the process's own files
+    samples = []
+    stop = threading.Event()
+
+    def sample():
+        while not stop.is_set():
+            try:
+                links = []
+                for fd in os.listdir(fd_dir):
+                    try:
+                        links.append(os.readlink(f"{fd_dir}/{fd}"))
+                    except OSError:
+                        pass  # closed between the listing and the look
+                samples.append((len(links), sum(t.startswith("socket:") for t in links)))
+            except OSError:
+                pass
+            time.sleep(0.01)
+
+    sampler = threading.Thread(target=sample)
+    sampler.start()
+    count = multiprocessing.Value("i", 0)
+    flooders = [multiprocessing.Process(target=flood, args=(port, FLOOD_SECONDS, count))]
+    start = time.monotonic()
+    for f in flooders:
+        f.start()
+    times = []  # (seconds since the flood began, seconds taken or None)
+    while time.monotonic() - start < FLOOD_SECONDS + 3:
+        at = time.monotonic() - start
+        times.append((at, real_client(port)))
+        time.sleep(max(0.0, 0.25 - (time.monotonic() - start - at)))
+    for f in flooders:
+        f.join()
+    stop.set()
+    sampler.join()
+    err = stop_server(server)
+    served = [t for _, t in times if t is not None]
+    failed = [at for at, t in times if t is None]
+    slow = [(at, t) for at, t in times if t is not None and t > WITHIN]
+    most = max(n for n, _ in samples)
+    sockets = max(k for _, k in samples)
+    print(f"# {count.value} connections in {FLOOD_SECONDS:.0f} s; descriptors {base} -> at most "
+          f"{most}, {sockets} of them sockets ({len(samples)} samples); real clients served "
+          f"{len(served)} of {len(times)}, the slowest in {max(served, default=0):.3f} s")
+    if count.value < 1000 * FLOOD_SECONDS:
+        sys.exit(f"FAIL: only {count.value} connections: no flood")
+    # A connection holds its socket, and while the page goes out the page's file too.
+    if sockets > PENDING_CAP + CLIENTS + MARGIN:
+        sys.exit(f"FAIL: {sockets} sockets open, over the pending cap and the clients")
+    if most > base + 2 * (PENDING_CAP + CLIENTS + MARGIN):
+        sys.exit(f"FAIL: {most} descriptors open, over a socket and a file per pending connection")
+    if failed:
+        sys.exit(f"FAIL: real clients not served at {', '.join(f'+{a:.2f} s' for a in failed)}\n{err}")
+    if slow:
+        sys.exit("FAIL: real clients served late: " +
+                 ", ".join(f"{t:.2f} s at +{a:.2f} s" for a, t in slow))
+    if server.returncode != 130:
+        sys.exit(f"FAIL: exit {server.returncode} after SIGINT\n{err}")
+    print("OK")
+
+
+if __name__ == "__main__":
+    main()
