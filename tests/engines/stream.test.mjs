@@ -47,7 +47,12 @@ test('a client receives every frame in order, each the matching --coeffs-out lin
   const frames = c.messages.map((m) => m.frame);
   console.log(`received ${frames.length} of 90 frames, from ${frames[0]} to ${frames.at(-1)}`);
   assert.ok(frames.length >= 80, `${frames.length} messages`);
-  for (let i = 1; i < frames.length; ++i) assert.equal(frames[i], frames[i - 1] + 1, 'in order, none missed');
+  // In order, never repeated; a frame the client missed on a busy machine (the stream sends the
+  // newest, never a queue) is one the summary counts as dropped.
+  for (let i = 1; i < frames.length; ++i) assert.ok(frames[i] > frames[i - 1], 'in order, never repeated');
+  const missed = frames.at(-1) - frames[0] + 1 - frames.length;
+  const dropped = Number(end.stderr.match(/(\d+) dropped for slow clients/)[1]);
+  assert.ok(missed <= dropped, `${missed} frames missed, ${dropped} counted as dropped`);
   for (const m of c.messages) {
     assert.equal(m.format, 'babylon');
     assert.deepEqual(captured(m), captured(lines[m.frame]));
