@@ -2,6 +2,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstring>
 #include <fstream>
 #include <nlohmann/json.hpp>
 #include <numbers>
@@ -102,6 +103,21 @@ TEST(Cli, IrradianceMapOfConstantEnvironment) {
 // (GL (X, Y, Z) = (-y, z, x)); and the cross, read back as a cube layout, projects to the
 // irradiance coefficients A_l L_lm (E is band-limited to l <= 2, so that is exact up to
 // sampling).
+// GL 4.6, table 8.19: each cube face's direction from (sc, tc) in [-1, 1], where
+// (s, t) = ((sc/|ma| + 1)/2, (tc/|ma| + 1)/2), and its cell in a horizontal cross; GL's face order.
+struct GlFace {
+  int col, row;
+  glm::vec3 (*dir)(float sc, float tc);
+};
+constexpr GlFace kGlFaces[6] = {
+    {2, 1, [](float sc, float tc) { return glm::vec3(1, -tc, -sc); }},   // +X
+    {0, 1, [](float sc, float tc) { return glm::vec3(-1, -tc, sc); }},   // -X
+    {1, 0, [](float sc, float tc) { return glm::vec3(sc, 1, tc); }},     // +Y
+    {1, 2, [](float sc, float tc) { return glm::vec3(sc, -1, -tc); }},   // -Y
+    {1, 1, [](float sc, float tc) { return glm::vec3(sc, -tc, 1); }},    // +Z
+    {3, 1, [](float sc, float tc) { return glm::vec3(-sc, -tc, -1); }},  // -Z
+};
+
 TEST(Cli, IrradianceCubeFollowsOpenGlsFaceTable) {
   lpt::TempDir tmp;
   const std::string map = lpt::dataPath("probes/latlong_256x128/grace.hdr");
@@ -115,21 +131,8 @@ TEST(Cli, IrradianceCubeFollowsOpenGlsFaceTable) {
   const lp::Image e = lp::loadImage(out);
   ASSERT_EQ(e.width, 4 * n);
   ASSERT_EQ(e.height, 3 * n);
-  // GL 4.6, table 8.19: major axis, sc, tc for each face; (s, t) = ((sc/|ma| + 1)/2, ...).
-  struct Face {
-    int col, row;  // cell of the horizontal cross
-    glm::vec3 (*dir)(float sc, float tc);
-  };
-  const Face faces[6] = {
-      {2, 1, [](float sc, float tc) { return glm::vec3(1, -tc, -sc); }},   // +X
-      {0, 1, [](float sc, float tc) { return glm::vec3(-1, -tc, sc); }},   // -X
-      {1, 0, [](float sc, float tc) { return glm::vec3(sc, 1, tc); }},     // +Y
-      {1, 2, [](float sc, float tc) { return glm::vec3(sc, -1, -tc); }},   // -Y
-      {1, 1, [](float sc, float tc) { return glm::vec3(sc, -tc, 1); }},    // +Z
-      {3, 1, [](float sc, float tc) { return glm::vec3(-sc, -tc, -1); }},  // -Z
-  };
   double worst = 0, scale = 0;
-  for (const Face& f : faces)
+  for (const GlFace& f : kGlFaces)
     for (int i = 0; i < n; i += 5)
       for (int j = 0; j < n; j += 5) {
         const float sc = 2 * (j + 0.5f) / n - 1, tc = 2 * (i + 0.5f) / n - 1;
@@ -151,6 +154,93 @@ TEST(Cli, IrradianceCubeFollowsOpenGlsFaceTable) {
     EXPECT_NEAR(E.c[k].x, truth.c[k].x, 2e-3 * truth.c[0].x) << lp::kShNames[k];
   expectOneLineError("irradiance " + map + " --cube 16 --size 64x32 --out " + out, "--cube",
                      "not both");
+}
+
+/// Standard base64, as in a data URI.
+std::vector<std::uint8_t> fromBase64(const std::string& s) {
+  std::vector<std::uint8_t> out;
+  std::uint32_t acc = 0;
+  int bits = 0;
+  for (char c : s) {
+    const char* k = "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
+    const char* at = c ? std::strchr(k, c) : nullptr;
+    if (!at) continue;  // padding
+    acc = acc << 6 | std::uint32_t(at - k);
+    if ((bits += 6) >= 8) out.push_back(std::uint8_t(acc >> (bits -= 8)));
+  }
+  return out;
+}
+
+/// Solid angle of the part of a cube face (at distance 1) from (0, 0) to (x, y).
+double faceArea(double x, double y) { return std::atan2(x * y, std::sqrt(x * x + y * y + 1)); }
+
+// The glTF export's specular cube, read as a glTF reader reads it (Babylon.js, the extension's
+// reference reader: each PNG row flipped back, RGBD decoded as pow(rgb, 2.2) / alpha, times the
+// light's intensity), projected onto the nine functions by each texel's exact solid angle:
+// the coefficients the same document declares (irradianceCoefficients, Condon-Shortley signs,
+// over A_l), within 2% of L00, on every map of the data.
+TEST(Cli, GltfSpecularCubeHoldsTheDeclaredCoefficients) {
+  const std::pair<const char*, const char*> maps[] = {
+      {"equirect/blouberg_sunrise_2_1k.hdr", ""},
+      {"equirect/moonless_golf_1k.hdr", ""},
+      {"equirect/pedestrian_overpass_1k.hdr", ""},
+      {"equirect/quarry_01_1k.hdr", ""},
+      {"equirect/royal_esplanade_1k.hdr", ""},
+      {"equirect/venice_sunset_1k.hdr", ""},
+      {"probes/latlong_256x128/ennis.hdr", ""},
+      {"probes/latlong_256x128/grace.hdr", ""},
+      {"probes/latlong_256x128/pisa.hdr", ""},
+      {"probes/latlong_256x128/uffizi.hdr", ""},
+      {"probes/latlong_256x128/wells.hdr", ""},
+      {"probes/latlong_full/grace_latlong.exr", ""},
+      {"probes/beach_probe.hdr", " --layout angular"},
+      {"cube/pisaHDR", " --layout cube"}};
+  constexpr float kSign[lp::kShCount] = {1, -1, 1, -1, 1, -1, 1, -1, 1};
+  for (const auto& [file, layout] : maps) {
+    const auto r = runLiveprobe("coeffs " + lpt::dataPath(file) + layout + " --format gltf");
+    ASSERT_EQ(r.exitCode, 0) << r.output;
+    const auto doc = nlohmann::json::parse(r.output);
+    const auto& light = doc["extensions"]["EXT_lights_image_based"]["lights"][0];
+    const float intensity = light["intensity"];
+    const int n = light["specularImageSize"];
+    lp::Sh9 declared, cube;
+    for (int k = 0; k < lp::kShCount; ++k)
+      for (int ch = 0; ch < 3; ++ch)
+        declared.c[k][ch] = kSign[k] * light["irradianceCoefficients"][k][ch].get<float>() *
+                            intensity /
+                            lp::shCosineLobe(k < 1   ? 0
+                                             : k < 4 ? 1
+                                                     : 2);
+    for (int f = 0; f < 6; ++f) {
+      const std::string uri = doc["images"][light["specularImages"][0][f].get<int>()]["uri"];
+      const auto png = fromBase64(uri.substr(uri.find(',') + 1));
+      const cv::Mat face = cv::imdecode(png, cv::IMREAD_UNCHANGED);  // BGRA
+      ASSERT_EQ(face.type(), CV_8UC4) << file;
+      ASSERT_EQ(face.rows, n);
+      for (int i = 0; i < n; ++i)  // i: GL's row (t), stored as the image's row n - 1 - i
+        for (int j = 0; j < n; ++j) {
+          const cv::Vec4b p = face.at<cv::Vec4b>(n - 1 - i, j);
+          const double x0 = 2.0 * j / n - 1, x1 = 2.0 * (j + 1) / n - 1;
+          const double y0 = 2.0 * i / n - 1, y1 = 2.0 * (i + 1) / n - 1;
+          const double omega =
+              faceArea(x0, y0) - faceArea(x0, y1) - faceArea(x1, y0) + faceArea(x1, y1);
+          const glm::vec3 g =
+              glm::normalize(kGlFaces[f].dir(float(x0 + x1) / 2, float(y0 + y1) / 2));
+          const auto y = lp::shBasis(g);
+          for (int ch = 0; ch < 3; ++ch) {
+            const double v = std::pow(p[2 - ch] / 255.0, 2.2) / (p[3] / 255.0) * intensity;
+            for (int k = 0; k < lp::kShCount; ++k) cube.c[k][ch] += float(v * y[k] * omega);
+          }
+        }
+    }
+    double worst = 0;
+    for (int k = 0; k < lp::kShCount; ++k)
+      for (int ch = 0; ch < 3; ++ch)
+        worst = std::max(worst,
+                         double(std::abs(cube.c[k][ch] - declared.c[k][ch]) / declared.c[0][ch]));
+    std::printf("%s: the cube's nine, worst %.2f%% of L00\n", file, 100 * worst);
+    EXPECT_LT(worst, 0.02) << file;
+  }
 }
 
 TEST(CliBadInput, EngineFormats) {

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 
 #include "liveprobe/capture/image.h"
 #include "liveprobe/exchange/coeffs_io.h"
@@ -46,14 +47,17 @@ glm::vec3 towards(const Light& l, Engine e) { return glm::normalize(engineFromWo
 
 // ---- glTF: RGBD cube faces -------------------------------------------------------------------
 
-/// RGBD, as EXT_lights_image_based's 4-channel PNGs hold HDR (Babylon's packing): alpha
-/// D = clamp(floor(max(255 / max(rgb), 1)) / 255, 1/255, 1), colour sRGB(rgb D); a reader
-/// divides the linear colour by D.
+/// RGBD, as EXT_lights_image_based's 4-channel PNGs hold HDR (Babylon's packing, which its
+/// reader, the extension's reference, undoes): alpha D = clamp(floor(max(255 / max(rgb), 1)) /
+/// 255, 1/255, 1), colour (rgb D)^(1/2.2); a reader raises the colour to 2.2 and divides by D.
+/// Babylon's RGBD shaders use the power 2.2, not the sRGB curve: with the sRGB curve a texel at
+/// 1% reads 37% dark.
 void packRgbd(glm::vec3 c, std::uint8_t* out) {
   const float m = std::max({c.x, c.y, c.z, 1e-6f});
   const float d = std::clamp(std::floor(std::max(255.0f / m, 1.0f)) / 255.0f, 1.0f / 255.0f, 1.0f);
   for (int ch = 0; ch < 3; ++ch)
-    out[ch] = std::uint8_t(std::lround(255.0f * linearToSrgb(std::clamp(c[ch] * d, 0.0f, 1.0f))));
+    out[ch] =
+        std::uint8_t(std::lround(255.0f * std::pow(std::clamp(c[ch] * d, 0.0f, 1.0f), 1 / 2.2f)));
   out[3] = std::uint8_t(std::lround(255.0f * d));
 }
 
@@ -73,32 +77,83 @@ std::string base64(const std::vector<std::uint8_t>& b) {
   return s;
 }
 
-/// One face of the environment's radiance, n x n, each texel the mean of 4 x 4 nearest-pixel
-/// samples (a box filter: no GGX prefiltering).
-std::vector<glm::vec3> radianceFace(const Image& image, const LayoutSpec& layout,
-                                    const glm::mat3& worldFromFile, int face, int n) {
-  std::vector<glm::vec3> out(std::size_t(n) * n, glm::vec3(0.0f));
-  const glm::mat3 fileFromWorld = glm::transpose(worldFromFile);
+/// Solid angle of the part of a cube face (at distance 1) from its centre to (x, y).
+double faceArea(double x, double y) { return std::atan2(x * y, std::sqrt(x * x + y * y + 1)); }
+
+/// The environment's radiance on the six faces of a cube, n x n each, in GL's face order (rows:
+/// t). Every panorama pixel's power (radiance times solid angle) lands on the cube whole, so
+/// the cube holds the map's energy and coefficients however small its bright sources: each
+/// texel takes kSub x kSub point samples, and a pixel's power is shared among the samples that
+/// fall on it by their solid angles; a pixel no sample falls on (a few-pixel sun between
+/// samples) gives its power to the texel its centre falls in. A box filter: no GGX
+/// prefiltering.
+std::vector<std::vector<glm::vec3>> radianceCube(const Image& image, const LayoutSpec& layout,
+                                                 const glm::mat3& worldFromFile, int n) {
   constexpr int kSub = 4;
-  for (int i = 0; i < n; ++i)
-    for (int j = 0; j < n; ++j) {
-      glm::vec3 sum(0.0f);
-      int count = 0;
-      for (int a = 0; a < kSub; ++a)
-        for (int b = 0; b < kSub; ++b) {
-          const glm::vec3 d = glm::normalize(
-              cubeFaceDirection(face, (j + (b + 0.5) / kSub) / n, (i + (a + 0.5) / kSub) / n));
-          const auto px = layoutPixel(layout, image.width, image.height, fileFromWorld * d);
-          if (!px) continue;
-          const int x = std::clamp(int(px->x), 0, image.width - 1);
-          const int y = std::clamp(int(px->y), 0, image.height - 1);
-          const float* p = &image.rgb[(std::size_t(y) * image.width + x) * 3];
-          sum += glm::vec3(p[0], p[1], p[2]);
-          ++count;
-        }
-      out[std::size_t(i) * n + j] = count > 0 ? sum / float(count) : glm::vec3(0.0f);
+  const int m = n * kSub;
+  const std::vector<SphereSample> pixels = layoutSamples(layout, image.width, image.height);
+  const glm::mat3 fileFromWorld = glm::transpose(worldFromFile);
+  // Each sample's pixel (-1: none) and solid angle, face by face, row by row.
+  std::vector<std::int64_t> hit(std::size_t(6) * m * m, -1);
+  std::vector<float> omega(hit.size());
+  std::vector<double> hitOmega(pixels.size(), 0.0);
+  for (int f = 0; f < 6; ++f)
+    for (int y = 0; y < m; ++y)
+      for (int x = 0; x < m; ++x) {
+        const double x0 = 2.0 * x / m - 1, x1 = 2.0 * (x + 1) / m - 1;
+        const double y0 = 2.0 * y / m - 1, y1 = 2.0 * (y + 1) / m - 1;
+        const std::size_t at = (std::size_t(f) * m + y) * m + x;
+        omega[at] =
+            float(faceArea(x0, y0) - faceArea(x0, y1) - faceArea(x1, y0) + faceArea(x1, y1));
+        const glm::vec3 d = glm::normalize(cubeFaceDirection(f, (x + 0.5) / m, (y + 0.5) / m));
+        const auto px = layoutPixel(layout, image.width, image.height, fileFromWorld * d);
+        if (!px) continue;
+        const std::int64_t p =
+            std::int64_t(std::clamp(int(px->y), 0, image.height - 1)) * image.width +
+            std::clamp(int(px->x), 0, image.width - 1);
+        if (!(pixels[std::size_t(p)].solidAngle > 0)) continue;
+        hit[at] = p;
+        hitOmega[std::size_t(p)] += omega[at];
+      }
+  const auto radiance = [&](std::int64_t p) {
+    const float* c = &image.rgb[std::size_t(p) * 3];
+    return glm::dvec3(c[0], c[1], c[2]);
+  };
+  // Power per texel, and each texel's solid angle.
+  std::vector<glm::dvec3> power(std::size_t(6) * n * n, glm::dvec3(0.0));
+  std::vector<double> texelOmega(power.size(), 0.0);
+  const auto texelOf = [&](int f, int y, int x) {
+    return (std::size_t(f) * n + y / kSub) * n + x / kSub;
+  };
+  for (int f = 0; f < 6; ++f)
+    for (int y = 0; y < m; ++y)
+      for (int x = 0; x < m; ++x) {
+        const std::size_t at = (std::size_t(f) * m + y) * m + x, t = texelOf(f, y, x);
+        texelOmega[t] += omega[at];
+        if (const std::int64_t p = hit[at]; p >= 0)
+          power[t] += radiance(p) * (double(pixels[std::size_t(p)].solidAngle) * omega[at] /
+                                     hitOmega[std::size_t(p)]);
+      }
+  // The pixels no sample fell on: the cube layout's own cross (4 x 3 faces of m) finds the
+  // sample their centre falls in.
+  constexpr int kFaceOfCell[3][4] = {{-1, 2, -1, -1}, {1, 4, 0, 5}, {-1, 3, -1, -1}};
+  for (std::size_t p = 0; p < pixels.size(); ++p) {
+    if (hitOmega[p] > 0 || !(pixels[p].solidAngle > 0)) continue;
+    const auto c =
+        layoutPixel(LayoutSpec(Layout::Cube), 4 * m, 3 * m, worldFromFile * pixels[p].dir);
+    if (!c) continue;
+    const int cx = std::clamp(int(c->x), 0, 4 * m - 1), cy = std::clamp(int(c->y), 0, 3 * m - 1);
+    const int f = kFaceOfCell[cy / m][cx / m];
+    if (f < 0) continue;
+    power[texelOf(f, cy % m, cx % m)] += radiance(std::int64_t(p)) * double(pixels[p].solidAngle);
+  }
+  std::vector<std::vector<glm::vec3>> faces(6, std::vector<glm::vec3>(std::size_t(n) * n));
+  for (int f = 0; f < 6; ++f)
+    for (std::size_t i = 0; i < std::size_t(n) * n; ++i) {
+      const std::size_t t = std::size_t(f) * n * n + i;
+      faces[std::size_t(f)][i] = glm::vec3(power[t] / texelOmega[t]);
     }
-  return out;
+  return faces;
 }
 
 std::vector<glm::vec3> halve(const std::vector<glm::vec3>& f, int n) {
@@ -283,9 +338,7 @@ ojson gltfDocument(const Image& panorama, const LayoutSpec& layout, const glm::m
   // The specular cube: faces in OpenGL's order (+X -X +Y -Y +Z -Z), mips 64, 32 and 16.
   constexpr int kSize = 64, kMips = 3;
   ojson images = ojson::array(), mips = ojson::array();
-  std::vector<std::vector<glm::vec3>> faces(6);
-  for (int f = 0; f < 6; ++f)
-    faces[std::size_t(f)] = radianceFace(panorama, layout, worldFromFile, f, kSize);
+  std::vector<std::vector<glm::vec3>> faces = radianceCube(panorama, layout, worldFromFile, kSize);
   // RGBD holds radiance up to 255: a brighter map is stored scaled down by a power of two, with
   // the light's intensity (which readers multiply into the cube and the coefficients) the scale.
   float peak = 0;
