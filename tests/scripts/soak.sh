@@ -1,10 +1,19 @@
 #!/bin/bash
 # Soak: replays FRAMES frames through the whole pipeline headless (with --coeffs-out and the HUD)
-# and samples the process every 0.5 s from /proc: after warm-up (the first quarter of the samples)
-# and before shutdown (the last sample may catch the process joining its threads and closing its
-# files), resident memory must stay within a tolerance, and open file descriptors and threads must
-# not grow: the second half's largest count is at most the first half's. (A looped video reopens
-# its decoder at each loop, so a sample may catch a moment with fewer threads or files.)
+# and samples the process every 0.5 s from /proc. After warm-up (the first quarter of the
+# samples) and before shutdown (the last sample may catch the process joining its threads and
+# closing its files), the rest is split into two halves of equal time, A then B:
+# - memory: a leak grows through the run, so B's peak resident memory exceeds A's by what B
+#   leaked; the allocator's arenas (glibc's per-thread heaps, more of them when threads contend
+#   on a busy machine) grow in steps while the threads first meet and then hold, so they move
+#   A's peak, not B's over A's. B's peak may exceed A's by at most 4 MB (2,000 frames: a leak of
+#   6 kB a frame fails; tests/scripts/soak_criterion.py tries the criterion). The growth from warm-up to the end is printed, not bounded: on a loaded
+#   machine it is the arenas' (+30 MB seen).
+# - open file descriptors and threads must not grow: B's largest count is at most A's. (A looped
+#   video reopens its decoder at each loop, so a sample may catch a moment with fewer.)
+# Frames never queue: the handoff holds one frame. Live, the renderer takes the newest and each
+# one it missed is counted as dropped, so a renderer that falls behind costs frames, not memory
+# (the summary says how many); a headless replay's capture waits for the renderer instead.
 # Usage: soak.sh LIVEPROBE FRAMES [SOURCE]   (CI: 2000 frames; README gives the 20,000 one)
 # A SOURCE under /dev/ is a camera (`live`); LIVEPROBE_PRELOAD then names a library to preload
 # into liveprobe alone (the V4L2 emulator, configured by its LPEMU_* variables).
@@ -38,19 +47,16 @@ lines=$(wc -l < "$work/c.jsonl")
 n=${#samples[@]}
 [ "$n" -ge 8 ] || { echo "soak: only $n samples; the run was too short to judge"; exit 1; }
 printf '%s\n' "${samples[@]}" | awk -v n="$n" '
-  NR > n / 4 && NR < n { if (!base) { base = $1; fd0 = $2; th0 = $3 }
-               fds = fds " " $2; ths = ths " " $3
-               if ($1 > rmax) rmax = $1
-               if (NR < (n / 4 + n) / 2) { if ($2 > fdA) fdA = $2; if ($3 > thA) thA = $3 }
-               else { if ($2 > fdB) fdB = $2; if ($3 > thB) thB = $3 } }
+  NR > n / 4 && NR < n {
+    if (!base) { base = $1; fd0 = $2; th0 = $3 }
+    fds = fds " " $2; ths = ths " " $3
+    if (NR < (n / 4 + n) / 2) { if ($1 > rA) rA = $1; if ($2 > fdA) fdA = $2; if ($3 > thA) thA = $3 }
+    else { if ($1 > rB) rB = $1; if ($2 > fdB) fdB = $2; if ($3 > thB) thB = $3 } }
   END {
-    growth = rmax - base
-    fdbad = fdB > fdA; thbad = thB > thA
-    printf "soak: %d samples; after warm-up RSS %d -> max %d kB (+%d), fds %d, threads %d\n",
-           n, base, rmax, growth, fd0, th0
-    # Tolerance: 8 MB or 10%, whichever is larger (allocator noise, glibc arenas).
-    tol = base / 10; if (tol < 8192) tol = 8192
-    if (growth > tol) { print "soak: resident memory grew by " growth " kB"; exit 1 }
-    if (fdbad) { print "soak: the number of open file descriptors grew: " fds; exit 1 }
-    if (thbad) { print "soak: the number of threads grew: " ths; exit 1 }
+    top = rA > rB ? rA : rB
+    printf "soak: %d samples; after warm-up RSS %d kB, peak %d kB in the first half and %d kB in the second (+%d kB), %d to %d kB in all; fds %d, threads %d\n",
+           n, base, rA, rB, rB - rA, base, top, fd0, th0
+    if (rB - rA > 4096) { print "soak: resident memory grew by " rB - rA " kB from the first half to the second: a leak"; exit 1 }
+    if (fdB > fdA) { print "soak: the number of open file descriptors grew: " fds; exit 1 }
+    if (thB > thA) { print "soak: the number of threads grew: " ths; exit 1 }
   }'
