@@ -265,6 +265,35 @@ TEST(Egl, RendersWhatOsMesaRenders) {
   EXPECT_LT(cv::mean(diff)[0], 0.05);
 }
 
+// EGL in hostile surroundings: no EGL vendor library, a driver that does not load, a GL too old
+// for the renderer or for the compute projection, a size beyond the renderer's: one line that
+// names what failed, exit 1, and no output left behind. (Mesa's own warnings stay quiet.)
+TEST(Egl, HostileSurroundingsAreOneLine) {
+  const std::string out = std::string(LIVEPROBE_TEST_OUTPUT) + "/gpu/hostile.png";
+  const std::string render = " render --coeff L00=1 --size 64x64 --gl egl --out " + out;
+  struct Case {
+    std::string env, args, says;
+  };
+  const Case cases[] = {
+      {"__EGL_VENDOR_LIBRARY_FILENAMES=/nonexistent.json", render, "cannot open EGL"},
+      {"GALLIUM_DRIVER=nonexistent LIBGL_ALWAYS_SOFTWARE=1", render, "EGL"},
+      {"MESA_GL_VERSION_OVERRIDE=3.1", render, "GL 3.3 core"},
+      {"MESA_GL_VERSION_OVERRIDE=3.3 MESA_GLSL_VERSION_OVERRIDE=330",
+       " bench --frames 2 --repeat 1 --size 160x90 --gl egl --projection gpu",
+       "no compute shaders (GL 4.3)"},
+      {"", " render --coeff L00=1 --size 30000x30000 --gl egl --out " + out, "at most"},
+  };
+  for (const Case& c : cases) {
+    std::filesystem::create_directories(std::filesystem::path(out).parent_path());
+    std::filesystem::remove(out);
+    const auto r = lpt::runCommand("env " + c.env + " " + LIVEPROBE_BIN + c.args);
+    EXPECT_EQ(r.exitCode, 1) << c.env << c.args << "\n" << r.output;
+    EXPECT_EQ(lpt::lineCount(r.output), 1) << c.env << c.args << "\n" << r.output;
+    EXPECT_NE(r.output.find(c.says), std::string::npos) << c.env << c.args << "\n" << r.output;
+    EXPECT_FALSE(std::filesystem::exists(out)) << c.env << c.args;
+  }
+}
+
 TEST(Egl, AnEglDeviceThatDoesNotExistIsOneLine) {
   lpt::expectOneLineError("render --coeff L00=1 --size 64x64 --gl egl --gpu 63 --out " +
                               std::string(LIVEPROBE_TEST_OUTPUT) + "/gpu/none.png",

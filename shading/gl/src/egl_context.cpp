@@ -11,6 +11,7 @@
 #include <EGL/eglext.h>
 
 #include <cstdio>
+#include <cstdlib>
 #include <cstring>
 #include <vector>
 
@@ -77,7 +78,13 @@ struct Device {
   std::string name;  ///< the DRM node, or the driver's word for it
 };
 
+/// Mesa's libEGL prints its own warnings ("libEGL warning: egl: failed to create dri2 screen")
+/// beside the one line liveprobe gives for the same failure: only fatal ones, unless the user
+/// set EGL_LOG_LEVEL. Before the first EGL call, on the thread that opens the context.
+void quietDriverLog() { ::setenv("EGL_LOG_LEVEL", "fatal", 0); }
+
 std::vector<Device> listDevices() {
+  quietDriverLog();
   const char* client = eglQueryString(EGL_NO_DISPLAY, EGL_EXTENSIONS);
   if (!hasExtension(client, "EGL_EXT_device_enumeration") &&
       !hasExtension(client, "EGL_EXT_device_base"))
@@ -219,6 +226,7 @@ std::vector<std::string> eglDevices() {
 
 std::unique_ptr<GlContext> openEgl(const ContextSpec& spec, bool hardwareOnly,
                                    std::string& whyNot) {
+  quietDriverLog();
   const char* client = eglQueryString(EGL_NO_DISPLAY, EGL_EXTENSIONS);
   if (!client) {
     whyNot = "EGL has no client extensions (no EGL 1.5 driver)";
