@@ -364,6 +364,12 @@ ojson gltfDocument(const Image& panorama, const LayoutSpec& layout, const glm::m
   light["irradianceCoefficients"] = nineTriples(condonShortley(toIrradiance(L) * (1.0f / scale)));
   light["specularImageSize"] = kSize;
   light["specularImages"] = mips;
+  // What the extension's reference reader does with it (docs/engines.md: the fix, tested).
+  light["extras"] = {
+      {"liveprobe",
+       "The light is in the glTF frame. Babylon.js shows its mirror image (in x in a left-handed "
+       "scene, in z in a right-handed one) and multiplies the intensity into the coefficients "
+       "twice; liveprobe's docs/engines.md gives the lines that undo both."}};
   ojson ext;
   ext["EXT_lights_image_based"] = {{"lights", ojson::array({light})}};
   ojson scene = {{"name", "liveprobe"},
