@@ -7,8 +7,9 @@
 #   leaked; the allocator's arenas (glibc's per-thread heaps, more of them when threads contend
 #   on a busy machine) grow in steps while the threads first meet and then hold, so they move
 #   A's peak, not B's over A's. B's peak may exceed A's by at most 4 MB (2,000 frames: a leak of
-#   6 kB a frame fails; tests/scripts/soak_criterion.py tries the criterion). The growth from warm-up to the end is printed, not bounded: on a loaded
-#   machine it is the arenas' (+30 MB seen).
+#   6 kB a frame fails; tests/scripts/soak_criterion.py tries the criterion). The growth from
+#   warm-up to the end is printed, not bounded: on a loaded machine it is the arenas' (up to
+#   +30 MB).
 # - open file descriptors and threads must not grow: B's largest count is at most A's. (A looped
 #   video reopens its decoder at each loop, so a sample may catch a moment with fewer.)
 # Frames never queue: the handoff holds one frame. Live, the renderer takes the newest and each
