@@ -98,11 +98,6 @@ TEST(Cli, IrradianceMapOfConstantEnvironment) {
   expectOneLineError("irradiance " + f, "irradiance", "--out");
 }
 
-// irradiance --cube: each face texel holds E at the direction the OpenGL specification gives that
-// texel (its cube-map table, restated here), turned into the world frame by liveprobe's GL map
-// (GL (X, Y, Z) = (-y, z, x)); and the cross, read back as a cube layout, projects to the
-// irradiance coefficients A_l L_lm (E is band-limited to l <= 2, so that is exact up to
-// sampling).
 // GL 4.6, table 8.19: each cube face's direction from (sc, tc) in [-1, 1], where
 // (s, t) = ((sc/|ma| + 1)/2, (tc/|ma| + 1)/2), and its cell in a horizontal cross; GL's face order.
 struct GlFace {
@@ -118,6 +113,11 @@ constexpr GlFace kGlFaces[6] = {
     {3, 1, [](float sc, float tc) { return glm::vec3(-sc, -tc, -1); }},  // -Z
 };
 
+// irradiance --cube: each face texel holds E at the direction the OpenGL specification gives that
+// texel (its cube-map table, restated here), turned into the world frame by liveprobe's GL map
+// (GL (X, Y, Z) = (-y, z, x)); and the cross, read back as a cube layout, projects to the
+// irradiance coefficients A_l L_lm (E is band-limited to l <= 2, so that is exact up to
+// sampling).
 TEST(Cli, IrradianceCubeFollowsOpenGlsFaceTable) {
   lpt::TempDir tmp;
   const std::string map = lpt::dataPath("probes/latlong_256x128/grace.hdr");
