@@ -24,20 +24,25 @@ function freePort() {
 
 /// A mosquitto listening on 127.0.0.1:port only, no persistence; resolves once it accepts.
 /// `extra`: more configuration lines; `pubArgs`: what mosquitto_pub needs to reach it. Started as
-/// root, mosquitto would drop to its own user, who cannot read this test's private files.
+/// root, mosquitto would drop to its own user, who cannot read this test's private files. A busy
+/// machine can take seconds to start it (a TLS handshake is costly): the wait is 60 s, and a
+/// broker that exits says why.
 async function broker(port, extra = '', pubArgs = ['-h', '127.0.0.1']) {
   const conf = join(dir, `mosquitto-${port}.conf`);
   writeFileSync(conf, `listener ${port} ${extra.includes('certfile') ? '' : '127.0.0.1'}\n` +
                       `${extra || 'allow_anonymous true\n'}persistence false\nuser ${userInfo().username}\n`);
-  const proc = spawn('mosquitto', ['-c', conf], { stdio: 'ignore' });
+  const proc = spawn('mosquitto', ['-c', conf], { stdio: ['ignore', 'ignore', 'pipe'] });
+  let said = '', exited = null;
+  proc.stderr.on('data', (d) => (said += d));
   brokers.add(proc);
-  proc.on('exit', () => brokers.delete(proc));
-  for (let i = 0; i < 100; ++i) {
-    const r = spawnSync('mosquitto_pub', [...pubArgs, '-p', String(port), '-t', 'ping', '-m', 'x']);
+  proc.on('exit', (code, signal) => { exited = code ?? signal; brokers.delete(proc); });
+  for (const deadline = Date.now() + 60000; Date.now() < deadline && exited === null;) {
+    const r = spawnSync('mosquitto_pub', [...pubArgs, '-p', String(port), '-t', 'ping', '-m', 'x'], { timeout: 10000 });
     if (r.status === 0) return proc;
-    await sleep(50);
+    await sleep(100);
   }
-  throw new Error('mosquitto did not start');
+  throw new Error(exited === null ? `mosquitto on port ${port} accepted nothing in 60 s`
+                                  : `mosquitto on port ${port} exited (${exited}): ${said.trim()}`);
 }
 after(() => { for (const b of brokers) b.kill('SIGKILL'); });
 
