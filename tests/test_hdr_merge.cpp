@@ -3,6 +3,8 @@
 // caught; a response is recovered from a sweep; a UVC metadata buffer gives its exposure time.
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstring>
 #include <nlohmann/json.hpp>
@@ -19,6 +21,7 @@
 #include "liveprobe/capture/v4l2.h"
 #endif
 #include "liveprobe/sh/error.h"
+#include "liveprobe/sh/simd.h"
 
 namespace {
 
@@ -149,6 +152,71 @@ TEST(HdrMerge, AMovedSunComesFromTheNewestFrameOnly) {
   // older frames' clipped sun; what they saw is counted as lost light.
   EXPECT_LT(out.rgb[before], 0.01f * truth[now]);
   EXPECT_LT(c.agreement, 0.9);
+}
+
+// Every SIMD path merges alike: vectors of 4, 8 or 16 pixels, rows that end part-way through a
+// vector and through a block, readings that agree, disagree and cannot tell (a sun that moves
+// and is clipped in some frames, a sky that brightens 10% between frames), against the scalar
+// path, one pixel at a time.
+TEST(HdrMerge, EverySimdPathMergesAlike) {
+  constexpr int w = 125;  // neither a whole block (64) nor a whole vector of any path
+  const std::string before = lp::simd::current();
+  const auto crop = [&](Frame f) {
+    for (int y = 0; y < kH; ++y)
+      std::memmove(&f.bgr8[std::size_t(y) * w * 3], &f.bgr8[std::size_t(y) * kW * 3], w * 3);
+    f.bgr8.resize(std::size_t(w) * kH * 3), f.width = w;
+    return f;
+  };
+  // A still bracket first: each pixel of the crop merges as in the whole width, and none is dark
+  // (the padding past a row's end adds no pixel to the sums).
+  const auto still = scene();
+  for (const std::string& path : lp::simd::available()) {
+    lp::simd::select(path);
+    BracketMerger whole(MergeOptions{.frames = 3}), part(MergeOptions{.frames = 3});
+    Frame a, b;
+    FrameConfidence c;
+    for (const double t : {1.0, 1.0 / 64, 1.0 / 4096}) {
+      whole.add(shootSrgb(still, t), a);
+      c = part.add(crop(shootSrgb(still, t)), b);
+    }
+    EXPECT_EQ(c.darkShare, 0.0) << path;
+    EXPECT_EQ(c.clippedShare, 0.0) << path;
+    for (int y = 0; y < kH; ++y)
+      for (int i = 0; i < w * 3; ++i)
+        ASSERT_EQ(b.rgb[std::size_t(y * w * 3 + i)], a.rgb[std::size_t(y * kW * 3 + i)]) << path;
+  }
+  std::vector<Frame> frames;
+  for (int i = 0; i < 5; ++i) {
+    auto radiance = scene(30 + 7 * i);
+    for (float& v : radiance) v *= 1.0f + 0.1f * float(i % 2);
+    frames.push_back(crop(shootSrgb(radiance, std::array{1.0, 1.0 / 64, 1.0 / 4096}[i % 3])));
+  }
+  std::vector<std::vector<float>> merged;
+  std::vector<FrameConfidence> said;
+  for (const std::string& path : lp::simd::available()) {
+    lp::simd::select(path);
+    BracketMerger merger(MergeOptions{.frames = 3});
+    Frame out;
+    for (const Frame& f : frames) {
+      said.push_back(merger.add(f, out));
+      merged.push_back(out.rgb);
+    }
+  }
+  lp::simd::select(before);
+  ASSERT_GE(merged.size(), frames.size());
+  for (std::size_t k = frames.size(); k < merged.size(); ++k) {
+    const std::size_t ref = k % frames.size();
+    for (std::size_t i = 0; i < merged[k].size(); ++i)
+      ASSERT_NEAR(merged[k][i], merged[ref][i], 1e-5f * merged[ref][i] + 1e-9f)
+          << "path " << k / frames.size() << " frame " << ref << " value " << i;
+    EXPECT_NEAR(said[k].value(), said[ref].value(), 1e-6) << ref;
+    EXPECT_NEAR(said[k].clippedShare, said[ref].clippedShare, 1e-6) << ref;
+    EXPECT_NEAR(said[k].darkShare, said[ref].darkShare, 1e-9) << ref;
+    EXPECT_EQ(said[k].brightestMeasured, said[ref].brightestMeasured) << ref;
+  }
+  // The run exercised what it is meant to: light found contradicted, and a clipped sun.
+  EXPECT_TRUE(std::any_of(said.begin(), said.end(), [](auto& c) { return c.agreement < 0.99; }));
+  EXPECT_TRUE(std::any_of(said.begin(), said.end(), [](auto& c) { return !c.brightestMeasured; }));
 }
 
 TEST(HdrMerge, ACoveredLensIsLeftOutOrFlagged) {

@@ -11,6 +11,7 @@
 #include "liveprobe/capture/image.h"
 #include "liveprobe/capture/input_file.h"
 #include "liveprobe/sh/error.h"
+#include "merge_kernel.h"
 
 namespace lp {
 
@@ -172,14 +173,6 @@ constexpr int kWellExposed = 16;
 // Codes from here down are surely below the clip, even after a JPEG's ringing.
 constexpr int kSurelyUnclipped = 200;
 
-// The hat weight of Debevec and Malik, 0 at the noise floor and at the clip.
-float hat(int code, int floor, int clip) {
-  if (code <= floor || code >= clip) return 0.0f;
-  return float(std::min(code - floor, clip - code));
-}
-
-float luminance(float r, float g, float b) { return 0.2126f * r + 0.7152f * g + 0.0722f * b; }
-
 // Solid angle of an equirect row (sin theta), or 1.
 float rowWeight(int y, int h, bool equirect) {
   return equirect ? std::sin(float(M_PI) * (float(y) + 0.5f) / float(h)) : 1.0f;
@@ -215,13 +208,12 @@ void BracketMerger::push(const Frame& in) {
 
 namespace {
 
-// One frame's reading of one pixel: radiance per channel, its largest code, its hat weight.
+// One frame's reading of one pixel: radiance per channel and its largest code.
 struct Reading {
   float e[3];
   float peak;  ///< the largest channel's radiance
   float scale;
   int code;  ///< the largest channel's code
-  float w;
 };
 
 enum class Verdict : std::uint8_t { Unknown, Agree, Disagree };
@@ -229,7 +221,8 @@ enum class Verdict : std::uint8_t { Unknown, Agree, Disagree };
 // What one reading says about the radiance (its largest channel), as an interval with room for
 // 8-bit steps and compression noise: a mid-range code within 25%, a low code within a factor of
 // two, a dark one below what would have read kWellExposed, a clipped one above what would have
-// read kSurelyUnclipped.
+// read kSurelyUnclipped. The row kernel (merge_kernel.cpp) applies the same rule per pixel; this
+// one judges whole frames on a sparse grid (usableFrames).
 struct Judge {
   int floor, clip;
   float wellLinear, belowClipLinear;  ///< linear at kWellExposed and at kSurelyUnclipped
@@ -257,19 +250,16 @@ struct Judge {
 
 }  // namespace
 
-// One merge's frames as the pixel loop reads them, and the steps of a pixel's merge.
+// One merge's frames as the row kernel and the whole-frame judgement read them.
 struct BracketView {
   int n = 0, newest = 0, longest = 0;
   std::array<bool, kMaxBracket> usable{};
   std::array<const std::uint8_t*, kMaxBracket> pixels{};
   std::array<float, kMaxBracket> scales{};
-  /// Per frame and code: the hat times the exposure time (a longer exposure gathers more light
-  /// for the same code noise; a short exposure's lowest codes, where a response is least known,
-  /// barely count).
-  std::array<std::array<float, 256>, kMaxBracket> weights{};
   const std::array<std::array<float, 256>, 3>* lut = nullptr;
   Judge judge{};
   float inv2s2 = 0;
+  merge::RowKernel kernel = nullptr;  ///< the pixel loop (merge_kernel.h)
 
   void read(int i, std::size_t at, Reading& r) const {
     const std::uint8_t* p = pixels[std::size_t(i)] + at;
@@ -278,71 +268,6 @@ struct BracketView {
     r.e[0] = l[0][p[2]] * r.scale, r.e[1] = l[1][p[1]] * r.scale, r.e[2] = l[2][p[0]] * r.scale;
     r.code = std::max({p[0], p[1], p[2]});
     r.peak = std::max({r.e[0], r.e[1], r.e[2]});
-    r.w = weights[std::size_t(i)][std::size_t(r.code)];
-  }
-
-  /// Where an older reading contradicts the newest, the newest wins (the older one's weight goes,
-  /// and the largest such radiance is returned as lost); where both measured, the older one is
-  /// weighed by how closely it agrees. Returns -1 when nothing was contradicted.
-  float resolveMotion(Reading* r) const {
-    float lost = -1;
-    for (int i = 0; i < newest; ++i) {
-      if (!usable[std::size_t(i)]) continue;
-      const Verdict v = judge(r[i], r[newest]);
-      if (v == Verdict::Disagree) {
-        r[i].w = 0;
-        lost = std::max(lost, luminance(r[i].e[0], r[i].e[1], r[i].e[2]));
-      } else if (v == Verdict::Agree) {
-        // d = log(q) for q within the agreement bound: 2 (q - 1) / (q + 1) is within 2%.
-        const float q = r[i].peak / r[newest].peak;
-        const float d = 2.0f * (q - 1.0f) / (q + 1.0f);
-        r[i].w *= std::exp(-d * d * inv2s2);
-      }
-    }
-    return lost;
-  }
-
-  /// One pixel: its radiance in `c`; whether it is clipped (a lower bound) and whether an exposure
-  /// read it well; the light the newest frame contradicted (< 0: none); the most the newest
-  /// frame allows there.
-  struct Pixel {
-    bool clipped = false, wellSeen = false;
-    bool fresh = false;  ///< the newest frame's own reading counts in it
-    float lost = -1, ceiling = 0;
-  };
-  Pixel merge(std::size_t at, float* c) const {
-    Reading r[kMaxBracket];
-    int clipped = -1;  // the clipped reading that bounds the pixel highest
-    for (int i = 0; i < n; ++i) {
-      read(i, at, r[i]);
-      if (!usable[std::size_t(i)]) r[i].w = 0;
-      if (usable[std::size_t(i)] && r[i].code >= judge.clip &&
-          (clipped < 0 || r[i].peak > r[clipped].peak))
-        clipped = i;
-    }
-    Pixel px;
-    px.lost = resolveMotion(r);
-    px.ceiling = judge.bounds(r[newest]).second;
-    float sw = 0;
-    c[0] = c[1] = c[2] = 0;
-    px.fresh = r[newest].w > 0;
-    for (int i = 0; i < n; ++i) {
-      sw += r[i].w;
-      px.wellSeen |= r[i].w > 0 && judge.well(r[i]);
-      for (int k = 0; k < 3; ++k) c[k] += r[i].w * r[i].e[k];
-    }
-    if (sw > 0) {
-      for (int k = 0; k < 3; ++k) c[k] /= sw;
-      return px;
-    }
-    // Unmeasured. Contradicted: as the newest frame reads it. Clipped somewhere: at least the
-    // highest bound a clipped reading sets (the shortest clipped exposure's value; a darker
-    // reading elsewhere only bounds it from above). Dark everywhere: the longest exposure's.
-    const bool contradicted = px.lost >= 0;
-    const int i = contradicted ? newest : clipped >= 0 ? clipped : longest;
-    std::copy(r[i].e, r[i].e + 3, c);
-    px.clipped = contradicted ? r[i].code >= judge.clip : clipped >= 0;
-    return px;
   }
 };
 
@@ -409,12 +334,10 @@ BracketView BracketMerger::prepare(int& exposures) const {
   const auto& lut = opt_.response.linear;
   v.judge = Judge{opt_.noiseFloor, opt_.clipLevel, lut[1][kWellExposed], lut[1][kSurelyUnclipped]};
   v.inv2s2 = float(1.0 / (2.0 * opt_.ghostSigma * opt_.ghostSigma));
+  v.kernel = merge::active();
   for (int i = 0; i < v.n; ++i) {
     v.pixels[std::size_t(i)] = window_[std::size_t(i)].bgr8.data();
     v.scales[std::size_t(i)] = float(window_[std::size_t(i)].radianceScale);
-    for (int z = 0; z < 256; ++z)
-      v.weights[std::size_t(i)][std::size_t(z)] =
-          hat(z, opt_.noiseFloor, opt_.clipLevel) / v.scales[std::size_t(i)];
   }
   v.usable = usableFrames(v);
   v.longest = v.newest;
@@ -434,34 +357,30 @@ BracketView BracketMerger::prepare(int& exposures) const {
 MergeTally BracketMerger::mergeRow(const BracketView& v, std::size_t y, float* out,
                                    const LuminanceRow& lum, bool fresh) const {
   const int w = window_.back().width, h = window_.back().height;
-  const float rw = rowWeight(int(y), h, opt_.equirect);
-  // Sums in locals (registers); the row's total goes to the tally once.
-  double power = 0, clippedPower = 0, clippedEstimate = 0, lostPower = 0;
-  std::size_t dark = 0;
-  float brightest = -1;
-  bool brightestClipped = false, brightestFresh = true;
-  for (int x = 0; x < w; ++x, out += 3) {
-    const BracketView::Pixel px = v.merge((y * std::size_t(w) + std::size_t(x)) * 3, out);
-    const float l = luminance(out[0], out[1], out[2]);
-    dark += !px.clipped && !px.wellSeen;
-    // What was lost: at least what the older readings say, and what the last merge saw where
-    // the newest frame rules that out (older frames that all missed it, as a window of repeated
-    // long exposures misses the sun, cannot vouch for it).
-    const float seen = fresh ? lum.previous[x] : 0.0f;  // read before lum.out (in place) is written
-    const float trusted = lum.reference[x];
-    if (px.lost >= 0 || seen > 1.25f * px.ceiling)
-      lostPower += std::max(std::max(px.lost, seen) - l, 0.0f);
-    lum.out[x] = l;
-    power += l;
-    if (px.clipped) clippedPower += l, clippedEstimate += std::max(l, trusted);
-    if (l > brightest) brightest = l, brightestClipped = px.clipped, brightestFresh = px.fresh;
+  merge::RowInput in;
+  // The usable frames, newest last (frames left out whole take no part).
+  for (int i = 0; i < v.n; ++i) {
+    if (!v.usable[std::size_t(i)]) continue;
+    if (i == v.longest) in.longest = in.frames;
+    in.bgr[in.frames] = v.pixels[std::size_t(i)] + y * std::size_t(w) * 3;
+    in.scale[in.frames++] = v.scales[std::size_t(i)];
   }
+  for (int c = 0; c < 3; ++c) in.lut[c] = (*v.lut)[std::size_t(c)].data();
+  in.floor = v.judge.floor, in.clip = v.judge.clip, in.wellExposed = kWellExposed;
+  in.wellLinear = v.judge.wellLinear, in.belowClipLinear = v.judge.belowClipLinear;
+  in.inv2s2 = v.inv2s2;
+  in.width = w;
+  in.previous = lum.previous, in.luminance = lum.out, in.reference = lum.reference;
+  in.fresh = fresh;
+  in.rgb = out;
+  const merge::RowSums s = v.kernel(in);
+  const float rw = rowWeight(int(y), h, opt_.equirect);
   MergeTally t;
-  t.power = power * rw, t.clippedPower = clippedPower * rw, t.disagreedPower = lostPower * rw;
-  t.clippedEstimate = clippedEstimate * rw;
-  t.dark = dark;
-  t.brightest = brightest, t.brightestClipped = brightestClipped;
-  t.brightestFresh = brightestFresh;
+  t.power = s.power * rw, t.clippedPower = s.clippedPower * rw, t.disagreedPower = s.lostPower * rw;
+  t.clippedEstimate = s.clippedEstimate * rw;
+  t.dark = s.dark;
+  t.brightest = s.brightest, t.brightestClipped = s.brightestClipped;
+  t.brightestFresh = s.brightestFresh;
   return t;
 }
 

@@ -3,14 +3,7 @@
 // picked by our own table below rather than HWY_DYNAMIC_DISPATCH, so LIVEPROBE_SIMD can force one
 // and the core needs Highway's headers only, not its library.
 
-// Scalar (Highway's SCALAR or EMU128 target), AVX2, AVX-512 and NEON. SVE is left out: its vectors
-// are sizeless and cannot sit in the accumulator arrays below, and no machine here runs it. AVX3_DL
-// adds nothing we use.
-#ifndef HWY_DISABLED_TARGETS
-#define HWY_DISABLED_TARGETS \
-  (HWY_SSSE3 | HWY_SSE4 | HWY_AVX3_DL | HWY_SVE | HWY_SVE2 | HWY_SVE_256 | HWY_SVE2_128)
-#endif
-#define HWY_COMPILE_ALL_ATTAINABLE  // keep the scalar path beside the best one
+#include "liveprobe/sh/simd_targets.h"
 
 #undef HWY_TARGET_INCLUDE
 #define HWY_TARGET_INCLUDE "project_kernel.cpp"
