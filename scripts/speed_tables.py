@@ -1,8 +1,8 @@
 #!/usr/bin/env python3
 """The speed report's tables (scripts/report speed): the frame path's stages from `liveprobe
 bench --json` files (arguments after the first: LABEL=FILE), then from liveprobe-bench's JSON
-(the first argument) the projection on every SIMD path with the two floors of the same run, and
-the other benchmarks. Medians."""
+(the first argument) the projection on every SIMD path with the two floors of the same run, the
+bracket merge beside the projection of the frame it makes, and the other benchmarks. Medians."""
 import json
 import re
 import sys
@@ -69,6 +69,24 @@ for (layout, kind, w, h, threads), by_path in sorted(rows.items()):
     cells += [f"{best / (w * h) * 1e9:.2f} ns", fmt(read) if read else "", fmt(fma) if fma else "",
               f"{best / bound:.2f}" if bound else ""]
     print("| " + " | ".join(cells) + " |")
+
+# Merge/bracket:3/u8/WxH/threads:T/{merge,project}/real_time
+merges = {}
+for name, t in medians.items():
+    m = re.match(r"Merge/bracket:(\d+)/u8/(\d+)x(\d+)/threads:(\d+)/(merge|project)/", name)
+    if m:
+        n, w, h, threads, part = m.groups()
+        merges.setdefault((int(w), int(h), int(threads), int(n)), {})[part] = t
+if merges:
+    print()
+    print("| bracket merge (8-bit sRGB, the synthetic sky at -12, -6, 0 EV) | merge | projection of "
+          "the merged frame | merge / projection |")
+    print("|---|---|---|---|")
+    for (w, h, threads, n), parts in sorted(merges.items()):
+        merge, project = parts.get("merge"), parts.get("project")
+        ratio = f"{merge / project:.1f}" if merge and project else ""
+        print(f"| {w}x{h}, {n} exposures, {threads} thread{'s' if threads > 1 else ''} | "
+              f"{fmt(merge) if merge else ''} | {fmt(project) if project else ''} | {ratio} |")
 
 print()
 print("| other benchmarks | median |")

@@ -359,8 +359,9 @@ void pipelineBench(benchmark::State& state, int stage) {
 
 // An exposure bracket's merge: the synthetic sky (its sun about 11 stops over the sky) seen by an
 // 8-bit sRGB camera at -12, -6 and 0 EV, merged into radiance as live --bracket does each frame.
-// The same frame's projection is Lights/equirect/u8/1920x1080/threads:2/project.
-void mergeBench(benchmark::State& state, Size s, int threads) {
+// With `project`, what is timed is the projection of the merged frame (float RGB, the same
+// threads) that follows each merge in live: docs/speed.md gives the ratio of the two.
+void mergeBench(benchmark::State& state, Size s, int threads, bool project) {
   const auto& radiance = skyF32(s);
   std::vector<lp::Frame> bracket;
   for (const double stops : {-12.0, -6.0, 0.0}) {
@@ -381,6 +382,13 @@ void mergeBench(benchmark::State& state, Size s, int threads) {
   lp::ThreadPool* workers = pool(threads);
   std::size_t next = 0;
   for (int i = 0; i < 3; ++i) merger.add(bracket[std::size_t(i)], out, workers);  // untimed: full
+  if (project) {
+    const lp::Projector proj(lp::Layout::Equirect, s.w, s.h);
+    const auto view = lp::PanoramaView::rgbF32(out.rgb.data(), s.w, s.h);
+    benchmark::DoNotOptimize(proj.project(view, workers));
+    for (auto _ : state) benchmark::DoNotOptimize(proj.project(view, workers));
+    return;
+  }
   for (auto _ : state) {
     benchmark::DoNotOptimize(merger.add(bracket[next], out, workers));
     next = (next + 1) % bracket.size();
@@ -451,11 +459,14 @@ void registerAll() {
       ->Unit(benchmark::kMillisecond);
   for (Size s : {Size{1920, 1080}, Size{3840, 1920}})
     for (int threads : {1, 2})
-      benchmark::RegisterBenchmark(
-          ("Merge/bracket:3/u8/" + sizeName(s) + "/threads:" + std::to_string(threads)).c_str(),
-          [=](benchmark::State& st) { mergeBench(st, s, threads); })
-          ->UseRealTime()
-          ->Unit(benchmark::kMillisecond);
+      for (const bool project : {false, true})
+        benchmark::RegisterBenchmark(
+            ("Merge/bracket:3/u8/" + sizeName(s) + "/threads:" + std::to_string(threads) +
+             (project ? "/project" : "/merge"))
+                .c_str(),
+            [=](benchmark::State& st) { mergeBench(st, s, threads, project); })
+            ->UseRealTime()
+            ->Unit(benchmark::kMillisecond);
   const char* stages[] = {"grab", "convert", "project"};
   for (int i = 0; i < 3; ++i)
     benchmark::RegisterBenchmark(
