@@ -123,6 +123,28 @@ TEST(HdrMerge, TwelveStopsOfRadianceComeBack) {
   EXPECT_LT(worst, 0.03);
 }
 
+// Codes outside those a calibration read carry no weight: the same bracket with a response read
+// only from code 100 up leaves the sky's darker readings out, and what no exposure read above
+// code 100 counts as dark.
+TEST(HdrMerge, CodesACalibrationNeverReadCarryNoWeight) {
+  const auto radiance = scene();
+  CameraResponse partial = CameraResponse::srgb();
+  partial.readFrom = 100;
+  FrameConfidence whole, part;
+  Frame a, b;
+  BracketMerger all(MergeOptions{}), some(MergeOptions{.response = partial});
+  for (double t : {1.0 / 4096, 1.0 / 64, 1.0}) {
+    whole = all.add(shootSrgb(radiance, t), a);
+    part = some.add(shootSrgb(radiance, t), b);
+  }
+  EXPECT_EQ(some.options().noiseFloor, 99);
+  EXPECT_EQ(whole.darkShare, 0.0);
+  // The ground (code 25 at 1 s, the longest) and the sky below 0.127 (code 100 at 1 s) are read
+  // by no counted code: over half the frame.
+  EXPECT_GT(part.darkShare, 0.5);
+  EXPECT_LT(part.darkShare, 0.9);
+}
+
 TEST(HdrMerge, ClippedEverywhereIsALowerBoundAndSaysSo) {
   const auto radiance = scene();
   BracketMerger merger(MergeOptions{.frames = 2});
@@ -292,6 +314,19 @@ TEST(HdrMerge, TheResponseRecoveredFromASweepIsThePowerLaw) {
     EXPECT_NEAR(r.linear[1][std::size_t(code)], std::pow(code / 255.0, 2.6),
                 0.03 * std::pow(code / 255.0, 2.6))
         << "code " << code;
+  // A scene that changes during the sweep (a light switched on: the sky twice as bright from the
+  // fifth frame on) tells no one curve: refused, in one line.
+  auto brighter = radiance;
+  for (std::size_t i = 0; i < brighter.size() / 2; ++i) brighter[i] *= 2;
+  for (int k = 4; k < int(frames.size()); ++k)
+    frames[std::size_t(k)] =
+        shoot(brighter, std::exp2(k - 6), [](float v) { return std::pow(v, 1 / 2.6f); });
+  try {
+    lp::calibrateResponse(frames);
+    ADD_FAILURE() << "a changing scene was calibrated";
+  } catch (const lp::Error& e) {
+    EXPECT_NE(std::string(e.what()).find("moved during the sweep"), std::string::npos) << e.what();
+  }
 }
 
 TEST(HdrMerge, AResponseFileIsCheckedWhole) {
@@ -313,6 +348,18 @@ TEST(HdrMerge, AResponseFileIsCheckedWhole) {
   falling["response"][0][3] = 0.0;  // red falls from code 2 to code 3
   failsWith(falling.dump(), "falls at code 3 of channel R");
   failsWith(R"({"response": 7})", "3 curves");
+  // The codes a calibration read: kept through a file, and only a range of codes.
+  CameraResponse read = CameraResponse::gamma(2.6f);
+  read.readFrom = 5, read.readTo = 240;
+  const CameraResponse back = CameraResponse::parse(read.json(), "r.json");
+  EXPECT_EQ(back.readFrom, 5);
+  EXPECT_EQ(back.readTo, 240);
+  EXPECT_EQ(nlohmann::json::parse(good).count("read"), 0u);  // a whole curve says nothing
+  for (const auto* range : {"[200, 100]", "[-1, 255]", "[0, 256]", "7"}) {
+    auto bad = nlohmann::json::parse(good);
+    bad["read"] = nlohmann::json::parse(range);
+    failsWith(bad.dump(), "\"read\"");
+  }
 }
 
 // One 8-bit frame: its clipped share is the power of the pixels with a channel at 255 over the

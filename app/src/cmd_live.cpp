@@ -227,8 +227,13 @@ namespace {
 /// --stops LO,HI: whole stops from the locked exposure, -20 <= LO < HI <= 20.
 OptionSpec stopsOption() {
   OptionSpec o{
-      "--stops", "LO,HI", "the sweep, in whole stops from the locked exposure (default -6,3)",
-      false,     false,   kCameraGroup};
+      "--stops",
+      "LO,HI",
+      "the sweep, in whole stops from the locked exposure (default -6,3); it goes on below LO "
+      "while the shortest frame reads no code of 4 or less, up to 12 stops more",
+      false,
+      false,
+      kCameraGroup};
   o.set = [](Settings& s, const std::string& v) {
     const auto r = parseNumberList(v, "--stops", 2, "LO,HI");
     if (!(r[0] < r[1]) || r[0] < -20 || r[1] > 20)
@@ -243,9 +248,10 @@ const CommandSpec kCalibrateSpec{
     "calibrate",
     "DEVICE",
     "Recovers a camera's response curve (code value to linear light) for --response: locks the\n"
-    "exposure, sweeps it over a static scene in whole stops, and solves for the curve with\n"
-    "Debevec and Malik's method (OpenCV's CalibrateDebevec). The curve must rise with the code.\n"
-    "Point the camera at a still scene with both shadows and highlights, and keep it still.",
+    "exposure, sweeps it over a static scene in whole stops (below LO until the darkest codes are\n"
+    "read), and solves for the curve from the codes each pixel took in each pair of exposures.\n"
+    "The curve must rise with the code; codes no frame read get no weight in a merge. Point the\n"
+    "camera at a still scene with both shadows and highlights, and keep it still.",
     [] {
       auto o = cameraOptions();
       o.insert(
@@ -289,19 +295,19 @@ int runCalibrate(const Args& a) {
   if (!locked.exposure100us)
     throw Error(cs.device + ": the camera has no exposure time control " +
                 "(V4L2_CID_EXPOSURE_ABSOLUTE): it cannot be calibrated");
-  // One frame per stop, after the camera has taken the new exposure.
+  // One frame per stop, after the camera has taken the new exposure. The sweep goes on below LO
+  // until its shortest frame reads some of the scene at the darkest codes the response is
+  // recovered for (kDarkestCode), so that every code is read by a pixel another exposure reads
+  // well; it stops at the control's limit, or 12 stops further.
   std::vector<Frame> frames;
   std::vector<double> brightness;
   std::int32_t previous = -1;
-  for (int stop = int(std::ceil(range[0])); stop <= int(std::floor(range[1])); ++stop) {
+  const auto take = [&](int stop) {
     const std::int32_t asked =
         camera->setExposure(std::int32_t(std::lround(*locked.exposure100us * std::exp2(stop))));
-    if (asked == previous) continue;  // clamped to the control's limit: already taken
+    if (asked == previous) return false;  // clamped to the control's limit: already taken
     previous = asked;
-    if (stopRequested()) {
-      std::fprintf(stderr, "liveprobe calibrate: stopped by a signal; nothing written\n");
-      return exitStatusFor(stopSignal());
-    }
+    if (stopRequested()) return false;
     Frame f;
     for (int i = 0; i < settle; ++i) {
       if (!camera->next(f)) throw Error(cs.device + ": the stream ended");
@@ -313,6 +319,18 @@ int runCalibrate(const Args& a) {
     std::fprintf(stderr, "  %+d EV: %d x 100 us, mean code %.1f\n", stop,
                  int(std::lround(1e4 / f.radianceScale)), brightness.back());
     frames.push_back(std::move(f));
+    return true;
+  };
+  const int lowest = int(std::ceil(range[0]));
+  for (int stop = lowest; stop <= int(std::floor(range[1])); ++stop) take(stop);
+  std::size_t shortest = 0;  // frames[0] is the lowest stop, then each one taken below it
+  for (int stop = lowest - 1; stop >= lowest - 12 && !frames.empty(); --stop) {
+    if (darkestCode(frames[shortest]) <= kDarkestCode || !take(stop)) break;
+    shortest = frames.size() - 1;
+  }
+  if (stopRequested()) {
+    std::fprintf(stderr, "liveprobe calibrate: stopped by a signal; nothing written\n");
+    return exitStatusFor(stopSignal());
   }
   // A camera that takes the control but not the exposure shows one brightness at every stop.
   const auto [lo, hi] = std::minmax_element(brightness.begin(), brightness.end());
@@ -324,10 +342,18 @@ int runCalibrate(const Args& a) {
   out.line(r.json());
   out.commit();
   const PowerLaw like = fitPowerLaw([&](int i) { return r.linear[1][std::size_t(i)]; });
+  std::string unread;
+  if (r.readFrom > kDarkestCode)
+    unread += "; codes below " + std::to_string(r.readFrom) + " were never read";
+  if (r.readTo < kBrightestCode)
+    unread += std::string(unread.empty() ? "; codes" : " nor") + " above " +
+              std::to_string(r.readTo) + (unread.empty() ? " were never read" : "");
+  if (!unread.empty()) unread += " (a merge counts them as noise or clipped)";
   std::fprintf(stderr,
                "liveprobe calibrate: %zu exposures; the response rises with the code (green is "
-               "like a gamma of %.2f over codes 32-240); written to %s\n",
-               frames.size(), like.gamma, s.output.out->c_str());
+               "like a gamma of %.2f over codes 32-240); codes %d-%d read%s; written to %s\n",
+               frames.size(), like.gamma, r.readFrom, r.readTo, unread.c_str(),
+               s.output.out->c_str());
   return 0;
 }
 #else

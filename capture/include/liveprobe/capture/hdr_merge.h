@@ -35,6 +35,10 @@ namespace lp {
 struct CameraResponse {
   std::array<std::array<float, 256>, 3> linear{};
   std::string name;  ///< "sRGB", "gamma 2.6", or the file it came from
+  /// The codes a calibration read in every channel, from..to (the curve beyond continues the
+  /// read part's shape, unmeasured): a merge counts no reading outside them. 0..255 for a
+  /// response known whole.
+  int readFrom = 0, readTo = 255;
 
   static CameraResponse srgb();
   static CameraResponse gamma(float g);
@@ -43,8 +47,9 @@ struct CameraResponse {
   static CameraResponse load(const std::string& path);
   /// Parses json() text; `name` is what errors call it.
   static CameraResponse parse(const std::string& text, const std::string& name);
-  /// {"response": [[256 R], [256 G], [256 B]]}: linear exposure per code, normalised so that
-  /// code 255 of the green channel is 1.
+  /// {"response": [[256 R], [256 G], [256 B]], "read": [from, to]}: linear exposure per code,
+  /// normalised so that the green channel's power law reaches 1 at code 255; "read" only where
+  /// it is not 0..255.
   std::string json() const;
   /// The first code (and channel) at which the curve falls, or -1 when it never does.
   int firstDecrease(int* channel = nullptr) const;
@@ -57,11 +62,21 @@ struct PowerLaw {
 };
 PowerLaw fitPowerLaw(const std::function<double(int)>& linear);
 
+/// The codes a calibration answers for: from kDarkestCode to kBrightestCode, each within 3% on a
+/// scene that reaches them (the codes outside continue the curve).
+inline constexpr int kDarkestCode = 4, kBrightestCode = 250;
+
+/// The darkest code an 8-bit frame reads over a part of its scene (0.05% of its samples or more,
+/// any channel): a calibration sweep goes shorter until this is kDarkestCode.
+int darkestCode(const Frame& frame);
+
 /// A camera's response recovered from 8-bit frames of one static scene, each with its own
-/// exposure time (Frame::radianceScale = 1 / exposure), by OpenCV's CalibrateDebevec (Debevec and
-/// Malik's least squares with a smoothness term), normalised so that green's code 255 is 1. Throws
-/// lp::Error with fewer than 3 distinct exposures, or when the recovered curve falls somewhere
-/// (too few tones in the scene, or a scene that moved).
+/// exposure time (Frame::radianceScale = 1 / exposure): the least squares of the codes each pixel
+/// took in each pair of frames (comparametric equations), with a smoothness over log(code) that
+/// any power law passes freely; normalised so that green's power law over codes 32-240 reaches 1
+/// at code 255; readFrom..readTo the codes every channel read. Throws lp::Error with fewer than 3
+/// distinct exposures, with too few codes read, or when the recovered curve falls somewhere (too
+/// few tones in the scene, or a scene that moved).
 CameraResponse calibrateResponse(const std::vector<Frame>& frames);
 
 /// How far a frame's lighting can be trusted.
