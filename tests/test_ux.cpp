@@ -633,6 +633,71 @@ TEST(CommandLine, RefusalsAreOneLineWithExit1) {
   EXPECT_EQ(r.output.find("render: render"), std::string::npos) << r.output;
 }
 
+// Refusals that name the real fault: a size of nothing, a folder where a file goes (for --out)
+// or a file where a folder goes (for --out-dir).
+TEST(CommandLine, RefusalsSayWhatIsWrong) {
+  lpt::TempDir tmp;
+  expectOneLineError("render --coeff L00=1 --size 0x0", "0x0", "must be at least 1");
+  expectOneLineError("render --coeff L00=1 --size 64x-2", "64x-2", "must be at least 1");
+  expectOneLineError("render --coeff L00=1 --out " + tmp.path.string(), tmp.path.string(),
+                     "is a folder; name a file (.png");
+  const std::string file = tmp / "not-a-folder";
+  std::ofstream(file) << "x";
+  expectOneLineError("replay synthetic:64x32 --headless --frames 1 --out-dir " + file, file,
+                     "is a file, not a folder");
+  // A folder of panoramas is a sequence: coeffs reads one map and says so.
+  const std::string folder = tmp / "maps";
+  fs::create_directories(folder);
+  for (const char* name : {"a.hdr", "b.hdr"})
+    ASSERT_TRUE(cv::imwrite(folder + "/" + name, cv::Mat(16, 32, CV_32FC3, cv::Scalar(1, 1, 1))));
+  expectOneLineError("coeffs " + folder, folder, "2 frames (a sequence or a video), not one map");
+  // An engine's export given where liveprobe's own coefficients go.
+  const std::string map = lpt::dataPath("probes/latlong_256x128/grace.hdr");
+  for (const std::string engine : {"three", "gltf"}) {
+    const std::string exported = tmp / (engine + ".json");
+    const auto r = runLiveprobe("coeffs " + map + " --format " + engine);
+    ASSERT_EQ(r.exitCode, 0) << r.output;
+    std::ofstream(exported) << r.output;
+    expectOneLineError("render --coeffs " + exported + " --out " + (tmp / "x.png"), exported,
+                       engine == "gltf" ? "a glTF document (--format gltf), not liveprobe's"
+                                        : "an export for three (--format three), not liveprobe's");
+  }
+}
+
+// A headless replay that keeps nothing says so at its end; one that keeps something, or --quiet,
+// does not; a run that fails says only why. (The suite runs without a display: "no display, so
+// headless" is what a user sees.)
+TEST(CommandLine, AHeadlessRunThatKeepsNothingSaysSo) {
+  lpt::TempDir tmp;
+  const std::string run = "replay synthetic:64x32 --frames 2 --size 32x18 ";
+  const auto bare = runLiveprobe(run + "--headless");
+  EXPECT_EQ(bare.exitCode, 0) << bare.output;
+  EXPECT_NE(bare.output.find("headless: nothing was kept from this run"), std::string::npos)
+      << bare.output;
+  for (const std::string& more :
+       {"--headless --coeffs-out " + (tmp / "c.jsonl"), "--headless --out-dir " + (tmp / "f"),
+        std::string("--headless --quiet")}) {
+    const auto r = runLiveprobe(run + more);
+    EXPECT_EQ(r.exitCode, 0) << more << ": " << r.output;
+    EXPECT_EQ(r.output.find("nothing was kept"), std::string::npos) << more << ": " << r.output;
+  }
+}
+
+// "help COMMAND" is that command's help; -V and -v are --version.
+TEST(CommandLine, HelpCommandAndShortVersion) {
+  const auto help = runLiveprobe("help coeffs");
+  EXPECT_EQ(help.exitCode, 0) << help.output;
+  EXPECT_EQ(help.output, runLiveprobe("coeffs --help").output);
+  EXPECT_NE(help.output.find("--lights"), std::string::npos) << help.output;
+  const auto version = runLiveprobe("--version");
+  for (const char* flag : {"-V", "-v"}) {
+    const auto r = runLiveprobe(flag);
+    EXPECT_EQ(r.exitCode, 0) << flag << ": " << r.output;
+    EXPECT_EQ(r.output, version.output) << flag;
+  }
+  expectOneLineError("help frobnicate", "frobnicate", "unknown command");
+}
+
 // A misspelt command or option is named with the nearest real one; an option's value that looks
 // like an option is still its value, and a name far from every option gets no guess.
 TEST(CommandLine, MisspellingsSuggestTheNearestName) {
@@ -774,6 +839,12 @@ TEST(CommandLine, LikelyLayoutMistakesWarnOnce) {
   ASSERT_TRUE(cv::imwrite(square, cv::Mat(64, 64, CV_32FC3, cv::Scalar(1, 1, 1))));
   const auto eq = runLiveprobe("coeffs --layout angular " + square);
   EXPECT_NE(eq.output.find("corners are not black"), std::string::npos) << eq.output;
+  // An equirect panorama read as two fisheye lenses.
+  const auto fisheye =
+      runLiveprobe("coeffs --layout fisheye " + lpt::dataPath("probes/latlong_256x128/grace.hdr"));
+  EXPECT_NE(fisheye.output.find("a dual fisheye frame whose corners are not black"),
+            std::string::npos)
+      << fisheye.output;
   // The right layout: no warning.
   const auto ok =
       runLiveprobe("coeffs --layout angular " + lpt::dataPath("probes/beach_probe.hdr"));

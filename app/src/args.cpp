@@ -3,6 +3,7 @@
 #include <CLI/CLI.hpp>
 #include <algorithm>
 #include <cmath>
+#include <filesystem>
 #include <iomanip>
 #include <map>
 #include <sstream>
@@ -229,8 +230,10 @@ std::pair<int, int> parseSize(const std::string& text, const std::string& what, 
   long long w = 0, h = 0;
   char x = 0, extra = 0;
   std::istringstream s(text);
-  if (!(s >> w >> x >> h) || (x != 'x' && x != 'X') || (s >> extra) || w <= 0 || h <= 0)
+  if (!(s >> w >> x >> h) || (x != 'x' && x != 'X') || (s >> extra))
     throw Error(what + " " + text + ": expected a size like 256x128");
+  if (w <= 0 || h <= 0)
+    throw Error(what + " " + text + ": the width and the height must be at least 1");
   if (w > maxSide || h > maxSide)
     throw Error(what + " " + text + ": each side must be at most " + std::to_string(maxSide));
   return {int(w), int(h)};
@@ -267,6 +270,9 @@ std::string requireExtension(const std::string& path, const std::string& what,
   if (std::find(allowed.begin(), allowed.end(), ext) != allowed.end()) return ext;
   std::string list;
   for (const auto& a : allowed) list += (list.empty() ? "" : ", ") + a;
+  std::error_code ec;
+  if (std::filesystem::is_directory(path, ec))
+    throw Error(what + " " + path + ": is a folder; name a file (" + list + ")");
   throw Error(what + " " + path + ": unsupported extension (expected " + list + ")");
 }
 

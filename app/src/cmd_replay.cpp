@@ -248,9 +248,11 @@ class FrameFolder {
   explicit FrameFolder(std::string dir) : dir_(std::move(dir)) {
     std::error_code ec;
     made_ = !fs::exists(dir_, ec);
+    if (!made_ && !fs::is_directory(dir_, ec))
+      throw Error("--out-dir " + dir_ + ": is a file, not a folder");
     fs::create_directories(dir_, ec);
     if (!fs::is_directory(dir_, ec))
-      throw Error("--out-dir " + dir_ + ": cannot create the folder");
+      throw Error("--out-dir " + dir_ + ": cannot create the folder (" + ec.message() + ")");
   }
   ~FrameFolder() {
     if (kept_) return;
@@ -656,6 +658,8 @@ struct StreamPlan {
   PipelineOptions opt;
   bool live = false;
   bool headless = false;                   ///< as the GL context came up (setHeadless)
+  bool headlessAsked = false;              ///< --headless (not only the want of a display)
+  bool quiet = false;                      ///< --quiet
   bool endless = false;                    ///< no end but Ctrl-C
   std::pair<int, int> size, headlessSize;  ///< the view's, in a window and headless
   double fps = 0;
@@ -666,6 +670,7 @@ struct StreamPlan {
 
 StreamPlan planStream(const Settings& s, const FrameSource& source, bool live) {
   StreamPlan p;
+  p.headlessAsked = s.scene.headless, p.quiet = s.output.quiet;
   p.live = live;
   p.opt = pipelineOptionsFrom(s, source);
   p.camera = cameraFrom(s.scene);
@@ -785,6 +790,14 @@ int finishStream(const StreamPlan& p, const PipelineStats& st, const StreamTally
   if (out.video) out.video->finish();
   if (out.frames) out.frames->keep();
   printSummary(p.description, st, tally, p.opt.smoothSeconds, stopRequested(), sinks);
+  // Headless with nowhere to put what it made (no display, and no output asked for): said, so
+  // that a run which only measures is one by choice.
+  if (p.headless && !out.frames && !out.video && !out.coeffs && !out.record && sinks.all.empty() &&
+      !p.quiet)
+    std::fprintf(stderr,
+                 "liveprobe: %s: nothing was kept from this run (--out-dir DIR, --out-video FILE "
+                 "or --coeffs-out FILE keep what it renders and measures)\n",
+                 p.headlessAsked ? "headless" : "no display, so headless");
   if (view.v->dynamicResolution.active())
     std::fprintf(stderr, "  %s at the end (dynamic resolution; --full-resolution turns it off)\n",
                  view.v->dynamicResolution.describe().c_str());

@@ -181,6 +181,10 @@ Environment loadEnvironment(const std::string& source, const PanoramaSettings& p
                             const LightOptions& lights) {
   layoutSpec(p);  // option errors before the file is read
   auto src = openSource(source);
+  // One map: a sequence or a video is replayed, not read as its first frame.
+  if (const std::int64_t n = src->frameCount(); n > 1)
+    throw Error(source + ": " + std::to_string(n) +
+                " frames (a sequence or a video), not one map: name one image, or replay it");
   Frame frame;
   if (!src->next(frame)) throw Error(source + ": no frame to read");
   Environment env;
@@ -216,19 +220,26 @@ void warnIfLayoutLooksWrong(const std::string& source, const LayoutSpec& layout,
     warn(source +
          ": a 16:9 frame taken as equirect (a 2:1 panorama stretched? results assume it covers the "
          "sphere)");
-  } else if (layout.layout == Layout::Angular && rgb && w >= 8 && h >= 8) {
-    // Outside the disc an angular map is black: look at the four corner pixels' neighbourhoods.
+  } else if ((layout.layout == Layout::Angular || layout.layout == Layout::DualFisheye) && rgb &&
+             w >= 16 && h >= 8) {
+    // Outside its discs an angular map or a dual fisheye frame is black: compare the corners'
+    // pixels (of each half, for two lenses) with the discs' centres.
+    const bool dual = layout.layout == Layout::DualFisheye;
+    const auto at = [&](int x, int y) {
+      const float* p = rgb + 3 * (std::size_t(y) * std::size_t(w) + std::size_t(x));
+      return double(p[0]) + p[1] + p[2];
+    };
+    std::vector<int> xs = {1, w - 2}, centres = {w / 2};
+    if (dual) xs = {1, w / 2 - 2, w / 2 + 1, w - 2}, centres = {w / 4, 3 * w / 4};
     double corner = 0, centre = 0;
-    for (int cy : {1, h - 2})
-      for (int cx : {1, w - 2}) {
-        const float* p = rgb + 3 * (std::size_t(cy) * w + cx);
-        corner += p[0] + p[1] + p[2];
-      }
-    const float* c = rgb + 3 * (std::size_t(h / 2) * w + w / 2);
-    centre = c[0] + c[1] + c[2];
-    if (corner > 0.01 * std::max(centre, 1e-6) * 4)
+    for (const int cy : {1, h - 2})
+      for (const int cx : xs) corner += at(cx, cy);
+    for (const int cx : centres) centre += at(cx, h / 2);
+    if (corner / double(2 * xs.size()) > 0.01 * std::max(centre / double(centres.size()), 1e-6))
       warn(source +
-           ": an angular map whose corners are not black (is it an equirect? give --layout)");
+           (dual ? ": a dual fisheye frame whose corners are not black"
+                 : ": an angular map whose corners are not black") +
+           " (is it an equirect? give --layout)");
   }
 }
 

@@ -48,6 +48,16 @@ nlohmann::ordered_json lightsJson(const std::vector<Light>& lights) {
 }
 
 Sh9 coefficientsFromJson(const nlohmann::json& j, const std::string& source) {
+  // An engine's export is for that engine: liveprobe reads its own coefficients.
+  const auto exported = [&](const std::string& what) {
+    return Error(source + ": " + what +
+                 ", not liveprobe's coefficients (write those with coeffs --format json, the "
+                 "default)");
+  };
+  if (j.is_object() && j.contains("format") && j["format"].is_string())
+    throw exported("an export for " + j["format"].get<std::string>() + " (--format " +
+                   j["format"].get<std::string>() + ")");
+  if (j.is_object() && j.contains("asset")) throw exported("a glTF document (--format gltf)");
   const nlohmann::json& c = j.contains("coefficients") ? j["coefficients"] : j;
   if (!c.is_object()) throw Error(source + ": no \"coefficients\" object");
   Sh9 out;
