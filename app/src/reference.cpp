@@ -43,6 +43,27 @@ const ExitCode kExitCodes[] = {
     {130, "stopped by SIGINT or SIGTERM (outputs are finalised first)"},
 };
 
+struct Example {
+  const char* text;
+  const char* command;  ///< as the manual writes it (its examples run in the test suite)
+};
+const Example kExamples[] = {
+    {"Replay the bundled recording, the sun taken out as a light that casts a shadow on a ground:",
+     "liveprobe replay recordings/sky.mkv --sun --ground"},
+    {"A 360 camera over UVC as a live light probe:",
+     "liveprobe live /dev/video0 --layout fisheye --size 1920x960 --format mjpeg --lock-exposure "
+     "--sun"},
+    {"The coefficients and the sun of a map, in three.js's frame and order:",
+     "liveprobe coeffs ../shared/data/equirect/pedestrian_overpass_1k.hdr --sun --format three > "
+     "three.json"},
+    {"A camera's response for --response, from an exposure sweep:",
+     "liveprobe calibrate /dev/video0 --out response.json --stops -6,3"},
+    {"A frame-time baseline, then a run compared with it:",
+     "liveprobe bench --json base.json --quiet && liveprobe bench --baseline base.json --threshold "
+     "50 --plot frame-times.png"},
+    {"A command's options:", "liveprobe help coeffs"},
+};
+
 const char* const kDescription =
     "liveprobe computes the nine spherical-harmonic coefficients of the diffuse light an "
     "environment casts (Ramamoorthi and Hanrahan, 2001) from panoramas: still maps, recordings, "
@@ -169,6 +190,9 @@ std::string man(const std::string& version) {
           << roff(o->help + (o->repeatable ? " (may be repeated)" : "")) << "\n";
     }
   }
+  m << ".SH EXAMPLES\n";
+  for (const auto& e : kExamples)
+    m << ".PP\n" << roff(e.text) << "\n.PP\n.RS 4\n.nf\n" << roff(e.command) << "\n.fi\n.RE\n";
   m << ".SH ENVIRONMENT\n";
   for (const auto& v : kEnvironment)
     m << ".TP\n.B " << roff(v.name) << "\n" << roff(v.text) << "\n";

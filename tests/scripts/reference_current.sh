@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # The checked-in command reference and man page are what the declarations generate now; the man
-# page renders without a groff warning; the bash completion completes commands and options.
+# page renders without a groff warning, and its examples are the manual's; the bash completion
+# completes commands and options.
 # Usage: reference_current.sh DOCS_DIR LIVEPROBE_DOCS
 set -uo pipefail
 docs=$1 gen=$2
@@ -13,6 +14,13 @@ warnings=$(MANWIDTH=100 man --warnings=all -l "$docs/liveprobe.1" 2>&1 >/dev/nul
 [[ -z $warnings ]] || fail "man reports: $warnings"
 page=$(MANWIDTH=100 man -l "$docs/liveprobe.1" 2>/dev/null)
 grep -q -- "--window none|auto|cmgen|W" <<<"$page" || fail "the rendered page lacks --window"
+# Every example of the page is one the manual gives (where the test suite runs it as written).
+examples=$(awk '/^EXAMPLES/ {on = 1; next} /^[A-Z]/ {on = 0} on && /^ +liveprobe / {sub(/^ +/, ""); print}' <<<"$page")
+[[ -n $examples ]] || fail "the rendered page has no EXAMPLES"
+while IFS= read -r example; do
+  grep -qF -- "$example" "$docs/../README.md" "$docs"/*.md ||
+    fail "the man page's example is in neither README.md nor docs/: $example"
+done <<<"$examples"
 source <("$gen" bash)
 COMP_WORDS=(liveprobe coe) COMP_CWORD=1
 _liveprobe
