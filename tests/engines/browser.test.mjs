@@ -7,12 +7,18 @@
 // of the page.
 import { test } from 'node:test';
 import assert from 'node:assert/strict';
-import { mkdirSync, writeFileSync } from 'node:fs';
+import { copyFileSync, mkdirSync, mkdtempSync, writeFileSync } from 'node:fs';
+import { tmpdir } from 'node:os';
 import { join } from 'node:path';
 import { chromium } from 'playwright-core';
 import { SphericalHarmonics3, Vector3 } from 'three';
 import { fileURLToPath } from 'node:url';
 import { serve } from './serve.mjs';
+
+const chromiumOptions = {
+  executablePath: process.env.LIVEPROBE_CHROMIUM || '/usr/bin/chromium',
+  args: ['--use-angle=swiftshader', '--enable-unsafe-swiftshader', '--ignore-gpu-blocklist'],
+};
 
 const srgb = (v) => (v <= 0.0031308 ? 12.92 * v : 1.055 * Math.pow(v, 1 / 2.4) - 0.055);
 
@@ -22,10 +28,7 @@ test('the page draws the model lit by the stream', async () => {
   const s = serve([sky, '--loop', '--headless', '--size', '64x36', '--duration', '60', '--serve', '0',
                    '--sun', '--quiet']);
   const port = await s.port;
-  const browser = await chromium.launch({
-    executablePath: process.env.LIVEPROBE_CHROMIUM || '/usr/bin/chromium',
-    args: ['--use-angle=swiftshader', '--enable-unsafe-swiftshader', '--ignore-gpu-blocklist'],
-  });
+  const browser = await chromium.launch(chromiumOptions);
   try {
     const page = await browser.newPage({ viewport: { width: 640, height: 360 } });
     const failed = [];
@@ -80,6 +83,31 @@ test('the page draws the model lit by the stream', async () => {
       const shot = await cdp.send('Page.captureScreenshot', { format: 'png' });
       writeFileSync(join(out, 'web_page.png'), Buffer.from(shot.data, 'base64'));
     }
+  } finally {
+    await browser.close();
+    s.proc.kill('SIGINT');
+    await s.exited;
+  }
+});
+
+// A page served without three.js (a build where npm never installed it) says so in the browser,
+// in its status line, with what to do; the terminal's warning is not the only word.
+test('without three.js the page says what is missing', async () => {
+  const web = mkdtempSync(join(tmpdir(), 'lp-web-'));
+  for (const f of ['index.html', 'main.js'])
+    copyFileSync(fileURLToPath(new URL(`../../app/web/${f}`, import.meta.url)), join(web, f));
+  const s = serve(['synthetic:64x32', '--headless', '--size', '32x18', '--duration', '60', '--serve', '0',
+                   '--quiet'], { LIVEPROBE_WEB_DIR: web });
+  const port = await s.port;
+  const browser = await chromium.launch(chromiumOptions);
+  try {
+    const page = await browser.newPage();
+    await page.goto(`http://127.0.0.1:${port}/`);
+    await page.waitForFunction(() => document.getElementById('status').className === 'bad', null,
+                               { timeout: 30000 });
+    const status = await page.textContent('#status');
+    assert.match(status, /three\.js did not load/);
+    assert.match(status, /npm ci in app\/web/);
   } finally {
     await browser.close();
     s.proc.kill('SIGINT');

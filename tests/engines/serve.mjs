@@ -4,10 +4,10 @@ import { spawn } from 'node:child_process';
 import { readFileSync, readdirSync } from 'node:fs';
 import { liveprobe } from './common.mjs';
 
-export function serve(args) {
+export function serve(args, extraEnv = {}) {
   // Under AddressSanitizer (scripts/test-sanitizers), freed memory waits in a quarantine that
   // would show as growth in the RSS checks: no quarantine there (LeakSanitizer checks leaks).
-  const env = { ...process.env };
+  const env = { ...process.env, ...extraEnv };
   if (env.ASAN_OPTIONS) env.ASAN_OPTIONS += ':quarantine_size_mb=0:thread_local_quarantine_size_kb=0';
   const proc = spawn(liveprobe, ['replay', ...args], { stdio: ['ignore', 'ignore', 'pipe'], env });
   let stderr = '';
