@@ -108,6 +108,35 @@ PowerLaw fitPowerLaw(const std::function<double(int)>& linear) {
 
 namespace {
 
+// One pair of codes that some pixels read in a pair of frames: g(a) - g(b) = r.
+struct CodePair {
+  std::uint8_t a, b;
+  std::uint32_t pixels;
+  double r;  ///< log(t_i / t_j)
+};
+
+// Every pair of codes (both within (0, 255)) that one channel's pixels read in every pair of
+// frames of distinct exposures, from their joint histograms: built once, solved three times.
+std::vector<CodePair> codePairs(const std::vector<Frame>& frames, int channel) {
+  std::vector<CodePair> pairs;
+  std::vector<std::uint32_t> joint(256 * 256);
+  for (std::size_t i = 0; i < frames.size(); ++i)
+    for (std::size_t j = i + 1; j < frames.size(); ++j) {
+      const double r = std::log(frames[j].radianceScale / frames[i].radianceScale);
+      if (std::abs(r) < 0.02) continue;  // the same exposure: says nothing
+      std::fill(joint.begin(), joint.end(), 0u);
+      const auto& p = frames[i].bgr8;
+      const auto& q = frames[j].bgr8;
+      for (std::size_t k = std::size_t(2 - channel); k < p.size(); k += 3)
+        if (p[k] > 0 && p[k] < 255 && q[k] > 0 && q[k] < 255) ++joint[p[k] * 256u + q[k]];
+      for (int a = 1; a < 255; ++a)
+        for (int b = 1; b < 255; ++b)
+          if (const std::uint32_t n = joint[std::size_t(a * 256 + b)])
+            pairs.push_back({std::uint8_t(a), std::uint8_t(b), n, r});
+    }
+  return pairs;
+}
+
 // One channel's log response g(z) = log(linear(z)) from the codes pixels took in pairs of frames:
 // where a pixel reads a in a frame of exposure t_i and b in one of t_j, both within (0, 255),
 // g(a) - g(b) = log(t_i / t_j) (comparametric: Mann and Picard; Grossberg and Nayar). Every
@@ -119,41 +148,29 @@ namespace {
 // the last solve. A smoothness in the log of the code, under which any power law is free, carries
 // the curve over codes no pair reads; g(128) = 0. `support` gets the pixels that read each code
 // in some pair.
-std::array<double, 256> solveChannel(const std::vector<Frame>& frames, int channel,
+std::array<double, 256> solveChannel(const std::vector<CodePair>& pairs,
                                      const std::array<double, 256>& noise,
                                      const std::array<double, 256>* last,
                                      std::array<std::size_t, 256>& support) {
   cv::Mat A = cv::Mat::zeros(256, 256, CV_64F), rhs = cv::Mat::zeros(256, 1, CV_64F);
-  std::vector<std::uint32_t> joint(256 * 256);
   support.fill(0);
   double total = 0;
-  for (std::size_t i = 0; i < frames.size(); ++i)
-    for (std::size_t j = i + 1; j < frames.size(); ++j) {
-      const double r = std::log(frames[j].radianceScale / frames[i].radianceScale);
-      if (std::abs(r) < 0.02) continue;  // the same exposure: says nothing
-      std::fill(joint.begin(), joint.end(), 0u);
-      const auto& p = frames[i].bgr8;
-      const auto& q = frames[j].bgr8;
-      for (std::size_t k = std::size_t(2 - channel); k < p.size(); k += 3)
-        if (p[k] > 0 && p[k] < 255 && q[k] > 0 && q[k] < 255) ++joint[p[k] * 256u + q[k]];
-      for (int a = 1; a < 255; ++a)
-        for (int b = 1; b < 255; ++b) {
-          const std::uint32_t count = joint[std::size_t(a * 256 + b)];
-          if (count == 0) continue;
-          const double var = noise[std::size_t(a)] + noise[std::size_t(b)];
-          double w = 1.0 / var;
-          if (last) {  // Huber: beyond two sigmas of the last solve, the weight falls as 1 / error
-            const double e = std::abs((*last)[std::size_t(a)] - (*last)[std::size_t(b)] - r);
-            const double k = 2.0 * std::sqrt(var);
-            if (e > k) w *= k / e;
-          }
-          A.at<double>(a, a) += w, A.at<double>(b, b) += w;
-          A.at<double>(a, b) -= w, A.at<double>(b, a) -= w;
-          rhs.at<double>(a) += w * r, rhs.at<double>(b) -= w * r;
-          support[std::size_t(a)] += count, support[std::size_t(b)] += count;
-          total += 2 * w;
-        }
+  for (const CodePair& c : pairs) {
+    const int a = c.a, b = c.b;
+    const double r = c.r;
+    const double var = noise[std::size_t(a)] + noise[std::size_t(b)];
+    double w = 1.0 / var;
+    if (last) {  // Huber: beyond two sigmas of the last solve, the weight falls as 1 / error
+      const double e = std::abs((*last)[std::size_t(a)] - (*last)[std::size_t(b)] - r);
+      const double k = 2.0 * std::sqrt(var);
+      if (e > k) w *= k / e;
     }
+    A.at<double>(a, a) += w, A.at<double>(b, b) += w;
+    A.at<double>(a, b) -= w, A.at<double>(b, a) -= w;
+    rhs.at<double>(a) += w * r, rhs.at<double>(b) -= w * r;
+    support[std::size_t(a)] += c.pixels, support[std::size_t(b)] += c.pixels;
+    total += 2 * w;
+  }
   // The second difference of g over log z, per unit of log z, each code weighing ten times the
   // average code's data (measured on sky, quarry and sunset scenes through sRGB, gamma 1.8 and
   // 2.6 responses: weaker lets 8-bit steps through at the darkest codes, much stronger bends the
@@ -245,10 +262,11 @@ CameraResponse calibrateResponse(const std::vector<Frame>& frames) {
     // slope comes from the last solve, starting from a gamma of 2.2.
     std::array<double, 256> noise{};
     for (int z = 0; z < 256; ++z) noise[std::size_t(z)] = std::pow(2.2 / std::max(z, 1), 2) / 12;
+    const std::vector<CodePair> pairs = codePairs(frames, c);
     for (int pass = 0; pass < 3; ++pass) {
       const std::array<double, 256> last = g[std::size_t(c)];
       g[std::size_t(c)] =
-          solveChannel(frames, c, noise, pass ? &last : nullptr, support[std::size_t(c)]);
+          solveChannel(pairs, noise, pass ? &last : nullptr, support[std::size_t(c)]);
       for (int z = 1; z < 255; ++z) {
         const double slope = std::max(1e-4, 0.5 * (g[std::size_t(c)][std::size_t(z + 1)] -
                                                    g[std::size_t(c)][std::size_t(z - 1)]));
