@@ -23,13 +23,11 @@ namespace {
 
 // Dear ImGui's platform backend for a window (GLFW's; a build without GLFW has no windows).
 #if LIVEPROBE_WITH_GLFW
-bool platformInit(void* window) {
-  return ImGui_ImplGlfw_InitForOpenGL(static_cast<GLFWwindow*>(window), true);
-}
+bool platformInit(GLFWwindow* window) { return ImGui_ImplGlfw_InitForOpenGL(window, true); }
 void platformShutdown() { ImGui_ImplGlfw_Shutdown(); }
 void platformNewFrame() { ImGui_ImplGlfw_NewFrame(); }
 #else
-bool platformInit(void*) { return false; }
+bool platformInit(GLFWwindow*) { return false; }
 void platformShutdown() {}
 void platformNewFrame() {}
 #endif
@@ -173,13 +171,13 @@ std::vector<KeyAction> handleInput(WindowInput& window, const Hud* hud, ViewStat
   return std::move(input.keys);
 }
 
-Hud::Hud(gl::GlContext& ctx) : window_(ctx.nativeWindow() != nullptr) {
+Hud::Hud(gl::GlContext& ctx) : window_(!ctx.isHeadless()) {
   IMGUI_CHECKVERSION();
   ImGui::CreateContext();
   ImGuiIO& io = ImGui::GetIO();
   io.IniFilename = nullptr;  // no imgui.ini left in the user's folder
   ImGui::GetStyle() = baseStyle();
-  if (window_ && !platformInit(ctx.nativeWindow()))
+  if (window_ && !platformInit(ctx.window()))
     throw Error("HUD: cannot attach Dear ImGui to the window");
   if (!ImGui_ImplOpenGL3_Init("#version 330 core")) {
     if (window_) platformShutdown();

@@ -10,9 +10,9 @@
 namespace lp::cli {
 
 #if LIVEPROBE_WITH_GLFW
-WindowInput::WindowInput(gl::GlContext& ctx) : ctx_(ctx), window_(ctx.nativeWindow()) {
+WindowInput::WindowInput(gl::GlContext& ctx) : ctx_(ctx), window_(ctx.window()) {
   if (!window_) return;
-  auto* window = static_cast<GLFWwindow*>(window_);
+  GLFWwindow* window = window_;
   glfwSetWindowUserPointer(window, this);
   // Installed before Dear ImGui's backend, which chains to them.
   glfwSetScrollCallback(window, [](GLFWwindow* w, double, double dy) {
@@ -69,7 +69,7 @@ WindowInput::WindowInput(gl::GlContext& ctx) : ctx_(ctx), window_(ctx.nativeWind
 
 WindowInput::~WindowInput() {
   if (!window_) return;
-  auto* window = static_cast<GLFWwindow*>(window_);
+  GLFWwindow* window = window_;
   glfwSetScrollCallback(window, nullptr);
   glfwSetKeyCallback(window, nullptr);
   glfwSetCharCallback(window, nullptr);
@@ -79,7 +79,7 @@ WindowInput::~WindowInput() {
 InputDelta WindowInput::poll() {
   ctx_.pollEvents();
   if (!window_) return {};
-  auto* window = static_cast<GLFWwindow*>(window_);
+  GLFWwindow* window = window_;
   double x, y;
   glfwGetCursorPos(window, &x, &y);
   if (glfwGetMouseButton(window, GLFW_MOUSE_BUTTON_LEFT) == GLFW_PRESS)
@@ -89,7 +89,7 @@ InputDelta WindowInput::poll() {
 }
 
 void WindowInput::setTitle(const std::string& title) {
-  if (window_) glfwSetWindowTitle(static_cast<GLFWwindow*>(window_), title.c_str());
+  if (window_) glfwSetWindowTitle(window_, title.c_str());
 }
 #else
 WindowInput::WindowInput(gl::GlContext& ctx) : ctx_(ctx), window_(nullptr) {}

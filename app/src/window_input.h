@@ -46,7 +46,7 @@ class WindowInput {
 
  private:
   gl::GlContext& ctx_;
-  void* window_;  ///< GLFWwindow*, or nullptr
+  GLFWwindow* window_;  ///< nullptr headless
   InputDelta input_;
   double lastX_ = 0, lastY_ = 0;
 };

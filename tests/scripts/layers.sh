@@ -3,6 +3,7 @@
 # OpenCV and nothing of capture; what reads a frame's record (exchange) includes the frame it
 # reads (liveprobe/capture/processed_frame.h), never the pipeline that makes it. Each rule is a
 # grep over the module's own sources; a line that breaks one is printed and fails the test.
+# The GL context is a platform only: at most five calls besides its destructor, no void*.
 set -euo pipefail
 root=$1
 status=0
@@ -20,4 +21,16 @@ forbid shading/sh '#include [<"](GL/|glad/|EGL/|GLFW/|opencv2/|liveprobe/(captur
 forbid exchange '#include "liveprobe/capture/pipeline\.h"' \
   'exchange reads frames (processed_frame.h), not the pipeline'
 forbid capture '#include "liveprobe/(gl|exchange)/' 'capture knows no GL and no exchange'
+ctx=$root/shading/gl/include/liveprobe/gl/context.h
+body=$(sed -n '/^class GlContext {/,/^};/p' "$ctx")
+calls=$(grep -cE '^ *virtual [^~]' <<< "$body" || true)
+if [[ -z $body || $calls -gt 5 ]]; then
+  echo "shading/gl: GlContext has $calls calls besides its destructor (at most 5):" >&2
+  grep -nE '^ *virtual [^~]' <<< "$body" >&2 || true
+  status=1
+fi
+if grep -nE 'void ?\*' <<< "$body" >&2; then
+  echo "shading/gl: GlContext hands out a void* (above)" >&2
+  status=1
+fi
 exit $status

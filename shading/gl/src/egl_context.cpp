@@ -119,6 +119,7 @@ class EglContext final : public GlContext {
     if (!eglInitialize(display_, &major, &minor)) throw eglFailure("cannot initialise the display");
     try {
       open();
+      description_ = "EGL " + platform_ + " (" + rendererString() + ")";
     } catch (...) {
       eglTerminate(display_);
       throw;
@@ -140,12 +141,6 @@ class EglContext final : public GlContext {
   glm::ivec2 framebufferSize() const override { return {width_, height_}; }
   bool shouldClose() const override { return false; }
   void pollEvents() override {}
-  bool isHeadless() const override { return true; }
-  std::string describe() const override {
-    return "EGL " + platform_ + " (" + rendererString() + ")";
-  }
-  void* nativeWindow() const override { return nullptr; }
-  void requestClose() override {}
 
  private:
   void open() {

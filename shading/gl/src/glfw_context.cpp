@@ -37,6 +37,7 @@ class GlfwContext final : public GlContext {
       throw ContextError("GLFW window: cannot load GL 3.3 core functions");
     }
     glfwSwapInterval(spec.vsync ? 1 : 0);
+    description_ = "GLFW window (" + rendererString() + ")";
   }
   ~GlfwContext() override {
     glfwDestroyWindow(window_);
@@ -51,13 +52,6 @@ class GlfwContext final : public GlContext {
   }
   bool shouldClose() const override { return glfwWindowShouldClose(window_); }
   void pollEvents() override { glfwPollEvents(); }
-  bool isHeadless() const override { return false; }
-  std::string describe() const override { return "GLFW window (" + rendererString() + ")"; }
-  void* nativeWindow() const override { return window_; }
-  void requestClose() override { glfwSetWindowShouldClose(window_, GLFW_TRUE); }
-
- private:
-  GLFWwindow* window_ = nullptr;
 };
 
 }  // namespace

@@ -39,6 +39,7 @@ class OsMesaContext final : public GlContext {
       OSMesaDestroyContext(ctx_);
       throw ContextError("OSMesa: cannot load GL 3.3 core functions");
     }
+    description_ = "OSMesa offscreen (" + rendererString() + ")";
   }
   ~OsMesaContext() override { OSMesaDestroyContext(ctx_); }
   void makeCurrent() override {
@@ -49,10 +50,6 @@ class OsMesaContext final : public GlContext {
   glm::ivec2 framebufferSize() const override { return {width_, height_}; }
   bool shouldClose() const override { return false; }
   void pollEvents() override {}
-  bool isHeadless() const override { return true; }
-  std::string describe() const override { return "OSMesa offscreen (" + rendererString() + ")"; }
-  void* nativeWindow() const override { return nullptr; }
-  void requestClose() override {}
 
  private:
   OSMesaContext ctx_ = nullptr;

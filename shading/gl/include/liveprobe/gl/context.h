@@ -12,6 +12,8 @@
 #include <string_view>
 #include <vector>
 
+struct GLFWwindow;  // GLFW's window type; only the window backend and the app's input include GLFW
+
 namespace lp::gl {
 
 struct ContextError : std::runtime_error {
@@ -44,8 +46,9 @@ struct ContextSpec {
 };
 
 /// What a platform provides for liveprobe to draw into (as Filament's OpenGLPlatform): a current
-/// context, a framebuffer and, for a window, its events. Input and the title are the app's
-/// (GLFW's callbacks on nativeWindow()).
+/// context, a framebuffer and, for a window, its events; five calls. What a context is (headless
+/// or a window, its name) is data, set once by the backend. Input and the title are the app's,
+/// through GLFW's own calls on window().
 class GlContext {
  public:
   virtual ~GlContext() = default;
@@ -53,18 +56,24 @@ class GlContext {
   /// Shows the frame (window) or does nothing (headless).
   virtual void present() = 0;
   virtual glm::ivec2 framebufferSize() const = 0;
+  /// Whether the window was asked to close (its close button, or the app); never headless.
   virtual bool shouldClose() const = 0;
   /// Processes the window's pending events (a headless context has none).
   virtual void pollEvents() = 0;
-  virtual bool isHeadless() const = 0;
+
+  /// The GLFW window (for the app's input and Dear ImGui's GLFW backend); nullptr headless.
+  GLFWwindow* window() const { return window_; }
+  bool isHeadless() const { return window_ == nullptr; }
   /// "GLFW window", "EGL device 0, /dev/dri/renderD128" or "OSMesa offscreen", plus
   /// GL_RENDERER and GL_VERSION.
-  virtual std::string describe() const = 0;
-  /// The GLFWwindow* of a window (for the app's input and Dear ImGui's GLFW backend); nullptr
-  /// headless.
-  virtual void* nativeWindow() const = 0;
-  /// Asks the window to close (as Esc does).
-  virtual void requestClose() = 0;
+  const std::string& describe() const { return description_; }
+
+ protected:
+  GlContext() = default;
+  GlContext(const GlContext&) = delete;
+  GlContext& operator=(const GlContext&) = delete;
+  GLFWwindow* window_ = nullptr;  ///< set by the window backend
+  std::string description_;       ///< set by each backend once GL is loaded
 };
 
 /// Whether a GL_RENDERER string (or a describe() holding one) names a software rasterizer
