@@ -834,6 +834,15 @@ TEST(CommandLine, LikelyLayoutMistakesWarnOnce) {
                                   " --headless --frames 1 --quiet --msaa 1 --size 64x36");
   EXPECT_EQ(video.exitCode, 0) << video.output;
   EXPECT_NE(video.output.find("16:9 frame taken as equirect"), std::string::npos) << video.output;
+  // Named: the user knows it is a stretched panorama (as pano.mp4 is), and is not warned.
+  const auto named = runLiveprobe("replay " + lpt::dataPath("video/pano.mp4") +
+                                  " --layout equirect --headless --frames 1 --quiet --msaa 1 "
+                                  "--size 64x36");
+  EXPECT_EQ(named.exitCode, 0) << named.output;
+  EXPECT_EQ(named.output.find("warning"), std::string::npos) << named.output;
+  const auto namedSquare =
+      runLiveprobe("coeffs --layout equirect " + lpt::dataPath("probes/beach_probe.hdr"));
+  EXPECT_EQ(namedSquare.output.find("warning"), std::string::npos) << namedSquare.output;
   // A square map that is bright in its corners read as an angular map.
   const std::string square = tmp / "square.hdr";
   ASSERT_TRUE(cv::imwrite(square, cv::Mat(64, 64, CV_32FC3, cv::Scalar(1, 1, 1))));

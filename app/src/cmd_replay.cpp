@@ -371,6 +371,7 @@ struct StreamView {
   std::unique_ptr<Viewer> v;
   bool autoExposure = true, haveLighting = false;
   LayoutSpec layout;
+  bool layoutGiven = false;  ///< --layout named it
   std::string source;
 
   /// Uploads a frame's lighting and background; returns the upload time in ms.
@@ -384,7 +385,8 @@ struct StreamView {
                     : f.raw ? f.raw->height
                             : 0;
       if (w > 0)
-        warnIfLayoutLooksWrong(source, layout, w, h, f.image ? f.image->rgb.data() : nullptr);
+        warnIfLayoutLooksWrong(source, layout, layoutGiven, w, h,
+                               f.image ? f.image->rgb.data() : nullptr);
     }
     if (!haveLighting && autoExposure)
       v->state.shading.exposure = cli::autoExposure(f.radiance, true, f.lights);
@@ -745,6 +747,7 @@ StreamView openStreamView(const Settings& s, const StreamPlan& p) {
   v.state.camera = v.state.initialCamera = p.camera;
   view.autoExposure = !s.scene.exposure;
   view.layout = p.opt.layout;
+  view.layoutGiven = s.panorama.layout.has_value();
   view.source = p.description;
   if (p.opt.rotation) v.renderer->setEnvOrientation(*p.opt.rotation);
   if (v.hud)

@@ -206,20 +206,21 @@ Environment loadEnvironment(const std::string& source, const PanoramaSettings& p
   if (scale != 1.0f)
     for (float& v : env.image.rgb) v *= scale;
   if (frame.format == PanoramaFormat::BgrU8) env.displayScale = scale;
-  warnIfLayoutLooksWrong(source, env.layout, env.image.width, env.image.height,
-                         env.image.rgb.data());
+  warnIfLayoutLooksWrong(source, env.layout, p.layout.has_value(), env.image.width,
+                         env.image.height, env.image.rgb.data());
   return env;
 }
 
-void warnIfLayoutLooksWrong(const std::string& source, const LayoutSpec& layout, int w, int h,
-                            const float* rgb) {
-  if (layout.layout == Layout::Equirect && w == h) {
+void warnIfLayoutLooksWrong(const std::string& source, const LayoutSpec& layout, bool given, int w,
+                            int h, const float* rgb) {
+  const bool guessedEquirect = layout.layout == Layout::Equirect && !given;
+  if (guessedEquirect && w == h) {
     warn(source +
          ": a square image taken as equirect (an angular map or a mirror ball? give --layout)");
-  } else if (layout.layout == Layout::Equirect && std::abs(double(w) / h - 16.0 / 9.0) < 0.02) {
+  } else if (guessedEquirect && std::abs(double(w) / h - 16.0 / 9.0) < 0.02) {
     warn(source +
-         ": a 16:9 frame taken as equirect (a 2:1 panorama stretched? results assume it covers the "
-         "sphere)");
+         ": a 16:9 frame taken as equirect (a 2:1 panorama stretched to 16:9 covers the sphere: "
+         "give --layout equirect; a camera's view does not)");
   } else if ((layout.layout == Layout::Angular || layout.layout == Layout::DualFisheye) && rgb &&
              w >= 16 && h >= 8) {
     // Outside its discs an angular map or a dual fisheye frame is black: compare the corners'

@@ -54,10 +54,11 @@ struct Environment {
 Environment loadEnvironment(const std::string& source, const PanoramaSettings& p,
                             const LightOptions& lights = {.maxLights = 0});
 
-/// One warning line when the frame's shape suggests another layout than the one given: a square
-/// image or a 16:9 frame taken as equirect, or an angular map whose corners are not black.
-void warnIfLayoutLooksWrong(const std::string& source, const LayoutSpec& layout, int width,
-                            int height, const float* rgb = nullptr);
+/// One warning line when the frame's shape suggests another layout than the one in use: a square
+/// image or a 16:9 frame taken as equirect by default (`given`: --layout named it, and the shape
+/// is the user's to know), or an angular map or fisheye frame whose corners are not black.
+void warnIfLayoutLooksWrong(const std::string& source, const LayoutSpec& layout, bool given,
+                            int width, int height, const float* rgb = nullptr);
 
 struct Lighting {
   Sh9 radiance;
