@@ -15,6 +15,7 @@ namespace lp::cli {
 
 inline constexpr int kExitInterrupted = 130;  ///< 128 + SIGINT, as shells report it
 inline constexpr int kExitHangup = 129;       ///< 128 + SIGHUP (the terminal closed)
+inline constexpr int kExitInconclusive = 2;   ///< bench: a slower stage the machine's load explains
 inline constexpr int kExitRuntime = 3;  ///< the run failed at run time (an internal error too)
 
 /// Installs the SIGINT/SIGTERM/SIGHUP handlers (once; later calls do nothing).

@@ -39,6 +39,7 @@ struct ExitCode {
 const ExitCode kExitCodes[] = {
     {0, "success"},
     {1, "a bad input, command line or device: one line on standard error names it"},
+    {2, "bench: a stage over the threshold, but the machine was too busy to tell (run it again)"},
     {3, "the run failed at run time: --publish reached no MQTT broker, or an internal error"},
     {130, "stopped by SIGINT or SIGTERM (outputs are finalised first)"},
 };

@@ -114,6 +114,7 @@ struct BenchSettings {
   ProjectOn projection = ProjectOn::Auto;
   int repeat = 3;
   double threshold = 25.0;
+  double maxContention = 1.5;  ///< above it (over the baseline's) a slower stage is inconclusive
   std::optional<std::string> baseline;
   std::vector<std::string> injectDelay;  ///< STAGE=MS
 };
