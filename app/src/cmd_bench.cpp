@@ -1,5 +1,8 @@
 // liveprobe bench: a frame-time regression run of the whole replay pipeline, headless.
 
+#include <pthread.h>
+#include <sched.h>
+
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -7,6 +10,7 @@
 #include <filesystem>
 #include <fstream>
 #include <iostream>
+#include <limits>
 #include <map>
 #include <numeric>
 #include <sstream>
@@ -60,34 +64,72 @@ void spin(double ms) {
 
 // The calibration kernel: a fixed amount of the machine's own kind of work (projecting a fixed
 // synthetic frame, single thread), timed in the same run. Stage times are divided by it, so a
-// slower machine is not a regression. It is the machine's speed, not its load: the fastest of 21
-// repetitions of a few milliseconds each (shorter than a scheduler's time slice), since a
-// repetition that other work interrupts only reads slower; a median read 2.5 ms in one run and
-// 6.4 ms in the next on two busy cores, and turned equal frame times into +177%. (A run on a busy
-// machine compares fairly with a baseline taken under the same load.) It runs on the scalar path
-// whatever the CPU offers: the stages it stands for (decode, GL on llvmpipe) gain little from
-// AVX-512, so a kernel on the widest path would make a machine that has it look slower than it is
-// (a render of 14 ms read as 22 against an AVX2 baseline).
-double calibrationMs() {
-  static std::vector<float> sky;
-  if (sky.empty()) renderSyntheticSky(512, 256, 0.5, sky);
-  struct Path {  // the scalar path for the kernel, the best one again after it
-    std::string was = simd::current();
-    Path() { simd::select("scalar"); }
-    ~Path() { simd::select(was); }
-  } path;
-  const Projector proj(Layout::Equirect, 512, 256);
-  std::vector<double> t;
-  for (int i = 0; i < 21; ++i) {
+// slower machine is not a regression. It is the machine's speed, not its load: the fastest of
+// many repetitions of a few milliseconds each (shorter than a scheduler's time slice), since a
+// repetition that other work interrupts only reads slower. The repetitions are spread over the
+// whole run (one before each frame) and over every CPU the process may use, in turn: on a 2-core
+// virtual machine one core could be slower for seconds (its host busy), and 21 repetitions in a
+// row, on whichever core, read 3.2 to 4.9 ms from one run to the next while the stages did not
+// move; spread, ten runs read 3.28 to 3.61 ms. (A median, not the fastest, read 2.5 ms in one run
+// and 6.4 ms in the next on two busy cores.) It runs on the scalar path whatever the CPU offers:
+// the stages it stands for (decode, GL on llvmpipe) gain little from AVX-512, so a kernel on the
+// widest path would make a machine that has it look slower than it is (a render of 14 ms read as
+// 22 against an AVX2 baseline).
+class CalibrationKernel {
+ public:
+  CalibrationKernel() : proj_(Layout::Equirect, 512, 256) {
+    renderSyntheticSky(512, 256, 0.5, sky_);
+  }
+  /// One repetition, timed; the fastest so far is speed().
+  void time() {
+    struct Path {  // the scalar path for the kernel, the best one again after it
+      std::string was = simd::current();
+      Path() { simd::select("scalar"); }
+      ~Path() { simd::select(was); }
+    } path;
     const auto t0 = Clock::now();
     Sh9 s;
-    for (int r = 0; r < 10; ++r) s += proj.project(PanoramaView::rgbF32(sky.data(), 512, 256));
+    const OnCpu on(count_++);
+    for (int r = 0; r < 10; ++r) s += proj_.project(PanoramaView::rgbF32(sky_.data(), 512, 256));
     volatile float sink = s.c[0].x;
     (void)sink;
-    t.push_back(msSince(t0));
+    best_ = std::min(best_, msSince(t0));
   }
-  return *std::min_element(t.begin(), t.end());
-}
+  double speed() const { return best_; }
+
+ private:
+  /// The calling thread on the n-th of the CPUs it may run on (in turn), for its lifetime.
+  class OnCpu {
+   public:
+    explicit OnCpu(std::size_t n) {
+      if (pthread_getaffinity_np(pthread_self(), sizeof was_, &was_) != 0) return;
+      const int count = CPU_COUNT(&was_);
+      if (count < 2) return;
+      int k = int(n % std::size_t(count));
+      for (int cpu = 0; cpu < CPU_SETSIZE; ++cpu)
+        if (CPU_ISSET(cpu, &was_) && k-- == 0) {
+          cpu_set_t one;
+          CPU_ZERO(&one);
+          CPU_SET(cpu, &one);
+          pinned_ = pthread_setaffinity_np(pthread_self(), sizeof one, &one) == 0;
+          break;
+        }
+    }
+    ~OnCpu() {
+      if (pinned_) pthread_setaffinity_np(pthread_self(), sizeof was_, &was_);
+    }
+    OnCpu(const OnCpu&) = delete;
+    OnCpu& operator=(const OnCpu&) = delete;
+
+   private:
+    cpu_set_t was_{};
+    bool pinned_ = false;
+  };
+  std::vector<float> sky_;
+  Projector proj_;
+  std::size_t count_ = 0;
+  double best_ = std::numeric_limits<double>::infinity();
+};
 
 // How much other programs held this process back: over its threads, the time each waited on a
 // run queue for a CPU against the time it ran (Linux's scheduler statistics,
@@ -657,21 +699,22 @@ int runBench(const Args& a) {
   ThreadPool pool(threads);
 
   // The runs: each starts the source from its first frame (rewound, or opened again where it
-  // cannot rewind) and times every frame; a calibration kernel is timed before each.
+  // cannot rewind) and times every frame; the calibration kernel is timed before each frame.
   std::vector<BenchTimes> all;
   std::array<std::vector<double>, kStageCount> runMedians;
-  std::vector<double> calibrations;
+  CalibrationKernel calibrationKernel;
   std::string description;
   const Contention sched;
   std::array<Rgb, kShCount> lastCoefficients{};
   Progress progress("bench", std::int64_t(frames) * repeat, s.output.quiet);
   for (int run = 0; run < repeat && !stopRequested(); ++run) {
-    calibrations.push_back(calibrationMs());
+    for (int i = 0; i < 21; ++i) calibrationKernel.time();
     if (run > 0 && !source->rewind()) source = openSource(sourceName);
     description = source->describe();
     RunState state(scene);
     std::vector<BenchTimes> times;
     for (int i = 0; i < frames && !stopRequested(); ++i) {
+      calibrationKernel.time();
       times.push_back(timeFrame(scene, state, *source, sourceName, pool, i == 0));
       progress.update(std::int64_t(all.size() + times.size()));
     }
@@ -692,7 +735,7 @@ int runBench(const Args& a) {
   }
 
   // The report: stages, calibration, the comparison, then the files and the verdict.
-  const double calibration = percentile(calibrations, 0.5), contention = sched.factor();
+  const double calibration = calibrationKernel.speed(), contention = sched.factor();
   nlohmann::ordered_json out;
   out["frames"] = frames;
   out["runs"] = repeat;
