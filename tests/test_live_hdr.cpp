@@ -534,10 +534,12 @@ TEST(LiveHdr, CalibrateRecoversTheResponse) {
             << what << ": channel "
             << "RGB"[c] << ", code " << code;
     EXPECT_LE(response.readFrom, lp::kDarkestCode + 1) << what << "\n" << cal.output;
+    EXPECT_EQ(response.controlDelay, 2) << what << "\n" << cal.output;
 
     const auto live = emu.run("live /dev/video7" + kBracket + "--frames 15 --sun --response " +
                               emu.tmp / "r.json --coeffs-out " + emu.tmp / "c.jsonl");
     ASSERT_EQ(live.exitCode, 0) << what << "\n" << live.output;
+    EXPECT_EQ(live.output.find("a new exposure showed"), std::string::npos) << live.output;
     const double gain = gainOf(live.output);
     int complete = 0;
     for (const json& f : readJsonl(emu.tmp / "c.jsonl")) {
@@ -560,6 +562,36 @@ TEST(LiveHdr, CalibrateRecoversTheResponse) {
     EXPECT_NE(r.output.find(faults == "no_exposure" ? "no exposure time control" : "ignores"),
               std::string::npos)
         << r.output;
+  }
+}
+
+// calibrate measures how many frames a camera takes to show a new exposure, with the metadata
+// node and without it (from the frames' brightness), and writes it with the response; live,
+// bracketing with that response, says in one warning when the camera it runs shows another
+// delay (the run goes on: each frame is merged at the exposure it shows).
+TEST(LiveHdr, TheControlDelayIsCalibratedAndCheckedLive) {
+  for (const bool metadata : {true, false}) {
+    Emulator emu("RGB3_256x128", {skyFrame(30)}, "control_delay=3");
+    if (!metadata) emu.env = "LPEMU_META_DEVICE= ";
+    const std::string r = emu.tmp / "r.json";
+    const auto cal = emu.run("calibrate /dev/video7 --lock-exposure 0.3 --out " + r);
+    ASSERT_EQ(cal.exitCode, 0) << cal.output;
+    EXPECT_NE(cal.output.find("a new exposure shows 3 frames after it is asked"), std::string::npos)
+        << cal.output;
+    EXPECT_EQ(lp::CameraResponse::load(r).controlDelay, 3);
+    for (const int delay : {3, 1}) {
+      Emulator cam("RGB3_256x128", {skyFrame(30)}, "control_delay=" + std::to_string(delay));
+      cam.env = emu.env;
+      const auto live = cam.run("live /dev/video7" + kBracket + "--frames 12 --response " + r);
+      ASSERT_EQ(live.exitCode, 0) << live.output;
+      const std::string said = "warning: /dev/video7: a new exposure showed " +
+                               std::to_string(delay) + " frame" + (delay == 1 ? "" : "s") +
+                               " after it was asked; the calibration (--response) measured 3";
+      if (delay == 3)
+        EXPECT_EQ(live.output.find("a new exposure showed"), std::string::npos) << live.output;
+      else
+        EXPECT_NE(live.output.find(said), std::string::npos) << metadata << "\n" << live.output;
+    }
   }
 }
 

@@ -5,6 +5,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <iostream>
+#include <map>
 #include <sstream>
 #include <tuple>
 
@@ -195,6 +196,7 @@ int runLive(const Args& a) {
   const std::vector<double>& stops = s.camera.bracket;
   if (!stops.empty())
     cs.metadataDevice = s.camera.metadata.value_or(siblingMetadataNode(cs.device));
+  cs.onWarning = [](const std::string& w) { warn(w); };
   auto camera = std::make_unique<V4l2Source>(cs);
   try {
     camera->start();
@@ -299,9 +301,19 @@ int runCalibrate(const Args& a) {
   // until its shortest frame reads some of the scene at the darkest codes the response is
   // recovered for (kDarkestCode), so that every code is read by a pixel another exposure reads
   // well; it stops at the control's limit, or 12 stops further.
+  // The control delay: after each change, the frames that still show the old exposure (the
+  // metadata's report where the camera sends it, else the first frame whose mean code moved by
+  // more than 4% and a code; a one-stop change moves it far more unless the frame clips or is
+  // black, and such a stop says nothing).
   std::vector<Frame> frames;
   std::vector<double> brightness;
+  std::vector<int> delays;
   std::int32_t previous = -1;
+  const auto meanCode = [](const Frame& f) {
+    double sum = 0;
+    for (const std::uint8_t v : f.bgr8) sum += v;
+    return sum / double(std::max<std::size_t>(1, f.bgr8.size()));
+  };
   const auto take = [&](int stop) {
     const std::int32_t asked =
         camera->setExposure(std::int32_t(std::lround(*locked.exposure100us * std::exp2(stop))));
@@ -309,13 +321,20 @@ int runCalibrate(const Args& a) {
     previous = asked;
     if (stopRequested()) return false;
     Frame f;
+    const double before = brightness.empty() ? -1.0 : brightness.back();
+    bool seen = false;
     for (int i = 0; i < settle; ++i) {
       if (!camera->next(f)) throw Error(cs.device + ": the stream ended");
-      if (camera->reportsExposure() && std::lround(1e4 / f.radianceScale) == asked) break;
+      if (camera->reportsExposure()) {
+        if (std::lround(1e4 / f.radianceScale) != asked) continue;
+        delays.push_back(i);
+        break;
+      }
+      const double m = meanCode(f);
+      if (!seen && before >= 0 && std::abs(m - before) > std::max(1.0, 0.04 * before))
+        delays.push_back(i), seen = true;
     }
-    double sum = 0;
-    for (const std::uint8_t v : f.bgr8) sum += v;
-    brightness.push_back(sum / double(std::max<std::size_t>(1, f.bgr8.size())));
+    brightness.push_back(meanCode(f));
     std::fprintf(stderr, "  %+d EV: %d x 100 us, mean code %.1f\n", stop,
                  int(std::lround(1e4 / f.radianceScale)), brightness.back());
     frames.push_back(std::move(f));
@@ -338,6 +357,13 @@ int runCalibrate(const Args& a) {
     throw Error(cs.device + ": the camera ignores its exposure control (mean code " +
                 formatNumber(*lo, 3) + " to " + formatNumber(*hi, 3) + " across the sweep)");
   CameraResponse r = calibrateResponse(frames);
+  if (!delays.empty()) {  // the most common delay over the stops that showed one
+    std::map<int, int> count;
+    for (const int d : delays) ++count[d];
+    r.controlDelay = std::max_element(count.begin(), count.end(), [](auto& a, auto& b) {
+                       return a.second < b.second;
+                     })->first;
+  }
   AtomicTextFile out(*s.output.out);
   out.line(r.json());
   out.commit();
@@ -349,10 +375,14 @@ int runCalibrate(const Args& a) {
     unread += std::string(unread.empty() ? "; codes" : " nor") + " above " +
               std::to_string(r.readTo) + (unread.empty() ? " were never read" : "");
   if (!unread.empty()) unread += " (a merge counts them as noise or clipped)";
+  const std::string delayText =
+      r.controlDelay ? "a new exposure shows " + std::to_string(*r.controlDelay) +
+                           (*r.controlDelay == 1 ? " frame" : " frames") + " after it is asked"
+                     : "no stop showed when a new exposure takes effect";
   std::fprintf(stderr,
                "liveprobe calibrate: %zu exposures; the response rises with the code (green is "
-               "like a gamma of %.2f over codes 32-240); codes %d-%d read%s; written to %s\n",
-               frames.size(), like.gamma, r.readFrom, r.readTo, unread.c_str(),
+               "like a gamma of %.2f over codes 32-240); codes %d-%d read%s; %s; written to %s\n",
+               frames.size(), like.gamma, r.readFrom, r.readTo, unread.c_str(), delayText.c_str(),
                s.output.out->c_str());
   return 0;
 }

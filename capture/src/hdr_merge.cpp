@@ -48,6 +48,7 @@ std::string CameraResponse::json() const {
   j["response"] = nlohmann::json::array();
   for (const auto& ch : linear) j["response"].push_back(std::vector<float>(ch.begin(), ch.end()));
   if (readFrom != 0 || readTo != 255) j["read"] = {readFrom, readTo};
+  if (controlDelay) j["control_delay_frames"] = *controlDelay;
   return j.dump();
 }
 
@@ -74,6 +75,12 @@ CameraResponse CameraResponse::parse(const std::string& text, const std::string&
       r.readFrom = read[0].get<int>(), r.readTo = read[1].get<int>();
       if (r.readFrom < 0 || r.readTo > 255 || r.readFrom >= r.readTo)
         throw Error("\"read\" must be two codes from 0 to 255, the first the lower");
+    }
+    if (j.contains("control_delay_frames")) {
+      const auto& d = j["control_delay_frames"];
+      if (!d.is_number_integer() || d.get<int>() < 0 || d.get<int>() > 60)
+        throw Error("\"control_delay_frames\" must be a whole number of frames from 0 to 60");
+      r.controlDelay = d.get<int>();
     }
   } catch (const nlohmann::json::exception& e) {
     throw Error(name + ": not a camera response (" + e.what() + ")");

@@ -437,6 +437,7 @@ bool V4l2Source::next(Frame& frame) {
         frame.radianceScale = 1.0 / *seconds;
         frame.exposure100us = std::int32_t(std::lround(*seconds * 1e4));
       } else {
+        if (!delayChecked_) ++sinceFirstSet_;  // taken at some exposure, as a frame is
         ++unidentified_;  // a bracketed frame of unknown exposure cannot be merged
         // A bracket that tells no exposure for many frames would stall the stream silently.
         if (++unidentifiedRun_ > 4 * bracket_.size() + 10)
@@ -450,6 +451,7 @@ bool V4l2Source::next(Frame& frame) {
     }
     if (!bracket_.empty()) {
       unidentifiedRun_ = 0;
+      if (!delayChecked_) checkControlDelay(frame);
       nextBracketExposure(frame);
     }
     return true;
@@ -481,6 +483,11 @@ std::vector<std::int32_t> V4l2Source::bracket(const std::vector<double>& stops,
     bracket_.push_back(std::int32_t(std::clamp<double>(std::lround(want), q.minimum, q.maximum)));
   }
   bracketAt_ = 0, bracketFrames_ = 0, unidentified_ = 0;
+  // The delay is checked where the first exposure is a stop or more from the locked one (the
+  // frames before it look different) and the calibration measured one.
+  expectedDelay_ = response.controlDelay, sinceFirstSet_ = 0;
+  delayChecked_ =
+      !expectedDelay_ || std::abs(std::log2(double(bracket_[0]) / *lockedExposure_)) < 1;
   reported_.clear();
   identifier_.reset();
   unidentifiedRun_ = 0;
@@ -518,6 +525,23 @@ std::int32_t V4l2Source::setExposure(std::int32_t exposure100us) {
          errno);
   lockedExposure_ = value;  // frames without metadata carry what was asked
   return value;
+}
+
+void V4l2Source::checkControlDelay(const Frame& frame) {
+  const double first = bracket_[0] * 1e-4;
+  if (std::abs(std::log2(first * frame.radianceScale)) > 0.3) {  // not yet the new exposure
+    if (++sinceFirstSet_ > 4 * bracket_.size() + 10) delayChecked_ = true;  // never seen: no say
+    return;
+  }
+  delayChecked_ = true;
+  if (expectedDelay_ && int(sinceFirstSet_) != *expectedDelay_ && settings_.onWarning)
+    settings_.onWarning(settings_.device + ": a new exposure showed " +
+                        std::to_string(sinceFirstSet_) + " frame" +
+                        (sinceFirstSet_ == 1 ? "" : "s") +
+                        " after it was asked; the calibration (--response) measured " +
+                        std::to_string(*expectedDelay_) +
+                        " (another mode, frame rate or camera? each frame is still merged at "
+                        "the exposure it shows)");
 }
 
 void V4l2Source::nextBracketExposure(const Frame& frame) {

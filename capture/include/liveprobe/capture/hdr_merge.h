@@ -22,6 +22,7 @@
 #include <cstdint>
 #include <deque>
 #include <functional>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -39,6 +40,9 @@ struct CameraResponse {
   /// read part's shape, unmeasured): a merge counts no reading outside them. 0..255 for a
   /// response known whole.
   int readFrom = 0, readTo = 255;
+  /// Frames a calibration saw at the old exposure after the control was set (the camera's
+  /// control delay, as liveprobe receives frames); unknown for a response not calibrated.
+  std::optional<int> controlDelay;
 
   static CameraResponse srgb();
   static CameraResponse gamma(float g);
@@ -47,9 +51,9 @@ struct CameraResponse {
   static CameraResponse load(const std::string& path);
   /// Parses json() text; `name` is what errors call it.
   static CameraResponse parse(const std::string& text, const std::string& name);
-  /// {"response": [[256 R], [256 G], [256 B]], "read": [from, to]}: linear exposure per code,
-  /// normalised so that the green channel's power law reaches 1 at code 255; "read" only where
-  /// it is not 0..255.
+  /// {"response": [[256 R], [256 G], [256 B]], "read": [from, to], "control_delay_frames": N}:
+  /// linear exposure per code, normalised so that the green channel's power law reaches 1 at
+  /// code 255; "read" only where it is not 0..255, the delay only where it was measured.
   std::string json() const;
   /// The first code (and channel) at which the curve falls, or -1 when it never does.
   int firstDecrease(int* channel = nullptr) const;

@@ -9,6 +9,7 @@
 // streamOff() is idempotent and returns every buffer, and a stopped source can start again.
 #include <cstddef>
 #include <cstdint>
+#include <functional>
 #include <memory>
 #include <optional>
 #include <string>
@@ -78,6 +79,9 @@ struct CameraSettings {
   /// The camera's UVC metadata node, streamed beside the video for each frame's exposure time
   /// (empty: none). Frames then carry the exposure the camera reports, not the one asked for.
   std::string metadataDevice;
+  /// Told, once, what a user should know but that stops nothing (a control delay that differs
+  /// from the calibration's); unset: not told.
+  std::function<void(const std::string&)> onWarning;
 };
 
 /// The exposure time, in seconds, in one buffer of a UVC metadata node
@@ -244,6 +248,12 @@ class V4l2Source final : public FrameSource {
   /// Without per-frame metadata: each bracketed frame's exposure from its pixels.
   std::unique_ptr<ExposureIdentifier> identifier_;
   std::size_t unidentified_ = 0, unidentifiedRun_ = 0;
+  /// The control delay seen at the bracket's start against the calibration's: frames received
+  /// since the first exposure of the cycle was set, until one shows it.
+  std::optional<int> expectedDelay_;
+  std::size_t sinceFirstSet_ = 0;
+  bool delayChecked_ = true;
+  void checkControlDelay(const Frame& frame);
 };
 
 }  // namespace lp
