@@ -737,6 +737,25 @@ TEST(OptionGroups, ASharedOptionHasOneHelpText) {
   EXPECT_GT(shared, 50);  // the layout, lighting, scene, look and light groups
 }
 
+// --help writes each option's value as the reference does: an option whose value may be left out
+// shows it in brackets ([SECONDS]), in every command that has one.
+TEST(OptionGroups, HelpAndReferenceWriteAnOptionalValueAlike) {
+  int optional = 0;
+  for (const auto& c : lp::cli::commands()) {
+    std::string help;
+    for (const auto& o : c.spec.options)
+      if (o.optionalValue && !o.value.empty()) {
+        if (help.empty()) help = runLiveprobe(c.spec.name + " --help").output;
+        const std::string name = o.name.substr(0, o.name.find(','));
+        EXPECT_NE(help.find(name + " [" + o.value + "]"), std::string::npos)
+            << c.spec.name << " --help:\n"
+            << help;
+        ++optional;
+      }
+  }
+  EXPECT_GT(optional, 0);
+}
+
 // The light group in every command that takes it: the largest --lights the renderer draws is
 // accepted, one more is one line naming the option and the range, a misspelling gets the name,
 // and the window's --hud with --no-hud is refused in one line where both exist.

@@ -77,7 +77,10 @@ void declare(Args::Parsed& p, const CommandSpec& spec) {
     if (o.value.empty()) {
       opt = app.add_flag(o.name, o.help)->multi_option_policy(CLI::MultiOptionPolicy::TakeAll);
     } else {
-      opt = app.add_option(o.name, store, o.help)->type_name(o.value)->allow_extra_args(false);
+      // A value that may be left out is shown as the reference shows it: [VALUE].
+      opt = app.add_option(o.name, store, o.help)
+                ->type_name(o.optionalValue ? "[" + o.value + "]" : o.value)
+                ->allow_extra_args(false);
       if (o.optionalValue)
         opt->expected(0, 1);
       else
