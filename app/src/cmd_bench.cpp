@@ -47,7 +47,7 @@ using Clock = std::chrono::steady_clock;
 // bracket); arrays below are indexed by position in this list.
 constexpr std::array kBenchStages = {Stage::Grab,   Stage::Convert, Stage::Project, Stage::Resample,
                                      Stage::Upload, Stage::Render,  Stage::Readback};
-constexpr int kStageCount = int(kBenchStages.size());
+constexpr int kBenchStageCount = int(kBenchStages.size());
 // A stage's name (the names are literals: NUL-terminated).
 const char* stageLabel(int s) { return stageName(kBenchStages[std::size_t(s)]).data(); }
 
@@ -174,7 +174,7 @@ constexpr int kWarmup =
 
 /// Frames' stage times stacked, one line a frame, into `data`; the totals.
 std::vector<double> writeStackedStages(const std::string& data, const std::string& path,
-                                       const std::vector<std::array<double, kStageCount>>& frames) {
+                                       const std::vector<std::array<double, kBenchStageCount>>& frames) {
   std::vector<double> total;
   std::ofstream d(data);
   for (std::size_t i = 0; i < frames.size(); ++i) {
@@ -214,10 +214,10 @@ std::string plotScript(const std::string& png, const std::string& data, const st
     g << "set object " << k << " rect from " << start << ",0 to " << start + kWarmup - 1 << ","
       << top << " fc rgb '#909090' fs solid 0.35 noborder behind\n";
   g << "set label 1 'grey bands: the warm-up frames of each run' at graph 0.01, graph 0.96\n";
-  const char* colours[kStageCount] = {"#1f77b4", "#ff7f0e", "#2ca02c", "#17becf",
+  const char* colours[kBenchStageCount] = {"#1f77b4", "#ff7f0e", "#2ca02c", "#17becf",
                                       "#d62728", "#9467bd", "#8c564b"};
   g << "plot ";
-  for (int s = kStageCount - 1; s >= 0; --s) {
+  for (int s = kBenchStageCount - 1; s >= 0; --s) {
     g << "'" << data << "' using 1:" << (s + 2) << " with filledcurves x1 lc rgb '" << colours[s]
       << "' title '" << stageLabel(s) << "'";
     g << (s ? ", " : "\n");
@@ -259,7 +259,7 @@ void runGnuplot(const std::string& script, const std::string& png, const std::st
 /// The frame-time plot, by gnuplot (pngcairo): stages stacked and filled against the frame
 /// number, the warm-up frames shaded, and a histogram of the total with median and p95 marked.
 /// Written to a temporary file and renamed; lp::Error when gnuplot is missing or fails.
-void drawPlot(const std::string& path, const std::vector<std::array<double, kStageCount>>& frames,
+void drawPlot(const std::string& path, const std::vector<std::array<double, kBenchStageCount>>& frames,
               int framesPerRun, const std::string& title) {
   AtomicOutput plot(path);  // gnuplot writes the PNG under its temporary name
   const std::string& png = plot.temporary();
@@ -292,16 +292,16 @@ void drawPlot(const std::string& path, const std::vector<std::array<double, kSta
 
 namespace {
 
-std::array<double, kStageCount> parseInjections(const BenchSettings& b) {
-  std::array<double, kStageCount> inject{};
+std::array<double, kBenchStageCount> parseInjections(const BenchSettings& b) {
+  std::array<double, kBenchStageCount> inject{};
   for (const auto& d : b.injectDelay) {
     const auto eq = d.find('=');
     int stage = -1;
-    for (int s = 0; s < kStageCount; ++s)
+    for (int s = 0; s < kBenchStageCount; ++s)
       if (eq != std::string::npos && d.substr(0, eq) == stageLabel(s)) stage = s;
     if (stage < 0) {
       std::string names;
-      for (int s = 0; s < kStageCount; ++s) names += std::string(" ") + stageLabel(s);
+      for (int s = 0; s < kBenchStageCount; ++s) names += std::string(" ") + stageLabel(s);
       throw Error("--inject-delay " + d + ": expected STAGE=MS, STAGE one of" + names);
     }
     const double ms = parseNumber(d.substr(eq + 1), "--inject-delay");
@@ -397,14 +397,14 @@ std::string plural(long n, const char* word) {
 
 namespace {
 
-using BenchTimes = std::array<double, kStageCount>;  // by position in kBenchStages
+using BenchTimes = std::array<double, kBenchStageCount>;  // by position in kBenchStages
 
 /// What the bench draws into, made once for every run.
 struct BenchScene {
   Viewer viewer;  ///< headless: the context, the renderer with the model, the one draw
   LayoutSpec layout;
   glm::mat3 orientation;
-  std::array<double, kStageCount> inject{};
+  std::array<double, kBenchStageCount> inject{};
   bool gpuProjection = false;  ///< --projection, as decided for the context that came up
   Photometry photometry;       // as the pipeline: one lookup table, each frame's exposure scales it
   Linearizer lin{photometry};
@@ -516,12 +516,12 @@ BenchTimes timeFrame(BenchScene& scene, RunState& run, FrameSource& source,
 /// Per stage: the median of the runs' medians, and p95, p99 and max over every frame; printed
 /// as a table and returned as the report's "stages".
 nlohmann::ordered_json stageSummary(const std::vector<BenchTimes>& all,
-                                    const std::array<std::vector<double>, kStageCount>& runMedians,
+                                    const std::array<std::vector<double>, kBenchStageCount>& runMedians,
                                     int repeat, int frames, const std::string& description) {
   nlohmann::ordered_json stages;
   std::printf("%-9s %9s %9s %9s %9s   (ms; %s of %s, %s)\n", "stage", "median", "p95", "p99", "max",
               plural(repeat, "run").c_str(), plural(frames, "frame").c_str(), description.c_str());
-  for (int s = 0; s < kStageCount; ++s) {
+  for (int s = 0; s < kBenchStageCount; ++s) {
     std::vector<double> v;
     for (const auto& t : all) v.push_back(t[std::size_t(s)]);
     const double med = percentile(runMedians[std::size_t(s)], 0.5);
@@ -601,7 +601,7 @@ Comparison compareWithBaseline(const nlohmann::ordered_json& stages, double cali
   Comparison c;
   const double baseCal = baseline.at("calibration_ms").get<double>();
   const nlohmann::json& baseStages = baseline.at("stages");
-  for (int s = 0; s < kStageCount; ++s) {
+  for (int s = 0; s < kBenchStageCount; ++s) {
     if (!baseStages.contains(stageLabel(s))) continue;
     const double baseMs = baseStages.at(stageLabel(s)).at("median_ms").get<double>();
     const double nowMs = stages[stageLabel(s)]["median_ms"].get<double>();
@@ -701,7 +701,7 @@ int runBench(const Args& a) {
   // The runs: each starts the source from its first frame (rewound, or opened again where it
   // cannot rewind) and times every frame; the calibration kernel is timed before each frame.
   std::vector<BenchTimes> all;
-  std::array<std::vector<double>, kStageCount> runMedians;
+  std::array<std::vector<double>, kBenchStageCount> runMedians;
   CalibrationKernel calibrationKernel;
   std::string description;
   const Contention sched;
@@ -720,7 +720,7 @@ int runBench(const Args& a) {
     }
     lastCoefficients = state.last.c;
     if (times.empty()) break;
-    for (int s = 0; s < kStageCount; ++s) {
+    for (int s = 0; s < kBenchStageCount; ++s) {
       std::vector<double> v;
       for (const auto& t : times) v.push_back(t[std::size_t(s)]);
       runMedians[std::size_t(s)].push_back(percentile(v, 0.5));
