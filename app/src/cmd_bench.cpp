@@ -173,8 +173,9 @@ constexpr int kWarmup =
     3;  // frames at the start of each run shown as warm-up (caches, JIT of llvmpipe's shaders)
 
 /// Frames' stage times stacked, one line a frame, into `data`; the totals.
-std::vector<double> writeStackedStages(const std::string& data, const std::string& path,
-                                       const std::vector<std::array<double, kBenchStageCount>>& frames) {
+std::vector<double> writeStackedStages(
+    const std::string& data, const std::string& path,
+    const std::vector<std::array<double, kBenchStageCount>>& frames) {
   std::vector<double> total;
   std::ofstream d(data);
   for (std::size_t i = 0; i < frames.size(); ++i) {
@@ -215,7 +216,7 @@ std::string plotScript(const std::string& png, const std::string& data, const st
       << top << " fc rgb '#909090' fs solid 0.35 noborder behind\n";
   g << "set label 1 'grey bands: the warm-up frames of each run' at graph 0.01, graph 0.96\n";
   const char* colours[kBenchStageCount] = {"#1f77b4", "#ff7f0e", "#2ca02c", "#17becf",
-                                      "#d62728", "#9467bd", "#8c564b"};
+                                           "#d62728", "#9467bd", "#8c564b"};
   g << "plot ";
   for (int s = kBenchStageCount - 1; s >= 0; --s) {
     g << "'" << data << "' using 1:" << (s + 2) << " with filledcurves x1 lc rgb '" << colours[s]
@@ -259,8 +260,9 @@ void runGnuplot(const std::string& script, const std::string& png, const std::st
 /// The frame-time plot, by gnuplot (pngcairo): stages stacked and filled against the frame
 /// number, the warm-up frames shaded, and a histogram of the total with median and p95 marked.
 /// Written to a temporary file and renamed; lp::Error when gnuplot is missing or fails.
-void drawPlot(const std::string& path, const std::vector<std::array<double, kBenchStageCount>>& frames,
-              int framesPerRun, const std::string& title) {
+void drawPlot(const std::string& path,
+              const std::vector<std::array<double, kBenchStageCount>>& frames, int framesPerRun,
+              const std::string& title) {
   AtomicOutput plot(path);  // gnuplot writes the PNG under its temporary name
   const std::string& png = plot.temporary();
   const std::string stem = png.substr(0, png.size() - fs::path(png).extension().string().size());
@@ -515,9 +517,10 @@ BenchTimes timeFrame(BenchScene& scene, RunState& run, FrameSource& source,
 
 /// Per stage: the median of the runs' medians, and p95, p99 and max over every frame; printed
 /// as a table and returned as the report's "stages".
-nlohmann::ordered_json stageSummary(const std::vector<BenchTimes>& all,
-                                    const std::array<std::vector<double>, kBenchStageCount>& runMedians,
-                                    int repeat, int frames, const std::string& description) {
+nlohmann::ordered_json stageSummary(
+    const std::vector<BenchTimes>& all,
+    const std::array<std::vector<double>, kBenchStageCount>& runMedians, int repeat, int frames,
+    const std::string& description) {
   nlohmann::ordered_json stages;
   std::printf("%-9s %9s %9s %9s %9s   (ms; %s of %s, %s)\n", "stage", "median", "p95", "p99", "max",
               plural(repeat, "run").c_str(), plural(frames, "frame").c_str(), description.c_str());
