@@ -134,9 +134,10 @@ class CalibrationKernel {
 // How much other programs held this process back: over its threads, the time each waited on a
 // run queue for a CPU against the time it ran (Linux's scheduler statistics,
 // /proc/self/task/*/schedstat: run ns, wait ns, timeslices). 1 + wait / run is the slowdown that
-// sharing the CPUs alone explains (1 on an idle machine; 2.2 for a busy loop beside four
-// stress-ng workers on two cores). The calibration kernel, the fastest of many short repetitions,
-// sees the machine's speed and not this; a stage's time sees both.
+// sharing the CPUs alone explains: about 1.06 on an idle 2-core machine (bench's own threads wait
+// for each other a little), 4.1 beside six stress-ng workers there. Runs are compared by its
+// ratio to the baseline's. The calibration kernel, the fastest of many short repetitions, sees the
+// machine's speed and not this; a stage's time sees both.
 class Contention {
  public:
   Contention() : start_(read()) {}
