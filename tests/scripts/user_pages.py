@@ -1,8 +1,9 @@
 #!/usr/bin/env python3
 """The user pages (README.md, docs/ but development.md and the generated reference) speak of the
-program, not of its tests or its history: no test name (a suite of tests/ followed by a dot and a
-name, as `LiveHdr.CalibrateRecoversTheResponse`), no "-dirty" commit stamp, no "issue N" or
-"this session". Prints each page:line that does. Usage: user_pages.py ROOT"""
+program, not of its tests or its past: no test name (a suite of tests/ followed by a dot and a
+name, as `LiveHdr.CalibrateRecoversTheResponse`), no "-dirty" commit stamp, no ticket number and
+no phrase that dates the text (the patterns in `history` below). Prints each page:line that does.
+Usage: user_pages.py ROOT"""
 import pathlib
 import re
 import sys
@@ -21,7 +22,8 @@ def main(root):
     if len(suites) < 10:
         sys.exit(f'tests/: only {len(suites)} suites found')
     test = re.compile(r'`(?:%s)\.[A-Za-z0-9_*]+' % '|'.join(sorted(suites, key=len, reverse=True)))
-    history = re.compile(r'-dirty\b|\bissue \d+|\bthis session\b|\bbefore this change\b', re.I)
+    history = re.compile(r'-dirty\b|\bissue\s+\d+|\bthis\s+session\b|\bbefore\s+this\s+change\b',
+                         re.I)
     pages = [root / 'README.md'] + sorted(p for p in (root / 'docs').glob('*.md')
                                           if p.name not in ('development.md', 'reference.md'))
     bad = 0
