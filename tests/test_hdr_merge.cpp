@@ -21,7 +21,9 @@
 #include "liveprobe/capture/v4l2.h"
 #endif
 #include "liveprobe/sh/error.h"
+#include "liveprobe/sh/lights.h"
 #include "liveprobe/sh/simd.h"
+#include "turned_map.h"
 
 namespace {
 
@@ -461,3 +463,69 @@ TEST(UvcMetadata, TheMetadataNodeFollowsTheVideoNode) {
 #endif  // LIVEPROBE_WITH_V4L2
 
 }  // namespace
+
+namespace {
+
+// One 8-bit sRGB frame of a float map at exposure t (the map is radiance per second).
+Frame shootImage(const lp::Image& map, double t, std::uint64_t sequence) {
+  Frame f;
+  f.format = lp::PanoramaFormat::BgrU8;
+  f.width = map.width, f.height = map.height;
+  f.radianceScale = 1.0 / t;
+  f.sequence = sequence;
+  f.bgr8.resize(map.rgb.size());
+  for (std::size_t i = 0; i < map.rgb.size(); i += 3)
+    for (std::size_t c = 0; c < 3; ++c)
+      f.bgr8[i + 2 - c] = std::uint8_t(std::lround(
+          255.0f * lp::linearToSrgb(std::clamp(float(map.rgb[i + c] * t), 0.0f, 1.0f))));
+  return f;
+}
+
+double sunShare(const float* rgb, int w, int h) {
+  const lp::LightSplit s =
+      lp::projectWithLights(lp::PanoramaView::rgbF32(rgb, w, h), lp::LightOptions{.maxLights = 1});
+  return s.lights.empty() ? 0.0 : double(s.lights.front().share);
+}
+
+}  // namespace
+
+// A camera turning 1 degree a frame (quarry_01, a sun over a quarry, at 256x128) about the
+// vertical and about a tilted axis, bracketing -13, -7 and 0 EV: merged with its older frames
+// turned to the newest by the rotation the frames show, the sun keeps its share of the HDR
+// frame's in every frame past start-up; merged as they come, it does not.
+TEST(HdrMerge, ATurningCamerasFramesAreAlignedBeforeTheyMerge) {
+  const lp::Image full =
+      lp::loadImage(std::string(LIVEPROBE_DATA_DIR) + "/equirect/quarry_01_1k.hdr");
+  const lp::Image map = lp::reduceEquirect(full.rgb.data(), full.width, full.height, 4);
+  std::vector<float> lum;
+  for (std::size_t i = 0; i < map.rgb.size(); i += 3) lum.push_back(map.rgb[i + 1]);
+  std::nth_element(lum.begin(), lum.begin() + lum.size() / 2, lum.end());
+  const double t0 = 0.18 / lum[lum.size() / 2];  // 0 EV: the median at mid-grey
+  const double yaw[3] = {0, 0, 1}, tilted[3] = {0.57735, 0.57735, 0.57735};
+  for (const double* axis : {yaw, tilted})
+    for (const bool align : {false, true}) {
+      BracketMerger merger(MergeOptions{.frames = 3, .align = align});
+      Frame out;
+      int frames = 0, within = 0;
+      std::string misses;
+      for (int n = 0; n < 40; ++n) {
+        const lp::Image now = lpt::turnedMap(map, axis, n);
+        const int stop[3] = {-13, -7, 0};
+        merger.add(shootImage(now, t0 * std::exp2(stop[n % 3]), std::uint64_t(n)), out);
+        if (n < 6) continue;
+        const double want = sunShare(now.rgb.data(), now.width, now.height);
+        const double got = sunShare(out.rgb.data(), out.width, out.height);
+        ++frames;
+        if (std::abs(got - want) <= 0.1 * want)
+          ++within;
+        else
+          misses += " " + std::to_string(n) + ":" + std::to_string(got / want);
+      }
+      std::printf("axis %g, %s: the share within 10%% in %d of %d frames;%s\n", axis[0],
+                  align ? "aligned" : "as they come", within, frames, misses.c_str());
+      if (align)
+        EXPECT_GE(within, 0.95 * frames) << "axis " << axis[0] << misses;
+      else
+        EXPECT_LT(within, frames) << "axis " << axis[0] << ": the scene turns too little to tell";
+    }
+}

@@ -201,41 +201,61 @@ double groundDarkening(const std::string& coeffs, double exposure, std::vector<b
 // darkened within 10% as much; one 8-bit exposure finds no sun to cast one.
 // A moving scene: quarry_01 (a sun over a quarry) turned 1 degree a frame about the vertical
 // and about a tilted axis, one stop of neutral density, 3 to 5 exposures applied 3 frames late,
-// each frame's exposure from the camera's metadata. Against the HDR replay of the same frames,
-// no merged frame past start-up whose sun's share is more than 25% off the truth says it can be
-// trusted (confidence 0.9 or more): a sun read by older exposures only carries the doubt the
-// scene's motion cast on them. (How often the share is within 10%: docs/hdr.md.)
-TEST(LiveHdr, AMovingSceneNeverTrustsASunItLost) {
+// each frame's exposure from the camera's metadata, and without metadata (exposures told from
+// the pixels). Against the HDR replay of the same frames, past start-up: the sun's share within
+// 10% in at least 95% of the merged frames (90% in each run), its direction within 1 degree in as
+// many, and no
+// frame whose share is more than 25% off the truth says it can be trusted (confidence 0.9 or
+// more). The older frames of each bracket are turned to the newest by the rotation the frames
+// show; docs/hdr.md has the counts.
+TEST(LiveHdr, AMovingSceneKeepsItsSunOrSaysItLostIt) {
   const double yaw[3] = {0, 0, 1}, tilted[3] = {0.57735, 0.57735, 0.57735};
+  constexpr int kFrames = 75;  // more than the run takes: the recording never loops back
+  int total = 0, totalWithin = 0, totalAimed = 0;
   for (const double* axis : {yaw, tilted}) {
     lpt::TempDir frames;
     const auto files =
         lpt::turningFrames(std::string(LIVEPROBE_DATA_DIR) + "/equirect/quarry_01_1k.hdr", 4, axis,
-                           1.0, 60, frames.path);
+                           1.0, kFrames, frames.path);
     const auto truth = hdrReplay(frames / "%04d.exr");
-    ASSERT_EQ(truth.size(), 60u);
-    for (const std::string bracket : {"-13,-7,0", "-13,-9,-4,0", "-13,-10,-7,-3,0"}) {
+    ASSERT_EQ(truth.size(), std::size_t(kFrames));
+    for (const std::string bracket :
+         {"-13,-7,0", "-13,-9,-4,0", "-13,-10,-7,-3,0", "-13,-7,0 without metadata"}) {
+      const bool metadata = bracket.find("without") == std::string::npos;
       const std::string what = "axis " + std::to_string(axis[0]) + " bracket " + bracket;
       Emulator emu("YUYV_256x128", files, "control_delay=3");
-      emu.env = "LPEMU_SENSITIVITY=0.5 ";
-      const auto r = emu.run("live /dev/video7 --bracket " + bracket +
+      emu.env = std::string("LPEMU_SENSITIVITY=0.5 ") + (metadata ? "" : "LPEMU_META_DEVICE= ");
+      const auto r = emu.run("live /dev/video7 --bracket " + bracket.substr(0, bracket.find(' ')) +
                              " --lock-exposure 0.3 --headless --view-size 64x36 --no-background "
                              "--frames 58 --sun --coeffs-out " +
                              emu.tmp / "c.jsonl");
       ASSERT_EQ(r.exitCode, 0) << r.output;
-      int frames = 0, within = 0;
+      int frames = 0, within = 0, aimed = 0;
+      std::string misses;  // frame: merged share / HDR share
       // scripts/hdr-pictures plots the first run (yaw, three exposures) from this table.
       const char* table = std::getenv("LIVEPROBE_HDR_MOTION_TABLE");
       std::ofstream plot;
       if (table && axis == yaw && bracket == "-13,-7,0") plot.open(table);
       for (const json& f : readJsonl(emu.tmp / "c.jsonl")) {
         const long s = f["sequence"].get<long>();
-        if (s < 12) continue;  // start-up: the lock, the first brackets
+        if (s < 14) continue;  // start-up: the lock, the first complete brackets
+        ASSERT_LT(s, kFrames) << what;
         ++frames;
-        // The emulator serves source frame `sequence` (mod 60) as the camera's frame `sequence`.
-        const double want = truth[std::size_t(s % 60)]["lights"][0]["share"].get<double>();
+        // The emulator serves source frame `sequence` as the camera's frame `sequence`.
+        const json& hdr = truth[std::size_t(s)]["lights"][0];
+        const double want = hdr["share"].get<double>();
         const double got = f.contains("lights") ? f["lights"][0]["share"].get<double>() : 0.0;
         within += std::abs(got - want) <= 0.1 * want;
+        if (std::abs(got - want) > 0.1 * want)
+          misses += " " + std::to_string(s) + ":" + std::to_string(got / want).substr(0, 4);
+        if (f.contains("lights")) {
+          const auto& a = hdr["direction"];
+          const auto& b = f["lights"][0]["direction"];
+          const double dot = a[0].get<double>() * b[0].get<double>() +
+                             a[1].get<double>() * b[1].get<double>() +
+                             a[2].get<double>() * b[2].get<double>();
+          aimed += std::acos(std::clamp(dot, -1.0, 1.0)) * 180.0 / M_PI <= 1.0;
+        }
         plot << s << " " << want << " " << got << " " << f["confidence"]["value"].get<double>()
              << "\n";
         if (std::abs(got - want) > 0.25 * want)
@@ -243,10 +263,23 @@ TEST(LiveHdr, AMovingSceneNeverTrustsASunItLost) {
               << what << ": frame " << s << " share " << got << " of " << want;
       }
       EXPECT_GE(frames, 40) << what << "\n" << r.output;
-      std::printf("%s: the sun's share within 10%% in %d of %d frames\n", what.c_str(), within,
-                  frames);
+      // Each run: 90% or more (the last few frames off by 10 to 12% are 8-bit and 4:2:2 noise
+      // on a sun two pixels wide); all runs together: 95% or more.
+      EXPECT_GE(within, 0.9 * frames) << what;
+      EXPECT_GE(aimed, 0.9 * frames) << what;
+      total += frames, totalWithin += within, totalAimed += aimed;
+      std::printf(
+          "%s: the sun's share within 10%% in %d of %d frames, its direction within 1 "
+          "degree in %d; misses (frame: share / HDR share):%s\n",
+          what.c_str(), within, frames, aimed, misses.c_str());
     }
   }
+  EXPECT_GE(totalWithin, 0.95 * total);
+  EXPECT_GE(totalAimed, 0.95 * total);
+  std::printf(
+      "all runs: the share within 10%% in %d of %d frames, the direction within 1 degree "
+      "in %d\n",
+      totalWithin, total, totalAimed);
 }
 
 TEST(LiveHdr, TheBracketsSunCastsTheHdrShadow) {

@@ -8,6 +8,7 @@
 #include <utility>
 #include <vector>
 
+#include "bracket_align.h"
 #include "liveprobe/capture/image.h"
 #include "liveprobe/capture/input_file.h"
 #include "liveprobe/sh/error.h"
@@ -368,19 +369,45 @@ float rowWeight(int y, int h, bool equirect) {
 
 }  // namespace
 
+// The camera's rotation over the window, and what is turned by it: the older frames, and the
+// last merges' luminance (each in the orientation of the frame it was merged for).
+struct BracketMerger::Alignment {
+  explicit Alignment(const CameraResponse& response) : coder(response.linear) {}
+  align::RotationTracker tracker;
+  align::Coder coder;
+  std::array<std::vector<std::uint8_t>, kMaxBracket> turned;
+  std::vector<float> previousTurned, referenceTurned;
+  std::uint64_t previousSequence = 0, referenceSequence = 0;  ///< the frames they were merged for
+  std::vector<std::uint8_t> nearClip;  ///< the newest frame clips the pixel or one beside it
+};
+
+namespace {
+// A turn that moves no pixel by more than this is not applied (a still camera's estimate is
+// noise of a hundredth of a pixel).
+constexpr double kLeastTurnPixels = 0.25;
+}  // namespace
+
 BracketMerger::BracketMerger(MergeOptions options) : opt_(std::move(options)) {
   if (opt_.frames < 1 || opt_.frames > kMaxBracket)
     throw Error("a bracket merges 1 to " + std::to_string(kMaxBracket) + " frames");
   // Codes the calibration never read count as noise or as clipped.
   opt_.noiseFloor = std::max(opt_.noiseFloor, opt_.response.readFrom - 1);
   opt_.clipLevel = std::min(opt_.clipLevel, opt_.response.readTo + 1);
+  if (opt_.align && opt_.equirect && opt_.frames > 1)
+    align_ = std::make_unique<Alignment>(opt_.response);
 }
+BracketMerger::~BracketMerger() = default;
+BracketMerger::BracketMerger(BracketMerger&&) noexcept = default;
+BracketMerger& BracketMerger::operator=(BracketMerger&&) noexcept = default;
 
 void BracketMerger::push(const Frame& in) {
   if (in.format != PanoramaFormat::BgrU8)
     throw Error("an exposure bracket merges 8-bit frames; this frame is already radiance");
-  if (!window_.empty() && (window_.back().width != in.width || window_.back().height != in.height))
+  if (!window_.empty() &&
+      (window_.back().width != in.width || window_.back().height != in.height)) {
     window_.clear(), agreements_.clear();
+    if (align_) align_->tracker.clear();
+  }
   // The window keeps copies; the oldest frame's buffer is reused for the newest.
   Frame kept;
   if (window_.size() == std::size_t(opt_.frames)) {
@@ -395,6 +422,29 @@ void BracketMerger::push(const Frame& in) {
   kept.exposure100us = in.exposure100us, kept.gain = in.gain;
   window_.push_back(std::move(kept));
   agreements_.push_back(1.0);  // its merge's own agreement, once measured
+  if (align_) {
+    align_->tracker.add(
+        align::logPyramid(in, opt_.response.linear, kWellExposed - 1, opt_.clipLevel),
+        in.radianceScale, in.sequence);
+  }
+}
+
+std::array<const std::uint8_t*, kMaxBracket> BracketMerger::alignedWindow(Executor* executor) {
+  std::array<const std::uint8_t*, kMaxBracket> pixels{};
+  const int n = int(window_.size());
+  for (int i = 0; i < n; ++i) {
+    const Frame& f = window_[std::size_t(i)];
+    pixels[std::size_t(i)] = f.bgr8.data();
+    if (!align_ || i == n - 1) continue;
+    const glm::mat3 q = align_->tracker.turnSince(f.sequence);
+    if (align::displacementPixels(q, f.width) < kLeastTurnPixels) continue;
+    auto& turned = align_->turned[std::size_t(i)];
+    turned.resize(f.bgr8.size());
+    align::turnCodes(f.bgr8.data(), f.width, f.height, q, align_->coder, opt_.clipLevel,
+                     turned.data(), executor);
+    pixels[std::size_t(i)] = turned.data();
+  }
+  return pixels;
 }
 
 namespace {
@@ -450,7 +500,8 @@ struct BracketView {
   const std::array<std::array<float, 256>, 3>* lut = nullptr;
   Judge judge{};
   float inv2s2 = 0;
-  merge::RowKernel kernel = nullptr;  ///< the pixel loop (merge_kernel.h)
+  merge::RowKernel kernel = nullptr;       ///< the pixel loop (merge_kernel.h)
+  const std::uint8_t* nearClip = nullptr;  ///< merge::RowInput::nearClip, the whole frame
 
   void read(int i, std::size_t at, Reading& r) const {
     const std::uint8_t* p = pixels[std::size_t(i)] + at;
@@ -474,7 +525,7 @@ FrameConfidence BracketMerger::add(const Frame& in, Frame& out, Executor* execut
   out.radianceScale = 1.0;
   out.exposure100us = in.exposure100us, out.gain = in.gain;
   int exposures = 0;
-  const BracketView view = prepare(exposures);
+  BracketView view = prepare(alignedWindow(executor), exposures);
   const std::size_t pixels = std::size_t(w) * std::size_t(h);
   const bool fresh = previous_.size() == pixels;
   if (!fresh) {
@@ -484,14 +535,45 @@ FrameConfidence BracketMerger::add(const Frame& in, Frame& out, Executor* execut
   // Where the last merge was trusted, its luminance is the reference: this merge's goes into the
   // other buffer, and neither is copied.
   float* luminanceOut = referenceIsPrevious_ ? reference_.data() : previous_.data();
+  const float* previous = previous_.data();
   const float* reference = referenceIsPrevious_ ? previous_.data() : reference_.data();
+  // The last merges' luminance turned to the newest frame, where the camera turned since.
+  std::uint64_t previousSequence = in.sequence;
+  if (align_) {
+    Alignment& a = *align_;
+    if (fresh) previousSequence = a.previousSequence;
+    const auto turn = [&](const float* lum, std::uint64_t then, std::vector<float>& into) {
+      const glm::mat3 q = a.tracker.turnSince(then);
+      if (align::displacementPixels(q, w) < kLeastTurnPixels) return lum;
+      into.resize(pixels);
+      align::turnLuminance(lum, w, h, q, into.data(), executor);
+      return static_cast<const float*>(into.data());
+    };
+    previous = turn(previous, previousSequence, a.previousTurned);
+    reference =
+        referenceIsPrevious_ ? previous : turn(reference, a.referenceSequence, a.referenceTurned);
+  }
+  // Beside the newest frame's clipped pixels, for the turned frames' sub-pixel edges.
+  if (align_) {
+    align_->nearClip.assign(pixels, 0);
+    const std::uint8_t* px = window_.back().bgr8.data();
+    for (int y = 0; y < h; ++y)
+      for (int x = 0; x < w; ++x) {
+        const std::uint8_t* p = px + (std::size_t(y) * w + std::size_t(x)) * 3;
+        if (std::max({p[0], p[1], p[2]}) < opt_.clipLevel) continue;
+        for (int dy = std::max(0, y - 1); dy <= std::min(h - 1, y + 1); ++dy)
+          for (int dx = x - 1; dx <= x + 1; ++dx)
+            align_->nearClip[std::size_t(dy) * w + std::size_t((dx + w) % w)] = 1;
+      }
+    view.nearClip = align_->nearClip.data();
+  }
   const MergeTally total = parallelReduce(
       executor, std::size_t(h), Split{.grain = 1, .perThread = 4}, MergeTally{},
       [&](std::size_t y0, std::size_t y1) {
         MergeTally t;
         for (std::size_t y = y0; y < y1; ++y)
           t.add(mergeRow(view, y, out.rgb.data() + y * std::size_t(w) * 3,
-                         {previous_.data() + y * std::size_t(w), luminanceOut + y * std::size_t(w),
+                         {previous + y * std::size_t(w), luminanceOut + y * std::size_t(w),
                           reference + y * std::size_t(w)},
                          fresh));
         return t;
@@ -514,11 +596,16 @@ FrameConfidence BracketMerger::add(const Frame& in, Frame& out, Executor* execut
   // A trusted merge (complete, its brightest pixel read unclipped, its confidence 0.9 or more)
   // is what later clipped pixels are measured against.
   if (referenceIsPrevious_) std::swap(previous_, reference_);  // this merge's is the last
+  if (align_) {
+    if (referenceIsPrevious_) align_->referenceSequence = previousSequence;
+    align_->previousSequence = in.sequence;
+  }
   referenceIsPrevious_ = c.complete && c.brightestMeasured && c.value() >= 0.9;
   return c;
 }
 
-BracketView BracketMerger::prepare(int& exposures) const {
+BracketView BracketMerger::prepare(const std::array<const std::uint8_t*, kMaxBracket>& pixels,
+                                   int& exposures) const {
   BracketView v;
   v.n = int(window_.size()), v.newest = v.n - 1;
   v.lut = &opt_.response.linear;
@@ -527,7 +614,7 @@ BracketView BracketMerger::prepare(int& exposures) const {
   v.inv2s2 = float(1.0 / (2.0 * opt_.ghostSigma * opt_.ghostSigma));
   v.kernel = merge::active();
   for (int i = 0; i < v.n; ++i) {
-    v.pixels[std::size_t(i)] = window_[std::size_t(i)].bgr8.data();
+    v.pixels[std::size_t(i)] = pixels[std::size_t(i)];
     v.scales[std::size_t(i)] = float(window_[std::size_t(i)].radianceScale);
   }
   v.usable = usableFrames(v);
@@ -563,6 +650,7 @@ MergeTally BracketMerger::mergeRow(const BracketView& v, std::size_t y, float* o
   in.width = w;
   in.previous = lum.previous, in.luminance = lum.out, in.reference = lum.reference;
   in.fresh = fresh;
+  in.nearClip = v.nearClip ? v.nearClip + y * std::size_t(w) : nullptr;
   in.rgb = out;
   const merge::RowSums s = v.kernel(in);
   const float rw = rowWeight(int(y), h, opt_.equirect);

@@ -101,8 +101,8 @@ HWY_INLINE Reading Read(DF d, const RowInput& in, const std::uint8_t* p, const f
 // the lanes that are pixels of the row.
 template <int M>
 void Chunk(const RowInput& in, const std::uint8_t* const* px, const float* const* lin,
-           const float* previous, const float* reference, float* luminance, float* rgb, VF x,
-           MF valid, LaneSums& acc) {
+           const float* previous, const float* reference, const std::uint8_t* nearClip,
+           float* luminance, float* rgb, VF x, MF valid, LaneSums& acc) {
   const DF d;
   constexpr int m = M, now = m - 1;
   Reading r[kMaxFrames];
@@ -115,22 +115,48 @@ void Chunk(const RowInput& in, const std::uint8_t* const* px, const float* const
   // and the largest such radiance is what was lost (-1: nothing). Where both are well exposed
   // and agree, the older one is weighed by how closely (d = log q, to within 2%).
   VF lost = hn::Set(d, -1.0f);
+  const DI di;
+  const MF edge = nearClip ? hn::Gt(hn::ConvertTo(d, hn::PromoteTo(di, hn::LoadU(DU8(), nearClip))),
+                                    hn::Zero(d))
+                           : hn::FirstN(d, 0);
+  MF newestGivesWay = hn::FirstN(d, 0);
   for (int i = 0; i < now; ++i) {
     Reading& o = r[i];
     const MF both = hn::And(o.well, n.well);
+    // Beside the newest frame's clipped core, a shorter exposure reading brighter: the source's
+    // edge, not a contradiction.
+    const MF edgeOfSource =
+        in.scale[i] > 1.02f * in.scale[now]
+            ? hn::And(edge, hn::And(both, hn::Gt(o.peak, hn::Mul(hn::Set(d, 1.5625f), n.peak))))
+            : hn::FirstN(d, 0);
+    newestGivesWay = hn::Or(newestGivesWay, edgeOfSource);
     // q = o / n within (1 / 1.5625, 1.5625); n > 0 where it is well exposed.
     const MF agree =
         hn::And(both, hn::And(hn::Lt(o.peak, hn::Mul(hn::Set(d, 1.25f * 1.25f), n.peak)),
                               hn::Gt(hn::Mul(hn::Set(d, 1.25f * 1.25f), o.peak), n.peak)));
     const Bounds b = BoundsOf(d, in, o, hn::Set(d, in.scale[i]));
     const MF apart = hn::Or(hn::Gt(b.lo, bNow.hi), hn::Gt(bNow.lo, b.hi));
-    const MF disagree = hn::Or(hn::AndNot(agree, both), hn::AndNot(both, apart));
+    const MF disagree =
+        hn::AndNot(edgeOfSource, hn::Or(hn::AndNot(agree, both), hn::AndNot(both, apart)));
     const VF dq =
         hn::Div(hn::Mul(hn::Set(d, 2.0f), hn::Sub(o.peak, n.peak)), hn::Add(o.peak, n.peak));
     const VF closeness = hn::Exp(d, hn::Neg(hn::Mul(hn::Mul(dq, dq), hn::Set(d, in.inv2s2))));
     o.w = hn::IfThenZeroElse(disagree, hn::IfThenElse(agree, hn::Mul(o.w, closeness), o.w));
     lost = hn::IfThenElse(disagree, hn::Max(lost, Luminance(d, o.e0, o.e1, o.e2)), lost);
   }
+  r[now].w = hn::IfThenZeroElse(newestGivesWay, r[now].w);
+  // Two older readings, both well exposed, where the shorter exposure reads brighter beyond the
+  // tolerance: the edge of a source the longer one clips, the two placed a fraction of a pixel
+  // apart (the turn between them, resampled) or the source moved. The longer reading misses
+  // light the shorter one measured beside the clipped core, and gives way.
+  for (int i = 0; i < now; ++i)
+    for (int j = 0; j < now; ++j) {
+      if (j == i || !(in.scale[j] > 1.02f * in.scale[i])) continue;  // j: the shorter exposure
+      const MF brighter =
+          hn::And(hn::And(r[i].well, hn::Gt(r[j].w, hn::Zero(d))),
+                  hn::And(r[j].well, hn::Gt(r[j].peak, hn::Mul(hn::Set(d, 1.5625f), r[i].peak))));
+      r[i].w = hn::IfThenZeroElse(brighter, r[i].w);
+    }
   // The weighted mean; the clipped reading that bounds the pixel highest (the first of equals).
   VF sw = hn::Zero(d), c0 = sw, c1 = sw, c2 = sw;
   VF k0 = sw, k1 = sw, k2 = sw, kPeak = hn::Set(d, -1.0f);
@@ -198,6 +224,7 @@ RowSums MergeRow(const RowInput& in) {
   HWY_ALIGN std::uint8_t bytes[kMaxFrames][3 * kBlock];
   HWY_ALIGN float linear[kMaxFrames][3 * kBlock];
   HWY_ALIGN float prev[kBlock], ref[kBlock], lum[kBlock], out[3 * kBlock];
+  HWY_ALIGN std::uint8_t near[kBlock];
   const std::uint8_t* px[kMaxFrames];
   const float* lin[kMaxFrames];
   const float *lutR = in.lut[0], *lutG = in.lut[1], *lutB = in.lut[2];
@@ -227,6 +254,7 @@ RowSums MergeRow(const RowInput& in) {
     }
     const float* previous = in.previous + x0;
     const float* reference = in.reference + x0;
+    const std::uint8_t* nearClip = in.nearClip ? in.nearClip + x0 : nullptr;
     float* luminance = in.luminance + x0;
     float* rgb = in.rgb + 3 * x0;
     if (!whole) {
@@ -234,13 +262,18 @@ RowSums MergeRow(const RowInput& in) {
       std::memcpy(prev, previous, sizeof(float) * std::size_t(count));
       std::memcpy(ref, reference, sizeof(float) * std::size_t(count));
       previous = prev, reference = ref, luminance = lum, rgb = out;
+      if (nearClip) {
+        std::memset(near, 0, sizeof near);
+        std::memcpy(near, nearClip, std::size_t(count));
+        nearClip = near;
+      }
     }
     for (int x = 0; x < kBlock; x += lanes) {
       const std::uint8_t* pxAt[kMaxFrames];
       const float* linAt[kMaxFrames];
       for (int i = 0; i < in.frames; ++i) pxAt[i] = px[i] + 3 * x, linAt[i] = lin[i] + x;
-      chunk(in, pxAt, linAt, previous + x, reference + x, luminance + x, rgb + 3 * x,
-            hn::Add(iota, hn::Set(d, float(x0 + x))),
+      chunk(in, pxAt, linAt, previous + x, reference + x, nearClip ? nearClip + x : nullptr,
+            luminance + x, rgb + 3 * x, hn::Add(iota, hn::Set(d, float(x0 + x))),
             hn::FirstN(d, std::size_t(std::clamp(count - x, 0, lanes))), acc);
     }
     if (!whole) {

@@ -31,6 +31,11 @@ struct RowInput {
   float* luminance = nullptr;
   const float* reference = nullptr;
   bool fresh = false;
+  /// Per pixel, where the older frames were turned to the newest: 1 where the newest frame clips
+  /// the pixel or one beside it (null: none). There an older, shorter exposure that reads
+  /// brighter than the newest is the edge of the source the newest clips, a fraction of a pixel
+  /// off, not a contradiction: the newest reading gives way.
+  const std::uint8_t* nearClip = nullptr;
   float* rgb = nullptr;  ///< the merged radiance, R, G, B per pixel
 };
 

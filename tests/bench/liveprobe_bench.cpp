@@ -16,10 +16,12 @@
 #include <immintrin.h>
 #endif
 
+#include "../turned_map.h"
 #include "liveprobe/capture/frame.h"
 #include "liveprobe/capture/hdr_merge.h"
 #include "liveprobe/capture/image.h"
 #include "liveprobe/capture/photometry.h"
+#include "liveprobe/capture/resample.h"
 #include "liveprobe/gl/context.h"
 #include "liveprobe/gl/mesh.h"
 #include "liveprobe/gl/renderer.h"
@@ -357,42 +359,70 @@ void pipelineBench(benchmark::State& state, int stage) {
   }
 }
 
-// An exposure bracket's merge: the synthetic sky (its sun about 11 stops over the sky) seen by an
-// 8-bit sRGB camera at -12, -6 and 0 EV, merged into radiance as live --bracket does each frame.
-// With `project`, what is timed is the projection of the merged frame (float RGB, the same
-// threads) that follows each merge in live: docs/speed.md gives the ratio of the two.
-void mergeBench(benchmark::State& state, Size s, int threads, bool project) {
-  const auto& radiance = skyF32(s);
-  std::vector<lp::Frame> bracket;
-  for (const double stops : {-12.0, -6.0, 0.0}) {
-    lp::Frame f;
-    f.format = lp::PanoramaFormat::BgrU8;
-    f.width = s.w, f.height = s.h;
-    const double t = 0.1 * std::exp2(stops);  // 0 EV: the sky's median near mid-grey
-    f.radianceScale = 1.0 / t;
-    f.bgr8.resize(radiance.size());
-    for (std::size_t i = 0; i < radiance.size(); i += 3)
-      for (int c = 0; c < 3; ++c)
-        f.bgr8[i + 2 - std::size_t(c)] = std::uint8_t(std::lround(
-            255 * lp::linearToSrgb(std::min(1.0f, float(radiance[i + std::size_t(c)] * t)))));
-    bracket.push_back(std::move(f));
+// One 8-bit sRGB frame of a radiance map (RGB floats) at exposure t.
+lp::Frame shootSrgb(const std::vector<float>& radiance, Size s, double t) {
+  lp::Frame f;
+  f.format = lp::PanoramaFormat::BgrU8;
+  f.width = s.w, f.height = s.h;
+  f.radianceScale = 1.0 / t;
+  f.bgr8.resize(radiance.size());
+  for (std::size_t i = 0; i < radiance.size(); i += 3)
+    for (int c = 0; c < 3; ++c)
+      f.bgr8[i + 2 - std::size_t(c)] = std::uint8_t(std::lround(
+          255 * lp::linearToSrgb(std::min(1.0f, float(radiance[i + std::size_t(c)] * t)))));
+  return f;
+}
+
+// Two brackets of a camera turning 1 degree a frame about a tilted axis: quarry_01 (a sun over
+// a quarry) at -13, -7 and 0 EV (0 EV: its median at mid-grey).
+std::vector<lp::Frame> turningBrackets(Size s) {
+  const lp::Image full =
+      lp::loadImage(std::string(LIVEPROBE_DATA_DIR) + "/equirect/quarry_01_1k.hdr");
+  const lp::Image map = lp::resampleToEquirect(full, {}, s.w, s.h);
+  std::vector<float> green;
+  for (std::size_t i = 1; i < map.rgb.size(); i += 3) green.push_back(map.rgb[i]);
+  std::nth_element(green.begin(), green.begin() + green.size() / 2, green.end());
+  const double t0 = 0.18 / green[green.size() / 2];
+  const double axis[3] = {0.57735, 0.57735, 0.57735};
+  std::vector<lp::Frame> frames;
+  for (int n = 0; n < 6; ++n)
+    frames.push_back(
+        shootSrgb(lpt::turnedMap(map, axis, n).rgb, s, t0 * std::exp2((n % 3 - 2) * 6.5)));
+  return frames;
+}
+
+// An exposure bracket's merge, as live --bracket does each frame. Still: the synthetic sky (its
+// sun about 11 stops over the sky) at -12, -6 and 0 EV; the camera's turn is estimated and found
+// to be none. Turning: turningBrackets(), the older frames turned to the newest before they
+// merge. Project: the projection of the merged frame (float RGB, the same threads) that follows
+// each merge in live; docs/speed.md gives the ratio of the two.
+enum class MergeCase { Still, Turning, Project };
+void mergeBench(benchmark::State& state, Size s, int threads, MergeCase what) {
+  std::vector<lp::Frame> frames;
+  if (what == MergeCase::Turning) {
+    frames = turningBrackets(s);
+  } else {
+    for (const double stops : {-12.0, -6.0, 0.0})  // 0 EV: the sky's median near mid-grey
+      frames.push_back(shootSrgb(skyF32(s), s, 0.1 * std::exp2(stops)));
   }
   lp::BracketMerger merger({.frames = 3});
   lp::Frame out;
   lp::ThreadPool* workers = pool(threads);
-  std::size_t next = 0;
-  for (int i = 0; i < 3; ++i) merger.add(bracket[std::size_t(i)], out, workers);  // untimed: full
-  if (project) {
+  std::uint64_t sequence = 0;
+  const auto add = [&] {
+    lp::Frame& f = frames[sequence % frames.size()];
+    f.sequence = sequence++;  // a camera's stream: one frame after another
+    return merger.add(f, out, workers);
+  };
+  for (int i = 0; i < 3; ++i) add();  // untimed: full
+  if (what == MergeCase::Project) {
     const lp::Projector proj(lp::Layout::Equirect, s.w, s.h);
     const auto view = lp::PanoramaView::rgbF32(out.rgb.data(), s.w, s.h);
     benchmark::DoNotOptimize(proj.project(view, workers));
     for (auto _ : state) benchmark::DoNotOptimize(proj.project(view, workers));
     return;
   }
-  for (auto _ : state) {
-    benchmark::DoNotOptimize(merger.add(bracket[next], out, workers));
-    next = (next + 1) % bracket.size();
-  }
+  for (auto _ : state) benchmark::DoNotOptimize(add());
 }
 
 void registerAll() {
@@ -457,14 +487,16 @@ void registerAll() {
   benchmark::RegisterBenchmark("Render/bunny/1280x720/osmesa", renderBench)
       ->UseRealTime()
       ->Unit(benchmark::kMillisecond);
-  for (Size s : {Size{1920, 1080}, Size{3840, 1920}})
+  for (Size s : {Size{1920, 960}, Size{3840, 1920}})
     for (int threads : {1, 2})
-      for (const bool project : {false, true})
+      for (const auto& [what, name] :
+           {std::pair{MergeCase::Still, "merge"}, std::pair{MergeCase::Turning, "turning"},
+            std::pair{MergeCase::Project, "project"}})
         benchmark::RegisterBenchmark(
-            ("Merge/bracket:3/u8/" + sizeName(s) + "/threads:" + std::to_string(threads) +
-             (project ? "/project" : "/merge"))
+            ("Merge/bracket:3/u8/" + sizeName(s) + "/threads:" + std::to_string(threads) + "/" +
+             name)
                 .c_str(),
-            [=](benchmark::State& st) { mergeBench(st, s, threads, project); })
+            [=](benchmark::State& st) { mergeBench(st, s, threads, what); })
             ->UseRealTime()
             ->Unit(benchmark::kMillisecond);
   const char* stages[] = {"grab", "convert", "project"};

@@ -15,6 +15,12 @@
 // (exp(-d^2 / (2 sigma^2)), d the log ratio). A frame that contradicts the newest on most of the
 // picture (a hand over the lens, a flash) is left out whole. A source the newest frame clips (the
 // sun at 0 EV) can only come from an older, shorter exposure: it lags by up to N - 1 frames.
+// Where the camera turns between the frames (a rig, a vehicle, a hand), the older frames of an
+// equirect set are first turned to the newest by the rotation the frames show (bracket_align.h):
+// the sun read N - 1 frames ago is merged where the newest frame sees it. A turned source's edge
+// is a fraction of a pixel off between exposures: where a shorter exposure reads brighter than a
+// longer one's well-exposed reading, the longer gives way (it misses light the shorter measured
+// beside its clipped core), the newest frame too where it clips the pixel or one beside it.
 //
 // Each merge also says how far it can be trusted (FrameConfidence).
 #include <array>
@@ -22,6 +28,7 @@
 #include <cstdint>
 #include <deque>
 #include <functional>
+#include <memory>
 #include <optional>
 #include <string>
 #include <vector>
@@ -126,11 +133,17 @@ struct MergeOptions {
   /// Solid-angle weights for clippedShare: rows of an equirect frame weigh sin(theta).
   bool equirect = true;
   double ghostSigma = 0.3;  ///< motion weighting: sigma of the log radiance ratio
+  /// Equirect frames: older frames turned to the newest by the camera's rotation between them,
+  /// estimated from the frames.
+  bool align = true;
 };
 
 class BracketMerger {
  public:
   explicit BracketMerger(MergeOptions options);
+  ~BracketMerger();
+  BracketMerger(BracketMerger&&) noexcept;
+  BracketMerger& operator=(BracketMerger&&) noexcept;
 
   /// Adds an 8-bit frame, whose Frame::radianceScale is 1 / its exposure time (what the camera
   /// reported for it), and merges the window into `out`: RgbF32 radiance in the same units,
@@ -144,8 +157,11 @@ class BracketMerger {
 
  private:
   void push(const Frame& in);
+  /// The window's pixels as the merge reads them: older frames turned to the newest.
+  std::array<const std::uint8_t*, kMaxBracket> alignedWindow(Executor* executor);
   /// The window as the pixel loop reads it; `exposures`: the distinct exposure times in use.
-  BracketView prepare(int& exposures) const;
+  BracketView prepare(const std::array<const std::uint8_t*, kMaxBracket>& pixels,
+                      int& exposures) const;
   /// The frames of the window that do not contradict the newest as a whole.
   std::array<bool, kMaxBracket> usableFrames(const BracketView& view) const;
   /// One row merged into `out` (RGB) and its luminance into `previous`; the row's sums.
@@ -164,6 +180,8 @@ class BracketMerger {
   std::vector<float> reference_;      ///< the last trusted merge's (complete, in agreement)
   bool referenceIsPrevious_ = false;  ///< the last merge was trusted: reference_ is stale
   std::deque<double> agreements_;     ///< per window frame: the agreement of its own merge
+  struct Alignment;                   ///< the camera's rotation, and the frames turned by it
+  std::unique_ptr<Alignment> align_;  ///< null where the frames are not aligned
 };
 
 }  // namespace lp

@@ -1,0 +1,112 @@
+#pragma once
+// Aligning the frames of an exposure bracket to the newest: the camera's rotation between frames,
+// estimated from the frames themselves, and older frames turned by it before they are merged.
+//
+// What is estimated: a rotation of the whole sphere (the camera turning about any axis; a scene
+// that moves within itself is left to the merge's agreement test). How: each frame's log
+// luminance in radiance units (its exposure divided out, so frames of different exposures
+// compare where both measured) at up to 160 pixels wide and two halvings; Lucas-Kanade on the
+// sphere, coarse to fine, in the three parameters of a small rotation (the Jacobian of a pixel
+// is d x grad I), Huber-weighted so that what moved within the scene pulls little. Each new
+// frame is compared with the frame before it and with the latest frame of its own exposure (the
+// one with the most pixels measured in both); their estimates of the newest step are combined
+// by their information, with the last step's rate as a weak prior (a frame that measured
+// nothing useful, a short exposure of a dark scene, turns as the last one did).
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstddef>
+#include <cstdint>
+#include <deque>
+#include <glm/glm.hpp>
+#include <vector>
+
+#include "liveprobe/capture/frame.h"
+#include "liveprobe/sh/executor.h"
+
+namespace lp::align {
+
+/// One level of a frame's log-luminance pyramid: equirect, NaN where no reading is measured.
+struct LogLevel {
+  int width = 0, height = 0;
+  std::vector<float> value;
+};
+inline constexpr int kLevels = 3;
+using LogPyramid = std::array<LogLevel, kLevels>;  ///< finest first
+
+using ResponseTable = std::array<std::array<float, 256>, 3>;
+
+/// The log luminance (radiance units: Frame::radianceScale applied) of an 8-bit equirect frame,
+/// block-averaged to at most 160 pixels wide, where the largest channel of every pixel of the
+/// block read between `floor` and `clip` (exclusive); then halved twice.
+LogPyramid logPyramid(const Frame& frame, const ResponseTable& response, int floor, int clip);
+
+/// The rotation exp([w]x) (Rodrigues).
+glm::mat3 rotationFromVector(const glm::vec3& w);
+
+/// One comparison of two pyramids: the rotation Q with now(d) = old(Q d), as guess * exp(delta).
+struct PairEstimate {
+  glm::vec3 delta{0.0f};
+  glm::mat3 information{0.0f};  ///< of delta (inverse covariance, radians); 0 when rejected
+  double inliers = 0;           ///< fraction of the overlap within the noise, at the finest level
+};
+PairEstimate estimatePair(const LogPyramid& old, const LogPyramid& now, const glm::mat3& guess);
+
+/// The camera's turn between frames, from the frames: a rate (a rotation vector per camera
+/// frame) measured between frames of the same exposure over the last brackets.
+class RotationTracker {
+ public:
+  /// Adds a frame of the stream, in order; `sequence` counts the frames the camera took.
+  void add(LogPyramid pyramid, double radianceScale, std::uint64_t sequence);
+  /// Where the newest frame sees direction d, the frame of `sequence` saw turnSince(sequence) d.
+  glm::mat3 turnSince(std::uint64_t sequence) const;
+  void clear() { history_.clear(), measurements_.clear(), ratePerFrame_ = glm::vec3(0.0f); }
+
+ private:
+  struct Entry {
+    LogPyramid pyramid;
+    double scale;
+    std::uint64_t sequence;
+  };
+  struct Measurement {
+    std::uint64_t sequence;
+    glm::dvec3 rate;
+    glm::dmat3 information;
+  };
+  std::deque<Entry> history_;
+  std::deque<Measurement> measurements_;
+  glm::vec3 ratePerFrame_{0.0f};
+};
+
+/// How far a rotation moves a pixel of an equirect frame `width` wide, at most, in pixels.
+double displacementPixels(const glm::mat3& q, int width);
+
+/// A camera's response both ways: linear per code (R, G, B), and the nearest code per linear
+/// value, from a table on a square-root scale (4096 steps: finer than a code step at every code).
+class Coder {
+ public:
+  explicit Coder(const ResponseTable& response);
+  const ResponseTable& linear() const { return linear_; }
+  /// The code of channel `c` (0 R, 1 G, 2 B) nearest to linear value v.
+  std::uint8_t code(int c, float v) const {
+    const float x = std::sqrt(std::max(0.0f, v) * inverseTop_[std::size_t(c)]);
+    return table_[std::size_t(c)][std::size_t(std::min(float(kSteps), x * kSteps + 0.5f))];
+  }
+
+ private:
+  static constexpr int kSteps = 4096;
+  ResponseTable linear_;
+  std::array<std::array<std::uint8_t, kSteps + 1>, 3> table_{};
+  std::array<float, 3> inverseTop_{};
+};
+
+/// dst(d) = src(q d) for an 8-bit BGR equirect frame: bilinear in linear units, coded back to
+/// the nearest code; a pixel whose corners are clipped (a code at or above `clip`) by half their
+/// weight or more reads as the clipped corner of most weight.
+void turnCodes(const std::uint8_t* src, int width, int height, const glm::mat3& q,
+               const Coder& coder, int clip, std::uint8_t* dst, Executor* executor);
+/// dst(d) = src(q d) for one float per pixel, bilinear.
+void turnLuminance(const float* src, int width, int height, const glm::mat3& q, float* dst,
+                   Executor* executor);
+
+}  // namespace lp::align
