@@ -262,32 +262,34 @@ double displacementPixels(const glm::mat3& q, int width) {
 
 namespace {
 
-// The four pixels around a point (pixel coordinates, fx within a width of the frame either side)
-// and their bilinear weights; rows clamped, columns wrapped.
-struct Corners {
-  std::size_t at[4];
-  float weight[4];
+// Where each pixel of one row reads from: the index of the corner above-left (row y0, column
+// x0) and of the one above-right (x0 + 1, wrapped), and the bilinear fractions; the corners
+// below are a row further.
+struct RowSamples {
+  std::vector<std::uint32_t> left, right;
+  std::vector<float> ax, ay;
+  explicit RowSamples(int w)
+      : left(std::size_t(w)), right(std::size_t(w)), ax(std::size_t(w)), ay(std::size_t(w)) {}
+  void set(int x, float fx, float fy, int w, int h) {
+    fy = std::clamp(fy, 0.0f, float(h - 1));
+    int x0 = int(fx + float(w)) - w;  // floor, for fx > -w
+    ax[std::size_t(x)] = fx - float(x0);
+    x0 = x0 < 0 ? x0 + w : (x0 >= w ? x0 - w : x0);
+    const int x1 = x0 + 1 == w ? 0 : x0 + 1;
+    const int y0 = std::min(int(fy), h - 2);
+    ay[std::size_t(x)] = fy - float(y0);
+    left[std::size_t(x)] = std::uint32_t(y0 * w + x0);
+    right[std::size_t(x)] = std::uint32_t(y0 * w + x1);
+  }
 };
-inline Corners cornersAt(float fx, float fy, int w, int h) {
-  fy = std::clamp(fy, 0.0f, float(h - 1));
-  int x0 = int(fx + float(w)) - w;  // floor, for fx > -w
-  const float ax = fx - float(x0);
-  x0 = x0 < 0 ? x0 + w : (x0 >= w ? x0 - w : x0);
-  const int x1 = x0 + 1 == w ? 0 : x0 + 1;
-  const int y0 = std::min(int(fy), h - 2);
-  const float ay = fy - float(y0);
-  const std::size_t r0 = std::size_t(y0) * std::size_t(w), r1 = r0 + std::size_t(w);
-  return {{r0 + std::size_t(x0), r0 + std::size_t(x1), r1 + std::size_t(x0), r1 + std::size_t(x1)},
-          {(1 - ax) * (1 - ay), ax * (1 - ay), (1 - ax) * ay, ax * ay}};
-}
 
-// Calls put(x, y, corners) for every pixel of an equirect frame w x h with the corners it reads
-// from under the turn q: where from is exact on a grid every 8 pixels, bilinear between (a small
-// turn moves pixels smoothly), exact per pixel within 3 degrees of the poles (where a turn moves
-// a pixel's azimuth fast).
-template <class Put>
-void forEachTurned(int w, int h, const glm::mat3& q, Executor* executor, Put put) {
-  constexpr int kGrid = 8;
+// Calls row(y, samples) for every row of an equirect frame w x h with where its pixels read
+// from under the turn q: exact on a grid every 16 pixels, bilinear between (a small turn moves
+// pixels smoothly), exact per pixel within 1.1 degrees of the poles (where a turn moves a
+// pixel's azimuth fast).
+template <class Row>
+void forEachTurnedRow(int w, int h, const glm::mat3& q, Executor* executor, Row row) {
+  constexpr int kGrid = 16;
   const glm::dmat3 qd(q);
   const auto source = [&](double x, double y, double& fx, double& fy) {
     const double theta = kPi * (y + 0.5) / h, phi = 2 * kPi * (x + 0.5) / w;
@@ -311,14 +313,16 @@ void forEachTurned(int w, int h, const glm::mat3& q, Executor* executor, Put put
     }
   parallelFor(executor, std::size_t(h), Split{.grain = 1, .perThread = 4},
               [&](std::size_t y0, std::size_t y1) {
+                RowSamples samples(w);
                 std::vector<float> o(static_cast<std::size_t>(gw)), r(o);
                 for (int y = int(y0); y < int(y1); ++y) {
-                  if (std::sin(kPi * (y + 0.5) / h) < 0.05) {
+                  if (std::sin(kPi * (y + 0.5) / h) < 0.02) {
                     for (int x = 0; x < w; ++x) {
                       double fx, fy;
                       source(x, y, fx, fy);
-                      put(x, y, cornersAt(float(fx), float(fy), w, h));
+                      samples.set(x, float(fx), float(fy), w, h);
                     }
+                    row(y, samples);
                     continue;
                   }
                   // This row's nodes, between the grid's rows.
@@ -330,13 +334,17 @@ void forEachTurned(int w, int h, const glm::mat3& q, Executor* executor, Put put
                     o[i] = o0[i] + t * (o0[i + std::size_t(gw)] - o0[i]);
                     r[i] = r0[i] + t * (r0[i + std::size_t(gw)] - r0[i]);
                   }
-                  for (int x = 0; x < w; ++x) {
-                    const std::size_t i = std::size_t(x / kGrid);
-                    const float s = float(x % kGrid) * (1.0f / kGrid);
-                    put(x, y,
-                        cornersAt(float(x) + o[i] + s * (o[i + 1] - o[i]),
-                                  r[i] + s * (r[i + 1] - r[i]), w, h));
+                  for (int i = 0; i * kGrid < w; ++i) {
+                    const float oa = o[std::size_t(i)], ob = o[std::size_t(i) + 1];
+                    const float ra = r[std::size_t(i)], rb = r[std::size_t(i) + 1];
+                    const int x0 = i * kGrid, n = std::min(kGrid, w - x0);
+                    for (int k = 0; k < n; ++k) {
+                      const float s = float(k) * (1.0f / kGrid);
+                      samples.set(x0 + k, float(x0 + k) + oa + s * (ob - oa), ra + s * (rb - ra), w,
+                                  h);
+                    }
                   }
+                  row(y, samples);
                 }
               });
 }
@@ -348,12 +356,14 @@ Coder::Coder(const ResponseTable& response) : linear_(response) {
     const auto& curve = linear_[c];
     const float top = std::max(curve[255], 1e-30f);
     inverseTop_[c] = 1.0f / top;
-    for (int i = 0; i <= kSteps; ++i) {
-      const float v = top * float(i) / kSteps * float(i) / kSteps;
+    for (std::uint32_t i = 0; i <= kLast - kFirst; ++i) {
+      // The bucket's middle value; the top bucket is 1 itself.
+      const std::uint32_t bits = ((i + kFirst) << 15) | (i + kFirst < kLast ? 1u << 14 : 0u);
+      const float v = top * std::bit_cast<float>(bits);
       const auto it = std::lower_bound(curve.begin(), curve.end(), v);
       std::size_t code = std::size_t(it - curve.begin());
       if (code == 256 || (code > 0 && v - curve[code - 1] < curve[code] - v)) --code;
-      table_[c][std::size_t(i)] = std::uint8_t(code);
+      table_[c][i] = std::uint8_t(i == 0 ? 0 : code);
     }
   }
 }
@@ -365,33 +375,66 @@ void turnCodes(const std::uint8_t* src, int w, int h, const glm::mat3& q, const 
   // corners are clipped by half their weight or more reads clipped (as the nearest pixel would),
   // otherwise from its unclipped corners alone.
   const ResponseTable& lut = coder.linear();
-  forEachTurned(w, h, q, executor, [&](int x, int y, const Corners& c) {
-    std::uint8_t* out = dst + (std::size_t(y) * w + std::size_t(x)) * 3;
-    float r = 0, g = 0, b = 0, unclipped = 0, most = -1;
-    for (int k = 0; k < 4; ++k) {
-      const std::uint8_t* p = src + c.at[k] * 3;
-      if (std::max({p[0], p[1], p[2]}) >= clip) {
-        if (c.weight[k] > most) most = c.weight[k], std::copy(p, p + 3, out);
-        continue;
+  const std::size_t stride = std::size_t(w);
+  forEachTurnedRow(w, h, q, executor, [&](int y, const RowSamples& rs) {
+    std::uint8_t* out = dst + std::size_t(y) * stride * 3;
+    for (int x = 0; x < w; ++x, out += 3) {
+      const std::size_t at[4] = {rs.left[std::size_t(x)], rs.right[std::size_t(x)],
+                                 rs.left[std::size_t(x)] + stride,
+                                 rs.right[std::size_t(x)] + stride};
+      const float ax = rs.ax[std::size_t(x)], ay = rs.ay[std::size_t(x)];
+      const float weight[4] = {(1 - ax) * (1 - ay), ax * (1 - ay), (1 - ax) * ay, ax * ay};
+      float r = 0, g = 0, b = 0, unclipped = 0, most = -1;
+      for (int k = 0; k < 4; ++k) {
+        const std::uint8_t* p = src + at[k] * 3;
+        if (std::max({p[0], p[1], p[2]}) >= clip) {
+          if (weight[k] > most) most = weight[k], std::copy(p, p + 3, out);
+          continue;
+        }
+        const float wk = weight[k];
+        unclipped += wk;
+        b += wk * lut[2][p[0]], g += wk * lut[1][p[1]], r += wk * lut[0][p[2]];
       }
-      const float wk = c.weight[k];
-      unclipped += wk;
-      b += wk * lut[2][p[0]], g += wk * lut[1][p[1]], r += wk * lut[0][p[2]];
+      if (unclipped <= 0.5f) continue;  // the clipped corner of most weight, copied
+      const float inv = 1.0f / unclipped;
+      out[0] = coder.code(2, b * inv), out[1] = coder.code(1, g * inv);
+      out[2] = coder.code(0, r * inv);
     }
-    if (unclipped <= 0.5f) return;  // the clipped corner of most weight, copied
-    const float inv = 1.0f / unclipped;
-    out[0] = coder.code(2, b * inv), out[1] = coder.code(1, g * inv),
-    out[2] = coder.code(0, r * inv);
   });
 }
 
 void turnLuminance(const float* src, int w, int h, const glm::mat3& q, float* dst,
                    Executor* executor) {
-  forEachTurned(w, h, q, executor, [&](int x, int y, const Corners& c) {
-    float v = 0;
-    for (int k = 0; k < 4; ++k) v += c.weight[k] * src[c.at[k]];
-    dst[std::size_t(y) * w + std::size_t(x)] = v;
+  const std::size_t stride = std::size_t(w);
+  forEachTurnedRow(w, h, q, executor, [&](int y, const RowSamples& rs) {
+    float* out = dst + std::size_t(y) * stride;
+    for (std::size_t x = 0; x < stride; ++x) {
+      const std::size_t at =
+          (rs.ax[x] > 0.5f ? rs.right[x] : rs.left[x]) + (rs.ay[x] > 0.5f ? stride : 0);
+      out[x] = src[at];
+    }
   });
+}
+
+void nearClipped(const std::uint8_t* bgr, int w, int h, int clip, std::uint8_t* out,
+                 Executor* executor) {
+  parallelFor(executor, std::size_t(h), Split{.grain = 1, .perThread = 4},
+              [&](std::size_t y0, std::size_t y1) {
+                std::vector<std::uint8_t> column(static_cast<std::size_t>(w));
+                for (int y = int(y0); y < int(y1); ++y) {
+                  // Clipped in this row or the ones above and below, per column.
+                  std::fill(column.begin(), column.end(), std::uint8_t(0));
+                  for (int yy = std::max(0, y - 1); yy <= std::min(h - 1, y + 1); ++yy) {
+                    const std::uint8_t* p = bgr + std::size_t(yy) * std::size_t(w) * 3;
+                    for (int x = 0; x < w; ++x, p += 3)
+                      column[std::size_t(x)] |= std::max({p[0], p[1], p[2]}) >= clip;
+                  }
+                  std::uint8_t* o = out + std::size_t(y) * std::size_t(w);
+                  for (int x = 0; x < w; ++x)
+                    o[x] = column[std::size_t(x == 0 ? w - 1 : x - 1)] | column[std::size_t(x)] |
+                           column[std::size_t(x + 1 == w ? 0 : x + 1)];
+                }
+              });
 }
 
 }  // namespace lp::align

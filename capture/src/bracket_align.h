@@ -14,6 +14,7 @@
 // nothing useful, a short exposure of a dark scene, turns as the last one did).
 #include <algorithm>
 #include <array>
+#include <bit>
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
@@ -82,21 +83,25 @@ class RotationTracker {
 double displacementPixels(const glm::mat3& q, int width);
 
 /// A camera's response both ways: linear per code (R, G, B), and the nearest code per linear
-/// value, from a table on a square-root scale (4096 steps: finer than a code step at every code).
+/// value, from a table indexed by the value's float exponent and top 8 mantissa bits (buckets
+/// 0.4% wide over 24 octaves: finer than a code step at every code).
 class Coder {
  public:
   explicit Coder(const ResponseTable& response);
   const ResponseTable& linear() const { return linear_; }
   /// The code of channel `c` (0 R, 1 G, 2 B) nearest to linear value v.
   std::uint8_t code(int c, float v) const {
-    const float x = std::sqrt(std::max(0.0f, v) * inverseTop_[std::size_t(c)]);
-    return table_[std::size_t(c)][std::size_t(std::min(float(kSteps), x * kSteps + 0.5f))];
+    const std::uint32_t bits = std::bit_cast<std::uint32_t>(v * inverseTop_[std::size_t(c)]);
+    const std::uint32_t i = std::clamp<std::uint32_t>(bits >> 15, kFirst, kLast) - kFirst;
+    return table_[std::size_t(c)][i];
   }
 
  private:
-  static constexpr int kSteps = 4096;
+  // Buckets from 2^-24 to 1 (of the curve's top), below and above clamped (negatives too: their
+  // sign bit puts them above).
+  static constexpr std::uint32_t kFirst = 103u << 8, kLast = 127u << 8;
   ResponseTable linear_;
-  std::array<std::array<std::uint8_t, kSteps + 1>, 3> table_{};
+  std::array<std::array<std::uint8_t, kLast - kFirst + 1>, 3> table_{};
   std::array<float, 3> inverseTop_{};
 };
 
@@ -105,8 +110,13 @@ class Coder {
 /// weight or more reads as the clipped corner of most weight.
 void turnCodes(const std::uint8_t* src, int width, int height, const glm::mat3& q,
                const Coder& coder, int clip, std::uint8_t* dst, Executor* executor);
-/// dst(d) = src(q d) for one float per pixel, bilinear.
+/// dst(d) = src(q d) for one float per pixel, the nearest pixel.
 void turnLuminance(const float* src, int width, int height, const glm::mat3& q, float* dst,
                    Executor* executor);
+
+/// out = 1 where an 8-bit BGR equirect frame clips (a channel at or above `clip`) the pixel or
+/// one of its eight neighbours (columns wrap), else 0.
+void nearClipped(const std::uint8_t* bgr, int width, int height, int clip, std::uint8_t* out,
+                 Executor* executor);
 
 }  // namespace lp::align

@@ -553,18 +553,15 @@ FrameConfidence BracketMerger::add(const Frame& in, Frame& out, Executor* execut
     reference =
         referenceIsPrevious_ ? previous : turn(reference, a.referenceSequence, a.referenceTurned);
   }
-  // Beside the newest frame's clipped pixels, for the turned frames' sub-pixel edges.
-  if (align_) {
-    align_->nearClip.assign(pixels, 0);
-    const std::uint8_t* px = window_.back().bgr8.data();
-    for (int y = 0; y < h; ++y)
-      for (int x = 0; x < w; ++x) {
-        const std::uint8_t* p = px + (std::size_t(y) * w + std::size_t(x)) * 3;
-        if (std::max({p[0], p[1], p[2]}) < opt_.clipLevel) continue;
-        for (int dy = std::max(0, y - 1); dy <= std::min(h - 1, y + 1); ++dy)
-          for (int dx = x - 1; dx <= x + 1; ++dx)
-            align_->nearClip[std::size_t(dy) * w + std::size_t((dx + w) % w)] = 1;
-      }
+  // Beside the newest frame's clipped pixels, where older frames were turned (their sub-pixel
+  // edges).
+  bool turned = false;
+  for (int i = 0; i < view.newest; ++i)
+    turned |= view.pixels[std::size_t(i)] != window_[std::size_t(i)].bgr8.data();
+  if (turned) {
+    align_->nearClip.resize(pixels);
+    align::nearClipped(window_.back().bgr8.data(), w, h, opt_.clipLevel, align_->nearClip.data(),
+                       executor);
     view.nearClip = align_->nearClip.data();
   }
   const MergeTally total = parallelReduce(
