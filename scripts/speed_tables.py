@@ -70,23 +70,25 @@ for (layout, kind, w, h, threads), by_path in sorted(rows.items()):
               f"{best / bound:.2f}" if bound else ""]
     print("| " + " | ".join(cells) + " |")
 
-# Merge/bracket:3/u8/WxH/threads:T/{merge,project}/real_time
+# Merge/bracket:3/u8/WxH/threads:T/{merge,turning,project}/real_time
 merges = {}
 for name, t in medians.items():
-    m = re.match(r"Merge/bracket:(\d+)/u8/(\d+)x(\d+)/threads:(\d+)/(merge|project)/", name)
+    m = re.match(r"Merge/bracket:(\d+)/u8/(\d+)x(\d+)/threads:(\d+)/(merge|turning|project)/", name)
     if m:
         n, w, h, threads, part = m.groups()
         merges.setdefault((int(w), int(h), int(threads), int(n)), {})[part] = t
 if merges:
     print()
-    print("| bracket merge (8-bit sRGB, the synthetic sky at -12, -6, 0 EV) | merge | projection of "
-          "the merged frame | merge / projection |")
-    print("|---|---|---|---|")
+    print("| bracket merge (8-bit sRGB) | still camera (the synthetic sky at -12, -6, 0 EV) | "
+          "turning camera (quarry_01 at -13, -6.5, 0 EV, 1 degree a frame) | projection of the "
+          "merged frame | still merge / projection |")
+    print("|---|---|---|---|---|")
     for (w, h, threads, n), parts in sorted(merges.items()):
-        merge, project = parts.get("merge"), parts.get("project")
+        merge, turning, project = parts.get("merge"), parts.get("turning"), parts.get("project")
         ratio = f"{merge / project:.1f}" if merge and project else ""
         print(f"| {w}x{h}, {n} exposures, {threads} thread{'s' if threads > 1 else ''} | "
-              f"{fmt(merge) if merge else ''} | {fmt(project) if project else ''} | {ratio} |")
+              f"{fmt(merge) if merge else ''} | {fmt(turning) if turning else ''} | "
+              f"{fmt(project) if project else ''} | {ratio} |")
 
 print()
 print("| other benchmarks | median |")

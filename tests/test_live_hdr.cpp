@@ -256,8 +256,9 @@ TEST(LiveHdr, AMovingSceneKeepsItsSunOrSaysItLostIt) {
                              a[2].get<double>() * b[2].get<double>();
           aimed += std::acos(std::clamp(dot, -1.0, 1.0)) * 180.0 / M_PI <= 1.0;
         }
-        plot << s << " " << want << " " << got << " " << f["confidence"]["value"].get<double>()
-             << "\n";
+        const json& c = f["confidence"];
+        plot << s << " " << want << " " << got << " " << c["value"] << " " << c["clipped_share"]
+             << " " << c["dark_share"] << " " << c["agreement"] << "\n";
         if (std::abs(got - want) > 0.25 * want)
           EXPECT_LT(f["confidence"]["value"].get<double>(), 0.9)
               << what << ": frame " << s << " share " << got << " of " << want;

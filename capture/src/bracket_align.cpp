@@ -416,23 +416,30 @@ void turnLuminance(const float* src, int w, int h, const glm::mat3& q, float* ds
   });
 }
 
-void nearClipped(const std::uint8_t* bgr, int w, int h, int clip, std::uint8_t* out,
-                 Executor* executor) {
+void neighbourhood(const std::uint8_t* bgr, int w, int h, std::uint8_t* low, std::uint8_t* high,
+                   Executor* executor) {
   parallelFor(executor, std::size_t(h), Split{.grain = 1, .perThread = 4},
               [&](std::size_t y0, std::size_t y1) {
-                std::vector<std::uint8_t> column(static_cast<std::size_t>(w));
+                std::vector<std::uint8_t> least(static_cast<std::size_t>(w)), most(least);
                 for (int y = int(y0); y < int(y1); ++y) {
-                  // Clipped in this row or the ones above and below, per column.
-                  std::fill(column.begin(), column.end(), std::uint8_t(0));
+                  // Over this row and the ones above and below, per column.
+                  std::fill(least.begin(), least.end(), std::uint8_t(255));
+                  std::fill(most.begin(), most.end(), std::uint8_t(0));
                   for (int yy = std::max(0, y - 1); yy <= std::min(h - 1, y + 1); ++yy) {
                     const std::uint8_t* p = bgr + std::size_t(yy) * std::size_t(w) * 3;
-                    for (int x = 0; x < w; ++x, p += 3)
-                      column[std::size_t(x)] |= std::max({p[0], p[1], p[2]}) >= clip;
+                    for (std::size_t x = 0; x < std::size_t(w); ++x, p += 3) {
+                      const std::uint8_t c = std::max({p[0], p[1], p[2]});
+                      least[x] = std::min(least[x], c), most[x] = std::max(most[x], c);
+                    }
                   }
-                  std::uint8_t* o = out + std::size_t(y) * std::size_t(w);
-                  for (int x = 0; x < w; ++x)
-                    o[x] = column[std::size_t(x == 0 ? w - 1 : x - 1)] | column[std::size_t(x)] |
-                           column[std::size_t(x + 1 == w ? 0 : x + 1)];
+                  std::uint8_t* lo = low + std::size_t(y) * std::size_t(w);
+                  std::uint8_t* hi = high + std::size_t(y) * std::size_t(w);
+                  for (int x = 0; x < w; ++x) {
+                    const std::size_t a = std::size_t(x == 0 ? w - 1 : x - 1), b = std::size_t(x),
+                                      c = std::size_t(x + 1 == w ? 0 : x + 1);
+                    lo[x] = std::min({least[a], least[b], least[c]});
+                    hi[x] = std::max({most[a], most[b], most[c]});
+                  }
                 }
               });
 }

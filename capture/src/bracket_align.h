@@ -114,9 +114,9 @@ void turnCodes(const std::uint8_t* src, int width, int height, const glm::mat3& 
 void turnLuminance(const float* src, int width, int height, const glm::mat3& q, float* dst,
                    Executor* executor);
 
-/// out = 1 where an 8-bit BGR equirect frame clips (a channel at or above `clip`) the pixel or
-/// one of its eight neighbours (columns wrap), else 0.
-void nearClipped(const std::uint8_t* bgr, int width, int height, int clip, std::uint8_t* out,
-                 Executor* executor);
+/// For each pixel of an 8-bit BGR equirect frame, the least and the most of its largest channel's
+/// code over the pixel and its eight neighbours (columns wrap).
+void neighbourhood(const std::uint8_t* bgr, int width, int height, std::uint8_t* low,
+                   std::uint8_t* high, Executor* executor);
 
 }  // namespace lp::align

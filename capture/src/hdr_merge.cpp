@@ -378,7 +378,7 @@ struct BracketMerger::Alignment {
   std::array<std::vector<std::uint8_t>, kMaxBracket> turned;
   std::vector<float> previousTurned, referenceTurned;
   std::uint64_t previousSequence = 0, referenceSequence = 0;  ///< the frames they were merged for
-  std::vector<std::uint8_t> nearClip;  ///< the newest frame clips the pixel or one beside it
+  std::vector<std::uint8_t> nearLow, nearHigh;  ///< the newest frame's 3x3 least and most code
 };
 
 namespace {
@@ -500,8 +500,9 @@ struct BracketView {
   const std::array<std::array<float, 256>, 3>* lut = nullptr;
   Judge judge{};
   float inv2s2 = 0;
-  merge::RowKernel kernel = nullptr;       ///< the pixel loop (merge_kernel.h)
-  const std::uint8_t* nearClip = nullptr;  ///< merge::RowInput::nearClip, the whole frame
+  merge::RowKernel kernel = nullptr;  ///< the pixel loop (merge_kernel.h)
+  /// merge::RowInput::nearLow and nearHigh, the whole frame.
+  const std::uint8_t *nearLow = nullptr, *nearHigh = nullptr;
 
   void read(int i, std::size_t at, Reading& r) const {
     const std::uint8_t* p = pixels[std::size_t(i)] + at;
@@ -553,16 +554,16 @@ FrameConfidence BracketMerger::add(const Frame& in, Frame& out, Executor* execut
     reference =
         referenceIsPrevious_ ? previous : turn(reference, a.referenceSequence, a.referenceTurned);
   }
-  // Beside the newest frame's clipped pixels, where older frames were turned (their sub-pixel
-  // edges).
+  // Where older frames were turned (their readings a fraction of a pixel off), the newest frame's
+  // neighbourhood.
   bool turned = false;
   for (int i = 0; i < view.newest; ++i)
     turned |= view.pixels[std::size_t(i)] != window_[std::size_t(i)].bgr8.data();
   if (turned) {
-    align_->nearClip.resize(pixels);
-    align::nearClipped(window_.back().bgr8.data(), w, h, opt_.clipLevel, align_->nearClip.data(),
-                       executor);
-    view.nearClip = align_->nearClip.data();
+    align_->nearLow.resize(pixels), align_->nearHigh.resize(pixels);
+    align::neighbourhood(window_.back().bgr8.data(), w, h, align_->nearLow.data(),
+                         align_->nearHigh.data(), executor);
+    view.nearLow = align_->nearLow.data(), view.nearHigh = align_->nearHigh.data();
   }
   const MergeTally total = parallelReduce(
       executor, std::size_t(h), Split{.grain = 1, .perThread = 4}, MergeTally{},
@@ -647,7 +648,8 @@ MergeTally BracketMerger::mergeRow(const BracketView& v, std::size_t y, float* o
   in.width = w;
   in.previous = lum.previous, in.luminance = lum.out, in.reference = lum.reference;
   in.fresh = fresh;
-  in.nearClip = v.nearClip ? v.nearClip + y * std::size_t(w) : nullptr;
+  in.nearLow = v.nearLow ? v.nearLow + y * std::size_t(w) : nullptr;
+  in.nearHigh = v.nearHigh ? v.nearHigh + y * std::size_t(w) : nullptr;
   in.rgb = out;
   const merge::RowSums s = v.kernel(in);
   const float rw = rowWeight(int(y), h, opt_.equirect);

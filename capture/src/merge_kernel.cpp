@@ -101,8 +101,9 @@ HWY_INLINE Reading Read(DF d, const RowInput& in, const std::uint8_t* p, const f
 // the lanes that are pixels of the row.
 template <int M>
 void Chunk(const RowInput& in, const std::uint8_t* const* px, const float* const* lin,
-           const float* previous, const float* reference, const std::uint8_t* nearClip,
-           float* luminance, float* rgb, VF x, MF valid, LaneSums& acc) {
+           const float* previous, const float* reference, const std::uint8_t* nearLow,
+           const std::uint8_t* nearHigh, float* luminance, float* rgb, VF x, MF valid,
+           LaneSums& acc) {
   const DF d;
   constexpr int m = M, now = m - 1;
   Reading r[kMaxFrames];
@@ -115,10 +116,26 @@ void Chunk(const RowInput& in, const std::uint8_t* const* px, const float* const
   // and the largest such radiance is what was lost (-1: nothing). Where both are well exposed
   // and agree, the older one is weighed by how closely (d = log q, to within 2%).
   VF lost = hn::Set(d, -1.0f);
-  const DI di;
-  const MF edge = nearClip ? hn::Gt(hn::ConvertTo(d, hn::PromoteTo(di, hn::LoadU(DU8(), nearClip))),
-                                    hn::Zero(d))
-                           : hn::FirstN(d, 0);
+  // Turned frames: the newest frame's neighbourhood bounds what a reading a fraction of a pixel
+  // off may say (green's response for the neighbours' largest channel).
+  const bool turned = nearLow != nullptr;
+  Bounds wide = bNow;
+  MF edge = hn::FirstN(d, 0);
+  if (turned) {
+    const DI di;
+    const auto neighbour = [&](const std::uint8_t* codes) HWY_ATTR {
+      Reading q;
+      const auto index = hn::PromoteTo(di, hn::LoadU(DU8(), codes));
+      q.code = hn::ConvertTo(d, index);
+      q.peak = hn::Mul(hn::GatherIndex(d, in.lut[1], index), sNow);
+      q.well = hn::And(hn::Ge(q.code, hn::Set(d, float(in.wellExposed))), hn::Lt(q.code, clipV));
+      return q;
+    };
+    const Reading low = neighbour(nearLow), high = neighbour(nearHigh);
+    wide.lo = hn::Min(wide.lo, BoundsOf(d, in, low, sNow).lo);
+    wide.hi = hn::Max(wide.hi, BoundsOf(d, in, high, sNow).hi);
+    edge = hn::Ge(high.code, clipV);
+  }
   MF newestGivesWay = hn::FirstN(d, 0);
   for (int i = 0; i < now; ++i) {
     Reading& o = r[i];
@@ -131,13 +148,17 @@ void Chunk(const RowInput& in, const std::uint8_t* const* px, const float* const
             : hn::FirstN(d, 0);
     newestGivesWay = hn::Or(newestGivesWay, edgeOfSource);
     // q = o / n within (1 / 1.5625, 1.5625); n > 0 where it is well exposed.
-    const MF agree =
-        hn::And(both, hn::And(hn::Lt(o.peak, hn::Mul(hn::Set(d, 1.25f * 1.25f), n.peak)),
-                              hn::Gt(hn::Mul(hn::Set(d, 1.25f * 1.25f), o.peak), n.peak)));
+    // q = o / n within (1 / 1.5625, 1.5625); n > 0 where it is well exposed. Turned: the
+    // readings' intervals meet those of the newest's neighbourhood (for two well-exposed
+    // readings, the same tolerance).
     const Bounds b = BoundsOf(d, in, o, hn::Set(d, in.scale[i]));
-    const MF apart = hn::Or(hn::Gt(b.lo, bNow.hi), hn::Gt(bNow.lo, b.hi));
-    const MF disagree =
-        hn::AndNot(edgeOfSource, hn::Or(hn::AndNot(agree, both), hn::AndNot(both, apart)));
+    const MF apart = hn::Or(hn::Gt(b.lo, wide.hi), hn::Gt(wide.lo, b.hi));
+    const MF agree =
+        turned ? hn::AndNot(apart, both)
+               : hn::And(both, hn::And(hn::Lt(o.peak, hn::Mul(hn::Set(d, 1.25f * 1.25f), n.peak)),
+                                       hn::Gt(hn::Mul(hn::Set(d, 1.25f * 1.25f), o.peak), n.peak)));
+    const MF disagree = hn::AndNot(
+        edgeOfSource, turned ? apart : hn::Or(hn::AndNot(agree, both), hn::AndNot(both, apart)));
     const VF dq =
         hn::Div(hn::Mul(hn::Set(d, 2.0f), hn::Sub(o.peak, n.peak)), hn::Add(o.peak, n.peak));
     const VF closeness = hn::Exp(d, hn::Neg(hn::Mul(hn::Mul(dq, dq), hn::Set(d, in.inv2s2))));
@@ -189,12 +210,12 @@ void Chunk(const RowInput& in, const std::uint8_t* const* px, const float* const
   hn::StoreInterleaved3(c0, c1, c2, d, rgb);
 
   // The row's sums. What was lost: at least what the older readings say, and what the last merge
-  // saw where the newest frame rules that out.
+  // saw where the newest frame (turned: its neighbourhood) rules that out.
   const VF l = Luminance(d, c0, c1, c2);
   const VF seen = in.fresh ? hn::LoadU(d, previous) : hn::Zero(d);  // read before it is written
   hn::StoreU(l, d, luminance);
   const MF gone =
-      hn::And(valid, hn::Or(contradicted, hn::Gt(seen, hn::Mul(hn::Set(d, 1.25f), bNow.hi))));
+      hn::And(valid, hn::Or(contradicted, hn::Gt(seen, hn::Mul(hn::Set(d, 1.25f), wide.hi))));
   acc.lostPower =
       hn::Add(acc.lostPower,
               hn::IfThenElseZero(gone, hn::Max(hn::Sub(hn::Max(lost, seen), l), hn::Zero(d))));
@@ -224,7 +245,7 @@ RowSums MergeRow(const RowInput& in) {
   HWY_ALIGN std::uint8_t bytes[kMaxFrames][3 * kBlock];
   HWY_ALIGN float linear[kMaxFrames][3 * kBlock];
   HWY_ALIGN float prev[kBlock], ref[kBlock], lum[kBlock], out[3 * kBlock];
-  HWY_ALIGN std::uint8_t near[kBlock];
+  HWY_ALIGN std::uint8_t low[kBlock], high[kBlock];
   const std::uint8_t* px[kMaxFrames];
   const float* lin[kMaxFrames];
   const float *lutR = in.lut[0], *lutG = in.lut[1], *lutB = in.lut[2];
@@ -254,7 +275,8 @@ RowSums MergeRow(const RowInput& in) {
     }
     const float* previous = in.previous + x0;
     const float* reference = in.reference + x0;
-    const std::uint8_t* nearClip = in.nearClip ? in.nearClip + x0 : nullptr;
+    const std::uint8_t* nearLow = in.nearLow ? in.nearLow + x0 : nullptr;
+    const std::uint8_t* nearHigh = in.nearHigh ? in.nearHigh + x0 : nullptr;
     float* luminance = in.luminance + x0;
     float* rgb = in.rgb + 3 * x0;
     if (!whole) {
@@ -262,18 +284,20 @@ RowSums MergeRow(const RowInput& in) {
       std::memcpy(prev, previous, sizeof(float) * std::size_t(count));
       std::memcpy(ref, reference, sizeof(float) * std::size_t(count));
       previous = prev, reference = ref, luminance = lum, rgb = out;
-      if (nearClip) {
-        std::memset(near, 0, sizeof near);
-        std::memcpy(near, nearClip, std::size_t(count));
-        nearClip = near;
+      if (nearLow) {
+        std::memset(low, 0, sizeof low), std::memset(high, 0, sizeof high);
+        std::memcpy(low, nearLow, std::size_t(count)),
+            std::memcpy(high, nearHigh, std::size_t(count));
+        nearLow = low, nearHigh = high;
       }
     }
     for (int x = 0; x < kBlock; x += lanes) {
       const std::uint8_t* pxAt[kMaxFrames];
       const float* linAt[kMaxFrames];
       for (int i = 0; i < in.frames; ++i) pxAt[i] = px[i] + 3 * x, linAt[i] = lin[i] + x;
-      chunk(in, pxAt, linAt, previous + x, reference + x, nearClip ? nearClip + x : nullptr,
-            luminance + x, rgb + 3 * x, hn::Add(iota, hn::Set(d, float(x0 + x))),
+      chunk(in, pxAt, linAt, previous + x, reference + x, nearLow ? nearLow + x : nullptr,
+            nearHigh ? nearHigh + x : nullptr, luminance + x, rgb + 3 * x,
+            hn::Add(iota, hn::Set(d, float(x0 + x))),
             hn::FirstN(d, std::size_t(std::clamp(count - x, 0, lanes))), acc);
     }
     if (!whole) {

@@ -31,11 +31,14 @@ struct RowInput {
   float* luminance = nullptr;
   const float* reference = nullptr;
   bool fresh = false;
-  /// Per pixel, where the older frames were turned to the newest: 1 where the newest frame clips
-  /// the pixel or one beside it (null: none). There an older, shorter exposure that reads
-  /// brighter than the newest is the edge of the source the newest clips, a fraction of a pixel
-  /// off, not a contradiction: the newest reading gives way.
-  const std::uint8_t* nearClip = nullptr;
+  /// Per pixel, where the older frames were turned to the newest (null: not turned): the least
+  /// and the most the newest frame read over the pixel and its eight neighbours (the largest
+  /// channel's code). A turned reading is a fraction of a pixel off: it is judged against the
+  /// neighbourhood, not the pixel alone; and beside the newest's clipped pixels, an older,
+  /// shorter exposure that reads brighter than the newest is the edge of the source the newest
+  /// clips: the newest reading gives way.
+  const std::uint8_t* nearLow = nullptr;
+  const std::uint8_t* nearHigh = nullptr;
   float* rgb = nullptr;  ///< the merged radiance, R, G, B per pixel
 };
 

@@ -17,9 +17,10 @@
 // sun at 0 EV) can only come from an older, shorter exposure: it lags by up to N - 1 frames.
 // Where the camera turns between the frames (a rig, a vehicle, a hand), the older frames of an
 // equirect set are first turned to the newest by the rotation the frames show (bracket_align.h):
-// the sun read N - 1 frames ago is merged where the newest frame sees it. A turned source's edge
-// is a fraction of a pixel off between exposures: where a shorter exposure reads brighter than a
-// longer one's well-exposed reading, the longer gives way (it misses light the shorter measured
+// the sun read N - 1 frames ago is merged where the newest frame sees it. A turned reading is a
+// fraction of a pixel off: it contradicts the newest only where it fits none of the newest's
+// readings over the pixel and its eight neighbours; where a shorter exposure reads brighter than
+// a longer one's well-exposed reading, the longer gives way (it misses light the shorter measured
 // beside its clipped core), the newest frame too where it clips the pixel or one beside it.
 //
 // Each merge also says how far it can be trusted (FrameConfidence).
