@@ -300,7 +300,7 @@ TEST(Backends, VersionListsThemAndAMissingOneIsOneLine) {
 
 TEST(Cli, CompareJson) {
   const auto r = runLiveprobe("compare " + lpt::dataPath("probes/latlong_256x128/grace.hdr") +
-                              " --size 32x16 --json");
+                              " --size 32x16 --format json");
   ASSERT_EQ(r.exitCode, 0) << r.output;
   const auto j = nlohmann::json::parse(r.output);
   for (const char* k : {"mean_frac_total", "max_frac_total", "mean_rel_mean", "max_rel_mean",

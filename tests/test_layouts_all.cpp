@@ -217,7 +217,8 @@ TEST_F(EveryLayout, TheSameCoefficientsThroughEveryCommand) {
         "replay " + file + " " + c.args +
         " --headless --frames 1 --threads 1 --size 32x18 --quiet --coeffs-out " + tmp / "c.jsonl");
     ASSERT_EQ(replay.exitCode, 0) << replay.output;
-    const auto compare = lpt::runLiveprobe("compare " + file + " " + c.args + " --size 8x4 --json");
+    const auto compare =
+        lpt::runLiveprobe("compare " + file + " " + c.args + " --size 8x4 --format json");
     ASSERT_EQ(compare.exitCode, 0) << compare.output;
     const auto want = nlohmann::json::parse(still.output)["coefficients"];
     std::ifstream lines(tmp / "c.jsonl");

@@ -719,7 +719,7 @@ TEST(CommandLine, MisspellingsSuggestTheNearestName) {
 // text wherever it appears. The exceptions are the options whose meaning is each command's own
 // (what --out writes, what --size sizes, what --frames counts, ...).
 TEST(OptionGroups, ASharedOptionHasOneHelpText) {
-  const std::set<std::string> ownMeaning = {"--out",    "--size",     "--format", "--json",
+  const std::set<std::string> ownMeaning = {"--out",    "--size",     "--format",
                                             "--frames", "--duration", "--fps"};
   std::map<std::string, std::pair<const lp::cli::OptionSpec*, std::string>> first;
   int shared = 0;
@@ -735,6 +735,23 @@ TEST(OptionGroups, ASharedOptionHasOneHelpText) {
           << o.name << " in " << c.spec.name << " and " << it->second.second;
     }
   EXPECT_GT(shared, 50);  // the layout, lighting, scene, look and light groups
+}
+
+// One meaning per option name, in kind at least: an option is a flag in every command that takes
+// it, or takes a value in every one, or an optional value in every one.
+TEST(OptionGroups, AnOptionIsAFlagEverywhereOrTakesAValueEverywhere) {
+  const auto kind = [](const lp::cli::OptionSpec& o) {
+    return o.value.empty() ? "a flag" : o.optionalValue ? "an optional value" : "a value";
+  };
+  std::map<std::string, std::pair<std::string, std::string>> first;  // name: kind, command
+  for (const auto& c : lp::cli::commands())
+    for (const auto& o : c.spec.options) {
+      const auto [it, fresh] = first.emplace(o.name, std::pair{kind(o), c.spec.name});
+      EXPECT_EQ(kind(o), it->second.first)
+          << o.name << " takes " << kind(o) << " in " << c.spec.name << ", " << it->second.first
+          << " in " << it->second.second;
+    }
+  EXPECT_GT(first.size(), 50u);
 }
 
 // --help writes each option's value as the reference does: an option whose value may be left out

@@ -198,12 +198,14 @@ const CommandSpec kCompareSpec{
     "(luminance, solid-angle weighted). Errors are given as a fraction of the total intensity\n"
     "(the paper's measure) and of the mean irradiance. With --sun, SH of the rest plus the\n"
     "lights is measured beside SH alone.",
-    withLayout({sizeOption("--size", "grid of normals", 4096, "64x32", LP_FIELD(output.size)),
-                fileOption("--out", "PNG",
-                           "figure: SH map, brute-force map and error, with a colour scale",
-                           {".png"}, LP_FIELD(output.out)),
-                flagOption("--json", "print JSON instead of text", LP_FIELD(output.json)),
-                quietOption(), windowOption(), lightOptionSpecs()[0], lightOptionSpecs()[1]}),
+    withLayout(
+        {sizeOption("--size", "grid of normals", 4096, "64x32", LP_FIELD(output.size)),
+         fileOption("--out", "PNG",
+                    "figure: SH map, brute-force map and error, with a colour scale", {".png"},
+                    LP_FIELD(output.out)),
+         choiceOption("--format", "what it prints", {"text", "json"}, "text", LP_FIELD(output.json),
+                      {}, [](const std::string& v) { return v == "json"; }),
+         quietOption(), windowOption(), lightOptionSpecs()[0], lightOptionSpecs()[1]}),
     1,
     1,
     "an environment map (.hdr, .exr, .png, .jpg), or a folder of six cube faces"};

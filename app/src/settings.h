@@ -62,7 +62,7 @@ struct OutputSettings {
   std::string saveCoeffs = "coeffs-edited.json";
   std::string format = "json";        ///< coeffs --format
   std::string coeffsFormat = "json";  ///< --coeffs-format
-  bool json = false;                  ///< compare --json
+  bool json = false;                  ///< compare --format json
   std::optional<Size> size;
   std::optional<std::int64_t> frames;
   std::optional<double> duration;
