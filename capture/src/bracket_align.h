@@ -27,6 +27,10 @@
 
 namespace lp::align {
 
+/// The smallest frame whose turn is estimated (and so the smallest turned): a smaller one is
+/// merged as it comes.
+inline constexpr int kLeastWidth = 32, kLeastHeight = 16;
+
 /// One level of a frame's log-luminance pyramid: equirect, NaN where no reading is measured.
 struct LogLevel {
   int width = 0, height = 0;

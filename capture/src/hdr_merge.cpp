@@ -422,7 +422,7 @@ void BracketMerger::push(const Frame& in) {
   kept.exposure100us = in.exposure100us, kept.gain = in.gain;
   window_.push_back(std::move(kept));
   agreements_.push_back(1.0);  // its merge's own agreement, once measured
-  if (align_) {
+  if (align_ && in.width >= align::kLeastWidth && in.height >= align::kLeastHeight) {
     align_->tracker.add(
         align::logPyramid(in, opt_.response.linear, kWellExposed - 1, opt_.clipLevel),
         in.radianceScale, in.sequence);
