@@ -2,16 +2,18 @@
 // Aligning the frames of an exposure bracket to the newest: the camera's rotation between frames,
 // estimated from the frames themselves, and older frames turned by it before they are merged.
 //
-// What is estimated: a rotation of the whole sphere (the camera turning about any axis; a scene
-// that moves within itself is left to the merge's agreement test). How: each frame's log
-// luminance in radiance units (its exposure divided out, so frames of different exposures
-// compare where both measured) at up to 160 pixels wide and two halvings; Lucas-Kanade on the
-// sphere, coarse to fine, in the three parameters of a small rotation (the Jacobian of a pixel
-// is d x grad I), Huber-weighted so that what moved within the scene pulls little. Each new
-// frame is compared with the frame before it and with the latest frame of its own exposure (the
-// one with the most pixels measured in both); their estimates of the newest step are combined
-// by their information, with the last step's rate as a weak prior (a frame that measured
-// nothing useful, a short exposure of a dark scene, turns as the last one did).
+// What is estimated: the camera's rotation rate (a rotation vector per camera frame, about any
+// axis), taken as steady over the last two brackets; a scene that moves within itself is left
+// to the merge's agreement test. How: each frame's log luminance in radiance units (its exposure
+// divided out, so frames of different exposures compare where both measured) at up to 160
+// pixels wide and two halvings; Lucas-Kanade on the sphere, coarse to fine, in the three
+// parameters of a small rotation (the Jacobian of a pixel is d x grad I), Huber-weighted so that
+// what moved within the scene pulls little, and without the two of 32 regions of the sphere that
+// hold the most information (a rotation must show everywhere, not only where the sun moves).
+// Each new frame is compared with the latest earlier frame of its own exposure (the most pixels
+// measured in both) and with the frame before; the measured rates of the last two brackets are
+// combined by their information, with a weak prior on no rotation (a frame that measured
+// nothing, a short exposure of a dark scene, is carried by the others).
 #include <algorithm>
 #include <array>
 #include <bit>
