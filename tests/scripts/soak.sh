@@ -6,8 +6,10 @@
 # - memory: a leak grows through the run, so B's peak resident memory exceeds A's by what B
 #   leaked; the allocator's arenas (glibc's per-thread heaps, more of them when threads contend
 #   on a busy machine) grow in steps while the threads first meet and then hold, so they move
-#   A's peak, not B's over A's. B's peak may exceed A's by at most 4 MB (2,000 frames: a leak of
-#   6 kB a frame fails; tests/scripts/soak_criterion.py tries the criterion). The growth from
+#   A's peak, not B's over A's. B's peak may exceed A's by at most 4 MB plus FRAME_KB, one
+#   decoded frame (a pipeline that meets a busier machine late in the run may hold one more
+#   frame in flight: 6 MB for a 1080p video, seen in CI); 2,000 frames of a 1080p video: a leak
+#   of 10 kB a frame fails; tests/scripts/soak_criterion.py tries the criterion. The growth from
 #   warm-up to the end is printed, not bounded: on a loaded machine it is the arenas' (up to
 #   +30 MB).
 # - open file descriptors and threads must not grow: B's largest count is at most A's. (A looped
@@ -15,11 +17,12 @@
 # Frames never queue: the handoff holds one frame. Live, the renderer takes the newest and each
 # one it missed is counted as dropped, so a renderer that falls behind costs frames, not memory
 # (the summary says how many); a headless replay's capture waits for the renderer instead.
-# Usage: soak.sh LIVEPROBE FRAMES [SOURCE]   (CI: 2000 frames; README gives the 20,000 one)
+# Usage: soak.sh LIVEPROBE FRAMES [SOURCE [FRAME_KB]]   (CI: 2000 frames; README gives the
+# 20,000 one). FRAME_KB: one decoded frame of SOURCE (default 0).
 # A SOURCE under /dev/ is a camera (`live`); LIVEPROBE_PRELOAD then names a library to preload
 # into liveprobe alone (the V4L2 emulator, configured by its LPEMU_* variables).
 set -euo pipefail
-liveprobe=$1 frames=$2 source=${3:-synthetic:128x64@1000}
+liveprobe=$1 frames=$2 source=${3:-synthetic:128x64@1000} frame_kb=${4:-0}
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
 if [[ $source == /dev/* ]]; then
@@ -47,7 +50,7 @@ lines=$(wc -l < "$work/c.jsonl")
 [ "$lines" -eq "$frames" ] || { echo "soak: $lines coefficient lines, expected $frames"; exit 1; }
 n=${#samples[@]}
 [ "$n" -ge 8 ] || { echo "soak: only $n samples; the run was too short to judge"; exit 1; }
-printf '%s\n' "${samples[@]}" | awk -v n="$n" '
+printf '%s\n' "${samples[@]}" | awk -v n="$n" -v slack=$((4096 + frame_kb)) '
   NR > n / 4 && NR < n {
     if (!base) { base = $1; fd0 = $2; th0 = $3 }
     fds = fds " " $2; ths = ths " " $3
@@ -57,7 +60,7 @@ printf '%s\n' "${samples[@]}" | awk -v n="$n" '
     top = rA > rB ? rA : rB
     printf "soak: %d samples; after warm-up RSS %d kB, peak %d kB in the first half and %d kB in the second (+%d kB), %d to %d kB in all; fds %d, threads %d\n",
            n, base, rA, rB, rB - rA, base, top, fd0, th0
-    if (rB - rA > 4096) { print "soak: resident memory grew by " rB - rA " kB from the first half to the second: a leak"; exit 1 }
+    if (rB - rA > slack) { print "soak: resident memory grew by " rB - rA " kB from the first half to the second (more than " slack " kB): a leak"; exit 1 }
     if (fdB > fdA) { print "soak: the number of open file descriptors grew: " fds; exit 1 }
     if (thB > thA) { print "soak: the number of threads grew: " ths; exit 1 }
   }'
