@@ -5,9 +5,10 @@
 set -u
 lp=$1 out=$2
 shift 2
+source "$(dirname "$0")/window_lib.sh"
+wait_for_display || exit 1
 "$lp" view --size 640x360 --msaa 1 --save-coeffs "$out" "$@" &
 pid=$!
-source "$(dirname "$0")/window_lib.sh"
 wait_for_window "$pid" || exit 1
 sleep 1
 xdotool windowfocus --sync "$wid"

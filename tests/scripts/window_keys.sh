@@ -3,9 +3,10 @@
 # "key: value" line per observation. $1: the liveprobe binary, $2: a folder for the screenshots.
 set -u
 lp=$1 out=$2
+source "$(dirname "$0")/window_lib.sh"
+wait_for_display || exit 1
 "$lp" replay synthetic:256x128@30 --size 960x540 --msaa 1 >"$out/log" 2>&1 &
 pid=$!
-source "$(dirname "$0")/window_lib.sh"
 wait_for_window "$pid" || exit 1
 # The title is updated about once a second, after a frame is drawn: wait for what it says.
 title_until() {  # $1: a pattern the title must match (grep -E), within 45 s of wall time
