@@ -706,6 +706,13 @@ int runBench(const Args& a) {
   // cannot rewind) and times every frame; the calibration kernel is timed before each frame.
   std::vector<BenchTimes> all;
   std::array<std::vector<double>, kBenchStageCount> runMedians;
+  {
+    // A source that gives no frame (a corrupt file) is refused before the calibration's
+    // repetitions: at once, not seconds later (minutes in a sanitizer build).
+    Frame first;
+    if (!source->next(first)) throw Error(sourceName + ": no frames to benchmark");
+    if (!source->rewind()) source = openSource(sourceName);
+  }
   CalibrationKernel calibrationKernel;
   std::string description;
   const Contention sched;
