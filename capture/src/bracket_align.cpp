@@ -52,12 +52,19 @@ LogLevel halve(const LogLevel& in) {
   return out;
 }
 
-// Bilinear sample of an equirect level at direction p (unit); NaN where a corner is unmeasured.
-float sample(const LogLevel& l, const glm::dvec3& p) {
-  const double theta = std::acos(std::clamp(p.z, -1.0, 1.0));
+// Where unit direction p lies in an equirect image w x h (liveprobe/sh/sh.h's convention), in
+// pixel coordinates: column fx (from 0 to w), row fy, pixel centres at whole numbers.
+void pixelOf(const glm::dvec3& p, int w, int h, double& fx, double& fy) {
   double phi = std::atan2(p.y, p.x);
   if (phi < 0) phi += 2 * kPi;
-  const double fx = phi / (2 * kPi) * l.width - 0.5, fy = theta / kPi * l.height - 0.5;
+  fx = phi / (2 * kPi) * w - 0.5;
+  fy = std::acos(std::clamp(p.z, -1.0, 1.0)) / kPi * h - 0.5;
+}
+
+// Bilinear sample of an equirect level at direction p (unit); NaN where a corner is unmeasured.
+float sample(const LogLevel& l, const glm::dvec3& p) {
+  double fx, fy;
+  pixelOf(p, l.width, l.height, fx, fy);
   if (fy < 0 || fy > l.height - 1) return kNaN;
   const int x0 = int(std::floor(fx)), y0 = std::min(int(fy), l.height - 2);
   const double ax = fx - x0, ay = fy - y0;
@@ -295,10 +302,7 @@ void forEachTurnedRow(int w, int h, const glm::mat3& q, Executor* executor, Row 
     const double theta = kPi * (y + 0.5) / h, phi = 2 * kPi * (x + 0.5) / w;
     const glm::dvec3 p = qd * glm::dvec3(std::sin(theta) * std::cos(phi),
                                          std::sin(theta) * std::sin(phi), std::cos(theta));
-    double ps = std::atan2(p.y, p.x);
-    if (ps < 0) ps += 2 * kPi;
-    fx = ps / (2 * kPi) * w - 0.5;
-    fy = std::acos(std::clamp(p.z, -1.0, 1.0)) / kPi * h - 0.5;
+    pixelOf(p, w, h, fx, fy);
   };
   const int gw = (w + kGrid - 1) / kGrid + 1, gh = (h + kGrid - 1) / kGrid + 1;
   const auto nodeY = [&](int j) { return std::min(j * kGrid, h - 1); };
