@@ -49,13 +49,15 @@ for size in ["300x300", "1920x960", "3840x1920", "7680x3840"]:
         print(f"| {t} {size} | {fmt(us(f'Upload/{p}/direct'))} | {pbo} | {fmt(floor)} | "
               f"{fmt(gpu)}; {fmt(us(f'Project/{p}/gpu'))} | {ratio} | {fmt(us(f'Project/{p}/cpu'))} |")
 print()
-print("| rows per group (f32 projection, GPU time) | 16 | 32 | 64 (default) | 128 | 256 |")
-print("|---|---|---|---|---|---|")
+print("| rows per group (GPU time) | 16 | 32 | 64 | 128 | 256 | default (groups) |")
+print("|---|---|---|---|---|---|---|")
 for size in ["3840x1920", "7680x3840"]:
-    cells = [fmt(us(f"Project/f32/{size}/gpu/rows:{r}", "gpu_us")) for r in (16, 32)]
-    cells.append(fmt(us(f"Project/f32/{size}/gpu", "gpu_us")))
-    cells += [fmt(us(f"Project/f32/{size}/gpu/rows:{r}", "gpu_us")) for r in (128, 256)]
-    print(f"| {size} | " + " | ".join(cells) + " |")
+    for t in ["f32", "u8"]:
+        cells = [fmt(us(f"Project/{t}/{size}/gpu/rows:{r}", "gpu_us")) for r in (16, 32, 64, 128, 256)]
+        groups = us(f"Project/{t}/{size}/gpu", "groups")
+        default = fmt(us(f"Project/{t}/{size}/gpu", "gpu_us"))
+        cells.append(f"{default} ({groups:.0f})" if groups else default)
+        print(f"| {t} {size} | " + " | ".join(cells) + " |")
 print()
 print("| render, the bunny with 4x MSAA | wall | GPU time |")
 print("|---|---|---|")

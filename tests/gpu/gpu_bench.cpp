@@ -261,7 +261,6 @@ std::unique_ptr<Uploaded> uploaded(benchmark::State& state, Size s, bool u8) {
 void readFloor(benchmark::State& state, Size s, bool u8) {
   auto up = uploaded(state, s, u8);
   if (!up) return;
-  const TestFrame& frame = up->frame;
   lp::gl::FrameTexture& tex = up->tex;
   const int rows = std::clamp(s.h * ((s.w + 255) / 256) / 512, 4, 64);
   const int gx = (s.w + 255) / 256, gy = (s.h + rows - 1) / rows;
@@ -410,14 +409,16 @@ void registerAll() {
           [](benchmark::State& st, Size sz, bool b) { projectGpu(st, sz, b); });
       reg("Project/" + tail + "/cpu", projectCpu);
     }
-  // The first pass's rows per invocation, at 4K and 8K float (the default takes 64).
+  // The first pass's rows per invocation, at 4K and 8K (the default aims at about 768 groups).
   for (Size s : {Size{3840, 1920}, Size{7680, 3840}})
-    for (int rows : {16, 32, 128, 256})
-      benchmark::RegisterBenchmark(
-          ("Project/f32/" + sizeName(s) + "/gpu/rows:" + std::to_string(rows)).c_str(),
-          [=](benchmark::State& st) { projectGpu(st, s, false, rows); })
-          ->UseRealTime()
-          ->Unit(benchmark::kMicrosecond);
+    for (bool u8 : {false, true})
+      for (int rows : {16, 32, 64, 128, 256})
+        benchmark::RegisterBenchmark(((u8 ? "Project/u8/" : "Project/f32/") + sizeName(s) +
+                                      "/gpu/rows:" + std::to_string(rows))
+                                         .c_str(),
+                                     [=](benchmark::State& st) { projectGpu(st, s, u8, rows); })
+            ->UseRealTime()
+            ->Unit(benchmark::kMicrosecond);
   for (Size s : {Size{1920, 1080}, Size{3840, 2160}})
     benchmark::RegisterBenchmark(("Render/bunny/" + sizeName(s) + "/msaa:4").c_str(),
                                  [=](benchmark::State& st) { renderBunny(st, s); })

@@ -17,96 +17,118 @@ namespace lp::gl {
 namespace {
 
 constexpr int kGroupSize = 256;
+/// The most rows a group of the first pass sums: their row factors (8 floats each) share the
+/// shared array that later holds 9 x 256 of the group's sums.
+constexpr int kMaxRowsPerGroup = 9 * kGroupSize / 8;
 
-// The first pass. A workgroup of 256 invocations covers 256 columns and `rowsPerGroup` rows;
-// each invocation walks down its column, so neighbours read neighbouring texels. Equirect: the
-// column's weights are constant, so an invocation sums value * row factor over its rows (six row
-// factors x three channels) and multiplies by the five column integrals once at the end (as the
-// CPU kernel sums columns first). Other layouts: nine weights per pixel from the CPU's table.
-// Then a shared-memory tree sums the 27 values of the 256 invocations: 27 partials per group.
-const char* const kReduceCs = R"(#version 430
+// The first pass, compiled twice: EQUIRECT 1 for the equirect layout, 0 for the others. A
+// workgroup of 256 invocations covers 256 columns and `rowsPerGroup` rows; each invocation walks
+// down its column, so neighbours read neighbouring texels.
+//   Equirect: the column's weights are constant, so an invocation sums value * row factor over
+//   its rows (six row factors x three channels, in registers) and multiplies by the five column
+//   integrals once at the end, as the CPU kernel sums columns first. The group's row factors sit
+//   in shared memory (8 floats a row, read by every invocation at once).
+//   Other layouts: nine weights per pixel from the CPU's table.
+// 8-bit frames are decoded through the 256-entry table, copied into shared memory per group.
+// Then the group's 27 x 256 sums go through shared memory nine values at a time (little shared
+// memory, so many groups share a multiprocessor and keep its fetches in flight): 216
+// invocations sum 32 each, 27 sum the last 8, 27 partials per group.
+const char* const kReduceCs = R"(
 layout(local_size_x = 256) in;
 layout(binding = 0) uniform sampler2D frame;
-layout(std430, binding = 0) readonly buffer Rows { float rowT[]; };      // 6 x height
+layout(std430, binding = 0) readonly buffer Rows { float rowT[]; };      // 8 x height
 layout(std430, binding = 1) readonly buffer Cols { float colT[]; };      // 5 x paddedWidth
 layout(std430, binding = 2) readonly buffer Weights { float weights[]; };  // blocked, 9 per pixel
 layout(std430, binding = 3) readonly buffer Decode { float decodeT[]; };   // 256
 layout(std430, binding = 4) writeonly buffer Partial { float partial[]; }; // 27 x groups
-uniform int width, height, paddedWidth, rowsPerGroup, equirect, codes;
-const int rowOf[9] = int[9](0, 2, 1, 2, 4, 3, 5, 3, 4);
-const int colOf[9] = int[9](0, 2, 0, 1, 4, 2, 0, 1, 3);
-shared float red[27 * 256];
+uniform int width, height, paddedWidth, rowsPerGroup, codes;
+shared float red[9 * 256];
+shared float decodeS[256];
 
-vec3 radiance(ivec2 p) {
-  vec3 v = texelFetch(frame, p, 0).rgb;
+vec3 radiance(int j, int i) {
+  vec3 v = texelFetch(frame, ivec2(j, i), 0).rgb;
   if (codes != 0) {
-    uvec3 c = uvec3(round(v * 255.0));
-    v = vec3(decodeT[c.r], decodeT[c.g], decodeT[c.b]);
+    const uvec3 c = uvec3(v * 255.0 + 0.5);
+    v = vec3(decodeS[c.r], decodeS[c.g], decodeS[c.b]);
   }
   return v;
 }
 
 void main() {
-  const uint lid = gl_LocalInvocationID.x;
-  const int j = int(gl_WorkGroupID.x) * 256 + int(lid);
+  const int lid = int(gl_LocalInvocationID.x);
+  const int j = int(gl_WorkGroupID.x) * 256 + lid;
   const int i0 = int(gl_WorkGroupID.y) * rowsPerGroup;
-  const int i1 = min(i0 + rowsPerGroup, height);
-  float acc[27];
-  for (int q = 0; q < 27; ++q) acc[q] = 0.0;
-  if (equirect != 0) {
-    // The group's row factors into shared memory (red[] is free until the tree).
-    for (int t = int(lid); t < 6 * (i1 - i0); t += 256)
-      red[t] = rowT[(t / (i1 - i0)) * height + i0 + t % (i1 - i0)];
-    barrier();
-  }
+  const int n = min(rowsPerGroup, height - i0);
+  if (codes != 0) decodeS[lid] = decodeT[lid];
+#if EQUIRECT
+  for (int t = lid; t < 8 * n; t += 256) red[t] = rowT[8 * i0 + t];
+  barrier();
+  vec3 b0 = vec3(0.0), b1 = vec3(0.0), b2 = vec3(0.0), b3 = vec3(0.0), b4 = vec3(0.0),
+       b5 = vec3(0.0);
+#define ROW(v, r)                                                                  \
+  b0 += red[8 * (r)] * v, b1 += red[8 * (r) + 1] * v, b2 += red[8 * (r) + 2] * v, \
+  b3 += red[8 * (r) + 3] * v, b4 += red[8 * (r) + 4] * v, b5 += red[8 * (r) + 5] * v
   if (j < width) {
-    if (equirect != 0) {
-      const int n = i1 - i0;
-      vec3 byRow[6];
-      for (int r = 0; r < 6; ++r) byRow[r] = vec3(0.0);
-      int i = 0;
-      // Four rows a step: four fetches in flight before their sums need them.
-      for (; i + 4 <= n; i += 4) {
-        const vec3 v0 = radiance(ivec2(j, i0 + i)), v1 = radiance(ivec2(j, i0 + i + 1));
-        const vec3 v2 = radiance(ivec2(j, i0 + i + 2)), v3 = radiance(ivec2(j, i0 + i + 3));
-        for (int r = 0; r < 6; ++r)
-          byRow[r] += red[r * n + i] * v0 + red[r * n + i + 1] * v1 + red[r * n + i + 2] * v2 +
-                      red[r * n + i + 3] * v3;
-      }
-      for (; i < n; ++i) {
-        const vec3 v = radiance(ivec2(j, i0 + i));
-        for (int r = 0; r < 6; ++r) byRow[r] += red[r * n + i] * v;
-      }
-      float col[5];
-      for (int c = 0; c < 5; ++c) col[c] = colT[c * paddedWidth + j];
-      for (int k = 0; k < 9; ++k) {
-        const vec3 s = byRow[rowOf[k]] * col[colOf[k]];
-        acc[3 * k] = s.r, acc[3 * k + 1] = s.g, acc[3 * k + 2] = s.b;
-      }
-    } else {
-      for (int i = i0; i < i1; ++i) {
-        const int p = i * width + j;
-        const int base = (p / 16) * 144 + p % 16;
-        const vec3 v = radiance(ivec2(j, i));
-        for (int k = 0; k < 9; ++k) {
-          const float w = weights[base + 16 * k];
-          acc[3 * k] += w * v.r, acc[3 * k + 1] += w * v.g, acc[3 * k + 2] += w * v.b;
-        }
-      }
+    int i = 0;
+    // Eight rows a step: eight fetches in flight before their sums need them.
+    for (; i + 8 <= n; i += 8) {
+      const vec3 v0 = radiance(j, i0 + i), v1 = radiance(j, i0 + i + 1);
+      const vec3 v2 = radiance(j, i0 + i + 2), v3 = radiance(j, i0 + i + 3);
+      const vec3 v4 = radiance(j, i0 + i + 4), v5 = radiance(j, i0 + i + 5);
+      const vec3 v6 = radiance(j, i0 + i + 6), v7 = radiance(j, i0 + i + 7);
+      ROW(v0, i); ROW(v1, i + 1); ROW(v2, i + 2); ROW(v3, i + 3);
+      ROW(v4, i + 4); ROW(v5, i + 5); ROW(v6, i + 6); ROW(v7, i + 7);
+    }
+    for (; i < n; ++i) {
+      const vec3 v = radiance(j, i0 + i);
+      ROW(v, i);
     }
   }
-  barrier();  // every row factor read before the tree overwrites them
-  for (int q = 0; q < 27; ++q) red[q * 256 + lid] = acc[q];
-  barrier();
-  for (uint stride = 128u; stride > 0u; stride >>= 1) {
-    if (lid < stride)
-      for (int q = 0; q < 27; ++q) red[q * 256 + lid] += red[q * 256 + lid + stride];
+  float c0 = 0.0, c1 = 0.0, c2 = 0.0, c3 = 0.0, c4 = 0.0;
+  if (j < width)
+    c0 = colT[j], c1 = colT[paddedWidth + j], c2 = colT[2 * paddedWidth + j],
+    c3 = colT[3 * paddedWidth + j], c4 = colT[4 * paddedWidth + j];
+  // Y_k's row and column factors, as lp::Projector pairs them (rows 0..5, columns 0..4).
+  const vec3 s[9] = vec3[9](b0 * c0, b2 * c2, b1 * c0, b2 * c1, b4 * c4, b3 * c2, b5 * c0,
+                            b3 * c1, b4 * c3);
+  float acc[27];
+  for (int k = 0; k < 9; ++k) acc[3 * k] = s[k].r, acc[3 * k + 1] = s[k].g, acc[3 * k + 2] = s[k].b;
+#else
+  barrier();  // the decode table in place
+  float acc[27];
+  for (int q = 0; q < 27; ++q) acc[q] = 0.0;
+  if (j < width)
+    for (int i = i0; i < i0 + n; ++i) {
+      const int p = i * width + j;
+      const int base = (p / 16) * 144 + p % 16;
+      const vec3 v = radiance(j, i);
+      for (int k = 0; k < 9; ++k) {
+        const float w = weights[base + 16 * k];
+        acc[3 * k] += w * v.r, acc[3 * k + 1] += w * v.g, acc[3 * k + 2] += w * v.b;
+      }
+    }
+#endif
+  // Nine values at a time: invocation lid (< 216) sums value q = lid / 8 of invocations
+  // lid % 8, lid % 8 + 8, ... (32 of them), in the round that holds q.
+  float sum = 0.0;
+  for (int round = 0; round < 3; ++round) {
+    barrier();  // the row factors, or the last round's values, read
+    for (int q = 0; q < 9; ++q) red[9 * lid + q] = acc[9 * round + q];
     barrier();
+    if (lid >= 72 * round && lid < 72 * round + 72) {
+      const int q = (lid >> 3) - 9 * round, part = lid & 7;
+      for (int l = part; l < 256; l += 8) sum += red[9 * l + q];
+    }
   }
-  if (lid < 27u) {
-    const uint groups = gl_NumWorkGroups.x * gl_NumWorkGroups.y;
-    const uint group = gl_WorkGroupID.y * gl_NumWorkGroups.x + gl_WorkGroupID.x;
-    partial[lid * groups + group] = red[lid * 256u];
+  barrier();
+  if (lid < 216) red[lid] = sum;
+  barrier();
+  if (lid < 27) {
+    float total = 0.0;
+    for (int part = 0; part < 8; ++part) total += red[8 * lid + part];
+    const int groups = int(gl_NumWorkGroups.x * gl_NumWorkGroups.y);
+    const int group = int(gl_WorkGroupID.y * gl_NumWorkGroups.x + gl_WorkGroupID.x);
+    partial[lid * groups + group] = total;
   }
 }
 )";
@@ -165,6 +187,15 @@ Buffer storageBuffer(const void* data, std::size_t bytes) {
   glBufferData(GL_SHADER_STORAGE_BUFFER, GLsizeiptr(std::max<std::size_t>(bytes, 16)), data,
                data ? GL_STATIC_DRAW : GL_DYNAMIC_COPY);
   return b;
+}
+
+/// Rows a first-pass group sums where the caller does not say: enough groups to fill a large GPU
+/// (about 768), each invocation summing 16 to 256 rows, a multiple of 4 (liveprobe-gpu-bench's
+/// rows:N runs measure the choice).
+int defaultRowsPerGroup(int width, int height) {
+  const int groupsX = (width + kGroupSize - 1) / kGroupSize;
+  const int rows = (height * groupsX + 767) / 768;
+  return std::clamp((rows + 3) / 4 * 4, 16, 256);
 }
 
 /// Waits for a fence (if any) and deletes it.
@@ -283,16 +314,20 @@ GpuProjector::GpuProjector(const LayoutSpec& spec, int width, int height, int ro
     : spec_(spec), width_(width), height_(height) {
   if (!hasCompute()) throw ContextError("the GPU projection needs compute shaders (GL 4.3)");
   const Projector cpu(spec, width, height);  // the same tables as the CPU's projection
-  reduce_ = linkCompute(kReduceCs, "the projection's reduction");
+  const EquirectIntegrals* t = cpu.equirectIntegrals();
+  const std::string reduce =
+      std::string("#version 430\n#define EQUIRECT ") + (t ? "1" : "0") + "\n" + kReduceCs;
+  reduce_ = linkCompute(reduce.c_str(), "the projection's reduction");
   finish_ = linkCompute(kFinishCs, "the projection's final sum");
-  // 64 rows a group (the row factors fit in the shared array; liveprobe-gpu-bench's rows:N
-  // measures other choices): each invocation keeps fetches in flight down its column.
   groupsX_ = (width + kGroupSize - 1) / kGroupSize;
-  rowsPerGroup_ = std::min(rowsPerGroup > 0 ? std::min(rowsPerGroup, 1152) : 64, height);
+  rowsPerGroup_ = std::min(rowsPerGroup > 0 ? std::min(rowsPerGroup, kMaxRowsPerGroup)
+                                            : defaultRowsPerGroup(width, height),
+                           height);
   groupsY_ = (height + rowsPerGroup_ - 1) / rowsPerGroup_;
-  if (const EquirectIntegrals* t = cpu.equirectIntegrals()) {
-    std::vector<float> rows, cols;
-    for (const auto& r : t->row) rows.insert(rows.end(), r.begin(), r.end());
+  if (t) {
+    std::vector<float> rows(std::size_t(height) * 8, 0.0f), cols;
+    for (std::size_t r = 0; r < t->row.size(); ++r)
+      for (std::size_t i = 0; i < std::size_t(height); ++i) rows[8 * i + r] = t->row[r][i];
     for (const auto& c : t->col) cols.insert(cols.end(), c.begin(), c.end());
     rows_ = storageBuffer(rows.data(), rows.size() * sizeof(float));
     cols_ = storageBuffer(cols.data(), cols.size() * sizeof(float));
@@ -314,7 +349,6 @@ GpuProjector::GpuProjector(const LayoutSpec& spec, int width, int height, int ro
   glUniform1i(glGetUniformLocation(p, "paddedWidth"),
               cpu.equirectIntegrals() ? GLint(cpu.equirectIntegrals()->col[0].size()) : 0);
   glUniform1i(glGetUniformLocation(p, "rowsPerGroup"), rowsPerGroup_);
-  glUniform1i(glGetUniformLocation(p, "equirect"), cpu.equirectIntegrals() ? 1 : 0);
   glUseProgram(finish_.get());
   glUniform1i(glGetUniformLocation(finish_.get(), "groups"), groups());
   glUseProgram(0);

@@ -62,7 +62,7 @@ class GpuProjector {
  public:
   /// Throws ContextError where the context has no compute shaders, lp::Error where the frame
   /// size does not fit the layout. `rowsPerGroup`: the rows each invocation of the first pass
-  /// sums (0 picks: about 500 groups, 4 to 64 rows; liveprobe-gpu-bench measures the choice).
+  /// sums (0 picks: about 768 groups, 16 to 256 rows; liveprobe-gpu-bench measures the choice).
   GpuProjector(const LayoutSpec& spec, int width, int height, int rowsPerGroup = 0);
   ~GpuProjector();
 
