@@ -1,6 +1,6 @@
 #!/bin/bash
 # Installs the liveprobe build BUILD into a temporary prefix, builds tests/consumer against it
-# with find_package(liveprobe), and runs its two programs. Usage: run.sh BUILD DATA_DIR
+# with find_package(liveprobe), and runs its three programs. Usage: run.sh BUILD DATA_DIR
 set -euo pipefail
 build=$1 data=$2
 here=$(cd "$(dirname "$0")" && pwd)
@@ -17,3 +17,4 @@ if ldd "$work/build/sh_only" | grep -E 'opencv|libGL|glfw|OSMesa|assimp'; then
 fi
 "$work/build/sh_only"
 "$work/build/grace" "$data/probes/latlong_full/grace_latlong.exr"
+"$work/build/exchange_json" "$data/probes/latlong_full/grace_latlong.exr"
