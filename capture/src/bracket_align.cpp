@@ -277,16 +277,26 @@ struct RowSamples {
   std::vector<float> ax, ay;
   explicit RowSamples(int w)
       : left(std::size_t(w)), right(std::size_t(w)), ax(std::size_t(w)), ay(std::size_t(w)) {}
-  void set(int x, float fx, float fy, int w, int h) {
-    fy = std::clamp(fy, 0.0f, float(h - 1));
-    int x0 = int(fx + float(w)) - w;  // floor, for fx > -w
-    ax[std::size_t(x)] = fx - float(x0);
-    x0 = x0 < 0 ? x0 + w : (x0 >= w ? x0 - w : x0);
-    const int x1 = x0 + 1 == w ? 0 : x0 + 1;
-    const int y0 = std::min(int(fy), h - 2);
-    ay[std::size_t(x)] = fy - float(y0);
-    left[std::size_t(x)] = std::uint32_t(y0 * w + x0);
-    right[std::size_t(x)] = std::uint32_t(y0 * w + x1);
+  /// Pixels x0 .. x0 + n - 1 from where they read (fx: column, any value over -w; fy: row), in
+  /// one loop without branches (the compiler vectorizes it).
+  void set(int x0, int n, const float* __restrict fx, const float* __restrict fy, int w, int h) {
+    std::uint32_t* __restrict l = left.data() + x0;
+    std::uint32_t* __restrict r = right.data() + x0;
+    float* __restrict axOut = ax.data() + x0;
+    float* __restrict ayOut = ay.data() + x0;
+    const float top = float(h - 1), wf = float(w);
+    for (int k = 0; k < n; ++k) {
+      const float y = std::clamp(fy[k], 0.0f, top);
+      int c0 = int(fx[k] + wf) - w;  // floor, for fx > -w
+      axOut[k] = fx[k] - float(c0);
+      c0 += c0 < 0 ? w : 0;
+      c0 -= c0 >= w ? w : 0;
+      const int c1 = c0 + 1 == w ? 0 : c0 + 1;
+      const int r0 = std::min(int(y), h - 2);
+      ayOut[k] = y - float(r0);
+      l[k] = std::uint32_t(r0 * w + c0);
+      r[k] = std::uint32_t(r0 * w + c1);
+    }
   }
 };
 
@@ -319,13 +329,15 @@ void forEachTurnedRow(int w, int h, const glm::mat3& q, Executor* executor, Row 
               [&](std::size_t y0, std::size_t y1) {
                 RowSamples samples(w);
                 std::vector<float> o(static_cast<std::size_t>(gw)), r(o);
+                std::vector<float> fx(static_cast<std::size_t>(w)), fy(fx);
                 for (int y = int(y0); y < int(y1); ++y) {
                   if (std::sin(kPi * (y + 0.5) / h) < 0.02) {
                     for (int x = 0; x < w; ++x) {
-                      double fx, fy;
-                      source(x, y, fx, fy);
-                      samples.set(x, float(fx), float(fy), w, h);
+                      double sx, sy;
+                      source(x, y, sx, sy);
+                      fx[std::size_t(x)] = float(sx), fy[std::size_t(x)] = float(sy);
                     }
+                    samples.set(0, w, fx.data(), fy.data(), w, h);
                     row(y, samples);
                     continue;
                   }
@@ -342,12 +354,14 @@ void forEachTurnedRow(int w, int h, const glm::mat3& q, Executor* executor, Row 
                     const float oa = o[std::size_t(i)], ob = o[std::size_t(i) + 1];
                     const float ra = r[std::size_t(i)], rb = r[std::size_t(i) + 1];
                     const int x0 = i * kGrid, n = std::min(kGrid, w - x0);
+                    float* __restrict sx = fx.data() + x0;
+                    float* __restrict sy = fy.data() + x0;
                     for (int k = 0; k < n; ++k) {
                       const float s = float(k) * (1.0f / kGrid);
-                      samples.set(x0 + k, float(x0 + k) + oa + s * (ob - oa), ra + s * (rb - ra), w,
-                                  h);
+                      sx[k] = float(x0 + k) + oa + s * (ob - oa), sy[k] = ra + s * (rb - ra);
                     }
                   }
+                  samples.set(0, w, fx.data(), fy.data(), w, h);
                   row(y, samples);
                 }
               });
@@ -422,28 +436,43 @@ void turnLuminance(const float* src, int w, int h, const glm::mat3& q, float* ds
 
 void neighbourhood(const std::uint8_t* bgr, int w, int h, std::uint8_t* low, std::uint8_t* high,
                    Executor* executor) {
+  const std::size_t width = std::size_t(w);
   parallelFor(executor, std::size_t(h), Split{.grain = 1, .perThread = 4},
               [&](std::size_t y0, std::size_t y1) {
-                std::vector<std::uint8_t> least(static_cast<std::size_t>(w)), most(least);
+                // Each row's largest channel once, in a ring of the last three rows.
+                std::vector<std::uint8_t> ring(3 * width), least(width), most(width);
+                const auto peaks = [&](int y) {
+                  const std::uint8_t* __restrict p = bgr + std::size_t(y) * width * 3;
+                  std::uint8_t* __restrict out = ring.data() + std::size_t(y % 3) * width;
+                  for (std::size_t x = 0; x < width; ++x)
+                    out[x] = std::max({p[3 * x], p[3 * x + 1], p[3 * x + 2]});
+                };
+                int done = -1;  // the last row whose peaks are in the ring
                 for (int y = int(y0); y < int(y1); ++y) {
                   // Over this row and the ones above and below, per column.
-                  std::fill(least.begin(), least.end(), std::uint8_t(255));
-                  std::fill(most.begin(), most.end(), std::uint8_t(0));
-                  for (int yy = std::max(0, y - 1); yy <= std::min(h - 1, y + 1); ++yy) {
-                    const std::uint8_t* p = bgr + std::size_t(yy) * std::size_t(w) * 3;
-                    for (std::size_t x = 0; x < std::size_t(w); ++x, p += 3) {
-                      const std::uint8_t c = std::max({p[0], p[1], p[2]});
-                      least[x] = std::min(least[x], c), most[x] = std::max(most[x], c);
-                    }
+                  const int above = std::max(0, y - 1), below = std::min(h - 1, y + 1);
+                  for (int r = std::max(above, done + 1); r <= below; ++r) peaks(r);
+                  done = below;
+                  const std::uint8_t* __restrict a = ring.data() + std::size_t(above % 3) * width;
+                  const std::uint8_t* __restrict m = ring.data() + std::size_t(y % 3) * width;
+                  const std::uint8_t* __restrict b = ring.data() + std::size_t(below % 3) * width;
+                  for (std::size_t x = 0; x < width; ++x) {
+                    least[x] = std::min({a[x], m[x], b[x]});
+                    most[x] = std::max({a[x], m[x], b[x]});
                   }
-                  std::uint8_t* lo = low + std::size_t(y) * std::size_t(w);
-                  std::uint8_t* hi = high + std::size_t(y) * std::size_t(w);
-                  for (int x = 0; x < w; ++x) {
-                    const std::size_t a = std::size_t(x == 0 ? w - 1 : x - 1), b = std::size_t(x),
-                                      c = std::size_t(x + 1 == w ? 0 : x + 1);
-                    lo[x] = std::min({least[a], least[b], least[c]});
-                    hi[x] = std::max({most[a], most[b], most[c]});
+                  // And the columns beside (the seam wraps).
+                  std::uint8_t* __restrict lo = low + std::size_t(y) * width;
+                  std::uint8_t* __restrict hi = high + std::size_t(y) * width;
+                  const auto ends = [&](std::size_t x, std::size_t left, std::size_t right) {
+                    lo[x] = std::min({least[left], least[x], least[right]});
+                    hi[x] = std::max({most[left], most[x], most[right]});
+                  };
+                  ends(0, width - 1, width > 1 ? 1 : 0);
+                  for (std::size_t x = 1; x + 1 < width; ++x) {
+                    lo[x] = std::min({least[x - 1], least[x], least[x + 1]});
+                    hi[x] = std::max({most[x - 1], most[x], most[x + 1]});
                   }
+                  if (width > 1) ends(width - 1, width - 2, 0);
                 }
               });
 }
