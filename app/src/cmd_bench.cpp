@@ -334,7 +334,8 @@ const CommandSpec kBenchSpec{
     "bench",
     "[SOURCE]",
     "Frame-time regression run: replays N frames headless through the whole pipeline (R times)\n"
-    "and times each stage per frame: grab (decode), convert, project, upload, render, readback.\n"
+    "and times each stage per frame: grab (decode), convert, project, resample (a layout GL does\n"
+    "not draw as it is), upload, render, readback.\n"
     "Reports median, p95, p99 and max per stage. With --baseline it compares the medians of the\n"
     "runs, divided by a calibration kernel timed in the same run, prints a verdict and exits 1\n"
     "when a stage is slower than the baseline by more than --threshold percent (default 25) and\n"

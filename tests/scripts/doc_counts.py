@@ -1,0 +1,68 @@
+#!/usr/bin/env python3
+"""The manual states the counts and lists the tree and the program have: every "N fuzz targets"
+(or "N libFuzzer targets") in README.md and docs/ is the number of tests/fuzz/fuzz_*.cpp, every
+"N stages" is the number of stages `liveprobe bench` times, and every list that names four or
+more of those stages (the generated reference included) names all of them in the program's order.
+Prints each page:line that differs. Usage: doc_counts.py ROOT LIVEPROBE"""
+import json
+import pathlib
+import re
+import subprocess
+import sys
+import tempfile
+
+sys.dont_write_bytecode = True
+
+WORDS = ['zero', 'one', 'two', 'three', 'four', 'five', 'six', 'seven', 'eight', 'nine', 'ten',
+         'eleven', 'twelve', 'thirteen', 'fourteen', 'fifteen', 'sixteen']
+
+
+def count(text):
+    return int(text) if text.isdigit() else WORDS.index(text.lower())
+
+
+def bench_stages(liveprobe):
+    with tempfile.TemporaryDirectory() as tmp:
+        out = pathlib.Path(tmp) / 'bench.json'
+        subprocess.run([liveprobe, 'bench', '--frames', '1', '--repeat', '1', '--quiet', '--json',
+                        str(out)], check=True, stdout=subprocess.DEVNULL, timeout=300)
+        return list(json.loads(out.read_text())['stages'])
+
+
+def main(root, liveprobe):
+    root = pathlib.Path(root)
+    fuzz = len(list((root / 'tests/fuzz').glob('fuzz_*.cpp')))
+    stages = bench_stages(liveprobe)
+    number = r'\b(\d+|' + '|'.join(WORDS) + r')'
+    pages = [root / 'README.md'] + sorted((root / 'docs').glob('*.md'))
+    bad = checked = 0
+    for page in pages:
+        for n, line in enumerate(page.read_text().splitlines(), 1):
+            where = f'{page.relative_to(root)}:{n}'
+            for m in re.finditer(number + r' (?:libFuzzer |fuzz )targets', line, re.I):
+                checked += 1
+                if count(m.group(1)) != fuzz:
+                    bad += 1
+                    print(f'{where}: "{m.group(0)}", but tests/fuzz has {fuzz}')
+            for m in re.finditer(number + r' stages\b', line, re.I):
+                checked += 1
+                if count(m.group(1)) != len(stages):
+                    bad += 1
+                    print(f'{where}: "{m.group(0)}", but bench times {len(stages)}: {stages}')
+            # A list of stages: names joined by commas (a parenthesis may follow a name).
+            for m in re.finditer(r'\b[a-z]+(?: \([^)]*\))?(?:, (?:and )?[a-z]+(?: \([^)]*\))?){3,}',
+                                 line):
+                named = re.findall(r'\b([a-z]+)(?: \([^)]*\))?(?=,|$)', m.group(0))
+                if sum(name in stages for name in named) < 4:
+                    continue
+                checked += 1
+                if named != stages:
+                    bad += 1
+                    print(f'{where}: stages {named}, but bench times {stages}')
+    print(f'{checked} stated counts and stage lists checked ({fuzz} fuzz targets, '
+          f'{len(stages)} stages)')
+    return 1 if bad else 0
+
+
+if __name__ == '__main__':
+    sys.exit(main(sys.argv[1], sys.argv[2]))
