@@ -21,7 +21,7 @@ constexpr int kGroupSize = 256;
 /// shared array that later holds 9 x 256 of the group's sums.
 constexpr int kMaxRowsPerGroup = 9 * kGroupSize / 8;
 
-// The first pass, compiled twice: EQUIRECT 1 for the equirect layout, 0 for the others. A
+// The first pass, compiled with EQUIRECT 1 for the equirect layout, 0 for the others. A
 // workgroup of 256 invocations covers 256 columns and `rowsPerGroup` rows; each invocation walks
 // down its column, so neighbours read neighbouring texels.
 //   Equirect: the column's weights are constant, so an invocation sums value * row factor over
