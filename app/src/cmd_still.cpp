@@ -213,17 +213,18 @@ const CommandSpec kCompareSpec{
 int runCompare(const Args& a) {
   const Settings& s = a.settings();
   const auto [w, h] = s.output.size.value_or(Size{64, 32});
-  Environment env = loadEnvironment(a);
+  // The map is projected once, here, and the comparison takes that projection and its time.
+  const LightOptions lights = chooseLights(s);
+  Environment env = loadEnvironment(a, lights);
   installStopHandlers();
   Progress progress("compare: brute force", std::int64_t(w) * h, s.output.quiet, "normals");
-  const LightOptions lights = chooseLights(s);
-  const CompareResult r = compareIrradiance(
-      env.image, env.layout, w, h, chooseWindow(s.still, env.radiance), 0, env.orientation,
-      [&](std::size_t done) {
-        progress.update(std::int64_t(done));
-        return !stopRequested();
-      },
-      lights.maxLights > 0 ? &lights : nullptr);
+  const CompareResult r =
+      compareIrradiance(env.image, env.layout, FrameLighting{env.radiance, env.lights, env.whole},
+                        env.projectMs, lights.maxLights > 0, w, h, chooseWindow(s.still, env.whole),
+                        0, env.orientation, [&](std::size_t done) {
+                          progress.update(std::int64_t(done));
+                          return !stopRequested();
+                        });
   progress.finish();
   if (stopRequested()) {
     std::fprintf(stderr, "liveprobe: compare stopped by a signal after %s\n", "part of the grid");

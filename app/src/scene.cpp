@@ -1,6 +1,7 @@
 #include "scene.h"
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <filesystem>
 #include <glm/gtc/matrix_transform.hpp>
@@ -193,12 +194,17 @@ Environment loadEnvironment(const std::string& source, const PanoramaSettings& p
   FrameProcessor processor({env.layout, Photometry{}, env.orientation, 1, lights});
   FrameLighting lit;
   try {
+    processor.fit(frame);  // the tables, before the projection is timed
+    const auto t0 = std::chrono::steady_clock::now();
     lit = processor.process(frame);
+    env.projectMs =
+        std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
   } catch (const Error& e) {
     throw Error(source + ": " + e.what());
   }
   env.radiance = lit.radiance;
   env.lights = std::move(lit.lights);
+  env.whole = lit.whole;
   // The linear image, for what reads pixels (the brute force, the background, the glTF cube), in
   // the same units as the coefficients: the frame's own exposure applied.
   const float scale = float(frame.radianceScale);

@@ -45,6 +45,8 @@ struct Environment {
   glm::mat3 orientation{1.0f};  ///< world from file (envOrientation)
   Sh9 radiance;                 ///< unwindowed, turned by `orientation` (with lights: the rest)
   std::vector<Light> lights;    ///< the dominant compact lights, when asked, turned likewise
+  Sh9 whole;                    ///< the whole map's coefficients, lights included
+  double projectMs = 0;         ///< the frame path's time for it (its tables made beforehand)
   float displayScale = 0.0f;    ///< an 8-bit file: the scale its decoded values carry; 0 for HDR
 };
 /// Reads the first frame of `source` and takes it through the frame path (FrameProcessor: one

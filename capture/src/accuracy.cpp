@@ -23,14 +23,25 @@ CompareResult compareIrradiance(const Image& img, const LayoutSpec& layout, int 
                                 const BandWindow& window, unsigned threads,
                                 const glm::mat3& orientation, const BruteProgress& progress,
                                 const LightOptions* sun) {
-  // The map through the frame path every command shares, timed with the evaluation: the SH
-  // side of the paper's comparison.
+  // The map through the frame path every command shares, timed: the SH side of the paper's
+  // comparison, with the evaluation.
   Frame frame;
   frame.format = PanoramaFormat::RgbF32;
   frame.width = img.width, frame.height = img.height;
   frame.rgb = img.rgb;
   FrameProcessor processor(
       {layout, Photometry{}, orientation, 1, sun ? *sun : LightOptions{.maxLights = 0}});
+  processor.fit(frame);  // the sample table is made once per size, as for a stream
+  const auto t0 = std::chrono::steady_clock::now();
+  const FrameLighting lit = processor.process(frame);
+  return compareIrradiance(img, layout, lit, msSince(t0), sun != nullptr, width, height, window,
+                           threads, orientation, progress);
+}
+
+CompareResult compareIrradiance(const Image& img, const LayoutSpec& layout,
+                                const FrameLighting& lit, double projectMs, bool sun, int width,
+                                int height, const BandWindow& window, unsigned threads,
+                                const glm::mat3& orientation, const BruteProgress& progress) {
   const auto grid = equirectSamples(width, height);
   std::vector<glm::vec3> normals(grid.size());
   for (std::size_t i = 0; i < grid.size(); ++i) normals[i] = grid[i].dir;
@@ -41,14 +52,12 @@ CompareResult compareIrradiance(const Image& img, const LayoutSpec& layout, int 
   r.ySh.resize(grid.size());
   r.yBrute.resize(grid.size());
 
-  processor.fit(frame);  // the sample table is made once per size, as for a stream
   auto t0 = std::chrono::steady_clock::now();
-  const FrameLighting lit = processor.process(frame);
   r.radiance = lit.whole;
   const auto m = irradianceMatrices(applyWindow(lit.whole, window));
   for (std::size_t i = 0; i < grid.size(); ++i)
     r.ySh[i] = luminance(evalIrradianceQuadratic(m, normals[i]));
-  r.shMs = msSince(t0);
+  r.shMs = projectMs + msSince(t0);
   if (sun) {
     const Sh9 residual = applyWindow(lit.radiance, window);
     r.sun = true;
@@ -58,7 +67,7 @@ CompareResult compareIrradiance(const Image& img, const LayoutSpec& layout, int 
       r.ySun[i] = luminance(evalIrradiance(residual, lit.lights, normals[i]));
   }
   // The oracle integrates the same pixels, each with its solid angle, turned to the world.
-  auto samples = processor.projector()->samples();
+  auto samples = Projector(layout, img.width, img.height).samples();
   for (auto& s : samples) s.dir = orientation * s.dir;
 
   t0 = std::chrono::steady_clock::now();

@@ -3,6 +3,7 @@
 #include <string>
 #include <vector>
 
+#include "liveprobe/capture/frame_processor.h"
 #include "liveprobe/capture/image.h"
 #include "liveprobe/sh/brute.h"
 #include "liveprobe/sh/layout.h"
@@ -38,6 +39,17 @@ CompareResult compareIrradiance(const Image& img, const LayoutSpec& layout, int 
                                 const glm::mat3& orientation = glm::mat3(1.0f),
                                 const BruteProgress& progress = {},
                                 const LightOptions* sun = nullptr);
+
+/// The same with the map already taken through the frame path: `lighting` from lp::FrameProcessor
+/// (the same layout and orientation; its lights, where it has any, measured as `sun` above) and
+/// `projectMs`, the time that took (tables made beforehand), which shMs includes. The map is
+/// projected once: here only the brute force and the evaluations run.
+CompareResult compareIrradiance(const Image& img, const LayoutSpec& layout,
+                                const FrameLighting& lighting, double projectMs, bool sun,
+                                int width, int height, const BandWindow& window = {},
+                                unsigned threads = 0,
+                                const glm::mat3& orientation = glm::mat3(1.0f),
+                                const BruteProgress& progress = {});
 
 /// The SH map (with --sun: SH of the rest plus the lights), the brute-force map (same exposure)
 /// and |error| / total intensity with a colour scale, side by side, as an 8-bit PNG.
