@@ -129,8 +129,10 @@ TEST(LiveMetadata, LatencyStartsAtTheCaptureTimestamp) {
     EXPECT_NE(s->find("latency ms (capture to shown): p50"), std::string::npos) << *s;
 }
 
-void expectFault(const Emulator& emu, const std::string& args, const std::string& says,
-                 double maxSeconds = 5) {
+/// Runs live against `emu`, expecting one line saying `says` and exit 1 within `maxSeconds`;
+/// returns how long the run took.
+double expectFault(const Emulator& emu, const std::string& args, const std::string& says,
+                   double maxSeconds = 5) {
   const auto t0 = std::chrono::steady_clock::now();
   const auto r = emu.run("live /dev/video7" + kCommon + args);
   const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
@@ -143,6 +145,7 @@ void expectFault(const Emulator& emu, const std::string& args, const std::string
   EXPECT_NE(r.output.find("/dev/video7"), std::string::npos) << r.output;
   EXPECT_NE(r.output.find(says), std::string::npos) << r.output;
   EXPECT_LT(s, maxSeconds) << "took too long: " << r.output;
+  return s;
 }
 
 TEST(LiveFaults, UnsupportedFormat) {
@@ -172,9 +175,14 @@ TEST(LiveFaults, FewerBuffersGranted) {
   three.expectNoLeak();
 }
 
+// The stall is noticed after --timeout: a run with a timeout 7.5 s longer takes about that much
+// longer. The two runs are measured in turn, so a loaded machine slows both alike; the margin
+// takes a slow start's seconds.
 TEST(LiveFaults, CameraStopsSending) {
   Emulator emu({"MJPG_320x160"}, "stop_after=4");
-  expectFault(emu, "--timeout 0.5", "the camera stopped sending", 3.0);
+  const double quick = expectFault(emu, "--timeout 0.5", "the camera stopped sending", 60);
+  const double slow = expectFault(emu, "--timeout 8", "the camera stopped sending", 60);
+  EXPECT_GT(slow - quick, 4.0) << "--timeout 0.5 took " << quick << " s, --timeout 8 " << slow;
   emu.expectNoLeak();
 }
 
