@@ -47,7 +47,7 @@ TEST(Live, FullSessionInEveryFormat) {
   for (const auto& [fmt, size, tol] : cases) {
     const std::string live = emu.tmp / ("live_" + fmt + size + ".jsonl"),
                       ref = emu.tmp / ("ref_" + fmt + size + ".jsonl");
-    auto r = emu.run("live /dev/video7 --format " + fmt + " --size " + size + " --frames " +
+    auto r = emu.run("live /dev/video7 --pixel-format " + fmt + " --size " + size + " --frames " +
                      std::to_string(kFrames) + kCommon + "--coeffs-out " + live);
     ASSERT_EQ(r.exitCode, 0) << r.output;
     std::string folder = fmt == "mjpeg" ? "MJPG_" : fmt == "yuyv" ? "YUYV_" : "NV12_";
@@ -150,9 +150,9 @@ double expectFault(const Emulator& emu, const std::string& args, const std::stri
 
 TEST(LiveFaults, UnsupportedFormat) {
   Emulator only({"MJPG_320x160"});
-  expectFault(only, "--format nv12", "does not offer NV12");
+  expectFault(only, "--pixel-format nv12", "does not offer NV12");
   Emulator refuses({"MJPG_320x160"}, "einval_fmt");
-  expectFault(refuses, "--format mjpeg", "VIDIOC_S_FMT MJPG: Invalid argument");
+  expectFault(refuses, "--pixel-format mjpeg", "VIDIOC_S_FMT MJPG: Invalid argument");
   refuses.expectNoLeak();
 }
 

@@ -17,6 +17,7 @@
 
 #include "commands.h"
 #include "dynamic_resolution.h"
+#include "environment.h"
 #include "hud.h"
 #include "liveprobe/backends.h"
 #include "liveprobe/gl/context.h"
@@ -24,6 +25,7 @@
 #include "liveprobe/gl/renderer.h"
 #include "liveprobe/sh/error.h"
 #include "liveprobe/sh/sh.h"
+#include "stream_sinks.h"
 #include "test_util.h"
 
 namespace {
@@ -564,6 +566,53 @@ TEST(Stops, CountsAddUpWhereverTheRunIsStopped) {
   }
 }
 
+// Headless --coeffs-out is a record sink like the stream and the broker: a line for each frame
+// as it is drawn, with its render time; beside a network sink, the records sent at capture and
+// never drawn follow at stop(), in frame order, with render time null; alone, only drawn frames.
+TEST(RecordSinks, HeadlessCoeffsOutLogsDrawnFramesThenTheSentOnes) {
+  struct Network final : lp::RecordSink {  // stands for --serve or --publish: takes every record
+    int records = 0;
+    void publish(lp::FrameRecord&) override { ++records; }
+  };
+  lpt::TempDir tmp;
+  const lp::CoeffFormat format = lp::parseCoeffFormat("json", "--coeffs-format", true);
+  const auto run = [&](bool network) {
+    const std::string path = tmp / (network ? "net.jsonl" : "alone.jsonl");
+    lp::AtomicTextFile file(path);
+    lp::cli::RecordSinks sinks;
+    if (network) sinks.all.push_back(std::make_unique<Network>());
+    lp::cli::addCoeffsSink(sinks, file, format, lp::cli::CoeffsLines::AtDraw);
+    std::vector<lp::ProcessedFrame> frames(4);
+    for (std::size_t i = 0; i < frames.size(); ++i) {
+      frames[i].index = i + 1;
+      lp::FrameRecord record(frames[i], format);
+      for (auto& sink : sinks.all) sink->publish(record);
+    }
+    sinks.shown(frames[0], {2.5, 30.0});
+    sinks.shown(frames[2], {3.5, 31.0});  // frame 2 was dropped before drawing
+    for (auto& sink : sinks.all) sink->stop();
+    file.commit();
+    std::vector<nlohmann::json> lines;
+    std::ifstream in(path);
+    for (std::string line; std::getline(in, line);) lines.push_back(nlohmann::json::parse(line));
+    return lines;
+  };
+  const auto net = run(true);
+  ASSERT_EQ(net.size(), 3u);  // drawn 1 and 3, then 4 (sent, never drawn); 2 was dropped
+  EXPECT_EQ(net[0]["frame"], 1);
+  EXPECT_EQ(net[0]["timings_ms"]["render"], 2.5);
+  EXPECT_EQ(net[0]["latency_ms"]["shown"], 30.0);
+  EXPECT_EQ(net[1]["frame"], 3);
+  EXPECT_EQ(net[1]["timings_ms"]["render"], 3.5);
+  EXPECT_EQ(net[2]["frame"], 4);
+  EXPECT_TRUE(net[2]["timings_ms"]["render"].is_null());
+  EXPECT_FALSE(net[2]["latency_ms"].contains("shown"));
+  const auto alone = run(false);
+  ASSERT_EQ(alone.size(), 2u);
+  EXPECT_EQ(alone[0]["frame"], 1);
+  EXPECT_EQ(alone[1]["frame"], 3);
+}
+
 TEST(Stops, SigintDuringRecordFinalisesTheRecording) {
   lpt::TempDir tmp;
   const std::string out = tmp / "rec.mkv";
@@ -616,6 +665,76 @@ TEST(CommandLine, EveryHelpNamesEveryOptionItAccepts) {
       }
     }
   }
+}
+
+// An option name means one thing in every command that takes it: the same typed field, whatever
+// the command's own help, range and default. Every command that takes --size, --frames, --fps,
+// --out or --format is given it, and the one field it names must hold the value.
+TEST(CommandLine, EachOptionNameSetsOneField) {
+  using lp::cli::Settings;
+  struct Shared {
+    std::string name;
+    std::vector<std::string> values;  ///< the first a command accepts is given
+    std::function<bool(const Settings&, const std::string&)> holds;
+  };
+  const std::vector<Shared> shared = {
+      {"--size",
+       {"40x20"},
+       [](const Settings& s, const std::string&) {
+         return s.output.size == lp::cli::Size{40, 20};
+       }},
+      {"--frames",
+       {"7"},
+       [](const Settings& s, const std::string&) { return s.output.frames == 7; }},
+      {"--fps", {"25"}, [](const Settings& s, const std::string&) { return s.stream.fps == 25.0; }},
+      {"--out",
+       {"x.png", "x.mkv", "x.json"},
+       [](const Settings& s, const std::string& v) { return s.output.out == v; }},
+      // the printed form: coeffs takes any coefficient format, compare text or json
+      {"--format",
+       {"json"},
+       [](const Settings& s, const std::string&) {
+         return s.output.format && s.output.format->name == "json";
+       }},
+  };
+  for (const auto& c : lp::cli::commands()) {
+    for (const Shared& o : shared) {
+      const bool takes =
+          std::any_of(c.spec.options.begin(), c.spec.options.end(),
+                      [&](const lp::cli::OptionSpec& x) { return x.name == o.name; });
+      if (!takes) continue;
+      std::string refused;
+      bool given = false;
+      // (a command that requires --out gets one it takes: .json, .png or .mkv)
+      const std::vector<std::string> outs =
+          o.name != "--out" && std::any_of(c.spec.options.begin(), c.spec.options.end(),
+                                           [](const auto& x) { return x.name == "--out"; })
+              ? std::vector<std::string>{"x.json", "x.png", "x.mkv"}
+              : std::vector<std::string>{""};
+      for (const std::string& v : o.values)
+        for (const std::string& out : outs) {
+          if (given) break;
+          std::vector<std::string> argv = {o.name, v};
+          if (!out.empty()) argv.insert(argv.end(), {"--out", out});
+          for (int i = 0; i < c.spec.minPositional; ++i) argv.push_back("x");
+          try {
+            const lp::cli::Args a(c.spec, argv);
+            EXPECT_TRUE(o.holds(a.settings(), v)) << c.spec.name << " " << o.name << " " << v;
+            given = true;
+          } catch (const lp::Error& e) {
+            refused += std::string(e.what()) + "; ";
+          }
+        }
+      EXPECT_TRUE(given) << c.spec.name << " " << o.name << ": " << refused;
+    }
+  }
+  // the camera's pixel format has a name of its own
+  const auto& all = lp::cli::commands();
+  const auto live =
+      std::find_if(all.begin(), all.end(), [](const auto& c) { return c.spec.name == "live"; });
+  ASSERT_NE(live, all.end());
+  const lp::cli::Args a(live->spec, {"--pixel-format", "yuyv", "/dev/video0"});
+  EXPECT_EQ(a.settings().camera.format, lp::CameraFormat::Yuyv);
 }
 
 TEST(CommandLine, RefusalsAreOneLineWithExit1) {

@@ -18,6 +18,7 @@
 
 #include "baseline.h"
 #include "commands.h"
+#include "environment.h"
 #include "liveprobe/capture/atomic_file.h"
 #include "liveprobe/capture/frame.h"
 #include "liveprobe/capture/input_file.h"
@@ -35,6 +36,7 @@
 #include "liveprobe/sh/simd.h"
 #include "progress.h"
 #include "scene.h"
+#include "scene_gl.h"
 #include "viewer.h"
 
 namespace lp::cli {
@@ -295,35 +297,25 @@ void drawPlot(const std::string& path,
 
 namespace {
 
-std::array<double, kBenchStageCount> parseInjections(const BenchSettings& b) {
-  std::array<double, kBenchStageCount> inject{};
-  for (const auto& d : b.injectDelay) {
+/// --inject-delay STAGE=MS, parsed and checked as the line is read.
+OptionSpec injectDelayOption(const std::string& group) {
+  OptionSpec o =
+      declared("--inject-delay", "STAGE=MS",
+               "add MS milliseconds, at most 10000, of busy work to STAGE; repeatable", group);
+  o.repeatable = true;
+  o.set = [](Settings& s, const std::string& d) {
     const auto eq = d.find('=');
     int stage = -1;
-    for (int s = 0; s < kBenchStageCount; ++s)
-      if (eq != std::string::npos && d.substr(0, eq) == stageLabel(s)) stage = s;
+    for (int k = 0; k < kBenchStageCount; ++k)
+      if (eq != std::string::npos && d.substr(0, eq) == stageLabel(k)) stage = k;
     if (stage < 0) {
       std::string names;
-      for (int s = 0; s < kBenchStageCount; ++s) names += std::string(" ") + stageLabel(s);
+      for (int k = 0; k < kBenchStageCount; ++k) names += std::string(" ") + stageLabel(k);
       throw Error("--inject-delay " + d + ": expected STAGE=MS, STAGE one of" + names);
     }
     const double ms = parseNumber(d.substr(eq + 1), "--inject-delay");
     if (ms < 0 || ms > 10000) throw Error("--inject-delay " + d + ": expected 0 to 10000 ms");
-    inject[std::size_t(stage)] += ms;
-  }
-  return inject;
-}
-
-/// --inject-delay STAGE=MS, each checked as the line is read.
-OptionSpec injectDelayOption(const std::string& group) {
-  OptionSpec o = textOption("--inject-delay", "STAGE=MS",
-                            "add MS milliseconds, at most 10000, of busy work to STAGE; repeatable",
-                            LP_FIELD(bench.injectDelay), group, true);
-  o.set = [](Settings& s, const std::string& v) {
-    BenchSettings one;
-    one.injectDelay = {v};
-    parseInjections(one);
-    s.bench.injectDelay.push_back(v);
+    s.bench.injectDelay.emplace_back(stage, ms);
   };
   return o;
 }
@@ -349,8 +341,7 @@ const CommandSpec kBenchSpec{
       const std::string g = "Benchmark";
       o.insert(
           o.end(),
-          {integerOption("--frames", "N", "frames per run", 1, 100000, "100",
-                         LP_FIELD(output.frames), g),
+          {opt::frames("frames per run", 100000, "100", g),
            integerOption("--repeat", "R",
                          "runs; stage medians are taken per run, then the median of those", 1, 1000,
                          "3", LP_FIELD(bench.repeat), g),
@@ -367,8 +358,7 @@ const CommandSpec kBenchSpec{
                         "times as much as the baseline's did; above, a slower stage is "
                         "inconclusive (exit 2)",
                         {1, 1000}, "1.5", LP_FIELD(bench.maxContention), g),
-           injectDelayOption(g),
-           sizeOption("--size", "render size", 16384, "640x360", LP_FIELD(output.size), g),
+           injectDelayOption(g), opt::size("render size", 16384, "640x360", g),
            choiceOption("--projection",
                         "where the frame is projected: on the GPU (the frame uploaded, a compute "
                         "pass), on the CPU, or auto: the GPU where the context is a GPU with "
@@ -691,8 +681,12 @@ int runBench(const Args& a) {
   const gl::Backend backend = s.scene.gl == gl::Backend::Auto ? gl::Backend::Headless : s.scene.gl;
   BenchScene scene{Viewer(ViewerSpec{backend, size, {}, false, false, false, true, s.scene.gpu},
                           meshFrom(s.scene)),
-                   layoutSpec(s.panorama, source.get()), envOrientation(s.panorama),
-                   parseInjections(s.bench)};
+                   layoutSpec(s.panorama, source.get()), envOrientation(s.panorama), [&] {
+                     std::array<double, kBenchStageCount> inject{};
+                     for (const auto& [stage, ms] : s.bench.injectDelay)
+                       inject[std::size_t(stage)] += ms;
+                     return inject;
+                   }()};
   scene.viewer.renderer->setEnvOrientation(scene.orientation);
   scene.timer = std::make_unique<gl::GpuTimer>();
   const std::string glName = scene.viewer.ctx->describe();

@@ -10,6 +10,7 @@
 #include <tuple>
 
 #include "commands.h"
+#include "environment.h"
 #include "liveprobe/backends.h"
 #include "liveprobe/capture/atomic_file.h"
 #include "liveprobe/capture/hdr_merge.h"
@@ -39,32 +40,31 @@ std::vector<OptionSpec> cameraOptions() {
   lock.set = [](Settings& s, const std::string& v) {
     s.camera.lockExposure = v.empty() ? 2.0 : parseNumberIn("--lock-exposure", v, {0, 3600});
   };
-  return {
-      choiceOption("--format", "pixel format (auto: MJPEG first)",
-                   {"mjpeg", "yuyv", "nv12", "rgb24", "auto"}, "auto", LP_FIELD(camera.format), g),
-      sizeOption("--size", "capture size asked of the camera", 16384, "its largest",
-                 LP_FIELD(camera.size), g),
-      numberOption("--fps", "N", "frame rate asked of the camera", {0, 1000}, "0: its own",
-                   LP_FIELD(camera.fps), g),
-      lock,
-      choiceOption("--mjpeg-reduce", "decode MJPEG at a reduced scale", {"1", "2", "4", "8"}, "1",
-                   LP_FIELD(camera.mjpegReduce), g,
-                   [](const std::string& v) { return std::stoi(v); }),
-      numberOption("--timeout", "SECONDS", "stop when no frame arrives for this long", {0.01, 3600},
-                   "2", LP_FIELD(camera.timeout), g),
-      textOption("--metadata", "DEVICE",
-                 "the camera's UVC metadata node, which says each frame's exposure (default: "
-                 "the node after DEVICE, as uvcvideo numbers them)",
-                 LP_FIELD(camera.metadata), g)};
+  return {choiceOption("--pixel-format", "pixel format (auto: MJPEG first)",
+                       {"mjpeg", "yuyv", "nv12", "rgb24", "auto"}, "auto", LP_FIELD(camera.format),
+                       g, [](const std::string& v) { return parseCameraFormat(v); }),
+          opt::size("capture size asked of the camera", 16384, "its largest", g),
+          opt::fps("frame rate asked of the camera", {0, 1000}, "0: its own", g),
+          lock,
+          choiceOption("--mjpeg-reduce", "decode MJPEG at a reduced scale", {"1", "2", "4", "8"},
+                       "1", LP_FIELD(camera.mjpegReduce), g,
+                       [](const std::string& v) { return std::stoi(v); }),
+          numberOption("--timeout", "SECONDS", "stop when no frame arrives for this long",
+                       {0.01, 3600}, "2", LP_FIELD(camera.timeout), g),
+          textOption("--metadata", "DEVICE",
+                     "the camera's UVC metadata node, which says each frame's exposure (default: "
+                     "the node after DEVICE, as uvcvideo numbers them)",
+                     LP_FIELD(camera.metadata), g)};
 }
 
 #if LIVEPROBE_WITH_V4L2
-CameraSettings cameraSettingsFrom(const std::string& device, const CameraOptions& c) {
+CameraSettings cameraSettingsFrom(const std::string& device, const Settings& s) {
+  const CameraOptions& c = s.camera;
   CameraSettings cs;
   cs.device = device;
-  cs.format = parseCameraFormat(c.format);
-  if (c.size) std::tie(cs.width, cs.height) = *c.size;
-  cs.fps = c.fps;
+  cs.format = c.format;
+  if (s.output.size) std::tie(cs.width, cs.height) = *s.output.size;
+  cs.fps = s.stream.fps.value_or(0.0);
   cs.mjpegReduce = c.mjpegReduce;
   cs.timeoutMs = int(1000 * c.timeout);
   return cs;
@@ -192,7 +192,7 @@ const CommandSpec kLiveSpec{
 int runLive(const Args& a) {
   const Settings& s = a.settings();
   layoutSpec(s.panorama);
-  CameraSettings cs = cameraSettingsFrom(a.positional()[0], s.camera);
+  CameraSettings cs = cameraSettingsFrom(a.positional()[0], s);
   const std::vector<double>& stops = s.camera.bracket;
   if (!stops.empty())
     cs.metadataDevice = s.camera.metadata.value_or(siblingMetadataNode(cs.device));
@@ -258,8 +258,7 @@ const CommandSpec kCalibrateSpec{
       auto o = cameraOptions();
       o.insert(
           o.end(),
-          {fileOption("--out", "FILE.json", "where the response goes (required)", {".json"},
-                      LP_FIELD(output.out), "Output"),
+          {opt::out("FILE.json", "where the response goes (required)", {".json"}, "Output"),
            stopsOption(),
            integerOption("--settle", "N",
                          "frames to let pass after each change before one is kept; a camera "
@@ -277,7 +276,7 @@ const CommandSpec kCalibrateSpec{
 #if LIVEPROBE_WITH_V4L2
 int runCalibrate(const Args& a) {
   const Settings& s = a.settings();
-  CameraSettings cs = cameraSettingsFrom(a.positional()[0], s.camera);
+  CameraSettings cs = cameraSettingsFrom(a.positional()[0], s);
   const auto& range = s.camera.stops;
   const int settle = s.camera.settle;
   // The metadata node when there is one (frames then say their exposure); the settle otherwise.

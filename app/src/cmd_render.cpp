@@ -6,10 +6,12 @@
 
 #include "commands.h"
 #include "dynamic_resolution.h"
+#include "environment.h"
 #include "hud.h"
 #include "liveprobe/sh/error.h"
 #include "progress.h"
 #include "scene.h"
+#include "scene_gl.h"
 #include "viewer.h"
 
 namespace lp::cli {
@@ -31,9 +33,9 @@ const CommandSpec kRenderSpec{
     "there\n"
     "is no display (or with --headless); otherwise in a GLFW window, read back before it is shown.",
     concat(concat(lightingOptions(), sceneOptions()),
-           {sizeOption("--size", "image size", 16384, "1280x720", LP_FIELD(output.size), "Output"),
-            fileOption("--out", "FILE.png", "output image, .png or .jpg (default render.png)",
-                       {".png", ".jpg", ".jpeg"}, LP_FIELD(output.out), "Output"),
+           {opt::size("image size", 16384, "1280x720", "Output"),
+            opt::out("FILE.png", "output image, .png or .jpg (default render.png)",
+                     {".png", ".jpg", ".jpeg"}, "Output"),
             hudOptions("Output", false)[0]}),
     0,
     0};
@@ -66,31 +68,29 @@ int runRender(const Args& a) {
   const std::string out = s.output.out.value_or("render.png");
   const Lighting lighting = requireLighting(s);
   const gl::Camera camera = cameraFrom(s.scene);
-  ViewState state;
-  state.camera = camera;
-  state.shading =
-      shadingFrom(s.scene, lighting.radiance, lighting.background.has_value(), lighting.lights);
   const Mesh mesh = meshFrom(s.scene);
-  auto ctx = openContext(glBackend(s.scene), size, {0, 0}, s.scene.gpu);
+  // The viewer's own frame, as view and replay draw theirs: the model framed beside the HUD
+  // where --hud shows it, at full resolution.
+  std::string described;
   try {
-    gl::Renderer renderer;
-    loadModel(renderer, mesh);
-    loadLighting(renderer, lighting);
-    const glm::ivec2 fb = ctx->framebufferSize();
-    const HudLayout layout = hudLayout(fb);
-    renderer.draw(fb, framedBesideHud(camera, layout, s.output.hud), state.shading);
-    if (s.output.hud) {
-      Hud hud(*ctx);
-      showStill(hud, s.lighting, lighting);
-      hud.draw(layout, renderer, state, 0.0);
-    }
+    Viewer v(
+        {glBackend(s.scene), size, size, s.output.hud, !s.output.hud, true, false, s.scene.gpu},
+        mesh);
+    v.state.camera = camera;
+    v.state.shading =
+        shadingFrom(s.scene, lighting.radiance, lighting.background.has_value(), lighting.lights);
+    loadLighting(*v.renderer, lighting);
+    if (v.hud && s.output.hud) showStill(*v.hud, s.lighting, lighting);
+    v.draw(0.0);
+    const glm::ivec2 fb = v.ctx->framebufferSize();
     const auto px = gl::Renderer::readRgb8(fb);
     saveRgb8(out, fb.x, fb.y, px.data());
+    described = v.ctx->describe();
   } catch (const gl::ContextError& e) {
     throw Error(std::string("GL: ") + e.what());
   }
-  errs() << "liveprobe: " << out << " (" << mesh.triangleCount() << " triangles, "
-         << ctx->describe() << ")\n";
+  errs() << "liveprobe: " << out << " (" << mesh.triangleCount() << " triangles, " << described
+         << ")\n";
   return 0;
 }
 
@@ -104,20 +104,18 @@ const CommandSpec kViewSpec{
     "them as JSON for render --coeffs. --screenshot OUT.png --frames N renders N frames, saves "
     "the\n"
     "last and exits (headless too).",
-    concat(
-        concat(lightingOptions(), sceneOptions()),
-        concat({sizeOption("--size", "window size", 16384, "1280x720", LP_FIELD(output.size),
-                           "Output"),
-                fileOption("--screenshot", "FILE.png",
-                           "save the last frame here and exit (with --frames)",
-                           {".png", ".jpg", ".jpeg"}, LP_FIELD(output.screenshot), "Output"),
-                integerOption("--frames", "N", "number of frames to render before the screenshot",
-                              1, 1000000, "1", LP_FIELD(output.frames), "Output"),
-                textOption("--save-coeffs", "FILE.json",
-                           "where the coefficient panel's Save writes (default "
-                           "coeffs-edited.json)",
-                           LP_FIELD(output.saveCoeffs), "Output")},
-               hudOptions("Output", true))),
+    concat(concat(lightingOptions(), sceneOptions()),
+           concat({opt::size("window size", 16384, "1280x720", "Output"),
+                   fileOption("--screenshot", "FILE.png",
+                              "save the last frame here and exit (with --frames)",
+                              {".png", ".jpg", ".jpeg"}, LP_FIELD(output.screenshot), "Output"),
+                   opt::frames("number of frames to render before the screenshot", 1000000, "1",
+                               "Output"),
+                   textOption("--save-coeffs", "FILE.json",
+                              "where the coefficient panel's Save writes (default "
+                              "coeffs-edited.json)",
+                              LP_FIELD(output.saveCoeffs), "Output")},
+                  hudOptions("Output", true))),
     0,
     0,
     {},

@@ -4,33 +4,22 @@
 #include <chrono>
 #include <cstdio>
 #include <filesystem>
-#include <fstream>
-#include <iostream>
-#include <map>
 #include <mutex>
-#include <sstream>
 
 #include "commands.h"
 #include "dynamic_resolution.h"
+#include "environment.h"
 #include "hud.h"
-#include "liveprobe/backends.h"
-#include "liveprobe/capture/atomic_file.h"
-#include "liveprobe/capture/input_file.h"
 #include "liveprobe/capture/pipeline.h"
 #include "liveprobe/capture/recorder.h"
-#include "liveprobe/exchange/coeffs_io.h"
-#include "liveprobe/exchange/engine_export.h"
 #include "liveprobe/sh/error.h"
-#if LIVEPROBE_WITH_MQTT
-#include "liveprobe/exchange/mqtt_publisher.h"
-#endif
 #include "progress.h"
 #include "scene.h"
+#include "scene_gl.h"
+#include "stream_outputs.h"
+#include "stream_sinks.h"
+#include "stream_summary.h"
 #include "viewer.h"
-#if LIVEPROBE_WITH_STREAM
-#include "liveprobe/exchange/stream_server.h"
-#endif
-#include "liveprobe/exchange/record_sink.h"
 
 namespace lp::cli {
 
@@ -54,8 +43,6 @@ std::string defaultRecording() {
 }
 
 namespace {
-
-double median(const std::vector<double>& v) { return percentile(v, 0.5); }
 
 Photometry photometryFrom(const StreamSettings& st) {
   Photometry p;
@@ -92,16 +79,13 @@ std::vector<OptionSpec> streamOptions() {
        numberOption("--smooth", "SECONDS",
                     "exponential moving average of the coefficients and lights (and its latency)",
                     {0, 3600}, "0", LP_FIELD(stream.smooth), g),
-       numberOption("--fps", "F", "frame rate of image sequences and stills", {0, 1000, true}, "30",
-                    LP_FIELD(stream.fps), g),
+       opt::fps("frame rate of image sequences and stills", {0, 1000, true}, "30", g),
        integerOption("--reduce", "F",
                      "equirect: project an F x F area average (its error: docs/accuracy.md)", 1, 64,
                      "1", LP_FIELD(stream.reduce), g),
        threadsOption(g),
-       integerOption("--frames", "N", "stop after N frames", 1, 1000000000, "",
-                     LP_FIELD(output.frames), g),
-       numberOption("--duration", "SECONDS", "stop after this much of the source's time",
-                    {0.001, 1e7}, "", LP_FIELD(output.duration), g),
+       opt::frames("stop after N frames", 1000000000, "", g),
+       opt::duration("stop after this much of the source's time", g),
        textOption("--coeffs-out", "FILE.jsonl",
                   "one JSON line per frame: coefficients and stage timings",
                   LP_FIELD(output.coeffsOut), g),
@@ -184,8 +168,7 @@ const CommandSpec kReplaySpec{
                       "headless: play at the source's frame rate, not as fast as frames render "
                       "(the default with --serve or --publish)",
                       LP_FIELD(stream.realtime), "Stream"),
-           sizeOption("--size", "window or frame size", 16384, "1280x720; headless 640x360",
-                      LP_FIELD(output.size), g),
+           opt::size("window or frame size", 16384, "1280x720; headless 640x360", g),
            textOption("--out-dir", "DIR",
                       "headless: write each rendered frame as DIR/frame_NNNNNN.png",
                       LP_FIELD(output.outDir), g),
@@ -241,131 +224,6 @@ PipelineOptions pipelineOptionsFrom(const Settings& s, const FrameSource& source
   return opt;
 }
 
-/// --out-dir: the frames this run wrote, removed again (with the folder, if the run made it)
-/// unless the run kept them: a replay that fails part-way leaves no outputs.
-class FrameFolder {
- public:
-  explicit FrameFolder(std::string dir) : dir_(std::move(dir)) {
-    std::error_code ec;
-    made_ = !fs::exists(dir_, ec);
-    if (!made_ && !fs::is_directory(dir_, ec))
-      throw Error("--out-dir " + dir_ + ": is a file, not a folder");
-    fs::create_directories(dir_, ec);
-    if (!fs::is_directory(dir_, ec))
-      throw Error("--out-dir " + dir_ + ": cannot create the folder (" + ec.message() + ")");
-  }
-  ~FrameFolder() {
-    if (kept_) return;
-    std::error_code ec;
-    for (const auto& f : written_) fs::remove(f, ec);
-    if (made_) fs::remove(dir_, ec);  // only if empty: nothing of anyone else's goes
-  }
-  FrameFolder(const FrameFolder&) = delete;
-  FrameFolder& operator=(const FrameFolder&) = delete;
-
-  void write(std::uint64_t index, glm::ivec2 size, const std::vector<std::uint8_t>& rgb) {
-    char name[32];
-    std::snprintf(name, sizeof name, "frame_%06llu.png", static_cast<unsigned long long>(index));
-    const std::string path = (fs::path(dir_) / name).string();
-    saveRgb8(path, size.x, size.y, rgb.data());
-    written_.push_back(path);
-  }
-  void keep() { kept_ = true; }
-
- private:
-  std::string dir_;
-  std::vector<std::string> written_;
-  bool made_ = false, kept_ = false;
-};
-
-/// Headless replay writes --coeffs-out as frames are drawn, but the stream and the broker get each
-/// record at capture: the records sent and not yet drawn are held here, so that a run stopped
-/// between the two still logs every record that left the program (with render time null).
-class SentRecords {
- public:
-  void sent(std::uint64_t index, std::string record) {
-    std::lock_guard lock(mutex_);
-    pending_.emplace(index, std::move(record));
-  }
-  void drawn(std::uint64_t index) {
-    std::lock_guard lock(mutex_);
-    pending_.erase(pending_.begin(), pending_.upper_bound(index));
-  }
-  /// The records sent and never drawn, in frame order.
-  std::vector<std::string> undrawn() {
-    std::lock_guard lock(mutex_);
-    std::vector<std::string> out;
-    for (auto& [index, record] : pending_) out.push_back(std::move(record));
-    pending_.clear();
-    return out;
-  }
-
- private:
-  std::mutex mutex_;
-  std::map<std::uint64_t, std::string> pending_;
-};
-
-/// --coeffs-out of a window or a camera: each line as the frame is captured.
-class CoeffsFileSink final : public RecordSink {
- public:
-  explicit CoeffsFileSink(AtomicTextFile& file) : file_(file) {}
-  void publish(FrameRecord& record) override { file_.line(record.text()); }
-
- private:
-  AtomicTextFile& file_;
-};
-
-/// Where the frames go besides the screen: --coeffs-out, --out-dir, --out-video, --record.
-struct StreamOutputs {
-  std::unique_ptr<AtomicTextFile> coeffs;
-  CoeffFormat format;  ///< --coeffs-format
-  std::unique_ptr<FrameFolder> frames;
-  std::unique_ptr<VideoRecorder> video, record;
-  std::unique_ptr<SentRecords> sent;  ///< headless replay with a stream or a broker
-
-  void writeFrame(const ProcessedFrame& f, glm::ivec2 fb,
-                  const std::vector<std::uint8_t>& rgb) const {
-    if (frames) frames->write(f.index, fb, rgb);
-    if (video) {
-      Frame out;
-      out.format = PanoramaFormat::BgrU8;
-      out.width = fb.x, out.height = fb.y;
-      out.timestamp = f.timestamp;
-      out.bgr8.resize(rgb.size());
-      for (std::size_t i = 0; i < rgb.size(); i += 3)
-        out.bgr8[i] = rgb[i + 2], out.bgr8[i + 1] = rgb[i + 1], out.bgr8[i + 2] = rgb[i];
-      video->write(out);
-    }
-  }
-};
-
-StreamOutputs openOutputs(const Settings& s, double fps, const std::string& description) {
-  const OutputSettings& os = s.output;
-  StreamOutputs o;
-  o.format = parseCoeffFormat(os.coeffsFormat, "--coeffs-format", true);
-  if (os.coeffsOut) o.coeffs = std::make_unique<AtomicTextFile>(*os.coeffsOut);
-  if (os.outDir) o.frames = std::make_unique<FrameFolder>(*os.outDir);
-  if (os.outVideo)
-    o.video =
-        std::make_unique<VideoRecorder>(*os.outVideo, fps, "liveprobe replay of " + description);
-  if (s.stream.record)
-    o.record = std::make_unique<VideoRecorder>(*s.stream.record, fps, description);
-  return o;
-}
-
-/// What the render loop measured, for the summary.
-struct StreamTally {
-  std::array<std::vector<double>, kStageCount> stages;  ///< ms per drawn frame, by lp::Stage
-  std::vector<double> latency;                          ///< capture to shown, ms
-  std::size_t drawn = 0, saturated = 0;
-  std::size_t withLight = 0, clippedLight = 0;  ///< frames with a light; of them, clipped
-  std::vector<double> confidence;               ///< each frame's
-  std::size_t brightestMeasured = 0;            ///< frames whose brightest pixel was measured
-
-  std::size_t frames() const { return latency.size(); }
-  double median(Stage s) const { return cli::median(stages[std::size_t(s)]); }
-};
-
 /// The viewer of a stream, and what it keeps of the stream's frames.
 struct StreamView {
   std::unique_ptr<Viewer> v;
@@ -401,53 +259,6 @@ struct StreamView {
   }
 };
 
-/// Where records go at capture besides the screen: the stream, the broker, and the --coeffs-out
-/// file of a window or a camera (record_sink.h).
-struct RecordSinks {
-  std::vector<std::unique_ptr<RecordSink>> all;
-  /// What the sinks say about themselves (where the stream is served, a broker that does not
-  /// answer), said once the source has given its first frame: a source that fails at once is
-  /// its one line alone.
-  std::vector<std::string> opening;
-
-  void fill(HudCounters& c) const {
-    for (const auto& s : all)
-      if (std::string line = s->status(); !line.empty()) c.sinks.push_back(std::move(line));
-  }
-};
-
-void recordSample(StreamTally& t, const ProcessedFrame& f, double uploadMs, double renderMs,
-                  double latencyMs, Hud* hud, const PipelineStats& st,
-                  const RecordSinks* sinks = nullptr) {
-  StageTimes times = f.times;
-  times[Stage::Upload] = uploadMs;
-  times[Stage::Render] = renderMs;
-  t.latency.push_back(latencyMs);
-  for (std::size_t k = 0; k < kStageCount; ++k) t.stages[k].push_back(times.ms[k]);
-  t.saturated += f.saturated;
-  t.confidence.push_back(f.confidence.value());
-  t.brightestMeasured += f.confidence.brightestMeasured;
-  if (!f.lights.empty()) ++t.withLight;
-  if (std::any_of(f.lights.begin(), f.lights.end(), [](const Light& l) { return l.clipped; }))
-    ++t.clippedLight;
-  if (!hud) return;
-  HudSample s;
-  s.frame = f.index;
-  s.time = f.timestamp;
-  s.times = times;
-  s.latencyMs = latencyMs;
-  s.radiance = f.radiance;
-  s.unsmoothed = f.unsmoothed;
-  s.lights = f.lights;
-  s.confidence = f.confidence;
-  s.held = f.held;
-  hud->push(s);
-  HudCounters c{st.captured, t.drawn, st.dropped, st.skipped,
-                double(t.saturated) / double(t.frames())};
-  if (sinks) sinks->fill(c);
-  hud->setCounters(c);
-}
-
 /// Headless replay: every frame drawn, in order, and written.
 void runOffline(CapturePipeline& pipeline, StreamView& view, const StreamOutputs& out,
                 StreamTally& tally, Progress& progress, const RecordSinks& sinks) {
@@ -466,9 +277,8 @@ void runOffline(CapturePipeline& pipeline, StreamView& view, const StreamOutputs
     const auto px = gl::Renderer::readRgb8(fb);
     const double latency = 1000.0 * (monotonicSeconds() - f->captureTime);
     ++tally.drawn;
-    recordSample(tally, *f, uploadMs, ms, latency, v.hud.get(), pipeline.stats(), &sinks);
-    if (out.coeffs) out.coeffs->line(frameRecord(*f, out.format, {ms, latency}));
-    if (out.sent) out.sent->drawn(f->index);
+    recordSample(tally, *f, uploadMs, ms, latency, v.hud.get(), pipeline.stats(), sinks);
+    sinks.shown(*f, {ms, latency});
     out.writeFrame(*f, fb, px);
     progress.update(std::int64_t(tally.drawn));
     return true;
@@ -503,8 +313,9 @@ void runInteractive(CapturePipeline& pipeline, StreamView& view, StreamTally& ta
     st = pipeline.stats();  // once a frame, for the HUD, progress and title
     if (f) {
       ++tally.drawn;
-      recordSample(tally, *f, uploadMs, ms, 1000.0 * (monotonicSeconds() - f->captureTime),
-                   v.hud.get(), st, &sinks);
+      const double latency = 1000.0 * (monotonicSeconds() - f->captureTime);
+      recordSample(tally, *f, uploadMs, ms, latency, v.hud.get(), st, sinks);
+      sinks.shown(*f, {ms, latency});
       progress.update(std::int64_t(st.captured));
     }
     return true;
@@ -514,145 +325,6 @@ void runInteractive(CapturePipeline& pipeline, StreamView& view, StreamTally& ta
                      std::string(v.state.paused ? " - paused" : "")};
   };
   v.run(loop);
-}
-
-/// "grab 0.95, convert 0.00, ...": the median of each stage up to render (merge and resample
-/// only where they ran).
-std::string stageMedians(const StreamTally& t) {
-  std::string out;
-  char one[64];
-  for (std::size_t k = 0; k <= std::size_t(Stage::Render); ++k) {
-    if (stageRunsForSomeSources(Stage(k)) && !(t.median(Stage(k)) > 0)) continue;
-    std::snprintf(one, sizeof one, "%s%s %.2f", out.empty() ? "" : ", ",
-                  std::string(kStageNames[k]).c_str(), t.median(Stage(k)));
-    out += one;
-  }
-  return out;
-}
-
-void printSummary(const std::string& description, const PipelineStats& st, const StreamTally& t,
-                  double smoothSeconds, bool interrupted, const RecordSinks& sinks) {
-  std::fprintf(stderr,
-               "liveprobe: %s: %zu frames captured, %zu drawn, %zu dropped (stale), %zu skipped "
-               "(corrupt)%s%s%s%s\n"
-               "  median ms: %s; saturated values %.1f per frame\n",
-               description.c_str(), st.captured, t.drawn, st.dropped, st.skipped,
-               st.unidentified == 0 ? ""
-                                    : (", " + std::to_string(st.unidentified) +
-                                       " left out of the bracket (exposure not told)")
-                                          .c_str(),
-               st.endReason.empty() ? "" : "; ", st.endReason.c_str(),
-               interrupted ? "; stopped by a signal" : "", stageMedians(t).c_str(),
-               t.frames() == 0 ? 0.0 : double(t.saturated) / double(t.frames()));
-  if (!t.latency.empty())
-    std::fprintf(stderr, "  latency ms (capture to shown): p50 %.1f, p95 %.1f, p99 %.1f\n",
-                 percentile(t.latency, 0.5), percentile(t.latency, 0.95),
-                 percentile(t.latency, 0.99));
-  if (t.withLight > 0 || t.clippedLight > 0)
-    std::fprintf(stderr, "  lights: in %zu of %zu frames%s\n", t.withLight, t.frames(),
-                 t.clippedLight > 0 ? (", clipped (8-bit maximum: power is a lower bound) in " +
-                                       std::to_string(t.clippedLight))
-                                          .c_str()
-                                    : "");
-  for (const auto& sink : sinks.all)
-    if (const std::string line = sink->summary(); !line.empty())
-      std::fprintf(stderr, "  %s\n", line.c_str());
-  if (!t.confidence.empty() &&
-      (st.held > 0 || t.median(Stage::Merge) > 0 || percentile(t.confidence, 0.0) < 1.0))
-    std::fprintf(stderr,
-                 "  confidence: median %.3f, lowest %.3f; brightest source measured unclipped in "
-                 "%zu of %zu frames; %zu held (last good lighting)\n",
-                 median(t.confidence), percentile(t.confidence, 0.0), t.brightestMeasured,
-                 t.confidence.size(), st.held);
-  if (st.gapsShortened > 0)
-    warn(std::to_string(st.gapsShortened) + " gap(s) in the source's timestamps over " +
-         formatNumber(PipelineOptions{}.maxGapSeconds) + " s were played as one frame interval");
-  if (smoothSeconds > 0)
-    std::fprintf(stderr,
-                 "  --smooth %.3g s: lighting lags a step change by %.3g s (63%% of the step)\n",
-                 smoothSeconds, smoothSeconds);
-}
-
-std::unique_ptr<RecordSink> openStream([[maybe_unused]] const StreamSettings& st,
-                                       [[maybe_unused]] std::vector<std::string>& opening) {
-  requireBackend(OptionalBackend::Stream, "--serve");
-#if LIVEPROBE_WITH_STREAM
-  StreamServerOptions o;
-  try {
-    parseServeAddress(*st.serve, o);
-  } catch (const Error& e) {
-    throw Error("--serve " + std::string(e.what()));
-  }
-  if (!isLoopback(o.host) && !st.serveRemote)
-    throw Error("--serve " + *st.serve + ": " + o.host +
-                " is reachable from other machines; add --serve-remote to listen there");
-  o.maxClients = st.serveClients.value_or(32);
-  o.idleSeconds = st.serveIdle.value_or(30);
-  o.defaultFormat = parseCoeffFormat("three", "--serve", true);
-  const char* web = std::getenv("LIVEPROBE_WEB_DIR");
-  o.webDir = web ? web : shareDir() + "/web";
-  o.threeDir = o.webDir + "/three";
-  if (!fs::exists(o.threeDir + "/three.module.js"))
-    warn("--serve: three.js is not in " + o.threeDir +
-         " (the build stages it from app/web/node_modules, which scripts/build installs with "
-         "npm); the page will not draw");
-  std::unique_ptr<StreamServer> server;
-  try {
-    server = std::make_unique<StreamServer>(o);
-  } catch (const Error& e) {
-    throw Error("--serve " + std::string(e.what()));
-  }
-  const std::string url = o.host + ":" + std::to_string(server->port());
-  opening.push_back("liveprobe: serving http://" + url + "/ (WebSocket ws://" + url +
-                    "/?format=three)");
-  return server;
-#else
-  return nullptr;  // (requireBackend threw)
-#endif
-}
-
-std::unique_ptr<RecordSink> openBroker([[maybe_unused]] const StreamSettings& st,
-                                       [[maybe_unused]] std::vector<std::string>& opening) {
-  requireBackend(OptionalBackend::Mqtt, "--publish");
-#if LIVEPROBE_WITH_MQTT
-  MqttTarget t;
-  try {
-    t = parseMqttUrl(*st.publish);
-  } catch (const Error& e) {
-    throw Error("--publish " + std::string(e.what()));
-  }
-  if (st.mqttCafile) {
-    if (!t.tls) throw Error("--mqtt-cafile goes with an mqtts:// broker");
-    t.cafile = *st.mqttCafile;
-    readInputFile(t.cafile);  // a missing or unreadable file is one line, now
-  }
-  if (t.password.empty() && !t.username.empty()) {
-    if (st.mqttPasswordFile) {
-      const std::string text = readInputFile(*st.mqttPasswordFile);
-      t.password = text.substr(0, text.find_first_of("\r\n"));  // its first line
-    } else if (const char* pw = std::getenv("LIVEPROBE_MQTT_PASSWORD")) {
-      t.password = pw;
-    }
-  }
-  std::unique_ptr<MqttPublisher> publisher;
-  try {
-    publisher = std::make_unique<MqttPublisher>(std::move(t), stopRequested);
-  } catch (const Error& e) {
-    throw Error("--publish " + std::string(e.what()));
-  }
-  if (!publisher->startupWarning().empty())
-    opening.push_back("liveprobe: warning: " + publisher->startupWarning());
-  return publisher;
-#else
-  return nullptr;  // (requireBackend threw)
-#endif
-}
-
-RecordSinks openSinks(const StreamSettings& st) {
-  RecordSinks s;
-  if (st.serve) s.all.push_back(openStream(st, s.opening));
-  if (st.publish) s.all.push_back(openBroker(st, s.opening));
-  return s;
 }
 
 /// How one run goes: the pipeline's options and what the loop decides from the source.
@@ -704,27 +376,23 @@ void setHeadless(const StreamSettings& st, StreamPlan& p, bool headless) {
   p.opt.realtime = !p.live && (!headless || st.realtime || st.serve || st.publish);
 }
 
-/// At capture, on capture's thread: --coeffs-out lines of a window or a camera, the stream and
-/// MQTT (none of them waits on a reader); --record's raw frames.
+/// At capture, on capture's thread: the record sinks (the stream, MQTT, --coeffs-out; none of
+/// them waits on a reader) and --record's raw frames.
 void wireCaptureOutputs(StreamPlan& p, StreamOutputs& out, RecordSinks& sinks,
                         const FrameSource& source) {
-  const bool network = !sinks.all.empty();
-  if (out.coeffs && (!p.headless || p.live))
-    sinks.all.push_back(std::make_unique<CoeffsFileSink>(*out.coeffs));
-  else if (out.coeffs && network)  // headless: the drawn frames' lines, and the sent-only ones
-    out.sent = std::make_unique<SentRecords>();
+  if (out.coeffs)  // headless replay logs the drawn frames, with their render times
+    addCoeffsSink(sinks, *out.coeffs, out.format,
+                  p.headless && !p.live ? CoeffsLines::AtDraw : CoeffsLines::AtCapture);
   std::vector<RecordSink*> to;
   for (const auto& sink : sinks.all) to.push_back(sink.get());
-  SentRecords* sent = out.sent.get();
   if (!to.empty())
-    p.opt.onCaptured = [to, sent, format = out.format, opening = sinks.opening,
+    p.opt.onCaptured = [to, format = out.format, opening = sinks.opening,
                         said = std::make_shared<std::once_flag>()](const ProcessedFrame& f) {
       std::call_once(*said, [&] {
         for (const std::string& line : opening) std::fprintf(stderr, "%s\n", line.c_str());
       });
       FrameRecord record(f, format);
       for (RecordSink* sink : to) sink->publish(record);
-      if (sent) sent->sent(f.index, record.text());
     };
   // --record (live): the raw stream, finalised even when capture stops on a fault.
   if (VideoRecorder* rec = out.record.get()) {
@@ -777,7 +445,8 @@ Progress announceRun(const StreamPlan& p, const FrameSource& source, bool window
 /// After the loop: the files kept or discarded, the summary, the exit code.
 int finishStream(const StreamPlan& p, const PipelineStats& st, const StreamTally& tally,
                  StreamOutputs& out, const RecordSinks& sinks, const StreamView& view) {
-  for (const auto& sink : sinks.all) sink->stop();  // every stream client gets a clean close
+  // Every stream client gets a clean close; --coeffs-out logs what was sent and never drawn.
+  for (const auto& sink : sinks.all) sink->stop();
   // A camera's frames up to a fault are real data and are kept; a replay that failed keeps
   // nothing (the recorders' destructors discard what they wrote).
   const bool keep = st.error.empty() || p.live;
@@ -786,8 +455,6 @@ int finishStream(const StreamPlan& p, const PipelineStats& st, const StreamTally
     std::fprintf(stderr, "liveprobe: recorded %zu frames to %s\n", out.record->frames(),
                  out.record->path().c_str());
   }
-  if (out.sent && out.coeffs)
-    for (const auto& record : out.sent->undrawn()) out.coeffs->line(record);
   if (out.coeffs && keep) out.coeffs->commit();
   if (!st.error.empty()) throw Error(st.error);
   if (out.video) out.video->finish();
@@ -866,16 +533,13 @@ const CommandSpec kRecordSpec{
     "(a sun's few pixels clip, as on a camera). Synthetic sources record 5 seconds unless\n"
     "--frames or --duration says otherwise. Ctrl-C stops cleanly: what was recorded is\n"
     "finalised, exit 130.",
-    {fileOption("--out", "FILE",
-                "output video (.mkv, .avi or .mp4), or a frame-number pattern of .exr or .hdr "
-                "frames (frames/%04d.exr: linear radiance, a sun unclipped); required",
-                {".mkv", ".avi", ".mp4", ".exr", ".hdr"}, LP_FIELD(output.out)),
-     integerOption("--frames", "N", "number of frames to record", 1, 1000000000, "",
-                   LP_FIELD(output.frames)),
-     numberOption("--duration", "SECONDS", "seconds of the source to record", {0.001, 1e7}, "",
-                  LP_FIELD(output.duration)),
-     numberOption("--fps", "F", "frame rate of image sequences and of the recording", {1, 1000},
-                  "the source's", LP_FIELD(stream.fps)),
+    {opt::out("FILE",
+              "output video (.mkv, .avi or .mp4), or a frame-number pattern of .exr or .hdr "
+              "frames (frames/%04d.exr: linear radiance, a sun unclipped); required",
+              {".mkv", ".avi", ".mp4", ".exr", ".hdr"}),
+     opt::frames("number of frames to record", 1000000000, ""),
+     opt::duration("seconds of the source to record"),
+     opt::fps("frame rate of image sequences and of the recording", {1, 1000}, "the source's"),
      quietOption()},
     1,
     1,

@@ -5,6 +5,7 @@
 #include <limits>
 
 #include "commands.h"
+#include "environment.h"
 #include "liveprobe/capture/accuracy.h"
 #include "liveprobe/capture/image.h"
 #include "liveprobe/exchange/coeffs_io.h"
@@ -26,9 +27,15 @@ OptionSpec windowOption() {
       "Hann window of width W (above 2) against ringing; auto = mildest keeping E >= 0; cmgen = "
       "Filament cmgen's default (--sh-window=auto: sinc^4, its cutoff search)"};
   o.set = [](Settings& s, const std::string& v) {
-    if (v != "none" && v != "auto" && v != "cmgen" && !(parseNumber(v, "--window") > 2.0))
-      throw Error("--window " + v + ": the Hann width must be greater than 2");
-    s.still.window = v;
+    using Kind = WindowChoice::Kind;
+    WindowChoice& w = s.still.window;
+    w = {};
+    if (v == "auto" || v == "cmgen" || v == "none") {
+      w.kind = v == "auto" ? Kind::Auto : v == "cmgen" ? Kind::Cmgen : Kind::None;
+      return;
+    }
+    w = {Kind::Hann, parseNumber(v, "--window")};
+    if (!(w.width > 2.0)) throw Error("--window " + v + ": the Hann width must be greater than 2");
   };
   return o;
 }
@@ -45,9 +52,10 @@ Environment loadEnvironment(const Args& a, const LightOptions& lights = {.maxLig
 
 /// Resolves --window against the coefficients; reports an automatic choice on stderr.
 BandWindow chooseWindow(const StillSettings& s, const Sh9& radiance) {
-  const std::string& w = s.window;
-  if (w == "none") return {};
-  if (w == "auto") {
+  using Kind = WindowChoice::Kind;
+  const WindowChoice& w = s.window;
+  if (w.kind == Kind::None) return {};
+  if (w.kind == Kind::Auto) {
     const AutoWindow aw = autoWindow(radiance);
     if (std::isinf(aw.width))
       errs() << "liveprobe: --window auto: irradiance is already non-negative, no window\n";
@@ -56,13 +64,13 @@ BandWindow chooseWindow(const StillSettings& s, const Sh9& radiance) {
              << aw.window.sigma1 << ", sigma2 " << aw.window.sigma2 << ")\n";
     return aw.window;
   }
-  if (w == "cmgen") {
+  if (w.kind == Kind::Cmgen) {
     const CmgenWindow cw = cmgenWindow(radiance);
     errs() << "liveprobe: --window cmgen: cutoff " << cw.cutoff << " bands (sigma1 "
            << cw.window.sigma1 << ", sigma2 " << cw.window.sigma2 << ")\n";
     return cw.window;
   }
-  return hannWindow(float(parseNumber(w, "--window")));
+  return hannWindow(float(w.width));
 }
 
 }  // namespace
@@ -74,10 +82,9 @@ const CommandSpec kCoeffsSpec{
     "environment map (.hdr, .exr, or 8-bit PNG/JPEG decoded from sRGB).",
     [] {
       auto o = withLayout(
-          {coeffFormatOption("--format",
-                             "json (default), text, glsl, or an engine's: three, babylon, "
-                             "filament, unity, gltf, webxr (docs/engines.md)",
-                             false, LP_FIELD(output.format)),
+          {opt::format("json (liveprobe's), text, glsl, or an engine's: three, babylon, filament, "
+                       "unity, gltf, webxr (docs/engines.md)",
+                       {}, "json"),
            windowOption()});
       for (auto& l : lightOptionSpecs()) o.push_back(l);
       return o;
@@ -88,7 +95,7 @@ const CommandSpec kCoeffsSpec{
 
 int runCoeffs(const Args& a) {
   const Settings& s = a.settings();
-  const CoeffFormat cf = parseCoeffFormat(s.output.format, "--format", false);
+  const CoeffFormat cf = s.output.format.value_or(CoeffFormat{});
   const std::string& format = cf.name;
   const LightOptions lights = chooseLights(s);
   const Environment env = loadEnvironment(a, lights);
@@ -136,24 +143,24 @@ const CommandSpec kIrradianceSpec{
     "map with --cube), computed from nine coefficients (sh) or by brute-force hemispherical\n"
     "integration (brute).\n"
     "PNG output is sRGB-encoded E/pi (the radiance of a white diffuse surface), clamped to 1.",
-    withLayout({fileOption("--out", "FILE",
-                           "output image (.hdr, .exr: linear irradiance; .png: 8-bit); required",
-                           {".hdr", ".exr", ".png"}, LP_FIELD(output.out)),
-                sizeOption("--size", "output size", 8192, "256x128", LP_FIELD(output.size)),
-                integerOption("--cube", "N",
-                              "write a cube map instead: six N x N faces in OpenGL's convention, "
-                              "as a 4N x 3N horizontal cross",
-                              1, 4096, "", LP_FIELD(still.cube)),
-                choiceOption("--method", "how to compute E", {"sh", "brute"}, "sh",
-                             LP_FIELD(still.method)),
-                windowOption()}),
+    withLayout(
+        {opt::out("FILE", "output image (.hdr, .exr: linear irradiance; .png: 8-bit); required",
+                  {".hdr", ".exr", ".png"}),
+         opt::size("output size", 8192, "256x128"),
+         integerOption("--cube", "N",
+                       "write a cube map instead: six N x N faces in OpenGL's convention, "
+                       "as a 4N x 3N horizontal cross",
+                       1, 4096, "", LP_FIELD(still.cube)),
+         choiceOption("--method", "how to compute E", {"sh", "brute"}, "sh", LP_FIELD(still.brute),
+                      {}, [](const std::string& v) { return v == "brute"; }),
+         windowOption()}),
     1,
     1,
     "an environment map (.hdr, .exr, .png, .jpg), or a folder of six cube faces",
     [](const Settings& s) {
       if (!s.output.out) throw Error("--out FILE is required");
       if (s.still.cube && s.output.size) throw Error("give --size or --cube, not both");
-      if (s.still.method == "brute" && s.still.window != "none")
+      if (s.still.brute && s.still.window.kind != WindowChoice::Kind::None)
         throw Error("--window applies to --method sh only");
     }};
 
@@ -166,13 +173,12 @@ int runIrradiance(const Args& a) {
   const int faceSize = s.still.cube.value_or(0);
   const auto [w, h] =
       cube ? std::pair{4 * faceSize, 3 * faceSize} : s.output.size.value_or(Size{256, 128});
-  const std::string& method = s.still.method;
   Environment env = loadEnvironment(a);
   const auto grid = cube ? layoutSamples(LayoutSpec(Layout::Cube), w, h) : equirectSamples(w, h);
   std::vector<glm::vec3> normals(grid.size());
   for (std::size_t i = 0; i < grid.size(); ++i) normals[i] = grid[i].dir;
   std::vector<Rgb> e(grid.size());
-  if (method == "sh") {
+  if (!s.still.brute) {
     const auto m =
         irradianceMatrices(applyWindow(env.radiance, chooseWindow(s.still, env.radiance)));
     for (std::size_t i = 0; i < normals.size(); ++i) e[i] = evalIrradianceQuadratic(m, normals[i]);
@@ -198,14 +204,11 @@ const CommandSpec kCompareSpec{
     "(luminance, solid-angle weighted). Errors are given as a fraction of the total intensity\n"
     "(the paper's measure) and of the mean irradiance. With --sun, SH of the rest plus the\n"
     "lights is measured beside SH alone.",
-    withLayout(
-        {sizeOption("--size", "grid of normals", 4096, "64x32", LP_FIELD(output.size)),
-         fileOption("--out", "PNG",
-                    "figure: SH map, brute-force map and error, with a colour scale", {".png"},
-                    LP_FIELD(output.out)),
-         choiceOption("--format", "what it prints", {"text", "json"}, "text", LP_FIELD(output.json),
-                      {}, [](const std::string& v) { return v == "json"; }),
-         quietOption(), windowOption(), lightOptionSpecs()[0], lightOptionSpecs()[1]}),
+    withLayout({opt::size("grid of normals", 4096, "64x32"),
+                opt::out("PNG", "figure: SH map, brute-force map and error, with a colour scale",
+                         {".png"}),
+                opt::format("what it prints", {"text", "json"}, "text"), quietOption(),
+                windowOption(), lightOptionSpecs()[0], lightOptionSpecs()[1]}),
     1,
     1,
     "an environment map (.hdr, .exr, .png, .jpg), or a folder of six cube faces"};
@@ -231,7 +234,7 @@ int runCompare(const Args& a) {
     return kExitInterrupted;
   }
   if (s.output.out) saveCompareFigure(*s.output.out, r);
-  if (s.output.json) {
+  if (s.output.format && s.output.format->name == "json") {
     nlohmann::ordered_json j;
     j["source"] = a.positional()[0];
     j["layout"] = std::string(layoutName(env.layout.layout));

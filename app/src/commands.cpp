@@ -22,6 +22,46 @@ OptionSpec threadsOption(const std::string& group) {
                        LP_FIELD(stream.threads), group);
 }
 
+namespace opt {
+
+OptionSpec size(const std::string& help, int maxSide, const std::string& dflt,
+                const std::string& group) {
+  return sizeOption("--size", help, maxSide, dflt, LP_FIELD(output.size), group);
+}
+
+OptionSpec out(const std::string& value, const std::string& help,
+               const std::vector<std::string>& extensions, const std::string& group) {
+  return fileOption("--out", value, help, extensions, LP_FIELD(output.out), group);
+}
+
+OptionSpec frames(const std::string& help, std::int64_t most, const std::string& dflt,
+                  const std::string& group) {
+  return integerOption("--frames", "N", help, 1, most, dflt, LP_FIELD(output.frames), group);
+}
+
+OptionSpec fps(const std::string& help, Range range, const std::string& dflt,
+               const std::string& group) {
+  return numberOption("--fps", "F", help, range, dflt, LP_FIELD(stream.fps), group);
+}
+
+OptionSpec duration(const std::string& help, const std::string& group) {
+  return numberOption("--duration", "SECONDS", help, {0.001, 1e7}, "", LP_FIELD(output.duration),
+                      group);
+}
+
+OptionSpec format(const std::string& help, const std::vector<std::string>& names,
+                  const std::string& dflt, const std::string& group) {
+  OptionSpec o = declared("--format", names.empty() ? "FORMAT" : joinChoices(names, "|"),
+                          help + " (default " + dflt + ")", group);
+  o.set = [names](Settings& s, const std::string& v) {
+    if (!names.empty()) parseChoice("--format", v, names);
+    s.output.format = parseCoeffFormat(v, "--format", false);
+  };
+  return o;
+}
+
+}  // namespace opt
+
 OptionSpec quietOption(const std::string& group) {
   return flagOption("--quiet", "no progress on stderr", LP_FIELD(output.quiet), group);
 }
@@ -36,10 +76,6 @@ std::vector<OptionSpec> hudOptions(const std::string& group, bool window) {
     o.push_back(flagOption("--no-hud", "start with the HUD hidden (H shows it)",
                            LP_FIELD(output.noHud), group));
   return o;
-}
-
-void checkCoeffFormat(const std::string& name, const std::string& value, bool streaming) {
-  parseCoeffFormat(value, name, streaming);
 }
 
 void checkHudOptions(const Settings& s) {

@@ -65,19 +65,42 @@ OptionSpec threadsOption(const std::string& group = {});
 OptionSpec quietOption(const std::string& group = {});
 /// --hud (into headless output) and, where there can be a window, --no-hud.
 std::vector<OptionSpec> hudOptions(const std::string& group, bool window);
-void checkCoeffFormat(const std::string& name, const std::string& value, bool streaming);
-/// A coefficient format (exchange/coeffs_io.h: parseCoeffFormat), checked as the line is read;
-/// `streaming`: the formats a stream's records take (no glsl, no text, no gltf).
+/// A coefficient format (exchange/engine_export.h: parseCoeffFormat), parsed as the line is
+/// read; `streaming`: the formats a stream's records take (no glsl, no text, no gltf).
 template <class F>
 OptionSpec coeffFormatOption(const std::string& name, const std::string& help, bool streaming,
                              F field, const std::string& group = {}) {
-  OptionSpec o = textOption(name, "FORMAT", help, field, group);
+  OptionSpec o = declared(name, "FORMAT", help, group);
   o.set = [name, streaming, field](Settings& s, const std::string& v) {
-    checkCoeffFormat(name, v, streaming);
-    field(s) = v;
+    field(s) = parseCoeffFormat(v, name, streaming);
   };
   return o;
 }
+
+/// Options several commands take with a help, range and default of their own: each is declared
+/// here once (its name, value, parser and the one field it sets), and a command gives the rest.
+namespace opt {
+/// --size WxH (output.size): what the command makes, draws, or asks of a camera; each side 1 to
+/// `maxSide`.
+OptionSpec size(const std::string& help, int maxSide, const std::string& dflt,
+                const std::string& group = {});
+/// --out FILE (output.out), its extension one of `extensions`.
+OptionSpec out(const std::string& value, const std::string& help,
+               const std::vector<std::string>& extensions, const std::string& group = {});
+/// --frames N (output.frames), 1 to `most`.
+OptionSpec frames(const std::string& help, std::int64_t most, const std::string& dflt,
+                  const std::string& group = {});
+/// --fps F (stream.fps): a frame rate in `range`.
+OptionSpec fps(const std::string& help, Range range, const std::string& dflt,
+               const std::string& group = {});
+/// --duration SECONDS (output.duration).
+OptionSpec duration(const std::string& help, const std::string& group = {});
+/// --format (output.format): the form a command prints, a coefficient format
+/// (liveprobe/exchange/engine_export.h), one of `names` where given; `dflt` is the command's
+/// when none is given.
+OptionSpec format(const std::string& help, const std::vector<std::string>& names,
+                  const std::string& dflt, const std::string& group = {});
+}  // namespace opt
 
 /// Refuses --hud with --no-hud (one line).
 void checkHudOptions(const Settings& s);

@@ -52,7 +52,8 @@ const Example kExamples[] = {
     {"Replay the bundled recording, the sun taken out as a light that casts a shadow on a ground:",
      "liveprobe replay recordings/sky.mkv --sun --ground"},
     {"A 360 camera over UVC as a live light probe:",
-     "liveprobe live /dev/video0 --layout fisheye --size 1920x960 --format mjpeg --lock-exposure "
+     "liveprobe live /dev/video0 --layout fisheye --size 1920x960 --pixel-format mjpeg "
+     "--lock-exposure "
      "--sun"},
     {"The coefficients and the sun of a map, in three.js's frame and order:",
      "liveprobe coeffs ../shared/data/equirect/pedestrian_overpass_1k.hdr --sun --format three > "

@@ -5,6 +5,7 @@
 // anything runs, and no command reads an option by its name.
 #include <array>
 #include <cstdint>
+#include <glm/vec3.hpp>
 #include <optional>
 #include <string>
 #include <type_traits>
@@ -12,7 +13,10 @@
 #include <vector>
 
 #include "args.h"
+#include "liveprobe/capture/v4l2.h"
+#include "liveprobe/exchange/engine_export.h"
 #include "liveprobe/gl/context.h"
+#include "liveprobe/gl/renderer.h"
 #include "liveprobe/sh/layout.h"
 
 namespace lp::cli {
@@ -35,10 +39,16 @@ struct LightSettings {
   std::optional<int> count;  ///< --lights K
 };
 
+/// --coeff NAME=VALUE: one coefficient (index in liveprobe/sh/sh.h's order) and its value.
+struct CoeffAssignment {
+  int index = 0;
+  glm::vec3 value{0.0f};
+};
+
 /// Where a still's lighting comes from (lightingOptions).
 struct LightingSettings {
   std::optional<std::string> env, coeffs;
-  std::vector<std::string> coeff;  ///< NAME=VALUE, each checked
+  std::vector<CoeffAssignment> coeff;  ///< each name at most once
 };
 
 /// The model, the camera and the look (sceneOptions).
@@ -47,8 +57,8 @@ struct SceneSettings {
   std::optional<Triple> modelRotate;
   bool upZ = false;
   std::optional<double> yaw, pitch, distance;
-  std::optional<double> exposure;  ///< nullopt: auto
-  std::string tonemap = "aces";
+  std::optional<double> exposure;           ///< nullopt: auto
+  gl::ToneMap toneMap = gl::ToneMap::Aces;  ///< --tonemap
   bool tonemapBackground = false, noBackground = false, fullResolution = false;
   bool shadows = false, ground = false, headless = false;
   int msaa = 4;
@@ -60,9 +70,8 @@ struct SceneSettings {
 struct OutputSettings {
   std::optional<std::string> out, jsonFile, plot, screenshot, outDir, outVideo, coeffsOut;
   std::string saveCoeffs = "coeffs-edited.json";
-  std::string format = "json";        ///< coeffs --format
-  std::string coeffsFormat = "json";  ///< --coeffs-format
-  bool json = false;                  ///< compare --format json
+  std::optional<CoeffFormat> format;  ///< --format: what a command prints (none: its default)
+  CoeffFormat coeffsFormat;           ///< --coeffs-format
   std::optional<Size> size;
   std::optional<std::int64_t> frames;
   std::optional<double> duration;
@@ -87,9 +96,8 @@ struct StreamSettings {
 
 /// A V4L2 camera (cameraOptions, live and calibrate).
 struct CameraOptions {
-  std::string format = "auto";
-  std::optional<Size> size, viewSize;
-  double fps = 0.0;                    ///< 0: the camera's own
+  CameraFormat format = CameraFormat::Auto;
+  std::optional<Size> viewSize;        ///< --view-size (the camera's: --size, output.size)
   std::optional<double> lockExposure;  ///< seconds to settle, when --lock-exposure is given
   int mjpegReduce = 1;
   double timeout = 2.0;
@@ -99,11 +107,17 @@ struct CameraOptions {
   int settle = 8;
 };
 
+/// --window: the band window against ringing.
+struct WindowChoice {
+  enum class Kind : std::uint8_t { None, Auto, Cmgen, Hann } kind = Kind::None;
+  double width = 0;  ///< Hann's, above 2
+};
+
 /// coeffs, irradiance and compare.
 struct StillSettings {
-  std::string window = "none";  ///< none, auto, cmgen or a Hann width
+  WindowChoice window;
   std::optional<int> cube;
-  std::string method = "sh";
+  bool brute = false;  ///< irradiance --method brute (else sh)
 };
 
 /// bench.
@@ -116,7 +130,7 @@ struct BenchSettings {
   double threshold = 25.0;
   double maxContention = 1.5;  ///< above it (over the baseline's) a slower stage is inconclusive
   std::optional<std::string> baseline;
-  std::vector<std::string> injectDelay;  ///< STAGE=MS
+  std::vector<std::pair<int, double>> injectDelay;  ///< --inject-delay STAGE=MS: bench stage, ms
 };
 
 struct Settings {

@@ -5,6 +5,7 @@
 
 #include "progress.h"
 #include "scene.h"
+#include "scene_gl.h"
 
 namespace lp::cli {
 

@@ -8,8 +8,10 @@
 
 #include "args.h"
 #include "commands.h"
+#include "environment.h"
 #include "liveprobe/sh/error.h"
 #include "scene.h"
+#include "scene_gl.h"
 
 namespace {
 

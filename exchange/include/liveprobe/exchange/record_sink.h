@@ -1,7 +1,8 @@
 #pragma once
-// Where a frame's record goes besides the screen: the --coeffs-out file of a window or a camera,
-// the WebSocket stream (--serve) and the MQTT broker (--publish). Every sink takes each captured
-// frame on capture's thread and never waits on its reader.
+// Where a frame's record goes besides the screen: the --coeffs-out file, the WebSocket stream
+// (--serve) and the MQTT broker (--publish). Every sink takes each captured frame on capture's
+// thread and never waits on its reader; a sink that wants the frame as drawn (headless
+// --coeffs-out logs the render time) takes that too, on the render loop's thread.
 #include <optional>
 #include <string>
 
@@ -32,6 +33,9 @@ class RecordSink {
   virtual ~RecordSink() = default;
   /// Takes one frame's record (capture's thread; never waits for a reader).
   virtual void publish(FrameRecord& record) = 0;
+  /// The frame as drawn, with its render time and latency (the render loop's thread; after its
+  /// publish). Frames dropped before drawing never come here.
+  virtual void shown(const ProcessedFrame& /*frame*/, RecordTimes /*times*/) {}
   /// One short line for the HUD ("stream: 2 clients, 0 dropped"); empty for none.
   virtual std::string status() const { return {}; }
   /// The run summary's line about this sink; empty for none.

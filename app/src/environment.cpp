@@ -1,0 +1,180 @@
+// Environments and lighting from the command line: --env (any layout, oriented), --coeffs,
+// --coeff.
+#include "environment.h"
+
+#include <chrono>
+#include <cmath>
+
+#include "commands.h"
+#include "liveprobe/capture/frame_processor.h"
+#include "liveprobe/capture/input_file.h"
+#include "liveprobe/capture/photometry.h"
+#include "liveprobe/exchange/coeffs_io.h"
+#include "liveprobe/sh/error.h"
+#include "progress.h"
+
+namespace lp::cli {
+
+glm::mat3 envOrientation(const PanoramaSettings& p) {
+  glm::mat3 o(1.0f);
+  if (p.rotate) {
+    const Triple& v = *p.rotate;
+    o = rotationYawPitchRoll(float(v[0]), float(v[1]), float(v[2]));
+  }
+  if (p.flip) o = o * glm::mat3(glm::vec3(1, 0, 0), glm::vec3(0, 1, 0), glm::vec3(0, 0, -1));
+  return o;
+}
+
+LayoutSpec layoutSpec(const PanoramaSettings& p, const FrameSource* source) {
+  const bool known = source && source->layout();
+  const Layout native = known ? *source->layout() : Layout::Equirect;
+  LayoutSpec spec(native);
+  if (p.layout) {
+    spec.layout = *p.layout;
+    if (known && spec.layout != native)
+      throw Error(source->describe() + ": the frames are a " + std::string(layoutName(native)) +
+                  " layout; --layout " + std::string(layoutName(*p.layout)) + " does not apply");
+  }
+  if (p.circle) {
+    if (spec.layout != Layout::MirrorBall)
+      throw Error("--circle applies to --layout mirrorball only");
+    spec.circle = {float((*p.circle)[0]), float((*p.circle)[1]), float((*p.circle)[2])};
+  } else if (spec.layout == Layout::MirrorBall) {
+    throw Error(
+        "--layout mirrorball needs --circle cx,cy,r: the mirror ball's centre and radius "
+        "in pixels");
+  }
+  if (p.fov) {
+    if (spec.layout != Layout::DualFisheye) throw Error("--fov applies to --layout fisheye only");
+    spec.fisheyeFovDeg = float(*p.fov);
+  }
+  return spec;
+}
+
+Environment loadEnvironment(const std::string& source, const PanoramaSettings& p,
+                            const LightOptions& lights) {
+  layoutSpec(p);  // option errors before the file is read
+  auto src = openSource(source);
+  // One map: a sequence or a video is replayed, not read as its first frame.
+  if (const std::int64_t n = src->frameCount(); n > 1)
+    throw Error(source + ": " + std::to_string(n) +
+                " frames (a sequence or a video), not one map: name one image, or replay it");
+  Frame frame;
+  if (!src->next(frame)) throw Error(source + ": no frame to read");
+  Environment env;
+  env.layout = layoutSpec(p, src.get());
+  env.orientation = envOrientation(p);
+  FrameProcessor processor({env.layout, Photometry{}, env.orientation, 1, lights});
+  FrameLighting lit;
+  try {
+    processor.fit(frame);  // the tables, before the projection is timed
+    const auto t0 = std::chrono::steady_clock::now();
+    lit = processor.process(frame);
+    env.projectMs =
+        std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+  } catch (const Error& e) {
+    throw Error(source + ": " + e.what());
+  }
+  env.radiance = lit.radiance;
+  env.lights = std::move(lit.lights);
+  env.whole = lit.whole;
+  // The linear image, for what reads pixels (the brute force, the background, the glTF cube), in
+  // the same units as the coefficients: the frame's own exposure applied.
+  const float scale = float(frame.radianceScale);
+  processor.linearizer().convert(frame, env.image);
+  if (scale != 1.0f)
+    for (float& v : env.image.rgb) v *= scale;
+  if (frame.format == PanoramaFormat::BgrU8) env.displayScale = scale;
+  warnIfLayoutLooksWrong(source, env.layout, p.layout.has_value(), env.image.width,
+                         env.image.height, env.image.rgb.data());
+  return env;
+}
+
+void warnIfLayoutLooksWrong(const std::string& source, const LayoutSpec& layout, bool given, int w,
+                            int h, const float* rgb) {
+  const bool guessedEquirect = layout.layout == Layout::Equirect && !given;
+  if (guessedEquirect && w == h) {
+    warn(source +
+         ": a square image taken as equirect (an angular map or a mirror ball? give --layout)");
+  } else if (guessedEquirect && std::abs(double(w) / h - 16.0 / 9.0) < 0.02) {
+    warn(source +
+         ": a 16:9 frame taken as equirect (a 2:1 panorama stretched to 16:9 covers the sphere: "
+         "give --layout equirect; a camera's view does not)");
+  } else if ((layout.layout == Layout::Angular || layout.layout == Layout::DualFisheye) && rgb &&
+             w >= 16 && h >= 8) {
+    // Outside its discs an angular map or a dual fisheye frame is black: compare the corners'
+    // pixels (of each half, for two lenses) with the discs' centres.
+    const bool dual = layout.layout == Layout::DualFisheye;
+    const auto at = [&](int x, int y) {
+      const float* p = rgb + 3 * (std::size_t(y) * std::size_t(w) + std::size_t(x));
+      return double(p[0]) + p[1] + p[2];
+    };
+    std::vector<int> xs = {1, w - 2}, centres = {w / 2};
+    if (dual) xs = {1, w / 2 - 2, w / 2 + 1, w - 2}, centres = {w / 4, 3 * w / 4};
+    double corner = 0, centre = 0;
+    for (const int cy : {1, h - 2})
+      for (const int cx : xs) corner += at(cx, cy);
+    for (const int cx : centres) centre += at(cx, h / 2);
+    if (corner / double(2 * xs.size()) > 0.01 * std::max(centre / double(centres.size()), 1e-6))
+      warn(source +
+           (dual ? ": a dual fisheye frame whose corners are not black"
+                 : ": an angular map whose corners are not black") +
+           " (is it an equirect? give --layout)");
+  }
+}
+
+CoeffAssignment parseCoeffAssignment(const std::string& text) {
+  const auto eq = text.find('=');
+  if (eq == std::string::npos)
+    throw Error("--coeff " + text + ": expected NAME=VALUE, e.g. L20=-0.2");
+  const std::string name = text.substr(0, eq);
+  const int k = shIndex(name);
+  if (k < 0)
+    throw Error("--coeff " + text + ": unknown coefficient name " + name + " (L00 .. L22)");
+  std::vector<float> v;
+  std::stringstream s(text.substr(eq + 1));
+  for (std::string part; std::getline(s, part, ',');) {
+    const double x = parseNumber(part, "--coeff " + name);
+    if (std::abs(x) > kMaxLightingValue)
+      throw Error("--coeff " + text + ": the most liveprobe takes is " +
+                  formatNumber(kMaxLightingValue));
+    v.push_back(float(x));
+  }
+  if (v.size() == 1) v = {v[0], v[0], v[0]};
+  if (v.size() != 3) throw Error("--coeff " + text + ": expected one value or r,g,b");
+  return {k, {v[0], v[1], v[2]}};
+}
+
+std::optional<Lighting> lightingFrom(const Settings& st) {
+  const LightingSettings& ls = st.lighting;
+  const int kinds = int(ls.env.has_value()) + int(ls.coeffs.has_value()) + int(!ls.coeff.empty());
+  if (kinds > 1) throw Error("give only one of --env, --coeffs and --coeff");
+  if (kinds == 0) return std::nullopt;
+  const LightOptions lights = chooseLights(st);
+  if (lights.maxLights > 0 && !ls.env)
+    throw Error(
+        "--sun and --lights take the lights out of an --env map (a --coeffs file carries "
+        "its own)");
+  Lighting l;
+  if (ls.env) {
+    Environment env = loadEnvironment(*ls.env, st.panorama, lights);
+    l.lights = env.lights;
+    l.layout = env.layout;
+    l.orientation = env.orientation;
+    l.radiance = env.radiance;
+    l.displayScale = env.displayScale;
+    l.background = std::move(env.image);
+  } else {
+    if (ls.coeffs) {
+      l.radiance = loadCoefficients(*ls.coeffs, &l.lights);
+    } else {
+      for (const CoeffAssignment& c : ls.coeff) l.radiance.c[std::size_t(c.index)] = c.value;
+    }
+    LightSplit turned = rotateSplit({l.radiance, l.lights}, envOrientation(st.panorama));
+    l.radiance = turned.residual;
+    l.lights = std::move(turned.lights);
+  }
+  return l;
+}
+
+}  // namespace lp::cli

@@ -1,0 +1,66 @@
+#pragma once
+// The lighting a still command draws with: an environment map in any layout, oriented by
+// --env-rotate and --env-flip, taken through the frame path; or coefficients from --coeffs or
+// --coeff.
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "liveprobe/capture/frame.h"
+#include "liveprobe/capture/image.h"
+#include "liveprobe/sh/layout.h"
+#include "liveprobe/sh/lights.h"
+#include "liveprobe/sh/sh.h"
+#include "settings.h"
+
+namespace lp::cli {
+
+/// --env-rotate YAW,PITCH,ROLL and --env-flip as one orthogonal matrix O: a light at file
+/// direction d lies in world direction O d, with O = Rz(yaw) Ry(pitch) Rx(roll) * F, F the
+/// flip z -> -z (a panorama stored upside down) or the identity. Identity when neither is given.
+glm::mat3 envOrientation(const PanoramaSettings& p);
+/// The layout options as a spec (option errors are reported before any file is read). A source
+/// that knows its own layout (six cube faces) gives the default, and a --layout that contradicts
+/// it is refused.
+LayoutSpec layoutSpec(const PanoramaSettings& p, const FrameSource* source = nullptr);
+
+/// A still environment in any layout: FILE is an image, or a folder of six cube faces.
+struct Environment {
+  Image image;  ///< linear RGB, as stored in the file
+  LayoutSpec layout;
+  glm::mat3 orientation{1.0f};  ///< world from file (envOrientation)
+  Sh9 radiance;                 ///< unwindowed, turned by `orientation` (with lights: the rest)
+  std::vector<Light> lights;    ///< the dominant compact lights, when asked, turned likewise
+  Sh9 whole;                    ///< the whole map's coefficients, lights included
+  double projectMs = 0;         ///< the frame path's time for it (its tables made beforehand)
+  float displayScale = 0.0f;    ///< an 8-bit file: the scale its decoded values carry; 0 for HDR
+};
+/// Reads the first frame of `source` and takes it through the frame path (FrameProcessor: one
+/// projection, the lights split out when `lights` asks), in the layout and orientation the
+/// options give (layoutSpec, envOrientation). Warns (one line) about a likely layout
+/// mistake. Throws lp::Error naming the source.
+Environment loadEnvironment(const std::string& source, const PanoramaSettings& p,
+                            const LightOptions& lights = {.maxLights = 0});
+
+/// One warning line when the frame's shape suggests another layout than the one in use: a square
+/// image or a 16:9 frame taken as equirect by default (`given`: --layout named it, and the shape
+/// is the user's to know), or an angular map or fisheye frame whose corners are not black.
+void warnIfLayoutLooksWrong(const std::string& source, const LayoutSpec& layout, bool given,
+                            int width, int height, const float* rgb = nullptr);
+
+struct Lighting {
+  Sh9 radiance;
+  std::vector<Light> lights;        ///< --sun with --env, or the "lights" of a --coeffs file
+  std::optional<Image> background;  ///< the environment, when lighting came from one
+  LayoutSpec layout;
+  glm::mat3 orientation{1.0f};
+  float displayScale = 0.0f;  ///< see Environment
+};
+
+/// From --env FILE [--layout], --coeffs FILE.json or --coeff NAME=VALUE...; nullopt if none given.
+std::optional<Lighting> lightingFrom(const Settings& s);
+
+/// "L20=-0.2" or "L22=0.1,0.2,0.3" (--coeff). Throws lp::Error on an unknown name or bad value.
+CoeffAssignment parseCoeffAssignment(const std::string& text);
+
+}  // namespace lp::cli

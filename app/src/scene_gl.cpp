@@ -1,0 +1,64 @@
+// What the app hands to GL: the context, the model, the lighting and the background.
+#include "scene_gl.h"
+
+#include <stdexcept>
+
+#include "liveprobe/capture/resample.h"
+#include "liveprobe/sh/error.h"
+
+namespace lp::cli {
+
+namespace {
+gl::BackgroundMapping backgroundMapping(Layout drawn) {
+  if (drawn != Layout::Equirect && drawn != Layout::Angular)
+    throw std::logic_error("the background is drawn from an equirect or an angular map");
+  return drawn == Layout::Angular ? gl::BackgroundMapping::Angular
+                                  : gl::BackgroundMapping::Equirect;
+}
+}  // namespace
+
+void setBackground(gl::Renderer& r, const Image& panorama, Layout drawn, float displayScale) {
+  r.setBackground(panorama.rgb.data(), panorama.width, panorama.height, backgroundMapping(drawn),
+                  displayScale);
+}
+
+void setBackground(gl::Renderer& r, const Frame& frame, Layout drawn, float scale) {
+  r.setBackgroundSrgb8(frame.bgr8.data(), frame.width, frame.height, backgroundMapping(drawn),
+                       scale);
+}
+
+gl::Backend glBackend(const SceneSettings& sc) {
+  if (sc.gl != gl::Backend::Auto) return sc.gl;
+  return sc.headless ? gl::Backend::Headless : gl::Backend::Auto;
+}
+
+std::unique_ptr<gl::GlContext> openContext(gl::Backend backend, std::pair<int, int> size,
+                                           std::pair<int, int> headlessSize, int gpu) {
+  try {
+    return gl::createGlContext({backend, size.first, size.second, "liveprobe", true,
+                                headlessSize.first, headlessSize.second, gpu});
+  } catch (const gl::ContextError& e) {
+    throw Error(std::string("GL context: ") + e.what());
+  }
+}
+
+void loadModel(gl::Renderer& r, const Mesh& mesh) {
+  r.setMesh(mesh);
+  if (!mesh.albedoTexture.empty()) {
+    const Image tex = loadImage(mesh.albedoTexture);
+    r.setAlbedoTexture(tex.rgb.data(), tex.width, tex.height);
+  }
+}
+
+void loadLighting(gl::Renderer& r, const Lighting& lighting) {
+  r.setLighting(lighting.radiance, lighting.lights);
+  r.setEnvOrientation(lighting.orientation);
+  if (!lighting.background) return;
+  if (displayDrawsAsIs(lighting.layout))
+    setBackground(r, *lighting.background, lighting.layout.layout, lighting.displayScale);
+  else
+    setBackground(r, displayEquirect(*lighting.background, lighting.layout), Layout::Equirect,
+                  lighting.displayScale);
+}
+
+}  // namespace lp::cli

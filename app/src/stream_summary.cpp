@@ -1,0 +1,101 @@
+// The stream's tally and summary.
+#include "stream_summary.h"
+
+#include <algorithm>
+#include <cstdio>
+
+#include "commands.h"
+#include "liveprobe/sh/error.h"
+#include "progress.h"
+
+namespace lp::cli {
+
+double StreamTally::median(Stage s) const { return percentile(stages[std::size_t(s)], 0.5); }
+
+void recordSample(StreamTally& t, const ProcessedFrame& f, double uploadMs, double renderMs,
+                  double latencyMs, Hud* hud, const PipelineStats& st, const RecordSinks& sinks) {
+  StageTimes times = f.times;
+  times[Stage::Upload] = uploadMs;
+  times[Stage::Render] = renderMs;
+  t.latency.push_back(latencyMs);
+  for (std::size_t k = 0; k < kStageCount; ++k) t.stages[k].push_back(times.ms[k]);
+  t.saturated += f.saturated;
+  t.confidence.push_back(f.confidence.value());
+  t.brightestMeasured += f.confidence.brightestMeasured;
+  if (!f.lights.empty()) ++t.withLight;
+  if (std::any_of(f.lights.begin(), f.lights.end(), [](const Light& l) { return l.clipped; }))
+    ++t.clippedLight;
+  if (!hud) return;
+  HudSample s;
+  s.frame = f.index;
+  s.time = f.timestamp;
+  s.times = times;
+  s.latencyMs = latencyMs;
+  s.radiance = f.radiance;
+  s.unsmoothed = f.unsmoothed;
+  s.lights = f.lights;
+  s.confidence = f.confidence;
+  s.held = f.held;
+  hud->push(s);
+  HudCounters c{st.captured, t.drawn, st.dropped, st.skipped,
+                double(t.saturated) / double(t.frames())};
+  sinks.fill(c);
+  hud->setCounters(c);
+}
+
+std::string stageMedians(const StreamTally& t) {
+  std::string out;
+  char one[64];
+  for (std::size_t k = 0; k <= std::size_t(Stage::Render); ++k) {
+    if (stageRunsForSomeSources(Stage(k)) && !(t.median(Stage(k)) > 0)) continue;
+    std::snprintf(one, sizeof one, "%s%s %.2f", out.empty() ? "" : ", ",
+                  std::string(kStageNames[k]).c_str(), t.median(Stage(k)));
+    out += one;
+  }
+  return out;
+}
+
+void printSummary(const std::string& description, const PipelineStats& st, const StreamTally& t,
+                  double smoothSeconds, bool interrupted, const RecordSinks& sinks) {
+  std::fprintf(stderr,
+               "liveprobe: %s: %zu frames captured, %zu drawn, %zu dropped (stale), %zu skipped "
+               "(corrupt)%s%s%s%s\n"
+               "  median ms: %s; saturated values %.1f per frame\n",
+               description.c_str(), st.captured, t.drawn, st.dropped, st.skipped,
+               st.unidentified == 0 ? ""
+                                    : (", " + std::to_string(st.unidentified) +
+                                       " left out of the bracket (exposure not told)")
+                                          .c_str(),
+               st.endReason.empty() ? "" : "; ", st.endReason.c_str(),
+               interrupted ? "; stopped by a signal" : "", stageMedians(t).c_str(),
+               t.frames() == 0 ? 0.0 : double(t.saturated) / double(t.frames()));
+  if (!t.latency.empty())
+    std::fprintf(stderr, "  latency ms (capture to shown): p50 %.1f, p95 %.1f, p99 %.1f\n",
+                 percentile(t.latency, 0.5), percentile(t.latency, 0.95),
+                 percentile(t.latency, 0.99));
+  if (t.withLight > 0 || t.clippedLight > 0)
+    std::fprintf(stderr, "  lights: in %zu of %zu frames%s\n", t.withLight, t.frames(),
+                 t.clippedLight > 0 ? (", clipped (8-bit maximum: power is a lower bound) in " +
+                                       std::to_string(t.clippedLight))
+                                          .c_str()
+                                    : "");
+  for (const auto& sink : sinks.all)
+    if (const std::string line = sink->summary(); !line.empty())
+      std::fprintf(stderr, "  %s\n", line.c_str());
+  if (!t.confidence.empty() &&
+      (st.held > 0 || t.median(Stage::Merge) > 0 || percentile(t.confidence, 0.0) < 1.0))
+    std::fprintf(stderr,
+                 "  confidence: median %.3f, lowest %.3f; brightest source measured unclipped in "
+                 "%zu of %zu frames; %zu held (last good lighting)\n",
+                 percentile(t.confidence, 0.5), percentile(t.confidence, 0.0), t.brightestMeasured,
+                 t.confidence.size(), st.held);
+  if (st.gapsShortened > 0)
+    warn(std::to_string(st.gapsShortened) + " gap(s) in the source's timestamps over " +
+         formatNumber(PipelineOptions{}.maxGapSeconds) + " s were played as one frame interval");
+  if (smoothSeconds > 0)
+    std::fprintf(stderr,
+                 "  --smooth %.3g s: lighting lags a step change by %.3g s (63%% of the step)\n",
+                 smoothSeconds, smoothSeconds);
+}
+
+}  // namespace lp::cli

@@ -1,0 +1,42 @@
+#pragma once
+// What a stream's render loop measures, and the summary it prints at the end.
+#include <array>
+#include <cstddef>
+#include <string>
+#include <vector>
+
+#include "hud.h"
+#include "liveprobe/capture/pipeline.h"
+#include "liveprobe/capture/processed_frame.h"
+#include "liveprobe/capture/stages.h"
+#include "stream_sinks.h"
+
+namespace lp::cli {
+
+struct StreamTally {
+  std::array<std::vector<double>, kStageCount> stages;  ///< ms per drawn frame, by lp::Stage
+  std::vector<double> latency;                          ///< capture to shown, ms
+  std::size_t drawn = 0, saturated = 0;
+  std::size_t withLight = 0, clippedLight = 0;  ///< frames with a light; of them, clipped
+  std::vector<double> confidence;               ///< each frame's
+  std::size_t brightestMeasured = 0;            ///< frames whose brightest pixel was measured
+
+  std::size_t frames() const { return latency.size(); }
+  double median(Stage s) const;
+};
+
+/// A drawn frame into the tally and, where there is one, the HUD (with the pipeline's counters
+/// and the sinks' lines).
+void recordSample(StreamTally& t, const ProcessedFrame& f, double uploadMs, double renderMs,
+                  double latencyMs, Hud* hud, const PipelineStats& st, const RecordSinks& sinks);
+
+/// "grab 0.95, convert 0.00, ...": the median of each stage up to render (merge and resample
+/// only where they ran).
+std::string stageMedians(const StreamTally& t);
+
+/// The run's summary on stderr: frames, stage medians, latency, lights, the sinks' lines,
+/// confidence, shortened gaps and --smooth's lag.
+void printSummary(const std::string& description, const PipelineStats& st, const StreamTally& t,
+                  double smoothSeconds, bool interrupted, const RecordSinks& sinks);
+
+}  // namespace lp::cli
