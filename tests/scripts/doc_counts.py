@@ -2,8 +2,9 @@
 """The manual states the counts and lists the tree and the program have: every "N fuzz targets"
 (or "N libFuzzer targets") in README.md and docs/ is the number of tests/fuzz/fuzz_*.cpp, every
 "N stages" is the number of stages `liveprobe bench` times, and every list that names four or
-more of those stages (the generated reference included) names all of them in the program's order.
-Prints each page:line that differs. Usage: doc_counts.py ROOT LIVEPROBE"""
+more of those stages (the generated reference included) names all of them in the program's order,
+and the committed baseline's numbers the manual quotes ("calibration kernel X ms, render Y ms
+median, contention xZ") are the file's, as rounded. Prints each page:line that differs. Usage: doc_counts.py ROOT LIVEPROBE"""
 import json
 import pathlib
 import re
@@ -59,6 +60,23 @@ def main(root, liveprobe):
                 if named != stages:
                     bad += 1
                     print(f'{where}: stages {named}, but bench times {stages}')
+    # The committed baseline, as the manual quotes it.
+    base = json.loads((root / 'recordings/bench-baseline.json').read_text())
+    quoted = {'calibration kernel': base['calibration_ms'],
+              'render': base['stages']['render']['median_ms'], 'contention x': base['contention']}
+    for page in pages:
+        for n, line in enumerate(page.read_text().splitlines(), 1):
+            m = re.search(r'calibration kernel (\d+(?:\.\d+)?) ms, render (\d+(?:\.\d+)?) ms median, '
+                          r'contention x(\d+(?:\.\d+)?)', line)
+            if not m:
+                continue
+            for (name, value), text in zip(quoted.items(), m.groups()):
+                checked += 1
+                digits = len(text.split('.')[1]) if '.' in text else 0
+                if abs(float(text) - round(value, digits)) > 1e-9:
+                    bad += 1
+                    print(f'{page.relative_to(root)}:{n}: {name} {text}, but '
+                          f'recordings/bench-baseline.json has {value:.{digits + 2}f}')
     print(f'{checked} stated counts and stage lists checked ({fuzz} fuzz targets, '
           f'{len(stages)} stages)')
     return 1 if bad else 0
