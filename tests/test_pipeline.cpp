@@ -262,6 +262,62 @@ TEST(Handoff, LayoutMismatchStopsWithAClearError) {
   EXPECT_NE(pipe.stats().error.find("must be square"), std::string::npos) << pipe.stats().error;
 }
 
+// The background is made in one place: what the capture pipeline hands the viewer is
+// FrameProcessor::run's, byte for byte, for an 8-bit frame the display decodes (equirect and
+// angular: the frame itself, shared), an 8-bit cube (its linear copy resampled to equirect) and
+// float maps (a linear copy, scaled by the frame's exposure, and resampled where GL does not draw
+// the layout).
+TEST(Background, ThePipelineDrawsFrameProcessorRunsBackground) {
+  lpt::TempDir tmp;
+  std::vector<std::uint8_t> rgb(64 * 32 * 3);
+  for (std::size_t i = 0; i < rgb.size(); ++i) rgb[i] = std::uint8_t((i * 37) % 256);
+  const std::string png = tmp / "pano.png", square = tmp / "angular.png";
+  lp::saveRgb8(png, 64, 32, rgb.data());
+  lp::saveRgb8(square, 32, 32, rgb.data());
+  const std::string data = LIVEPROBE_DATA_DIR;
+  const std::vector<std::pair<std::string, lp::LayoutSpec>> cases = {
+      {png, lp::LayoutSpec(lp::Layout::Equirect)},
+      {square, lp::LayoutSpec(lp::Layout::Angular)},
+      {data + "/probes/latlong_256x128/grace.hdr", lp::LayoutSpec(lp::Layout::Equirect)},
+      {data + "/cube/pisaHDR", lp::LayoutSpec(lp::Layout::Cube)},
+  };
+  for (const auto& [file, layout] : cases) {
+    SCOPED_TRACE(file);
+    lp::PipelineOptions opt;
+    opt.layout = layout;
+    opt.handoff = lp::Handoff::Every;
+    opt.maxFrames = 1;
+    opt.keepImages = true;
+    lp::CapturePipeline pipe(lp::openSource(file), opt);
+    pipe.start();
+    const auto shown = pipe.waitNext();
+    ASSERT_TRUE(shown.has_value()) << pipe.stats().error;
+    const lp::Background& a = shown->background;
+    auto frame = std::make_shared<lp::Frame>();
+    ASSERT_TRUE(lp::openSource(file)->next(*frame));
+    lp::FrameProcessor processor({layout, opt.photometry, std::nullopt, 1, {.maxLights = 0}});
+    const lp::Background b = processor.run(frame, {.background = true}).background;
+    const bool asIs =
+        frame->format == lp::PanoramaFormat::BgrU8 && layout.layout != lp::Layout::Cube;
+    ASSERT_EQ(bool(a.raw), asIs);
+    ASSERT_EQ(bool(b.raw), asIs);
+    EXPECT_EQ(a.layout, b.layout);
+    EXPECT_EQ(a.layout,
+              layout.layout == lp::Layout::Angular ? lp::Layout::Angular : lp::Layout::Equirect);
+    EXPECT_EQ(a.scale, b.scale);
+    if (asIs) {
+      EXPECT_EQ(a.raw->bgr8, b.raw->bgr8);
+      EXPECT_EQ(b.raw.get(), frame.get()) << "the frame is shared, not copied";
+    } else {
+      ASSERT_TRUE(a.image && b.image);
+      EXPECT_EQ(a.image->width, b.image->width);
+      EXPECT_EQ(a.image->height, b.image->height);
+      EXPECT_EQ(a.image->rgb, b.image->rgb);
+      EXPECT_EQ(a.image->width, 2 * a.image->height) << "drawn as equirect";
+    }
+  }
+}
+
 // Sources: synthetic is deterministic per frame; sequences by folder and by pattern.
 TEST(Sources, SyntheticIsDeterministic) {
   std::vector<float> a, b;

@@ -20,6 +20,7 @@
 #include "environment.h"
 #include "hud.h"
 #include "liveprobe/backends.h"
+#include "liveprobe/capture/frame_processor.h"
 #include "liveprobe/gl/context.h"
 #include "liveprobe/gl/mesh.h"
 #include "liveprobe/gl/renderer.h"
@@ -563,6 +564,35 @@ TEST(Stops, CountsAddUpWhereverTheRunIsStopped) {
     // With a network sink every record offered is a line (drawn or sent only); without one,
     // headless --coeffs-out lists the frames drawn.
     EXPECT_EQ(lines, LIVEPROBE_WITH_MQTT ? captured : drawn) << delay << " s: " << r.output;
+  }
+}
+
+// A still's background is the frame path's (FrameProcessor::run), byte for byte, as the stream's
+// is: an 8-bit map the display decodes is the frame itself, a float map its linear copy.
+TEST(Background, StillsDrawFrameProcessorRunsBackground) {
+  lpt::TempDir tmp;
+  std::vector<std::uint8_t> rgb(64 * 32 * 3);
+  for (std::size_t i = 0; i < rgb.size(); ++i) rgb[i] = std::uint8_t((i * 53) % 256);
+  const std::string png = tmp / "pano.png";
+  lp::saveRgb8(png, 64, 32, rgb.data());
+  for (const std::string& file :
+       {png, std::string(LIVEPROBE_DATA_DIR) + "/probes/latlong_256x128/grace.hdr"}) {
+    SCOPED_TRACE(file);
+    const lp::cli::Environment env =
+        lp::cli::loadEnvironment(file, lp::cli::PanoramaSettings{}, {.maxLights = 0}, true);
+    auto frame = std::make_shared<lp::Frame>();
+    ASSERT_TRUE(lp::openSource(file)->next(*frame));
+    lp::FrameProcessor processor({lp::LayoutSpec(lp::Layout::Equirect)});
+    const lp::Background b = processor.run(frame, {.background = true}).background;
+    const lp::Background& a = env.background;
+    ASSERT_EQ(bool(a.raw), frame->format == lp::PanoramaFormat::BgrU8);
+    ASSERT_EQ(bool(a.raw), bool(b.raw));
+    EXPECT_EQ(a.scale, b.scale);
+    EXPECT_EQ(a.layout, b.layout);
+    if (a.raw)
+      EXPECT_EQ(a.raw->bgr8, b.raw->bgr8);
+    else
+      EXPECT_EQ(a.image->rgb, b.image->rgb);
   }
 }
 

@@ -401,7 +401,6 @@ struct BenchScene {
   std::array<double, kBenchStageCount> inject{};
   bool gpuProjection = false;  ///< --projection, as decided for the context that came up
   Photometry photometry;       // as the pipeline: one lookup table, each frame's exposure scales it
-  Linearizer lin{photometry};
   /// GPU time of the upload, the projection and the render, by timer queries read three frames
   /// late: every frame's, by stage, as they came back.
   std::unique_ptr<gl::GpuTimer> timer;
@@ -420,8 +419,7 @@ void onGpuTimer(BenchScene& scene, gl::GpuTimer::Stage stage, F work) {
 struct RunState {
   explicit RunState(const BenchScene& scene)
       : processor({scene.layout, scene.photometry, scene.orientation, 1, {.maxLights = 0}}) {}
-  Frame frame;
-  Image image;
+  std::shared_ptr<Frame> frame = std::make_shared<Frame>();  ///< the background shares it
   FrameProcessor processor;  ///< the frame path every command shares
   float exposure = 1.0f;     ///< from the first frame's irradiance
   Sh9 last;                  ///< the last frame's coefficients (in the report)
@@ -433,7 +431,7 @@ struct RunState {
 /// The projection on the GPU: view() of the frame uploaded (8-bit codes as they are), the two
 /// compute passes, the coefficients read back, then scaled and turned as on the CPU.
 Sh9 projectOnGpu(RunState& run, const LayoutSpec& layout) {
-  const FrameProcessor::ProjectedView v = run.processor.view(run.frame);
+  const FrameProcessor::ProjectedView v = run.processor.view(*run.frame);
   if (!run.gpu || run.gpuFrame.width() != v.view.width || run.gpuFrame.height() != v.view.height)
     run.gpu = std::make_unique<gl::GpuProjector>(layout, v.view.width, v.view.height);
   run.gpuFrame.upload(v.view);
@@ -442,68 +440,61 @@ Sh9 projectOnGpu(RunState& run, const LayoutSpec& layout) {
   return run.processor.fromProjected(whole, v.scale).radiance;
 }
 
-/// One frame through the pipeline, stage by stage, as the replay pipeline does it: grab, convert
-/// (only frames the display cannot take as they are get a linear copy), project, resample (a
-/// layout GL does not draw as it is), upload, render and read back.
+/// One frame through the pipeline, stage by stage, as the replay pipeline does it: grab, then
+/// the frame path (FrameProcessor::run: convert, only where the display cannot take the frame as
+/// it is; project, on the CPU or the GPU; resample, for a layout GL does not draw as it is), then
+/// upload, render and read back. One StageClock times them all.
 BenchTimes timeFrame(BenchScene& scene, RunState& run, FrameSource& source,
                      const std::string& sourceName, Executor& pool, bool first) {
-  const Linearizer& lin = scene.lin;
-  Frame& frame = run.frame;
-  Image& image = run.image;
-  BenchTimes t{};
-  auto t0 = Clock::now();
-  auto lap = [&](int stage) {
-    spin(scene.inject[std::size_t(stage)]);
-    t[std::size_t(stage)] = msSince(t0);
-    t0 = Clock::now();
+  StageClock clock;
+  const auto injected = [&](Stage stage) {  // --inject-delay's busy work, in its stage
+    for (int k = 0; k < kBenchStageCount; ++k)
+      if (kBenchStages[std::size_t(k)] == stage) spin(scene.inject[std::size_t(k)]);
   };
+  const auto lap = [&](Stage stage) {
+    injected(stage);
+    clock.lap(stage);
+  };
+  Frame& frame = *run.frame;
   if (!source.next(frame) && (!source.rewind() || !source.next(frame)))
     throw Error(sourceName + ": no frames to benchmark");
-  lap(0);
-  const bool asIs = displayTakesFrameAsIs(frame, scene.photometry, scene.layout);
-  const float scale = float(frame.radianceScale);
-  if (!asIs) {
-    lin.convert(frame, image);
-    if (scale != 1.0f)
-      for (float& v : image.rgb) v *= scale;
-  }
-  lap(1);
+  lap(Stage::Grab);
   scene.timer->beginFrame();
   for (int k = 0; k < gl::GpuTimer::kStages; ++k)
     if (auto ms = scene.timer->justRead(gl::GpuTimer::Stage(k)))
       scene.gpuTimes[std::size_t(k)].push_back(*ms);
   Sh9 sh;
+  FrameResult r;
   try {
+    r = run.processor.run(run.frame, {.background = true, .project = !scene.gpuProjection}, &pool);
+    clock.skip();  // (timed by run() itself)
+    clock.times += r.times;
     if (scene.gpuProjection) {
       onGpuTimer(scene, gl::GpuTimer::Project, [&] { sh = projectOnGpu(run, scene.layout); });
+      clock.lap(Stage::Project);
     } else {
-      sh = run.processor.process(frame, &pool).radiance;
+      sh = r.lighting.radiance;
     }
   } catch (const Error& e) {
     throw Error(sourceName + ": " + e.what());
   }
+  for (const Stage stage : {Stage::Convert, Stage::Project, Stage::Resample}) lap(stage);
   run.last = sh;
-  lap(2);
-  if (!asIs && !displayDrawsAsIs(scene.layout)) image = displayEquirect(image, scene.layout);
-  lap(3);
   if (first) run.exposure = autoExposure(sh);
   gl::Renderer& renderer = *scene.viewer.renderer;
   renderer.setLighting(sh);
-  onGpuTimer(scene, gl::GpuTimer::Upload, [&] {
-    if (asIs)
-      setBackground(renderer, frame, displayLayout(scene.layout), lin.exposure() * scale);
-    else
-      setBackground(renderer, image, displayLayout(scene.layout),
-                    frame.format == PanoramaFormat::BgrU8 ? lin.exposure() * scale : 0.0f);
-  });
+  onGpuTimer(scene, gl::GpuTimer::Upload, [&] { setBackground(renderer, r.background); });
   gl::Renderer::finish();
-  lap(4);
+  lap(Stage::Upload);
   scene.viewer.state.shading.exposure = run.exposure;
   onGpuTimer(scene, gl::GpuTimer::Render, [&] { scene.viewer.draw(0.0); });
   gl::Renderer::finish();
-  lap(5);
+  lap(Stage::Render);
   auto px = gl::Renderer::readRgb8(scene.viewer.ctx->framebufferSize());
-  lap(6);
+  lap(Stage::Readback);
+  BenchTimes t{};
+  for (int k = 0; k < kBenchStageCount; ++k)
+    t[std::size_t(k)] = clock.times[kBenchStages[std::size_t(k)]];
   return t;
 }
 

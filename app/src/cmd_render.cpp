@@ -78,7 +78,7 @@ int runRender(const Args& a) {
         mesh);
     v.state.camera = camera;
     v.state.shading =
-        shadingFrom(s.scene, lighting.radiance, lighting.background.has_value(), lighting.lights);
+        shadingFrom(s.scene, lighting.radiance, !lighting.background.empty(), lighting.lights);
     loadLighting(*v.renderer, lighting);
     if (v.hud && s.output.hud) showStill(*v.hud, s.lighting, lighting);
     v.draw(0.0);
@@ -145,7 +145,7 @@ int runView(const Args& a) {
   Lighting lighting = requireLighting(s);
   const gl::Camera camera = cameraFrom(s.scene);
   const gl::ShadingSettings shading =
-      shadingFrom(s.scene, lighting.radiance, lighting.background.has_value(), lighting.lights);
+      shadingFrom(s.scene, lighting.radiance, !lighting.background.empty(), lighting.lights);
   const Mesh mesh = meshFrom(s.scene);
   const bool screenshot = s.output.screenshot.has_value();
   const std::int64_t frames = s.output.frames.value_or(1);

@@ -25,12 +25,6 @@ namespace lp::cli {
 
 namespace fs = std::filesystem;
 
-namespace {
-
-using Clock = std::chrono::steady_clock;
-
-}  // namespace
-
 std::string shareDir() {
   std::error_code ec;
   const fs::path exe = fs::read_symlink("/proc/self/exe", ec);
@@ -234,28 +228,20 @@ struct StreamView {
 
   /// Uploads a frame's lighting and background; returns the upload time in ms.
   double use(const ProcessedFrame& f) {
-    const auto t0 = Clock::now();
-    if (!haveLighting) {  // the first frame: does its shape fit the layout?
-      const int w = f.image ? f.image->width
-                    : f.raw ? f.raw->width
-                            : 0,
-                h = f.image ? f.image->height
-                    : f.raw ? f.raw->height
-                            : 0;
-      if (w > 0)
-        warnIfLayoutLooksWrong(source, layout, layoutGiven, w, h,
-                               f.image ? f.image->rgb.data() : nullptr);
-    }
+    StageClock clock;
+    const Background& b = f.background;
+    if (!haveLighting && !b.empty())  // the first frame: does its shape fit the layout?
+      warnIfLayoutLooksWrong(source, layout, layoutGiven, b.width(), b.height(),
+                             b.image ? b.image->rgb.data() : nullptr);
     if (!haveLighting && autoExposure)
       v->state.shading.exposure = cli::autoExposure(f.radiance, true, f.lights);
     haveLighting = true;
     gl::Renderer& r = *v->renderer;
     r.setLighting(f.radiance, f.lights);
-    if (f.image) setBackground(r, *f.image, f.displayLayout, f.displayScale);
-    if (f.raw) setBackground(r, *f.raw, f.displayLayout, f.rawScale);
+    setBackground(r, b);
     // The time to hand the data to GL, not waiting for it (no glFinish stalling every frame);
     // `liveprobe bench` times the upload to completion.
-    return std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
+    return clock.lap(Stage::Upload);
   }
 };
 

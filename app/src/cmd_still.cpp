@@ -101,7 +101,8 @@ int runCoeffs(const Args& a) {
   const Environment env = loadEnvironment(a, lights);
   const Sh9 L = applyWindow(env.radiance, chooseWindow(s.still, env.radiance));
   if (cf.engine == Engine::Gltf) {
-    std::cout << gltfDocument(env.image, env.layout, env.orientation, L, env.lights).dump() << "\n";
+    std::cout << gltfDocument(env.image(), env.layout, env.orientation, L, env.lights).dump()
+              << "\n";
   } else if (cf.engine) {
     nlohmann::ordered_json j;
     j["source"] = a.positional()[0];
@@ -112,14 +113,14 @@ int runCoeffs(const Args& a) {
     nlohmann::ordered_json j;
     j["source"] = a.positional()[0];
     j["layout"] = std::string(layoutName(env.layout.layout));
-    j["width"] = env.image.width;
-    j["height"] = env.image.height;
+    j["width"] = env.image().width;
+    j["height"] = env.image().height;
     j["coefficients"] = coefficientsJson(L);
     if (lights.maxLights > 0) j["lights"] = lightsJson(env.lights);
     std::cout << j.dump() << "\n";
   } else if (format == "text") {
     std::cout << a.positional()[0] << " (" << layoutName(env.layout.layout) << ", "
-              << env.image.width << "x" << env.image.height << ")\n"
+              << env.image().width << "x" << env.image().height << ")\n"
               << coefficientsText(L);
     if (lights.maxLights > 0 && env.lights.empty())
       std::printf("lights: none (no compact source holds 5%% of the power)\n");
@@ -183,10 +184,10 @@ int runIrradiance(const Args& a) {
         irradianceMatrices(applyWindow(env.radiance, chooseWindow(s.still, env.radiance)));
     for (std::size_t i = 0; i < normals.size(); ++i) e[i] = evalIrradianceQuadratic(m, normals[i]);
   } else {
-    auto samples = layoutSamples(env.layout, env.image.width, env.image.height);
+    auto samples = layoutSamples(env.layout, env.image().width, env.image().height);
     for (auto& smp : samples) smp.dir = env.orientation * smp.dir;
     ThreadPool pool(0);
-    e = bruteIrradiance(env.image.rgb.data(), 3, samples.data(), samples.size(), normals, &pool);
+    e = bruteIrradiance(env.image().rgb.data(), 3, samples.data(), samples.size(), normals, &pool);
   }
   Image out(w, h);
   for (std::size_t i = 0; i < e.size(); ++i)  // (cells of the cross outside the faces: black)
@@ -222,7 +223,7 @@ int runCompare(const Args& a) {
   installStopHandlers();
   Progress progress("compare: brute force", std::int64_t(w) * h, s.output.quiet, "normals");
   const CompareResult r =
-      compareIrradiance(env.image, env.layout, FrameLighting{env.radiance, env.lights, env.whole},
+      compareIrradiance(env.image(), env.layout, FrameLighting{env.radiance, env.lights, env.whole},
                         env.projectMs, lights.maxLights > 0, w, h, chooseWindow(s.still, env.whole),
                         0, env.orientation, [&](std::size_t done) {
                           progress.update(std::int64_t(done));
@@ -238,7 +239,7 @@ int runCompare(const Args& a) {
     nlohmann::ordered_json j;
     j["source"] = a.positional()[0];
     j["layout"] = std::string(layoutName(env.layout.layout));
-    j["input"] = std::to_string(env.image.width) + "x" + std::to_string(env.image.height);
+    j["input"] = std::to_string(env.image().width) + "x" + std::to_string(env.image().height);
     j["size"] = std::to_string(w) + "x" + std::to_string(h);
     j["mean_frac_total"] = r.meanFracTotal;
     j["max_frac_total"] = r.maxFracTotal;
@@ -257,8 +258,8 @@ int runCompare(const Args& a) {
     std::cout << j.dump(2) << "\n";
   } else {
     std::printf("%s (%s, %dx%d), %dx%d normals\n", a.positional()[0].c_str(),
-                std::string(layoutName(env.layout.layout)).c_str(), env.image.width,
-                env.image.height, w, h);
+                std::string(layoutName(env.layout.layout)).c_str(), env.image().width,
+                env.image().height, w, h);
     std::printf("  |E_sh - E| / total intensity: mean %.3f%%  max %.3f%%\n", 100 * r.meanFracTotal,
                 100 * r.maxFracTotal);
     if (r.sun) {

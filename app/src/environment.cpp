@@ -52,41 +52,34 @@ LayoutSpec layoutSpec(const PanoramaSettings& p, const FrameSource* source) {
 }
 
 Environment loadEnvironment(const std::string& source, const PanoramaSettings& p,
-                            const LightOptions& lights) {
+                            const LightOptions& lights, bool background) {
   layoutSpec(p);  // option errors before the file is read
   auto src = openSource(source);
   // One map: a sequence or a video is replayed, not read as its first frame.
   if (const std::int64_t n = src->frameCount(); n > 1)
     throw Error(source + ": " + std::to_string(n) +
                 " frames (a sequence or a video), not one map: name one image, or replay it");
-  Frame frame;
-  if (!src->next(frame)) throw Error(source + ": no frame to read");
+  auto frame = std::make_shared<Frame>();
+  if (!src->next(*frame)) throw Error(source + ": no frame to read");
   Environment env;
   env.layout = layoutSpec(p, src.get());
   env.orientation = envOrientation(p);
   FrameProcessor processor({env.layout, Photometry{}, env.orientation, 1, lights});
-  FrameLighting lit;
+  FrameResult r;
   try {
-    processor.fit(frame);  // the tables, before the projection is timed
-    const auto t0 = std::chrono::steady_clock::now();
-    lit = processor.process(frame);
-    env.projectMs =
-        std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+    processor.fit(*frame);  // the tables, before the projection is timed
+    r = processor.run(frame, {.background = background, .linear = true});
   } catch (const Error& e) {
     throw Error(source + ": " + e.what());
   }
-  env.radiance = lit.radiance;
-  env.lights = std::move(lit.lights);
-  env.whole = lit.whole;
-  // The linear image, for what reads pixels (the brute force, the background, the glTF cube), in
-  // the same units as the coefficients: the frame's own exposure applied.
-  const float scale = float(frame.radianceScale);
-  processor.linearizer().convert(frame, env.image);
-  if (scale != 1.0f)
-    for (float& v : env.image.rgb) v *= scale;
-  if (frame.format == PanoramaFormat::BgrU8) env.displayScale = scale;
-  warnIfLayoutLooksWrong(source, env.layout, p.layout.has_value(), env.image.width,
-                         env.image.height, env.image.rgb.data());
+  env.projectMs = r.times[Stage::Project];
+  env.radiance = r.lighting.radiance;
+  env.lights = std::move(r.lighting.lights);
+  env.whole = r.lighting.whole;
+  env.linear = std::move(r.linear);
+  env.background = std::move(r.background);
+  warnIfLayoutLooksWrong(source, env.layout, p.layout.has_value(), env.image().width,
+                         env.image().height, env.image().rgb.data());
   return env;
 }
 
@@ -157,13 +150,12 @@ std::optional<Lighting> lightingFrom(const Settings& st) {
         "its own)");
   Lighting l;
   if (ls.env) {
-    Environment env = loadEnvironment(*ls.env, st.panorama, lights);
+    Environment env = loadEnvironment(*ls.env, st.panorama, lights, true);
     l.lights = env.lights;
     l.layout = env.layout;
     l.orientation = env.orientation;
     l.radiance = env.radiance;
-    l.displayScale = env.displayScale;
-    l.background = std::move(env.image);
+    l.background = std::move(env.background);
   } else {
     if (ls.coeffs) {
       l.radiance = loadCoefficients(*ls.coeffs, &l.lights);

@@ -8,6 +8,7 @@
 
 #include "liveprobe/capture/frame.h"
 #include "liveprobe/capture/image.h"
+#include "liveprobe/capture/processed_frame.h"
 #include "liveprobe/sh/layout.h"
 #include "liveprobe/sh/lights.h"
 #include "liveprobe/sh/sh.h"
@@ -26,21 +27,23 @@ LayoutSpec layoutSpec(const PanoramaSettings& p, const FrameSource* source = nul
 
 /// A still environment in any layout: FILE is an image, or a folder of six cube faces.
 struct Environment {
-  Image image;  ///< linear RGB, as stored in the file
+  /// Linear radiance, in the file's layout (what reads pixels: the brute force, the glTF cube).
+  std::shared_ptr<const Image> linear;
+  const Image& image() const { return *linear; }
+  Background background;  ///< as the display draws it, when asked (FrameProcessor::run)
   LayoutSpec layout;
   glm::mat3 orientation{1.0f};  ///< world from file (envOrientation)
   Sh9 radiance;                 ///< unwindowed, turned by `orientation` (with lights: the rest)
   std::vector<Light> lights;    ///< the dominant compact lights, when asked, turned likewise
   Sh9 whole;                    ///< the whole map's coefficients, lights included
   double projectMs = 0;         ///< the frame path's time for it (its tables made beforehand)
-  float displayScale = 0.0f;    ///< an 8-bit file: the scale its decoded values carry; 0 for HDR
 };
 /// Reads the first frame of `source` and takes it through the frame path (FrameProcessor: one
 /// projection, the lights split out when `lights` asks), in the layout and orientation the
-/// options give (layoutSpec, envOrientation). Warns (one line) about a likely layout
-/// mistake. Throws lp::Error naming the source.
+/// options give (layoutSpec, envOrientation), with the display's background when `background`
+/// asks. Warns (one line) about a likely layout mistake. Throws lp::Error naming the source.
 Environment loadEnvironment(const std::string& source, const PanoramaSettings& p,
-                            const LightOptions& lights = {.maxLights = 0});
+                            const LightOptions& lights = {.maxLights = 0}, bool background = false);
 
 /// One warning line when the frame's shape suggests another layout than the one in use: a square
 /// image or a 16:9 frame taken as equirect by default (`given`: --layout named it, and the shape
@@ -50,11 +53,10 @@ void warnIfLayoutLooksWrong(const std::string& source, const LayoutSpec& layout,
 
 struct Lighting {
   Sh9 radiance;
-  std::vector<Light> lights;        ///< --sun with --env, or the "lights" of a --coeffs file
-  std::optional<Image> background;  ///< the environment, when lighting came from one
+  std::vector<Light> lights;  ///< --sun with --env, or the "lights" of a --coeffs file
+  Background background;      ///< the environment, when lighting came from one
   LayoutSpec layout;
   glm::mat3 orientation{1.0f};
-  float displayScale = 0.0f;  ///< see Environment
 };
 
 /// From --env FILE [--layout], --coeffs FILE.json or --coeff NAME=VALUE...; nullopt if none given.

@@ -3,7 +3,6 @@
 
 #include <stdexcept>
 
-#include "liveprobe/capture/resample.h"
 #include "liveprobe/sh/error.h"
 
 namespace lp::cli {
@@ -17,14 +16,13 @@ gl::BackgroundMapping backgroundMapping(Layout drawn) {
 }
 }  // namespace
 
-void setBackground(gl::Renderer& r, const Image& panorama, Layout drawn, float displayScale) {
-  r.setBackground(panorama.rgb.data(), panorama.width, panorama.height, backgroundMapping(drawn),
-                  displayScale);
-}
-
-void setBackground(gl::Renderer& r, const Frame& frame, Layout drawn, float scale) {
-  r.setBackgroundSrgb8(frame.bgr8.data(), frame.width, frame.height, backgroundMapping(drawn),
-                       scale);
+void setBackground(gl::Renderer& r, const Background& b) {
+  if (b.raw)
+    r.setBackgroundSrgb8(b.raw->bgr8.data(), b.raw->width, b.raw->height,
+                         backgroundMapping(b.layout), b.scale);
+  else if (b.image)
+    r.setBackground(b.image->rgb.data(), b.image->width, b.image->height,
+                    backgroundMapping(b.layout), b.scale);
 }
 
 gl::Backend glBackend(const SceneSettings& sc) {
@@ -53,12 +51,7 @@ void loadModel(gl::Renderer& r, const Mesh& mesh) {
 void loadLighting(gl::Renderer& r, const Lighting& lighting) {
   r.setLighting(lighting.radiance, lighting.lights);
   r.setEnvOrientation(lighting.orientation);
-  if (!lighting.background) return;
-  if (displayDrawsAsIs(lighting.layout))
-    setBackground(r, *lighting.background, lighting.layout.layout, lighting.displayScale);
-  else
-    setBackground(r, displayEquirect(*lighting.background, lighting.layout), Layout::Equirect,
-                  lighting.displayScale);
+  setBackground(r, lighting.background);
 }
 
 }  // namespace lp::cli

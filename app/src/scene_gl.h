@@ -4,8 +4,7 @@
 #include <utility>
 
 #include "environment.h"
-#include "liveprobe/capture/frame.h"
-#include "liveprobe/capture/image.h"
+#include "liveprobe/capture/processed_frame.h"
 #include "liveprobe/gl/context.h"
 #include "liveprobe/gl/mesh.h"
 #include "liveprobe/gl/renderer.h"
@@ -13,13 +12,8 @@
 
 namespace lp::cli {
 
-/// The background texture: a panorama in a layout GL draws as it is (equirect or angular;
-/// liveprobe/capture/resample.h: displayLayout, displayEquirect for the others).
-/// `displayScale`: see gl::Renderer::setBackground (0 for an HDR frame).
-void setBackground(gl::Renderer& r, const Image& panorama, Layout drawn, float displayScale = 0.0f);
-/// The background from an 8-bit sRGB frame the display takes as it is
-/// (liveprobe/capture/frame_processor.h, displayTakesFrameAsIs), its decoded values times `scale`.
-void setBackground(gl::Renderer& r, const Frame& frame, Layout drawn, float scale);
+/// The background the frame path made (liveprobe/capture/processed_frame.h); none when empty.
+void setBackground(gl::Renderer& r, const Background& background);
 
 gl::Backend glBackend(const SceneSettings& s);
 
@@ -32,8 +26,7 @@ std::unique_ptr<gl::GlContext> openContext(gl::Backend backend, std::pair<int, i
 /// Uploads the mesh and its albedo texture.
 void loadModel(gl::Renderer& r, const Mesh& mesh);
 
-/// Uploads the lighting, its orientation and its background (resampled to equirect where GL does
-/// not draw its layout as it is).
+/// Uploads the lighting, its orientation and its background.
 void loadLighting(gl::Renderer& r, const Lighting& lighting);
 
 }  // namespace lp::cli

@@ -35,7 +35,6 @@ void Viewer::draw(double lastFrameMs) {
 }
 
 void Viewer::run(const ViewerLoop& loop) {
-  using Clock = std::chrono::steady_clock;
   RateTitle rate;
   double lastMs = 0;
   while (!ctx->shouldClose() && !stopRequested()) {
@@ -46,10 +45,10 @@ void Viewer::run(const ViewerLoop& loop) {
       std::this_thread::sleep_for(std::chrono::milliseconds(2));
       continue;
     }
-    const auto t0 = Clock::now();
+    StageClock clock;
     draw(lastMs);
     gl::Renderer::finish();
-    lastMs = std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
+    lastMs = clock.lap(Stage::Render);
     dynamicResolution.update(lastMs);
     if (loop.drawn && !loop.drawn(lastMs)) break;
     ctx->present();

@@ -96,6 +96,53 @@ FrameProcessor::ProjectedView FrameProcessor::view(const Frame& frame, const Ima
           scale * linearizer_.exposure()};
 }
 
+FrameResult FrameProcessor::run(std::shared_ptr<const Frame> frame, const FrameRequest& request,
+                                Executor* executor) {
+  StageClock clock;
+  FrameResult r;
+  const Frame& f = *frame;
+  // A linear copy where something reads it (a reduction reads it too, before the frame's
+  // radianceScale: the projection applies that once); none for a background the display decodes.
+  const bool asIs = request.background && displayTakesFrameAsIs(f, opt_.photometry, opt_.layout);
+  std::shared_ptr<Image> linear;
+  if (request.linear || (request.background && !asIs)) {
+    linear = std::make_shared<Image>();
+    r.saturated = linearizer_.convert(f, *linear);
+  } else if (request.saturation) {
+    r.saturated = countSaturated(f);
+  }
+  clock.lap(Stage::Convert);
+  if (request.project) {
+    r.lighting = process(f, executor, linear.get());
+    clock.lap(Stage::Project);
+  }
+  const float scale = float(f.radianceScale);
+  if (linear && scale != 1.0f) {
+    for (float& v : linear->rgb) v *= scale;
+    clock.lap(Stage::Convert);
+  }
+  if (request.background) {
+    Background& b = r.background;
+    b.layout = displayLayout(opt_.layout);
+    const float decoded = scale * opt_.photometry.exposure;
+    if (asIs) {
+      b.raw = std::move(frame);
+      b.scale = decoded;
+    } else {
+      b.scale = f.format == PanoramaFormat::BgrU8 ? decoded : 0.0f;
+      if (displayDrawsAsIs(opt_.layout)) {
+        b.image = linear;
+      } else {
+        b.image = std::make_shared<Image>(displayEquirect(*linear, opt_.layout));
+        clock.lap(Stage::Resample);
+      }
+    }
+  }
+  if (request.linear) r.linear = std::move(linear);
+  r.times = clock.times;
+  return r;
+}
+
 FrameLighting FrameProcessor::process(const Frame& frame, Executor* executor, const Image* linear) {
   const ProjectedView v = view(frame, linear);
   std::vector<float> peaks;

@@ -28,9 +28,6 @@ std::string formatFps(double fps) {
 
 namespace {
 using Clock = std::chrono::steady_clock;
-double msBetween(Clock::time_point a, Clock::time_point b) {
-  return std::chrono::duration<double, std::milli>(b - a).count();
-}
 }  // namespace
 
 glm::vec3 slerp(glm::vec3 a, glm::vec3 b, float t) {
@@ -137,8 +134,9 @@ struct CapturePipeline::Loop {
   ShSmoother smoother;
   LightSmoother lightSmoother;
   std::unique_ptr<ThreadPool> pool;
-  Frame frame;
-  std::shared_ptr<Image> image;  ///< this frame's linear copy, when one is made
+  /// The frame in hand: shared with the background that shows it as it is (then the next
+  /// grab takes a new one).
+  std::shared_ptr<Frame> frame = std::make_shared<Frame>();
   std::uint64_t index = 0;
   Clock::time_point wallStart;
   double streamStart = -1, loopOffset = 0, lastTimestamp = 0;
@@ -155,19 +153,21 @@ bool CapturePipeline::waitForTurn(Loop& s) {
 }
 
 bool CapturePipeline::grab(Loop& s) {
-  if (!source_->next(s.frame)) {
-    if (!(opt_.loop && source_->rewind() && source_->next(s.frame))) return false;
+  if (s.frame.use_count() > 1) s.frame = std::make_shared<Frame>();  // the last one is shown
+  Frame& frame = *s.frame;
+  if (!source_->next(frame)) {
+    if (!(opt_.loop && source_->rewind() && source_->next(frame))) return false;
     s.loopOffset = s.lastTimestamp + (source_->fps() > 0 ? 1.0 / source_->fps() : 0.0);
   }
-  if (opt_.onFrame) opt_.onFrame(s.frame);
-  s.lastTimestamp = s.frame.timestamp + s.loopOffset;
+  if (opt_.onFrame) opt_.onFrame(frame);
+  s.lastTimestamp = frame.timestamp + s.loopOffset;
   return true;
 }
 
 void CapturePipeline::merge(Loop& s, ProcessedFrame& out) const {
   if (!s.merger) return;
-  out.confidence = s.merger->add(s.frame, s.merged, s.pool.get());
-  std::swap(s.frame, s.merged);
+  out.confidence = s.merger->add(*s.frame, s.merged, s.pool.get());
+  std::swap(*s.frame, s.merged);
 }
 
 bool CapturePipeline::hold(Loop& s, ProcessedFrame& out) {
@@ -189,39 +189,23 @@ bool CapturePipeline::hold(Loop& s, ProcessedFrame& out) {
   return true;
 }
 
-void CapturePipeline::convertForDisplay(Loop& s, ProcessedFrame& out) const {
-  // A linear copy only for display; the projection reads the frame itself (a reduction reads the
-  // copy, before run() scales it by the exposure in force: a recording's stored exposure, a
-  // camera's exposure time).
-  const Frame& frame = s.frame;
-  const double scale = frame.radianceScale;
-  out.rawScale = float(scale) * opt_.photometry.exposure;
-  out.displayScale = frame.format == PanoramaFormat::BgrU8 ? out.rawScale : 0.0f;
-  if (opt_.keepImages && displayTakesFrameAsIs(frame, opt_.photometry, opt_.layout)) {
-    out.raw = std::make_shared<Frame>(frame);  // the display decodes it: no linear copy
-    out.saturated = countSaturated(frame);
-  } else if (opt_.keepImages) {
-    s.image = std::make_shared<Image>();
-    out.saturated = s.processor.linearizer().convert(frame, *s.image);
-  } else {
-    out.saturated = countSaturated(frame);
-  }
-}
-
 void CapturePipeline::project(Loop& s, ProcessedFrame& out) {
-  // A reduction reads the display's linear copy when there is one.
-  FrameLighting lit;
+  FrameResult r;
   try {
-    lit = s.processor.process(s.frame, s.pool.get(), s.image.get());
+    r = s.processor.run(s.frame, {.background = opt_.keepImages, .saturation = true}, s.pool.get());
   } catch (const Error& e) {
     throw Error(source_->describe() + ": frame " + std::to_string(out.index + 1) + ": " + e.what());
   }
+  out.times += r.times;
+  out.saturated = r.saturated;
+  out.background = std::move(r.background);
+  FrameLighting& lit = r.lighting;
   // A merged bracket judged itself; a single frame is judged by its clipped pixels. A bracket
   // whose brightest pixel clipped in every exposure has its strongest light's power as a lower
   // bound, as an 8-bit frame's clipped light has.
   if (!s.merger) {
-    // convertForDisplay counted the values at 255: without any, the frame is trusted whole.
-    if (out.saturated > 0) out.confidence = s.processor.confidence(s.frame, lit);
+    // Without values at 255 the frame is trusted whole.
+    if (out.saturated > 0) out.confidence = s.processor.confidence(*s.frame, lit);
   } else if (!out.confidence.brightestMeasured && !lit.lights.empty())
     lit.lights.front().clipped = true;
   // Below --hold-below the last good lighting stands, and the smoothing does not see the frame.
@@ -275,36 +259,21 @@ void CapturePipeline::run() {
     while (!stop_ && !interrupted_ &&
            (opt_.maxFrames < 0 || std::int64_t(s.index) < opt_.maxFrames)) {
       if (!waitForTurn(s)) break;
-      const auto t0 = Clock::now();
+      StageClock clock;
       if (!grab(s)) break;
-      const auto t1 = Clock::now();
+      clock.lap(Stage::Grab);
       const double grabbed = monotonicSeconds();
       ProcessedFrame out;
       out.index = s.index++;
-      out.sequence = s.frame.sequence;
+      out.sequence = s.frame->sequence;
       out.timestamp = s.lastTimestamp;
-      merge(s, out);
-      const auto tm = Clock::now();
-      convertForDisplay(s, out);
-      const auto t2 = Clock::now();
-      project(s, out);
-      if (s.image && s.frame.radianceScale != 1.0)
-        for (float& v : s.image->rgb) v *= float(s.frame.radianceScale);
-      const auto t3 = Clock::now();
-      // The display's copy in a layout GL draws as it is, made here rather than on the viewer's
-      // thread.
-      out.displayLayout = displayLayout(opt_.layout);
-      const bool resample = s.image && !displayDrawsAsIs(opt_.layout);
-      if (resample) *s.image = displayEquirect(*s.image, opt_.layout);
-      const auto t4 = Clock::now();
-      if (opt_.keepImages && !out.raw) out.image = std::move(s.image);  // one background a frame
-      s.image.reset();
-      out.times[Stage::Grab] = msBetween(t0, t1);
-      if (s.merger) out.times[Stage::Merge] = msBetween(t1, tm);
-      out.times[Stage::Convert] = msBetween(tm, t2);
-      out.times[Stage::Project] = msBetween(t2, t3);
-      if (resample && out.image) out.times[Stage::Resample] = msBetween(t3, t4);
-      out.captureTime = s.frame.captureTime >= 0 ? s.frame.captureTime : grabbed;
+      if (s.merger) {
+        merge(s, out);
+        clock.lap(Stage::Merge);
+      }
+      out.times = clock.times;
+      project(s, out);  // convert, project and resample: FrameProcessor::run's times
+      out.captureTime = s.frame->captureTime >= 0 ? s.frame->captureTime : grabbed;
       out.coefficientsLatencyMs = 1000.0 * (monotonicSeconds() - out.captureTime);
       pace(s, out.timestamp);
       if (interrupted_) break;  // the frame whose time had not come is not handed over

@@ -475,8 +475,7 @@ void StreamServer::publish(const ProcessedFrame& frame) {
   {
     std::lock_guard lock(impl_->mutex);
     impl_->latest = frame;
-    impl_->latest.image.reset();  // the record needs the numbers, not the pixels
-    impl_->latest.raw.reset();
+    impl_->latest.background = {};  // the record needs the numbers, not the pixels
     ++impl_->latestSeq;
   }
   if (impl_->context && !impl_->stopping) lws_cancel_service(impl_->context);

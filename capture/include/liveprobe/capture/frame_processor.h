@@ -1,10 +1,12 @@
 #pragma once
-// The one frame path: a Frame in, the frame's lighting out. Every caller (the capture pipeline,
-// bench, the still commands, the accuracy evaluation) goes through it, so a frame's lighting is
-// computed one way: the frame as a panorama view, the exposure applied once (an 8-bit frame's
-// lookup table carries the photometry's exposure, a float frame is scaled after the projection,
-// which is linear, and Frame::radianceScale scales both), an optional area-averaged reduction,
-// the coefficients and the lights, then the orientation.
+// The one frame path: a Frame in, the frame's whole result out (run()): its lighting, the
+// background the display draws, and the stage times. Every caller (the capture pipeline, bench,
+// the still commands, the accuracy evaluation) goes through it, so a frame is taken one way: the
+// frame as a panorama view, the exposure applied once (an 8-bit frame's lookup table carries the
+// photometry's exposure, a float frame is scaled after the projection, which is linear, and
+// Frame::radianceScale scales both), an optional area-averaged reduction, the coefficients and
+// the lights, then the orientation; and the background as the frame itself where the display
+// decodes it, or a linear copy resampled where GL does not draw the layout.
 #include <memory>
 #include <optional>
 #include <string>
@@ -14,6 +16,8 @@
 #include "liveprobe/capture/hdr_merge.h"
 #include "liveprobe/capture/image.h"
 #include "liveprobe/capture/photometry.h"
+#include "liveprobe/capture/processed_frame.h"
+#include "liveprobe/capture/stages.h"
 #include "liveprobe/sh/executor.h"
 #include "liveprobe/sh/layout.h"
 #include "liveprobe/sh/lights.h"
@@ -38,6 +42,27 @@ struct FrameLighting {
   Sh9 whole;                  ///< the whole map's coefficients, lights included
 };
 
+/// What run() makes besides the lighting.
+struct FrameRequest {
+  bool background = false;  ///< the display's background (Background)
+  bool linear = false;      ///< the linear frame in its own layout (the brute force, exports)
+  bool saturation = false;  ///< count the values at 255 (a linear copy counts them anyway)
+  /// Project on the CPU; false: the caller projects view() elsewhere (the GPU), and the result's
+  /// lighting is left empty.
+  bool project = true;
+};
+
+/// A frame's whole result.
+struct FrameResult {
+  FrameLighting lighting;
+  Background background;  ///< when asked
+  /// When asked: the frame in linear radiance (Frame::radianceScale and the photometry applied)
+  /// in its own layout.
+  std::shared_ptr<const Image> linear;
+  std::size_t saturated = 0;  ///< channel values at 255 (with a linear copy, or when asked)
+  StageTimes times;           ///< Convert, Project and Resample, where they ran
+};
+
 class FrameProcessor {
  public:
   explicit FrameProcessor(FrameProcessorOptions options);
@@ -45,10 +70,17 @@ class FrameProcessor {
   FrameProcessor(FrameProcessor&&) noexcept;
   FrameProcessor& operator=(FrameProcessor&&) noexcept;
 
-  /// The lighting of `frame`. `linear`, when the caller has it, is the frame already converted by
-  /// linearizer() (a reduction reads it instead of converting again). Throws lp::Error (without
-  /// a source name: the caller adds it) when the frame does not fit the layout or the reduction,
-  /// or when its coefficients are not finite.
+  /// The frame's lighting, and what `request` asks for besides: the one call every caller makes
+  /// for a frame. The background is the frame itself (shared, not copied) where the display takes
+  /// it as it is (displayTakesFrameAsIs), else a linear copy, resampled to equirect where GL
+  /// does not draw the layout. Throws as process() does.
+  FrameResult run(std::shared_ptr<const Frame> frame, const FrameRequest& request = {},
+                  Executor* executor = nullptr);
+
+  /// The lighting of `frame` alone. `linear`, when the caller has it, is the frame already
+  /// converted by linearizer() (a reduction reads it instead of converting again). Throws lp::Error
+  /// (without a source name: the caller adds it) when the frame does not fit the layout or the
+  /// reduction, or when its coefficients are not finite.
   FrameLighting process(const Frame& frame, Executor* executor = nullptr,
                         const Image* linear = nullptr);
 

@@ -147,8 +147,8 @@ class CapturePipeline {
   void merge(Loop& s, ProcessedFrame& out) const;  ///< a bracket into radiance; the confidence
   /// Below holdBelow, after a good frame: the last good lighting stands (counted).
   bool hold(Loop& s, ProcessedFrame& out);
-  void convertForDisplay(Loop& s, ProcessedFrame& out) const;
-  /// The frame through its FrameProcessor, judged, held or smoothed.
+  /// The frame through its FrameProcessor (lighting, background, stage times), judged, held or
+  /// smoothed.
   void project(Loop& s, ProcessedFrame& out);
   void pace(Loop& s, double timestamp);  ///< --realtime: waits for the frame's time
   /// Waits on cv_ until ready(), stop, `until`, or PipelineOptions::interrupted (polled).

@@ -17,6 +17,24 @@
 
 namespace lp {
 
+/// The frame as the display draws it behind the model, made once for every caller
+/// (FrameProcessor::run): the frame itself where the display decodes it (8-bit sRGB in a layout
+/// GL draws as it is), else its linear copy in radiance units, resampled to equirect where GL
+/// does not draw the layout (cube, mirror ball, fisheye).
+struct Background {
+  std::shared_ptr<const Frame> raw;    ///< the frame as captured; the GPU decodes sRGB
+  std::shared_ptr<const Image> image;  ///< or the linear copy
+  Layout layout = Layout::Equirect;    ///< as drawn: equirect or angular
+  /// `raw`: the linear scale of its decoded values (the exposure). `image` made from an 8-bit
+  /// frame: the scale its values carry, so the display can show it as the source looks
+  /// (gl::Renderer::setBackground); 0 for HDR frames.
+  float scale = 0.0f;
+
+  bool empty() const { return !raw && !image; }
+  int width() const { return raw ? raw->width : image ? image->width : 0; }
+  int height() const { return raw ? raw->height : image ? image->height : 0; }
+};
+
 struct ProcessedFrame {
   std::uint64_t index = 0;     ///< position in this pipeline's output, from 0
   std::uint64_t sequence = 0;  ///< the source's frame number
@@ -26,18 +44,8 @@ struct ProcessedFrame {
   /// With PipelineOptions::lights: the dominant compact lights (liveprobe/sh/lights.h), after
   /// orientation and smoothing, beside the residual `radiance`.
   std::vector<Light> lights;
-  std::shared_ptr<const Image> image;  ///< the linear frame (when PipelineOptions::keepImages)
-  /// Instead of `image`, for sRGB 8-bit frames: the frame as captured, with the linear scale
-  /// (exposure) that applies to its decoded values. The GPU decodes sRGB for display.
-  std::shared_ptr<const Frame> raw;
-  float rawScale = 1.0f;
-  /// For `image` made from an 8-bit frame: the scale its decoded values carry (0 for HDR frames),
-  /// so the display can show it as the source looks (gl::Renderer::setBackground).
-  float displayScale = 0.0f;
-  /// The layout `image` or `raw` is drawn in: equirect or angular (a frame of any other layout
-  /// is resampled to equirect on capture's thread, Stage::Resample).
-  Layout displayLayout = Layout::Equirect;
-  StageTimes times;  ///< capture's stages; the viewer adds its own
+  Background background;  ///< when PipelineOptions::keepImages
+  StageTimes times;       ///< capture's stages; the viewer adds its own
   std::size_t saturated = 0;
   /// How far this frame's lighting can be trusted (clipped power, the bracket's agreement).
   FrameConfidence confidence;

@@ -4,6 +4,7 @@
 // where a frame's time went (the per-frame records, the HUD's plot, the summary, `liveprobe bench`)
 // reads its stages from here.
 #include <array>
+#include <chrono>
 #include <cstddef>
 #include <string_view>
 
@@ -47,6 +48,33 @@ struct StageTimes {
 
   double& operator[](Stage s) { return ms[std::size_t(s)]; }
   double operator[](Stage s) const { return ms[std::size_t(s)]; }
+  /// Adds `other`'s stages to these.
+  StageTimes& operator+=(const StageTimes& other) {
+    for (std::size_t i = 0; i < kStageCount; ++i) ms[i] += other.ms[i];
+    return *this;
+  }
+};
+
+/// The one stage timer of the frame path (FrameProcessor::run, the capture pipeline, bench): a
+/// frame's work timed as laps on the steady clock, each lap's time added to its stage.
+class StageClock {
+ public:
+  using Clock = std::chrono::steady_clock;
+  StageClock() : last_(Clock::now()) {}
+  /// Starts the next lap now: what ran since the last lap goes to no stage.
+  void skip() { last_ = Clock::now(); }
+  /// The time since the last lap (or the clock's start, or skip()) goes to `s`; returns it, ms.
+  double lap(Stage s) {
+    const auto now = Clock::now();
+    const double ms = std::chrono::duration<double, std::milli>(now - last_).count();
+    times[s] += ms;
+    last_ = now;
+    return ms;
+  }
+  StageTimes times;
+
+ private:
+  Clock::time_point last_;
 };
 
 }  // namespace lp
