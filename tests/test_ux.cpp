@@ -767,6 +767,26 @@ TEST(CommandLine, EachOptionNameSetsOneField) {
   EXPECT_EQ(a.settings().camera.format, lp::CameraFormat::Yuyv);
 }
 
+// The camera's options are capture's own settings (lp::CameraSettings), set as the line is read:
+// live and calibrate hand them to the camera as they are, with the device, --size and --fps.
+TEST(CommandLine, CameraOptionsAreCapturesCameraSettings) {
+  static_assert(std::is_same_v<decltype(lp::cli::Settings::camera), lp::CameraSettings>);
+  const auto& all = lp::cli::commands();
+  for (const char* name : {"live", "calibrate"}) {
+    const auto c =
+        std::find_if(all.begin(), all.end(), [&](const auto& x) { return x.spec.name == name; });
+    ASSERT_NE(c, all.end());
+    std::vector<std::string> argv = {"--pixel-format", "nv12", "--mjpeg-reduce", "4",
+                                     "--timeout",      "0.25", "/dev/video0"};
+    if (std::string(name) == "calibrate") argv.insert(argv.end(), {"--out", "r.json"});
+    const lp::cli::Args a(c->spec, argv);
+    const lp::CameraSettings& cs = a.settings().camera;
+    EXPECT_EQ(cs.format, lp::CameraFormat::Nv12) << name;
+    EXPECT_EQ(cs.mjpegReduce, 4) << name;
+    EXPECT_EQ(cs.timeoutMs, 250) << name;
+  }
+}
+
 TEST(CommandLine, RefusalsAreOneLineWithExit1) {
   expectOneLineError("frobnicate", "frobnicate", "unknown command");
   expectOneLineError("render --coeff L00=1 --bogus", "--bogus", "unknown option");

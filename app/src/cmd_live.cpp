@@ -38,7 +38,7 @@ std::vector<OptionSpec> cameraOptions() {
       true,
       g};
   lock.set = [](Settings& s, const std::string& v) {
-    s.camera.lockExposure = v.empty() ? 2.0 : parseNumberIn("--lock-exposure", v, {0, 3600});
+    s.live.lockExposure = v.empty() ? 2.0 : parseNumberIn("--lock-exposure", v, {0, 3600});
   };
   return {choiceOption("--pixel-format", "pixel format (auto: MJPEG first)",
                        {"mjpeg", "yuyv", "nv12", "rgb24", "auto"}, "auto", LP_FIELD(camera.format),
@@ -49,29 +49,33 @@ std::vector<OptionSpec> cameraOptions() {
           choiceOption("--mjpeg-reduce", "decode MJPEG at a reduced scale", {"1", "2", "4", "8"},
                        "1", LP_FIELD(camera.mjpegReduce), g,
                        [](const std::string& v) { return std::stoi(v); }),
-          numberOption("--timeout", "SECONDS", "stop when no frame arrives for this long",
-                       {0.01, 3600}, "2", LP_FIELD(camera.timeout), g),
+          [&] {  // capture's field, in ms
+            const Range r{0.01, 3600};
+            OptionSpec o = declared(
+                "--timeout", "SECONDS",
+                withRange("stop when no frame arrives for this long", rangeText(r), "2"), g);
+            o.set = [r](Settings& s, const std::string& v) {
+              s.camera.timeoutMs = int(std::lround(1000 * parseNumberIn("--timeout", v, r)));
+            };
+            return o;
+          }(),
           textOption("--metadata", "DEVICE",
                      "the camera's UVC metadata node, which says each frame's exposure (default: "
                      "the node after DEVICE, as uvcvideo numbers them)",
-                     LP_FIELD(camera.metadata), g)};
+                     LP_FIELD(live.metadata), g)};
 }
 
 #if LIVEPROBE_WITH_V4L2
 CameraSettings cameraSettingsFrom(const std::string& device, const Settings& s) {
-  const CameraOptions& c = s.camera;
-  CameraSettings cs;
+  CameraSettings cs = s.camera;
   cs.device = device;
-  cs.format = c.format;
   if (s.output.size) std::tie(cs.width, cs.height) = *s.output.size;
   cs.fps = s.stream.fps.value_or(0.0);
-  cs.mjpegReduce = c.mjpegReduce;
-  cs.timeoutMs = int(1000 * c.timeout);
   return cs;
 }
 
 /// Settles auto exposure for --lock-exposure's seconds (default 2), locks, and says what it locked.
-LockedExposure lockExposure(const CameraOptions& c, V4l2Source& camera, const char* command) {
+LockedExposure lockExposure(const LiveSettings& c, V4l2Source& camera, const char* command) {
   const double settle = c.lockExposure.value_or(2.0);
   const LockedExposure l = camera.lockExposure(settle);
   auto show = [](const std::optional<std::int32_t>& v) {
@@ -159,7 +163,7 @@ const CommandSpec kLiveSpec{
                          false,
                          false,
                          g};
-      bracket.set = [](Settings& s, const std::string& v) { s.camera.bracket = bracketStops(v); };
+      bracket.set = [](Settings& s, const std::string& v) { s.live.bracket = bracketStops(v); };
       o.insert(
           o.end(),
           {bracket,
@@ -169,7 +173,7 @@ const CommandSpec kLiveSpec{
                       "a bracket: .mkv or .png frames",
                       {".mkv", ".avi", ".mp4", ".exr", ".hdr", ".png"}, LP_FIELD(stream.record), g),
            sizeOption("--view-size", "window or frame size", 16384, "1280x720; headless 640x360",
-                      LP_FIELD(camera.viewSize), "Output")});
+                      LP_FIELD(live.viewSize), "Output")});
       auto scene = sceneOptions();
       o.insert(o.end(), scene.begin(), scene.end());
       return o;
@@ -179,9 +183,8 @@ const CommandSpec kLiveSpec{
     "a V4L2 video-capture node, e.g. /dev/video0",
     [](const Settings& s) {
       checkStreamOptions(s);
-      if (s.camera.metadata && s.camera.bracket.empty())
-        throw Error("--metadata goes with --bracket");
-      if (!s.camera.bracket.empty() && s.stream.record) try {
+      if (s.live.metadata && s.live.bracket.empty()) throw Error("--metadata goes with --bracket");
+      if (!s.live.bracket.empty() && s.stream.record) try {
           checkBracketRecording(*s.stream.record);
         } catch (const Error& e) {
           throw Error(std::string("--record ") + e.what());
@@ -193,9 +196,8 @@ int runLive(const Args& a) {
   const Settings& s = a.settings();
   layoutSpec(s.panorama);
   CameraSettings cs = cameraSettingsFrom(a.positional()[0], s);
-  const std::vector<double>& stops = s.camera.bracket;
-  if (!stops.empty())
-    cs.metadataDevice = s.camera.metadata.value_or(siblingMetadataNode(cs.device));
+  const std::vector<double>& stops = s.live.bracket;
+  if (!stops.empty()) cs.metadataDevice = s.live.metadata.value_or(siblingMetadataNode(cs.device));
   cs.onWarning = [](const std::string& w) { warn(w); };
   auto camera = std::make_unique<V4l2Source>(cs);
   try {
@@ -203,7 +205,7 @@ int runLive(const Args& a) {
   } catch (const Error&) {
     // Without a metadata node (most webcams), exposures are measured from the frames; one named
     // with --metadata must work.
-    if (cs.metadataDevice.empty() || s.camera.metadata) throw;
+    if (cs.metadataDevice.empty() || s.live.metadata) throw;
     cs.metadataDevice.clear();
     camera = std::make_unique<V4l2Source>(cs);
     camera->start();
@@ -212,7 +214,7 @@ int runLive(const Args& a) {
                s.output.frames || s.output.duration ? "" : "; running until Ctrl-C");
   // Bracketing counts its stops from a locked exposure.
   LockedExposure locked;
-  if (s.camera.lockExposure || !stops.empty()) locked = lockExposure(s.camera, *camera, "live");
+  if (s.live.lockExposure || !stops.empty()) locked = lockExposure(s.live, *camera, "live");
   if (!stops.empty())
     startBracket(*camera, stops, locked.exposure100us.value_or(1),
                  responseOption(s.stream).value_or(CameraResponse::srgb()));
@@ -240,7 +242,7 @@ OptionSpec stopsOption() {
     const auto r = parseNumberList(v, "--stops", 2, "LO,HI");
     if (!(r[0] < r[1]) || r[0] < -20 || r[1] > 20)
       throw Error("--stops " + v + ": expected LO,HI with -20 <= LO < HI <= 20");
-    s.camera.stops = {r[0], r[1]};
+    s.live.stops = {r[0], r[1]};
   };
   return o;
 }
@@ -263,7 +265,7 @@ const CommandSpec kCalibrateSpec{
            integerOption("--settle", "N",
                          "frames to let pass after each change before one is kept; a camera "
                          "whose metadata reports exposures keeps the first that shows the new one",
-                         1, 60, "8", LP_FIELD(camera.settle), kCameraGroup)});
+                         1, 60, "8", LP_FIELD(live.settle), kCameraGroup)});
       return o;
     }(),
     1,
@@ -277,22 +279,22 @@ const CommandSpec kCalibrateSpec{
 int runCalibrate(const Args& a) {
   const Settings& s = a.settings();
   CameraSettings cs = cameraSettingsFrom(a.positional()[0], s);
-  const auto& range = s.camera.stops;
-  const int settle = s.camera.settle;
+  const auto& range = s.live.stops;
+  const int settle = s.live.settle;
   // The metadata node when there is one (frames then say their exposure); the settle otherwise.
-  cs.metadataDevice = s.camera.metadata.value_or(siblingMetadataNode(cs.device));
+  cs.metadataDevice = s.live.metadata.value_or(siblingMetadataNode(cs.device));
   auto camera = std::make_unique<V4l2Source>(cs);
   try {
     camera->start();
   } catch (const Error&) {
-    if (s.camera.metadata) throw;
+    if (s.live.metadata) throw;
     cs.metadataDevice.clear();
     camera = std::make_unique<V4l2Source>(cs);
     camera->start();
   }
   std::fprintf(stderr, "liveprobe calibrate: %s%s\n", camera->describe().c_str(),
                camera->reportsExposure() ? "; frames report their exposure" : "");
-  const LockedExposure locked = lockExposure(s.camera, *camera, "calibrate");
+  const LockedExposure locked = lockExposure(s.live, *camera, "calibrate");
   if (!locked.exposure100us)
     throw Error(cs.device + ": the camera has no exposure time control " +
                 "(V4L2_CID_EXPOSURE_ABSOLUTE): it cannot be calibrated");

@@ -337,8 +337,9 @@ StreamPlan planStream(const Settings& s, const FrameSource& source, bool live) {
   p.mesh = meshFrom(s.scene);
   p.fps = source.fps();
   p.description = source.describe();
-  const std::optional<Size> asked = live ? s.camera.viewSize : s.output.size;  // live: --size
-  p.size = asked.value_or(Size{1280, 720});                                    // is the camera's
+  // live: --view-size (its --size is the camera's)
+  const std::optional<Size> asked = live ? s.live.viewSize : s.output.size;
+  p.size = asked.value_or(Size{1280, 720});
   p.headlessSize = asked.value_or(Size{640, 360});
   PipelineOptions& opt = p.opt;
   if (s.output.duration) {

@@ -94,15 +94,14 @@ struct StreamSettings {
   double holdBelow = 0.0;
 };
 
-/// A V4L2 camera (cameraOptions, live and calibrate).
-struct CameraOptions {
-  CameraFormat format = CameraFormat::Auto;
-  std::optional<Size> viewSize;        ///< --view-size (the camera's: --size, output.size)
-  std::optional<double> lockExposure;  ///< seconds to settle, when --lock-exposure is given
-  int mjpegReduce = 1;
-  double timeout = 2.0;
-  std::optional<std::string> metadata;
-  std::vector<double> bracket;  ///< stops, when given
+/// What live and calibrate do with a camera besides opening it (the device's own settings are
+/// capture's lp::CameraSettings, Settings::camera: --pixel-format, --mjpeg-reduce, --timeout;
+/// its size and rate are --size and --fps).
+struct LiveSettings {
+  std::optional<Size> viewSize;         ///< --view-size
+  std::optional<double> lockExposure;   ///< seconds to settle, when --lock-exposure is given
+  std::optional<std::string> metadata;  ///< --metadata (none: the node after the device's)
+  std::vector<double> bracket;          ///< stops, when given
   std::array<double, 2> stops = {-6, 3};
   int settle = 8;
 };
@@ -140,7 +139,8 @@ struct Settings {
   SceneSettings scene;
   OutputSettings output;
   StreamSettings stream;
-  CameraOptions camera;
+  CameraSettings camera;  ///< the V4L2 camera's (cameraOptions; device, size and rate at open)
+  LiveSettings live;
   StillSettings still;
   BenchSettings bench;
 };
