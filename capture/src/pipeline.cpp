@@ -134,9 +134,10 @@ struct CapturePipeline::Loop {
   ShSmoother smoother;
   LightSmoother lightSmoother;
   std::unique_ptr<ThreadPool> pool;
-  /// The frame in hand: shared with the background that shows it as it is (then the next
-  /// grab takes a new one).
+  /// The frame in hand. Handed over as the background that shows it as it is (`shown`), it is
+  /// the viewer's: the next grab takes a new one, and capture never writes it again.
   std::shared_ptr<Frame> frame = std::make_shared<Frame>();
+  bool shown = false;
   std::uint64_t index = 0;
   Clock::time_point wallStart;
   double streamStart = -1, loopOffset = 0, lastTimestamp = 0;
@@ -153,7 +154,7 @@ bool CapturePipeline::waitForTurn(Loop& s) {
 }
 
 bool CapturePipeline::grab(Loop& s) {
-  if (s.frame.use_count() > 1) s.frame = std::make_shared<Frame>();  // the last one is shown
+  if (s.shown) s.frame = std::make_shared<Frame>(), s.shown = false;
   Frame& frame = *s.frame;
   if (!source_->next(frame)) {
     if (!(opt_.loop && source_->rewind() && source_->next(frame))) return false;
@@ -199,6 +200,7 @@ void CapturePipeline::project(Loop& s, ProcessedFrame& out) {
   out.times += r.times;
   out.saturated = r.saturated;
   out.background = std::move(r.background);
+  s.shown = out.background.raw != nullptr;
   FrameLighting& lit = r.lighting;
   // A merged bracket judged itself; a single frame is judged by its clipped pixels. A bracket
   // whose brightest pixel clipped in every exposure has its strongest light's power as a lower
