@@ -55,12 +55,13 @@ def real_client(port):
     """GET / to the end of the page, then a WebSocket's upgrade and first frame; the seconds it
     took, or None where it was not served."""
     t0 = time.monotonic()
-    try:
-        if not (http_get(port) and websocket_frame(port)):
-            return None
-    except OSError:
-        return None
-    return time.monotonic() - t0
+    for _ in range(2):  # a browser retries a connection reset in the flood's first burst
+        try:
+            if http_get(port) and websocket_frame(port):
+                return time.monotonic() - t0
+        except OSError:
+            pass
+    return None
 
 
 def main():
