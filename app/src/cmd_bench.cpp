@@ -419,7 +419,8 @@ void onGpuTimer(BenchScene& scene, gl::GpuTimer::Stage stage, F work) {
 struct RunState {
   explicit RunState(const BenchScene& scene)
       : processor({scene.layout, scene.photometry, scene.orientation, 1, {.maxLights = 0}}) {}
-  std::shared_ptr<Frame> frame = std::make_shared<Frame>();  ///< the background shares it
+  std::shared_ptr<Frame> frame = std::make_shared<Frame>();   ///< the background shares it
+  std::shared_ptr<Image> linear = std::make_shared<Image>();  ///< its linear copy, reused
   FrameProcessor processor;  ///< the frame path every command shares
   float exposure = 1.0f;     ///< from the first frame's irradiance
   Sh9 last;                  ///< the last frame's coefficients (in the report)
@@ -466,7 +467,9 @@ BenchTimes timeFrame(BenchScene& scene, RunState& run, FrameSource& source,
   Sh9 sh;
   FrameResult r;
   try {
-    r = run.processor.run(run.frame, {.background = true, .project = !scene.gpuProjection}, &pool);
+    r = run.processor.run(
+        run.frame, {.background = true, .project = !scene.gpuProjection, .linearInto = run.linear},
+        &pool);
     clock.skip();  // (timed by run() itself)
     clock.times += r.times;
     if (scene.gpuProjection) {

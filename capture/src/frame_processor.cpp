@@ -106,7 +106,7 @@ FrameResult FrameProcessor::run(std::shared_ptr<const Frame> frame, const FrameR
   const bool asIs = request.background && displayTakesFrameAsIs(f, opt_.photometry, opt_.layout);
   std::shared_ptr<Image> linear;
   if (request.linear || (request.background && !asIs)) {
-    linear = std::make_shared<Image>();
+    linear = request.linearInto ? request.linearInto : std::make_shared<Image>();
     r.saturated = linearizer_.convert(f, *linear);
   } else if (request.saturation) {
     r.saturated = countSaturated(f);

@@ -50,6 +50,9 @@ struct FrameRequest {
   /// Project on the CPU; false: the caller projects view() elsewhere (the GPU), and the result's
   /// lighting is left empty.
   bool project = true;
+  /// Where the linear copy goes: a buffer of the caller's that nothing else reads any more (bench
+  /// reuses one from frame to frame); none: a new one, as a frame handed to another thread needs.
+  std::shared_ptr<Image> linearInto = nullptr;
 };
 
 /// A frame's whole result.
