@@ -60,30 +60,6 @@ void UniqueFd::reset(int fd) {
   fd_ = fd;
 }
 
-std::string_view cameraFormatName(CameraFormat f) {
-  switch (f) {
-    case CameraFormat::Auto:
-      return "auto";
-    case CameraFormat::Mjpeg:
-      return "mjpeg";
-    case CameraFormat::Yuyv:
-      return "yuyv";
-    case CameraFormat::Nv12:
-      return "nv12";
-    case CameraFormat::Rgb24:
-      return "rgb24";
-  }
-  return "?";
-}
-
-CameraFormat parseCameraFormat(std::string_view name) {
-  for (CameraFormat f : {CameraFormat::Auto, CameraFormat::Mjpeg, CameraFormat::Yuyv,
-                         CameraFormat::Nv12, CameraFormat::Rgb24})
-    if (cameraFormatName(f) == name) return f;
-  throw Error("unknown camera format " + std::string(name) +
-              " (expected mjpeg, yuyv, nv12, rgb24 or auto)");
-}
-
 // One memory-mapped buffer; unmapped when destroyed.
 struct V4l2Source::Buffer {
   void* start = MAP_FAILED;

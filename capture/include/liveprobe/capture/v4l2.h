@@ -19,6 +19,7 @@
 
 #include "liveprobe/capture/frame.h"
 #include "liveprobe/capture/hdr_merge.h"
+#include "liveprobe/sh/error.h"
 
 namespace lp {
 
@@ -50,9 +51,31 @@ class UniqueFd {
 
 /// The pixel formats liveprobe converts, as V4L2 fourcc codes.
 enum class CameraFormat : std::uint8_t { Auto, Mjpeg, Yuyv, Nv12, Rgb24 };
-std::string_view cameraFormatName(CameraFormat f);
-/// "mjpeg", "yuyv", "nv12", "rgb24" or "auto"; throws lp::Error.
-CameraFormat parseCameraFormat(std::string_view name);
+inline std::string_view cameraFormatName(CameraFormat f) {
+  switch (f) {
+    case CameraFormat::Auto:
+      return "auto";
+    case CameraFormat::Mjpeg:
+      return "mjpeg";
+    case CameraFormat::Yuyv:
+      return "yuyv";
+    case CameraFormat::Nv12:
+      return "nv12";
+    case CameraFormat::Rgb24:
+      return "rgb24";
+  }
+  return "?";
+}
+
+/// "mjpeg", "yuyv", "nv12", "rgb24" or "auto"; throws lp::Error. (Inline: the command line
+/// reads it in every build, with V4L2 or without.)
+inline CameraFormat parseCameraFormat(std::string_view name) {
+  for (CameraFormat f : {CameraFormat::Auto, CameraFormat::Mjpeg, CameraFormat::Yuyv,
+                         CameraFormat::Nv12, CameraFormat::Rgb24})
+    if (cameraFormatName(f) == name) return f;
+  throw Error("unknown camera format " + std::string(name) +
+              " (expected mjpeg, yuyv, nv12, rgb24 or auto)");
+}
 
 /// One buffer as a camera filled it, in the format negotiated with VIDIOC_S_FMT.
 struct CameraBuffer {
