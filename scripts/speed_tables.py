@@ -70,10 +70,11 @@ for (layout, kind, w, h, threads), by_path in sorted(rows.items()):
               f"{best / bound:.2f}" if bound else ""]
     print("| " + " | ".join(cells) + " |")
 
-# Merge/bracket:3/u8/WxH/threads:T/{merge,turning,project}/real_time
+# Merge/bracket:3/u8/WxH/threads:T/{merge,turning,project,merge+project}/real_time
 merges = {}
 for name, t in medians.items():
-    m = re.match(r"Merge/bracket:(\d+)/u8/(\d+)x(\d+)/threads:(\d+)/(merge|turning|project)/", name)
+    m = re.match(r"Merge/bracket:(\d+)/u8/(\d+)x(\d+)/threads:(\d+)/"
+                 r"(merge|turning|project|merge\+project)/", name)
     if m:
         n, w, h, threads, part = m.groups()
         merges.setdefault((int(w), int(h), int(threads), int(n)), {})[part] = t
@@ -81,14 +82,18 @@ if merges:
     print()
     print("| bracket merge (8-bit sRGB) | still camera (the synthetic sky at -12, -6, 0 EV) | "
           "turning camera (quarry_01 at -13, -6.5, 0 EV, 1 degree a frame) | projection of the "
-          "merged frame | still merge / projection |")
-    print("|---|---|---|---|---|")
+          "merged frame | still merge / projection | still merge projecting as it merges, no "
+          "frame written | that / projection |")
+    print("|---|---|---|---|---|---|---|")
     for (w, h, threads, n), parts in sorted(merges.items()):
         merge, turning, project = parts.get("merge"), parts.get("turning"), parts.get("project")
+        fused = parts.get("merge+project")
         ratio = f"{merge / project:.1f}" if merge and project else ""
+        fusedRatio = f"{fused / project:.1f}" if fused and project else ""
         print(f"| {w}x{h}, {n} exposures, {threads} thread{'s' if threads > 1 else ''} | "
               f"{fmt(merge) if merge else ''} | {fmt(turning) if turning else ''} | "
-              f"{fmt(project) if project else ''} | {ratio} |")
+              f"{fmt(project) if project else ''} | {ratio} | {fmt(fused) if fused else ''} | "
+              f"{fusedRatio} |")
 
 print()
 print("| other benchmarks | median |")

@@ -22,6 +22,7 @@
 #endif
 #include "liveprobe/sh/error.h"
 #include "liveprobe/sh/lights.h"
+#include "liveprobe/sh/projector.h"
 #include "liveprobe/sh/simd.h"
 #include "turned_map.h"
 
@@ -528,4 +529,72 @@ TEST(HdrMerge, ATurningCamerasFramesAreAlignedBeforeTheyMerge) {
       else
         EXPECT_LT(within, frames) << "axis " << axis[0] << ": the scene turns too little to tell";
     }
+}
+
+// A merge that projects as it goes gives the coefficients the projector gives of the frame it
+// merged, on every SIMD path: a still bracket cropped to a width of no whole block or vector, and
+// a turning camera whose older frames are turned before they merge; with the frame written and
+// without, and the confidence the same.
+TEST(HdrMerge, ProjectingAsItMergesGivesTheMergedFramesCoefficients) {
+  const lp::Image full =
+      lp::loadImage(std::string(LIVEPROBE_DATA_DIR) + "/equirect/quarry_01_1k.hdr");
+  const lp::Image map = lp::reduceEquirect(full.rgb.data(), full.width, full.height, 4);
+  const double axis[3] = {0.57735, 0.57735, 0.57735};
+  std::vector<Frame> turning, still;
+  for (int n = 0; n < 8; ++n)
+    turning.push_back(shootImage(lpt::turnedMap(map, axis, 2 * n), 0.05 * std::exp2(-6 * (n % 3)),
+                                 std::uint64_t(n)));
+  constexpr int w = 125;
+  for (int n = 0; n < 5; ++n) {
+    Frame f = shootSrgb(scene(30 + 3 * n), std::array{1.0, 1.0 / 64, 1.0 / 4096}[n % 3]);
+    for (int y = 0; y < kH; ++y)
+      std::memmove(&f.bgr8[std::size_t(y) * w * 3], &f.bgr8[std::size_t(y) * kW * 3], w * 3);
+    f.bgr8.resize(std::size_t(w) * kH * 3), f.width = w, f.sequence = std::uint64_t(n);
+    still.push_back(std::move(f));
+  }
+  const std::string before = lp::simd::current();
+  for (const std::string& path : lp::simd::available()) {
+    lp::simd::select(path);
+    for (const auto* frames : {&still, &turning}) {
+      const lp::Projector projector(lp::Layout::Equirect, frames->front().width,
+                                    frames->front().height);
+      BracketMerger plain(MergeOptions{.frames = 3}), keeping(MergeOptions{.frames = 3}),
+          projecting(MergeOptions{.frames = 3});
+      Frame merged, kept, bare;
+      for (const Frame& f : *frames) {
+        const FrameConfidence c = plain.add(f, merged);
+        lp::MergeProjection withFrame{.integrals = projector.equirectIntegrals()};
+        lp::MergeProjection alone{.integrals = projector.equirectIntegrals(), .keepFrame = false};
+        const FrameConfidence ck = keeping.add(f, kept, nullptr, withFrame);
+        const FrameConfidence cb = projecting.add(f, bare, nullptr, alone);
+        const std::string at = path + " frame " + std::to_string(f.sequence);
+        ASSERT_EQ(kept.rgb, merged.rgb) << at;
+        EXPECT_TRUE(bare.rgb.empty()) << at;
+        EXPECT_EQ(bare.width, merged.width) << at;
+        EXPECT_EQ(bare.captureTime, merged.captureTime) << at;
+        for (const FrameConfidence& o : {ck, cb}) {
+          EXPECT_EQ(o.value(), c.value()) << at;
+          EXPECT_EQ(o.brightestMeasured, c.brightestMeasured) << at;
+        }
+        const lp::Sh9 truth = projector.project(
+            lp::PanoramaView::rgbF32(merged.rgb.data(), merged.width, merged.height));
+        const float l00 = std::max({truth.c[0].r, truth.c[0].g, truth.c[0].b});
+        ASSERT_GT(l00, 0.0f) << at;
+        for (int k = 0; k < lp::kShCount; ++k)
+          for (int ch = 0; ch < 3; ++ch) {
+            EXPECT_NEAR(withFrame.coefficients.c[k][ch], truth.c[k][ch], 1e-5f * l00)
+                << at << " coefficient " << k << " channel " << ch;
+            EXPECT_NEAR(alone.coefficients.c[k][ch], truth.c[k][ch], 1e-5f * l00)
+                << at << " coefficient " << k << " channel " << ch;
+          }
+      }
+    }
+  }
+  lp::simd::select(before);
+  // A projection of another size is refused.
+  const lp::Projector other(lp::Layout::Equirect, 64, 32);
+  lp::MergeProjection wrong{.integrals = other.equirectIntegrals()};
+  BracketMerger merger(MergeOptions{.frames = 3});
+  Frame out;
+  EXPECT_THROW(merger.add(still.front(), out, nullptr, wrong), lp::Error);
 }

@@ -1,6 +1,7 @@
 // The stream side of capture: SH rotation, smoothing, the latest-value handoff, sources.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <iostream>
@@ -10,6 +11,7 @@
 
 #include "liveprobe/capture/frame.h"
 #include "liveprobe/capture/frame_processor.h"
+#include "liveprobe/capture/hdr_merge.h"
 #include "liveprobe/capture/image.h"
 #include "liveprobe/capture/pipeline.h"
 #include "liveprobe/capture/recorder.h"
@@ -314,6 +316,92 @@ TEST(Background, ThePipelineDrawsFrameProcessorRunsBackground) {
       EXPECT_EQ(a.image->height, b.image->height);
       EXPECT_EQ(a.image->rgb, b.image->rgb);
       EXPECT_EQ(a.image->width, 2 * a.image->height) << "drawn as equirect";
+    }
+  }
+}
+
+// A bracketing camera's frames, shot here from a float map at three exposures through the sRGB
+// curve, each with its exposure (Frame::radianceScale = 1 / t).
+class BracketSource : public lp::FrameSource {
+ public:
+  explicit BracketSource(const lp::Image& map) {
+    for (int n = 0; n < 7; ++n) {
+      const double t = 0.5 * std::exp2(-6.0 * (n % 3));
+      lp::Frame f;
+      f.format = lp::PanoramaFormat::BgrU8;
+      f.width = map.width, f.height = map.height;
+      f.radianceScale = 1.0 / t;
+      f.sequence = std::uint64_t(n), f.timestamp = n / 30.0;
+      f.bgr8.resize(map.rgb.size());
+      for (std::size_t i = 0; i < map.rgb.size(); i += 3)
+        for (std::size_t c = 0; c < 3; ++c)
+          f.bgr8[i + 2 - c] = std::uint8_t(std::lround(
+              255.0f * lp::linearToSrgb(std::clamp(float(map.rgb[i + c] * t), 0.0f, 1.0f))));
+      frames_.push_back(std::move(f));
+    }
+  }
+  bool next(lp::Frame& frame) override {
+    if (at_ == frames_.size()) return false;
+    frame = frames_[at_++];
+    return true;
+  }
+  bool rewind() override { return at_ = 0, true; }
+  std::string describe() const override { return "bracket"; }
+  double fps() const override { return 30; }
+  int bracketFrames() const override { return 3; }
+  const std::vector<lp::Frame>& frames() const { return frames_; }
+
+ private:
+  std::vector<lp::Frame> frames_;
+  std::size_t at_ = 0;
+};
+
+// A bracket merged and projected in one pass, in the pipeline, with the float frame written
+// (a display) and without: each frame's coefficients are those of the merged frame projected
+// through the one frame path (exposure and orientation applied once), and the display's
+// background is the merged frame.
+TEST(Bracket, ThePipelinesOnePassIsTheMergedFrameProjected) {
+  const lp::Image map =
+      lp::loadImage(std::string(LIVEPROBE_DATA_DIR) + "/probes/latlong_256x128/grace.hdr");
+  const BracketSource shots(map);
+  const lp::Photometry photometry{.exposure = 2.0f};
+  const glm::mat3 turn = lp::rotationYawPitchRoll(10, 20, 30);
+  std::vector<lp::Sh9> truth;
+  {
+    lp::BracketMerger merger(lp::MergeOptions{.frames = 3});
+    lp::FrameProcessor processor(
+        {lp::LayoutSpec(lp::Layout::Equirect), photometry, turn, 1, {.maxLights = 0}});
+    lp::Frame merged;
+    for (const lp::Frame& f : shots.frames()) {
+      merger.add(f, merged);
+      truth.push_back(processor.process(merged).radiance);
+    }
+  }
+  for (const bool keepImages : {false, true}) {
+    SCOPED_TRACE(keepImages ? "with the frame" : "without the frame");
+    lp::PipelineOptions opt;
+    opt.layout = lp::LayoutSpec(lp::Layout::Equirect);
+    opt.photometry = photometry;
+    opt.rotation = turn;
+    opt.handoff = lp::Handoff::Every;
+    opt.keepImages = keepImages;
+    opt.bracket = lp::MergeOptions{.frames = 3};
+    lp::CapturePipeline pipe(std::make_unique<BracketSource>(map), opt);
+    pipe.start();
+    for (std::size_t n = 0; n < truth.size(); ++n) {
+      const auto out = pipe.waitNext();
+      ASSERT_TRUE(out.has_value()) << "frame " << n << ": " << pipe.stats().error;
+      const float l00 = std::max({truth[n].c[0].r, truth[n].c[0].g, truth[n].c[0].b});
+      for (int k = 0; k < lp::kShCount; ++k)
+        for (int c = 0; c < 3; ++c)
+          EXPECT_NEAR(out->unsmoothed.c[k][c], truth[n].c[k][c], 1e-5f * l00)
+              << "frame " << n << " coefficient " << k << " channel " << c;
+      if (keepImages) {
+        ASSERT_TRUE(out->background.image) << "frame " << n;
+        EXPECT_EQ(out->background.image->rgb.size(), map.rgb.size()) << "frame " << n;
+      } else {
+        EXPECT_FALSE(out->background.image || out->background.raw) << "frame " << n;
+      }
     }
   }
 }

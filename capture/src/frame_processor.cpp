@@ -73,11 +73,18 @@ FrameConfidence FrameProcessor::confidence(const Frame& frame, const FrameLighti
   return c;
 }
 
+float FrameProcessor::projectionScale(const Frame& frame) const {
+  // An 8-bit frame's lookup table carries the photometry's exposure; a float frame is scaled
+  // after its projection.
+  const float scale = float(frame.radianceScale);
+  return frame.format == PanoramaFormat::BgrU8 ? scale : scale * linearizer_.exposure();
+}
+
 FrameProcessor::ProjectedView FrameProcessor::view(const Frame& frame, const Image* linear) {
   fit(frame);
   // An 8-bit frame through the lookup table (the photometry's exposure in it) inside the
   // projection; a float frame as it is, scaled after; a reduction reads the linear copy.
-  float scale = float(frame.radianceScale);
+  const float scale = float(frame.radianceScale);
   if (opt_.reduce > 1) {
     if (!linear) {
       linearizer_.convert(frame, converted_);
@@ -91,9 +98,9 @@ FrameProcessor::ProjectedView FrameProcessor::view(const Frame& frame, const Ima
   if (frame.format == PanoramaFormat::BgrU8)
     return {PanoramaView::bgrU8(frame.bgr8.data(), frame.width, frame.height,
                                 linearizer_.table().data(), projector_->spec()),
-            scale};
+            projectionScale(frame)};
   return {PanoramaView::rgbF32(frame.rgb.data(), frame.width, frame.height, projector_->spec()),
-          scale * linearizer_.exposure()};
+          projectionScale(frame)};
 }
 
 FrameResult FrameProcessor::run(std::shared_ptr<const Frame> frame, const FrameRequest& request,

@@ -335,8 +335,10 @@ struct MergeTally {
   std::size_t dark = 0;
   float brightest = -1;
   bool brightestClipped = false;
-  bool brightestFresh = true;  ///< the newest frame itself read the brightest pixel
+  bool brightestFresh = true;             ///< the newest frame itself read the brightest pixel
+  std::array<glm::dvec3, kShCount> sh{};  ///< projecting as it merges: the coefficients' sums
   void add(const MergeTally& o) {
+    for (int k = 0; k < kShCount; ++k) sh[k] += o.sh[k];
     power += o.power, clippedPower += o.clippedPower, clippedEstimate += o.clippedEstimate;
     dark += o.dark, disagreedPower += o.disagreedPower;
     if (o.brightest > brightest)
@@ -515,12 +517,27 @@ struct BracketView {
 };
 
 FrameConfidence BracketMerger::add(const Frame& in, Frame& out, Executor* executor) {
+  MergeProjection frameOnly;
+  return add(in, out, executor, frameOnly);
+}
+
+FrameConfidence BracketMerger::add(const Frame& in, Frame& out, Executor* executor,
+                                   MergeProjection& projection) {
+  const EquirectIntegrals* project = projection.integrals;
+  if (project && (project->width != in.width || project->height != in.height))
+    throw Error("a merge projects with the integrals of its frame's size (" +
+                std::to_string(in.width) + "x" + std::to_string(in.height) + ", not " +
+                std::to_string(project->width) + "x" + std::to_string(project->height) + ")");
   push(in);
   const int w = in.width, h = in.height;
   out.format = PanoramaFormat::RgbF32;
   out.width = w, out.height = h;
   out.bgr8.clear();
-  out.rgb.resize(std::size_t(w) * h * 3);
+  const bool keep = projection.keepFrame || !project;
+  if (keep)
+    out.rgb.resize(std::size_t(w) * h * 3);
+  else
+    out.rgb.clear();
   out.sequence = in.sequence, out.timestamp = in.timestamp;
   out.captureTime = window_.front().captureTime;
   out.radianceScale = 1.0;
@@ -570,13 +587,15 @@ FrameConfidence BracketMerger::add(const Frame& in, Frame& out, Executor* execut
       [&](std::size_t y0, std::size_t y1) {
         MergeTally t;
         for (std::size_t y = y0; y < y1; ++y)
-          t.add(mergeRow(view, y, out.rgb.data() + y * std::size_t(w) * 3,
+          t.add(mergeRow(view, y, keep ? out.rgb.data() + y * std::size_t(w) * 3 : nullptr,
                          {previous + y * std::size_t(w), luminanceOut + y * std::size_t(w),
                           reference + y * std::size_t(w)},
-                         fresh));
+                         fresh, project));
         return t;
       },
       [](MergeTally& into, const MergeTally& part) { into.add(part); });
+  if (project)
+    for (int k = 0; k < kShCount; ++k) projection.coefficients.c[std::size_t(k)] = Rgb(total.sh[k]);
   FrameConfidence c = total.confidence(std::size_t(w) * h, exposures);
   // The strongest light read only by older frames (the newest clips it) is what the scene was
   // then: where the last merges found light contradicted (the scene moving), as much of it may
@@ -631,7 +650,8 @@ BracketView BracketMerger::prepare(const std::array<const std::uint8_t*, kMaxBra
 }
 
 MergeTally BracketMerger::mergeRow(const BracketView& v, std::size_t y, float* out,
-                                   const LuminanceRow& lum, bool fresh) const {
+                                   const LuminanceRow& lum, bool fresh,
+                                   const EquirectIntegrals* project) const {
   const int w = window_.back().width, h = window_.back().height;
   merge::RowInput in;
   // The usable frames, newest last (frames left out whole take no part).
@@ -651,9 +671,18 @@ MergeTally BracketMerger::mergeRow(const BracketView& v, std::size_t y, float* o
   in.nearLow = v.nearLow ? v.nearLow + y * std::size_t(w) : nullptr;
   in.nearHigh = v.nearHigh ? v.nearHigh + y * std::size_t(w) : nullptr;
   in.rgb = out;
+  if (project)
+    for (int k = 0; k < 5; ++k) in.col[k] = project->col[std::size_t(k)].data();
   const merge::RowSums s = v.kernel(in);
   const float rw = rowWeight(int(y), h, opt_.equirect);
   MergeTally t;
+  // Pixel (y, x) weighs row[kRowOf[k]][y] * col[kColOf[k]][x] (liveprobe/sh/projector.h).
+  if (project)
+    for (int k = 0; k < kShCount; ++k) {
+      const auto& cs = s.col[EquirectIntegrals::kColOf[k]];
+      t.sh[k] = glm::dvec3(cs[0], cs[1], cs[2]) *
+                double(project->row[std::size_t(EquirectIntegrals::kRowOf[k])][y]);
+    }
   t.power = s.power * rw, t.clippedPower = s.clippedPower * rw, t.disagreedPower = s.lostPower * rw;
   t.clippedEstimate = s.clippedEstimate * rw;
   t.dark = s.dark;

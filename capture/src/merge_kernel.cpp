@@ -98,12 +98,13 @@ HWY_INLINE Reading Read(DF d, const RowInput& in, const std::uint8_t* p, const f
 }
 
 // The lanes' pixels: `px[i]` the frames' bytes, `lin[i]` their linear values (Read), `valid`
-// the lanes that are pixels of the row.
+// the lanes that are pixels of the row. The merged radiance goes to `rgb` (R, G, B per pixel)
+// and to `planar` (R, then G kBlock floats on, then B, for the projection), each where not null.
 template <int M>
 void Chunk(const RowInput& in, const std::uint8_t* const* px, const float* const* lin,
            const float* previous, const float* reference, const std::uint8_t* nearLow,
-           const std::uint8_t* nearHigh, float* luminance, float* rgb, VF x, MF valid,
-           LaneSums& acc) {
+           const std::uint8_t* nearHigh, float* luminance, float* rgb, float* planar, VF x,
+           MF valid, LaneSums& acc) {
   const DF d;
   constexpr int m = M, now = m - 1;
   Reading r[kMaxFrames];
@@ -207,7 +208,11 @@ void Chunk(const RowInput& in, const std::uint8_t* const* px, const float* const
   c0 = pick(c0, n.e0, k0, lg.e0), c1 = pick(c1, n.e1, k1, lg.e1), c2 = pick(c2, n.e2, k2, lg.e2);
   const MF clipped = hn::AndNot(measured, hn::Or(hn::And(contradicted, hn::Ge(n.code, clipV)),
                                                  hn::AndNot(contradicted, hasClip)));
-  hn::StoreInterleaved3(c0, c1, c2, d, rgb);
+  if (rgb) hn::StoreInterleaved3(c0, c1, c2, d, rgb);
+  if (planar) {
+    hn::Store(c0, d, planar), hn::Store(c1, d, planar + kBlock);
+    hn::Store(c2, d, planar + 2 * kBlock);
+  }
 
   // The row's sums. What was lost: at least what the older readings say, and what the last merge
   // saw where the newest frame (turned: its neighbourhood) rules that out.
@@ -253,6 +258,14 @@ RowSums MergeRow(const RowInput& in) {
   constexpr decltype(&Chunk<1>) kChunks[kMaxFrames] = {&Chunk<1>, &Chunk<2>, &Chunk<3>, &Chunk<4>,
                                                        &Chunk<5>};
   const auto chunk = kChunks[std::clamp(in.frames, 1, kMaxFrames) - 1];
+  // The projection as the row merges: the radiance of each block, still in L1, weighed by the
+  // column integrals (as the projector's equirect kernel does), s[k][c] column sum k of channel c.
+  const bool project = in.col[0] != nullptr;
+  VF s[5][3];
+  for (auto& sk : s)
+    for (VF& v : sk) v = hn::Zero(d);
+  HWY_ALIGN float colTail[5][kBlock];
+  HWY_ALIGN float radiance[3 * kBlock];  // the block's merged radiance, planar
   for (int x0 = 0; x0 < in.width; x0 += kBlock) {
     const int count = std::min(kBlock, in.width - x0);
     // The last pixels of a row go through zero-padded copies.
@@ -278,12 +291,13 @@ RowSums MergeRow(const RowInput& in) {
     const std::uint8_t* nearLow = in.nearLow ? in.nearLow + x0 : nullptr;
     const std::uint8_t* nearHigh = in.nearHigh ? in.nearHigh + x0 : nullptr;
     float* luminance = in.luminance + x0;
-    float* rgb = in.rgb + 3 * x0;
+    float* rgb = in.rgb ? in.rgb + 3 * x0 : nullptr;
     if (!whole) {
       std::fill(prev, prev + kBlock, 0.0f), std::fill(ref, ref + kBlock, 0.0f);
       std::memcpy(prev, previous, sizeof(float) * std::size_t(count));
       std::memcpy(ref, reference, sizeof(float) * std::size_t(count));
-      previous = prev, reference = ref, luminance = lum, rgb = out;
+      previous = prev, reference = ref, luminance = lum;
+      if (rgb) rgb = out;
       if (nearLow) {
         std::memset(low, 0, sizeof low), std::memset(high, 0, sizeof high);
         std::memcpy(low, nearLow, std::size_t(count)),
@@ -296,13 +310,33 @@ RowSums MergeRow(const RowInput& in) {
       const float* linAt[kMaxFrames];
       for (int i = 0; i < in.frames; ++i) pxAt[i] = px[i] + 3 * x, linAt[i] = lin[i] + x;
       chunk(in, pxAt, linAt, previous + x, reference + x, nearLow ? nearLow + x : nullptr,
-            nearHigh ? nearHigh + x : nullptr, luminance + x, rgb + 3 * x,
-            hn::Add(iota, hn::Set(d, float(x0 + x))),
+            nearHigh ? nearHigh + x : nullptr, luminance + x, rgb ? rgb + 3 * x : nullptr,
+            project ? radiance + x : nullptr, hn::Add(iota, hn::Set(d, float(x0 + x))),
             hn::FirstN(d, std::size_t(std::clamp(count - x, 0, lanes))), acc);
+    }
+    if (project) {
+      const float* col[5];
+      for (int k = 0; k < 5; ++k) {
+        col[k] = in.col[k] + x0;
+        if (!whole) {
+          std::fill(colTail[k], colTail[k] + kBlock, 0.0f);
+          std::memcpy(colTail[k], col[k], sizeof(float) * std::size_t(count));
+          col[k] = colTail[k];
+        }
+      }
+      for (int x = 0; x < kBlock; x += lanes) {
+        const VF r = hn::Load(d, radiance + x), g = hn::Load(d, radiance + kBlock + x),
+                 b = hn::Load(d, radiance + 2 * kBlock + x);
+        for (int k = 0; k < 5; ++k) {
+          const VF wk = hn::LoadU(d, col[k] + x);
+          s[k][0] = hn::MulAdd(wk, r, s[k][0]), s[k][1] = hn::MulAdd(wk, g, s[k][1]);
+          s[k][2] = hn::MulAdd(wk, b, s[k][2]);
+        }
+      }
     }
     if (!whole) {
       std::memcpy(in.luminance + x0, lum, sizeof(float) * std::size_t(count));
-      std::memcpy(in.rgb + 3 * x0, out, sizeof(float) * std::size_t(3 * count));
+      if (in.rgb) std::memcpy(in.rgb + 3 * x0, out, sizeof(float) * std::size_t(3 * count));
     }
   }
   // The lanes, summed in double; the brightest is the first pixel of the largest luminance.
@@ -310,17 +344,23 @@ RowSums MergeRow(const RowInput& in) {
   const VF all[8] = {acc.power, acc.clippedPower, acc.clippedEstimate, acc.lostPower,
                      acc.best,  acc.bestClipped,  acc.bestFresh,       acc.bestX};
   for (int k = 0; k < 8; ++k) hn::Store(all[k], d, v[k]);
-  RowSums s;
-  s.dark = acc.dark;
+  RowSums sums;
+  sums.dark = acc.dark;
   float firstX = 0;
   for (int j = 0; j < lanes; ++j) {
-    s.power += v[0][j], s.clippedPower += v[1][j], s.clippedEstimate += v[2][j];
-    s.lostPower += v[3][j];
-    if (v[4][j] > s.brightest || (v[4][j] == s.brightest && v[7][j] < firstX))
-      s.brightest = v[4][j], s.brightestClipped = v[5][j] > 0, s.brightestFresh = v[6][j] > 0,
-      firstX = v[7][j];
+    sums.power += v[0][j], sums.clippedPower += v[1][j], sums.clippedEstimate += v[2][j];
+    sums.lostPower += v[3][j];
+    if (v[4][j] > sums.brightest || (v[4][j] == sums.brightest && v[7][j] < firstX))
+      sums.brightest = v[4][j], sums.brightestClipped = v[5][j] > 0,
+      sums.brightestFresh = v[6][j] > 0, firstX = v[7][j];
   }
-  return s;
+  if (project)
+    for (int k = 0; k < 5; ++k)
+      for (int c = 0; c < 3; ++c) {
+        hn::Store(s[k][c], d, v[0]);
+        for (int j = 0; j < lanes; ++j) sums.col[k][c] += double(v[0][j]);
+      }
+  return sums;
 }
 
 }  // namespace HWY_NAMESPACE

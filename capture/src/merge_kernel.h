@@ -39,7 +39,10 @@ struct RowInput {
   /// clips: the newest reading gives way.
   const std::uint8_t* nearLow = nullptr;
   const std::uint8_t* nearHigh = nullptr;
-  float* rgb = nullptr;  ///< the merged radiance, R, G, B per pixel
+  float* rgb = nullptr;  ///< the merged radiance, R, G, B per pixel (null: not written)
+  /// Equirect frames projected as they merge: the five column integrals of the row
+  /// (EquirectIntegrals::col, zero-padded to a multiple of 16), or null: no projection.
+  const float* col[5] = {};
 };
 
 /// A row's sums (unweighted by its solid angle).
@@ -48,6 +51,8 @@ struct RowSums {
   std::size_t dark = 0;
   float brightest = -1;  ///< the largest luminance; the flags are of its first pixel
   bool brightestClipped = false, brightestFresh = true;
+  /// With RowInput::col: the merged radiance's column-weighted sums, [column integral][R, G, B].
+  double col[5][3] = {};
 };
 
 using RowKernel = RowSums (*)(const RowInput& in);

@@ -124,6 +124,10 @@ struct CapturePipeline::Loop {
   FrameProcessor processor;  ///< the frame's lighting (liveprobe/capture/frame_processor.h)
   std::optional<BracketMerger> merger;
   Frame merged;  ///< the merger's output, swapped into `frame`
+  /// Equirect frames without a light search are projected as they merge (their coefficients
+  /// here), and the float frame is written only where the display draws it.
+  MergeProjection projection;
+  bool projected = false;  ///< `frame` was projected as it merged
   struct Lit {
     Sh9 radiance, unsmoothed;
     std::vector<Light> lights;
@@ -167,7 +171,16 @@ bool CapturePipeline::grab(Loop& s) {
 
 void CapturePipeline::merge(Loop& s, ProcessedFrame& out) const {
   if (!s.merger) return;
-  out.confidence = s.merger->add(*s.frame, s.merged, s.pool.get());
+  s.projected =
+      opt_.layout.layout == Layout::Equirect && opt_.reduce == 1 && opt_.lights.maxLights == 0;
+  if (s.projected) {
+    s.processor.fit(*s.frame);  // the projector of the frame's size
+    s.projection.integrals = s.processor.projector()->equirectIntegrals();
+    s.projection.keepFrame = opt_.keepImages;
+    out.confidence = s.merger->add(*s.frame, s.merged, s.pool.get(), s.projection);
+  } else {
+    out.confidence = s.merger->add(*s.frame, s.merged, s.pool.get());
+  }
   std::swap(*s.frame, s.merged);
 }
 
@@ -193,7 +206,12 @@ bool CapturePipeline::hold(Loop& s, ProcessedFrame& out) {
 void CapturePipeline::project(Loop& s, ProcessedFrame& out) {
   FrameResult r;
   try {
-    r = s.processor.run(s.frame, {.background = opt_.keepImages, .saturation = true}, s.pool.get());
+    r = s.processor.run(
+        s.frame, {.background = opt_.keepImages, .saturation = true, .project = !s.projected},
+        s.pool.get());
+    if (s.projected)
+      r.lighting = s.processor.fromProjected(s.projection.coefficients,
+                                             s.processor.projectionScale(*s.frame));
   } catch (const Error& e) {
     throw Error(source_->describe() + ": frame " + std::to_string(out.index + 1) + ": " + e.what());
   }

@@ -394,9 +394,11 @@ std::vector<lp::Frame> turningBrackets(Size s) {
 // An exposure bracket's merge, as live --bracket does each frame. Still: the synthetic sky (its
 // sun about 11 stops over the sky) at -12, -6 and 0 EV; the camera's turn is estimated and found
 // to be none. Turning: turningBrackets(), the older frames turned to the newest before they
-// merge. Project: the projection of the merged frame (float RGB, the same threads) that follows
-// each merge in live; docs/speed.md gives the ratio of the two.
-enum class MergeCase { Still, Turning, Project };
+// merge. Project: the projection of the merged frame (float RGB, the same threads), what a
+// merge that writes its frame (a light search reads it) is followed by. Projecting: the still
+// merge projecting as it merges and writing no frame, as headless live does without a light
+// search. docs/speed.md gives the ratios to Project.
+enum class MergeCase { Still, Turning, Project, Projecting };
 void mergeBench(benchmark::State& state, Size s, int threads, MergeCase what) {
   std::vector<lp::Frame> frames;
   if (what == MergeCase::Turning) {
@@ -408,18 +410,20 @@ void mergeBench(benchmark::State& state, Size s, int threads, MergeCase what) {
   lp::BracketMerger merger({.frames = 3});
   lp::Frame out;
   lp::ThreadPool* workers = pool(threads);
+  const lp::Projector projector(lp::Layout::Equirect, s.w, s.h);
+  lp::MergeProjection projecting{.integrals = projector.equirectIntegrals(), .keepFrame = false};
   std::uint64_t sequence = 0;
   const auto add = [&] {
     lp::Frame& f = frames[sequence % frames.size()];
     f.sequence = sequence++;  // a camera's stream: one frame after another
-    return merger.add(f, out, workers);
+    return what == MergeCase::Projecting ? merger.add(f, out, workers, projecting)
+                                         : merger.add(f, out, workers);
   };
   for (int i = 0; i < 3; ++i) add();  // untimed: full
   if (what == MergeCase::Project) {
-    const lp::Projector proj(lp::Layout::Equirect, s.w, s.h);
     const auto view = lp::PanoramaView::rgbF32(out.rgb.data(), s.w, s.h);
-    benchmark::DoNotOptimize(proj.project(view, workers));
-    for (auto _ : state) benchmark::DoNotOptimize(proj.project(view, workers));
+    benchmark::DoNotOptimize(projector.project(view, workers));
+    for (auto _ : state) benchmark::DoNotOptimize(projector.project(view, workers));
     return;
   }
   for (auto _ : state) benchmark::DoNotOptimize(add());
@@ -491,7 +495,8 @@ void registerAll() {
     for (int threads : {1, 2})
       for (const auto& [what, name] :
            {std::pair{MergeCase::Still, "merge"}, std::pair{MergeCase::Turning, "turning"},
-            std::pair{MergeCase::Project, "project"}})
+            std::pair{MergeCase::Project, "project"},
+            std::pair{MergeCase::Projecting, "merge+project"}})
         benchmark::RegisterBenchmark(
             ("Merge/bracket:3/u8/" + sizeName(s) + "/threads:" + std::to_string(threads) + "/" +
              name)

@@ -96,6 +96,10 @@ class FrameProcessor {
     float scale = 1.0f;
   };
   ProjectedView view(const Frame& frame, const Image* linear = nullptr);
+  /// The scale the coefficients of `frame`'s own pixels take (Frame::radianceScale, and for a
+  /// float frame the photometry's exposure): view()'s, for a frame projected as it was made (a
+  /// bracket merged and projected in one pass, liveprobe/capture/hdr_merge.h).
+  float projectionScale(const Frame& frame) const;
   /// The lighting from the coefficients of view(frame) projected elsewhere: scaled and turned as
   /// process() does. Without lights (they are searched in the frame's pixels): throws lp::Error
   /// where the options ask for them.

@@ -36,6 +36,8 @@
 
 #include "liveprobe/capture/frame.h"
 #include "liveprobe/sh/executor.h"
+#include "liveprobe/sh/projector.h"
+#include "liveprobe/sh/sh.h"
 
 namespace lp {
 
@@ -139,6 +141,20 @@ struct MergeOptions {
   bool align = true;
 };
 
+/// A merge that projects as it goes (equirect frames): each row's radiance weighed by the
+/// projector's pixel integrals while the row is in cache, so the coefficients cost no second
+/// pass over a float frame, and the frame is written only where something reads it (a display,
+/// the light search).
+struct MergeProjection {
+  /// The projector's integrals for the frame's size (Projector::equirectIntegrals()).
+  const EquirectIntegrals* integrals = nullptr;
+  /// false: `out` gets the merged frame's size, times and scale, and no pixels.
+  bool keepFrame = true;
+  /// The result: the merged frame's radiance coefficients, the sums Projector::project makes of
+  /// it (in its units, before any photometry or rotation).
+  Sh9 coefficients;
+};
+
 class BracketMerger {
  public:
   explicit BracketMerger(MergeOptions options);
@@ -152,6 +168,9 @@ class BracketMerger {
   /// time (the latency of the merge starts there). Throws lp::Error on a float frame. A frame of
   /// another size starts the window afresh.
   FrameConfidence add(const Frame& in, Frame& out, Executor* executor = nullptr);
+  /// The same, projecting as it merges. Throws lp::Error where the integrals are not of the
+  /// frame's size.
+  FrameConfidence add(const Frame& in, Frame& out, Executor* executor, MergeProjection& projection);
 
   const MergeOptions& options() const { return opt_; }
   std::size_t held() const { return window_.size(); }
@@ -174,7 +193,7 @@ class BracketMerger {
     const float* reference;
   };
   MergeTally mergeRow(const BracketView& view, std::size_t y, float* out, const LuminanceRow& lum,
-                      bool fresh) const;
+                      bool fresh, const EquirectIntegrals* project) const;
   MergeOptions opt_;
   std::deque<Frame> window_;          ///< oldest first
   std::vector<float> previous_;       ///< the last merge's luminance, per pixel
