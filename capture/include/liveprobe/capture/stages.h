@@ -12,9 +12,9 @@ namespace lp {
 
 enum class Stage : int {
   Grab,      ///< the source's next frame, decoded
-  Merge,     ///< an exposure bracket's merge into radiance
+  Merge,     ///< an exposure bracket's merge into radiance (with its projection, where one pass)
   Convert,   ///< the linear copy kept for display (8-bit frames are linearised in the projection)
-  Project,   ///< coefficients and lights
+  Project,   ///< coefficients and lights (none for a bracket projected as it merged)
   Resample,  ///< the display's equirect of a layout GL does not draw as it is (cube, ball, fisheye)
   Upload,    ///< lighting and background handed to GL
   Render,    ///< the model drawn (and the HUD)
