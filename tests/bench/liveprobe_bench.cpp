@@ -394,10 +394,10 @@ std::vector<lp::Frame> turningBrackets(Size s) {
 // An exposure bracket's merge, as live --bracket does each frame. Still: the synthetic sky (its
 // sun about 11 stops over the sky) at -12, -6 and 0 EV; the camera's turn is estimated and found
 // to be none. Turning: turningBrackets(), the older frames turned to the newest before they
-// merge. Project: the projection of the merged frame (float RGB, the same threads), what a
-// merge that writes its frame (a light search reads it) is followed by. Projecting: the still
-// merge projecting as it merges and writing no frame, as headless live does without a light
-// search. docs/speed.md gives the ratios to Project.
+// merge. Project: the projection of the merged frame (float RGB, the same threads), the second
+// pass a merge for a light search is followed by. Projecting: the still merge projecting as it
+// merges and writing no frame, as a pipeline asked for the coefficients alone does
+// (PipelineOptions::keepImages off). docs/speed.md gives the ratios to Project.
 enum class MergeCase { Still, Turning, Project, Projecting };
 void mergeBench(benchmark::State& state, Size s, int threads, MergeCase what) {
   std::vector<lp::Frame> frames;
