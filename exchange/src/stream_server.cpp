@@ -228,11 +228,17 @@ void StreamServer::Impl::evictOldest(const std::string* peer) {
 }
 
 void StreamServer::Impl::admit(lws* wsi) {
-  char addr[64] = "";
-  if (!lws_get_peer_simple(wsi, addr, sizeof addr)) return;  // the listening socket
+  // The peer's address, read here: lws_get_peer_simple answers a failure with the error's text.
+  // A peer already gone has none; it counts against the overall bound only.
+  sockaddr_in a{};
+  socklen_t size = sizeof a;
+  char addr[INET_ADDRSTRLEN] = "";
+  if (::getpeername(lws_get_socket_fd(wsi), reinterpret_cast<sockaddr*>(&a), &size) != 0 ||
+      a.sin_family != AF_INET || !inet_ntop(AF_INET, &a.sin_addr, addr, sizeof addr))
+    addr[0] = '\0';
   const std::string peer = addr;
   opened(wsi);
-  if (pendingFrom(peer) >= opt.maxPendingPerAddress) evictOldest(&peer);
+  if (!peer.empty() && pendingFrom(peer) >= opt.maxPendingPerAddress) evictOldest(&peer);
   if (pending.size() >= opt.maxPending) evictOldest(nullptr);
   pending.push_back({wsi, peer});
   pendingAt[wsi] = std::prev(pending.end());
@@ -328,7 +334,8 @@ int StreamServer::Impl::callback(lws* wsi, lws_callback_reasons reason, void* us
   auto* slot = static_cast<SessionSlot*>(user);
   if (!self) return lws_callback_http_dummy(wsi, reason, user, in, len);
   switch (reason) {
-    case LWS_CALLBACK_WSI_CREATE:  // accepted: it has handshakeSeconds to say what it wants
+    // Accepted and given its descriptor: it has handshakeSeconds to say what it wants.
+    case LWS_CALLBACK_SERVER_NEW_CLIENT_INSTANTIATED:
       self->admit(wsi);
       return 0;
     case LWS_CALLBACK_FILTER_NETWORK_CONNECTION:  // accepted, not yet adopted: 1 closes it

@@ -1,4 +1,5 @@
-"""What the stream's attack tests share: the server started, and a real client's two requests."""
+"""What the stream's attack tests share: the server started, a real client's two requests, and
+the server's descriptors counted while it runs."""
 import base64
 import os
 import re
@@ -6,6 +7,8 @@ import signal
 import socket
 import subprocess
 import sys
+import threading
+import time
 
 
 def start_server(liveprobe, *extra):
@@ -71,3 +74,38 @@ def stop_server(server):
         server.kill()
         sys.exit("FAIL: the server did not stop within 10 s of SIGINT")
     return err
+
+
+class Descriptors:
+    """The server's open descriptors, counted every 10 ms on a thread while the `with` block runs:
+    `samples` holds, per count, the seconds since it began, all descriptors, and the sockets."""
+
+    def __init__(self, pid):
+        self.fd_dir = f"/proc/{pid}/fd"
+        self.samples = []
+        self._stop = threading.Event()
+        self._thread = threading.Thread(target=self._run)
+
+    def __enter__(self):
+        self._thread.start()
+        return self
+
+    def __exit__(self, *exc):
+        self._stop.set()
+        self._thread.join()
+
+    def _run(self):
+        start = time.monotonic()
+        while not self._stop.is_set():
+            try:
+                links = []
+                for fd in os.listdir(self.fd_dir):
+                    try:
+                        links.append(os.readlink(f"{self.fd_dir}/{fd}"))
+                    except OSError:
+                        pass  # closed between the listing and the look
+                self.samples.append((time.monotonic() - start, len(links),
+                                     sum(t.startswith("socket:") for t in links)))
+            except OSError:
+                pass
+            time.sleep(0.01)

@@ -16,11 +16,11 @@ import multiprocessing
 import os
 import socket
 import sys
-import threading
 import time
 
 sys.dont_write_bytecode = True  # nothing written beside the sources
-from stream_clients import http_get, start_server, stop_server, websocket_frame  # noqa: E402
+from stream_clients import (Descriptors, http_get, start_server, stop_server,  # noqa: E402
+                            websocket_frame)
 
 LIVEPROBE = sys.argv[1]
 FLOOD_SECONDS = float(sys.argv[2]) if len(sys.argv) > 2 else 6.0
@@ -66,48 +66,29 @@ def real_client(port):
 
 def main():
     server, port = start_server(LIVEPROBE, "--size", "64x36")
-    fd_dir = f"/proc/{server.pid}/fd"
     time.sleep(0.5)
-    base = len(os.listdir(fd_dir))  # the listening socket, the process's own files
-    samples = []
-    stop = threading.Event()
-
-    def sample():
-        while not stop.is_set():
-            try:
-                links = []
-                for fd in os.listdir(fd_dir):
-                    try:
-                        links.append(os.readlink(f"{fd_dir}/{fd}"))
-                    except OSError:
-                        pass  # closed between the listing and the look
-                samples.append((len(links), sum(t.startswith("socket:") for t in links)))
-            except OSError:
-                pass
-            time.sleep(0.01)
-
-    sampler = threading.Thread(target=sample)
-    sampler.start()
+    # The listening socket, the process's own files.
+    base = len(os.listdir(f"/proc/{server.pid}/fd"))
     count = multiprocessing.Value("i", 0)
     flooders = [multiprocessing.Process(target=flood, args=(port, FLOOD_SECONDS, count))]
-    start = time.monotonic()
-    for f in flooders:
-        f.start()
     times = []  # (seconds since the flood began, seconds taken or None)
-    while time.monotonic() - start < FLOOD_SECONDS + 3:
-        at = time.monotonic() - start
-        times.append((at, real_client(port)))
-        time.sleep(max(0.0, 0.25 - (time.monotonic() - start - at)))
-    for f in flooders:
-        f.join()
-    stop.set()
-    sampler.join()
+    with Descriptors(server.pid) as descriptors:
+        start = time.monotonic()
+        for f in flooders:
+            f.start()
+        while time.monotonic() - start < FLOOD_SECONDS + 3:
+            at = time.monotonic() - start
+            times.append((at, real_client(port)))
+            time.sleep(max(0.0, 0.25 - (time.monotonic() - start - at)))
+        for f in flooders:
+            f.join()
+    samples = descriptors.samples
     err = stop_server(server)
     served = [t for _, t in times if t is not None]
     failed = [at for at, t in times if t is None]
     slow = [(at, t) for at, t in times if t is not None and t > WITHIN]
-    most = max(n for n, _ in samples)
-    sockets = max(k for _, k in samples)
+    most = max(n for _, n, _ in samples)
+    sockets = max(k for _, _, k in samples)
     print(f"# {count.value} connections in {FLOOD_SECONDS:.0f} s; descriptors {base} -> at most "
           f"{most}, {sockets} of them sockets ({len(samples)} samples); real clients served "
           f"{len(served)} of {len(times)}, the slowest in {max(served, default=0):.3f} s")
