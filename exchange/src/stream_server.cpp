@@ -187,7 +187,10 @@ struct StreamServer::Impl {
     return n == pendingPerPeer.end() ? 0 : n->second;
   }
   void admit(lws* wsi);
-  bool full();  // at the limit of open connections with none to close (counts the one turned away)
+  // Whether a new connection (its descriptor, accepted, not yet adopted) is closed at once:
+  // its peer has hung up, or full(). Counts the one turned away.
+  bool turnAway(int fd);
+  bool full();  // at the limit of open connections with none to close
   void handshakeDone(lws* wsi);
   void evictOldest(const std::string* peer);
 
@@ -245,21 +248,36 @@ void StreamServer::Impl::admit(lws* wsi) {
   ++pendingPerPeer[peer];
 }
 
+namespace {
+/// Whether the peer has hung up (a FIN, a reset or an error waits on the socket).
+bool hungUp(int fd) {
+  pollfd p{fd, POLLRDHUP, 0};
+  return ::poll(&p, 1, 0) == 1 && (p.revents & (POLLRDHUP | POLLHUP | POLLERR));
+}
+}  // namespace
+
+bool StreamServer::Impl::turnAway(int fd) {
+  // A peer that hung up before it was even accepted (a flood's connect, GET, close) is closed
+  // unanswered, at the cost of the accept alone: the server keeps pace with such a flood, and
+  // the kernel's accept queue in front of a real client stays short.
+  if (!hungUp(fd) && !full()) return false;
+  std::lock_guard lock(mutex);
+  ++stats.evicted;
+  return true;
+}
+
 bool StreamServer::Impl::full() {
   if (open.size() - dying.size() < opt.maxPending) return false;
   int looked = 0;
   for (auto it = open.begin(); it != open.end() && looked < kEvictLook; ++it) {
     if (dying.count(*it)) continue;
     ++looked;
-    pollfd p{lws_get_socket_fd(*it), POLLRDHUP, 0};
-    if (::poll(&p, 1, 0) == 1 && (p.revents & (POLLRDHUP | POLLHUP | POLLERR))) {
+    if (hungUp(lws_get_socket_fd(*it))) {
       handshakeDone(*it);
       kill(*it);
       return false;
     }
   }
-  std::lock_guard lock(mutex);
-  ++stats.evicted;
   return true;
 }
 
@@ -339,7 +357,7 @@ int StreamServer::Impl::callback(lws* wsi, lws_callback_reasons reason, void* us
       self->admit(wsi);
       return 0;
     case LWS_CALLBACK_FILTER_NETWORK_CONNECTION:  // accepted, not yet adopted: 1 closes it
-      return self->full() ? 1 : 0;
+      return self->turnAway(int(reinterpret_cast<lws_intptr_t>(in))) ? 1 : 0;
     case LWS_CALLBACK_WSI_DESTROY:
       self->handshakeDone(wsi);
       self->notOpen(wsi);

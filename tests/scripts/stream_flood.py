@@ -10,7 +10,9 @@ descriptors every 10 ms and sends a real client every quarter second: GET / (the
 a WebSocket (the upgrade, then one frame). A thousand connections a second must be made; the
 sockets must stay within the pending cap and the clients' (and the few the server holds anyway)
 at every sample, and all descriptors within a socket and a file (the page on its way out) for
-each of those; every real client must be served, each within WITHIN seconds.
+each of those; every real client must be served, each within WITHIN seconds. A real client waits
+behind whatever the kernel's accept queue holds in front of it, so that bound holds only where the
+server turns the flood away as fast as it comes.
 """
 import multiprocessing
 import os
@@ -27,10 +29,12 @@ FLOOD_SECONDS = float(sys.argv[2]) if len(sys.argv) > 2 else 6.0
 PENDING_CAP = 256   # StreamServerOptions::maxPending, the default
 CLIENTS = 32        # --serve-clients, the default
 MARGIN = 16         # the listening socket, the service loop's own, the process's files
-# Seconds a real client may take. Idle, the slowest takes 0.1 to 0.3 s; with the flood on one of
-# two cores and builds running beside the test (the server's thread then shares the other core
-# with the renderer and the builds), up to 1.4 s.
-WITHIN = 3.0
+# Seconds a real client may take. The server closes a connection whose peer has hung up as it
+# accepts it, so the accept queue stays short: the slowest takes 0.06 s idle and 0.1 to 0.2 s with
+# the flood on one of two cores and stress-ng, a renderer and compiles beside. A server that
+# answered every flood connection would fall behind the flood and fill the accept queue (4096
+# here): 0.7 s idle, 1.3 s beside that load, and seconds more on a busier machine.
+WITHIN = 2.0
 
 
 def flood(port, seconds, count):

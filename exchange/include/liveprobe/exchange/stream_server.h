@@ -24,7 +24,8 @@ struct StreamServerOptions {
   /// Connections still in their handshake, in all and from one address: over either limit the
   /// oldest silent one (of that address) is closed, so a new client is always heard. maxPending
   /// also bounds every connection that is not a client (pending, or being sent the page): at it a
-  /// new one closes the oldest whose peer has hung up, or is closed as it is accepted.
+  /// new one closes the oldest whose peer has hung up, or is closed as it is accepted. A peer
+  /// that has hung up before its connection is accepted is closed unanswered.
   std::size_t maxPending = 256, maxPendingPerAddress = 64;
   CoeffFormat defaultFormat;  ///< for clients that ask for none (?format=)
   std::string webDir;         ///< the page (index.html, main.js)
