@@ -676,13 +676,11 @@ MergeTally BracketMerger::mergeRow(const BracketView& v, std::size_t y, float* o
   const merge::RowSums s = v.kernel(in);
   const float rw = rowWeight(int(y), h, opt_.equirect);
   MergeTally t;
-  // Pixel (y, x) weighs row[kRowOf[k]][y] * col[kColOf[k]][x] (liveprobe/sh/projector.h).
-  if (project)
-    for (int k = 0; k < kShCount; ++k) {
-      const auto& cs = s.col[EquirectIntegrals::kColOf[k]];
-      t.sh[k] = glm::dvec3(cs[0], cs[1], cs[2]) *
-                double(project->row[std::size_t(EquirectIntegrals::kRowOf[k])][y]);
-    }
+  if (project) {
+    glm::dvec3 colSums[5];
+    for (int k = 0; k < 5; ++k) colSums[k] = {s.col[k][0], s.col[k][1], s.col[k][2]};
+    project->addRow(y, colSums, t.sh);
+  }
   t.power = s.power * rw, t.clippedPower = s.clippedPower * rw, t.disagreedPower = s.lostPower * rw;
   t.clippedEstimate = s.clippedEstimate * rw;
   t.dark = s.dark;

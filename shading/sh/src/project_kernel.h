@@ -17,8 +17,6 @@ inline constexpr int kMaxLanes = 16;
 
 /// The equirect tables (liveprobe/sh/projector.h has them, for the GPU projection too).
 using EquirectTables = EquirectIntegrals;
-inline constexpr const int* kRowOf = EquirectIntegrals::kRowOf;
-inline constexpr const int* kColOf = EquirectIntegrals::kColOf;
 
 /// Float lanes of the 27 sums (coefficient-major, then the frame's channels), kMaxLanes each; a
 /// path uses as many lanes as its vectors have and leaves the rest zero.

@@ -39,7 +39,7 @@ kernel::EquirectTables equirectTables(int width, int height) {
     t->col[3][j] = float((std::sin(2 * p1) - std::sin(2 * p0)) / 2);
     t->col[4][j] = float((std::cos(2 * p0) - std::cos(2 * p1)) / 2);
   }
-  // Row factors with the basis constants folded in (slots as kernel::kRowOf uses them).
+  // Row factors with the basis constants folded in (slots as EquirectIntegrals::kRowOf uses them).
   for (auto& r : t->row) r.resize(std::size_t(height));
   for (int i = 0; i < height; ++i) {
     const double t0 = pi * i / height, t1 = pi * (i + 1) / height;
@@ -53,7 +53,7 @@ kernel::EquirectTables equirectTables(int width, int height) {
     // Each coefficient k uses one row factor; the kernel multiplies it by one column sum:
     // L00 = k0 R1 S1; L1-1 = k1 Rs Ssin; L10 = k1 Rc S1; L11 = k1 Rs Scos; L2-2 = k2/2 Rs2 Ssin2;
     // L2-1 = k2 Rsc Ssin; L20 = k3 R3 S1; L21 = k2 Rsc Scos; L22 = k4 Rs2 Scos2.
-    // Row factor slots (kernel::kRowOf): 0 k0*one, 1 k1*cosT, 2 k1*sinT, 3 k2*sinCos,
+    // Row factor slots (EquirectIntegrals::kRowOf): 0 k0*one, 1 k1*cosT, 2 k1*sinT, 3 k2*sinCos,
     // 4 sin2 (times k2/2 for L2-2 or k4 for L22: equal, since k2/2 = k4), 5 k3*threeCos2.
     t->row[0][i] = float(k0 * one);
     t->row[1][i] = float(k1 * cosT);
@@ -201,13 +201,12 @@ void Projector::addPixels(std::size_t row, std::size_t col, const Rgb* values, s
                           std::array<glm::dvec3, kShCount>& sums) const {
   // Float over the run (at most a row, as project() sums), double beyond.
   if (tables_->equirect) {
-    // Pixel (i, j) weighs row[kRowOf[k]][i] * col[kColOf[k]][j]: the five column sums first.
+    // The five column sums first, then the row integrals.
     const auto& t = *tables_->equirect;
-    std::array<Rgb, 5> colSums{};
+    Rgb colSums[5]{};
     for (std::size_t n = 0; n < count; ++n)
       for (int c = 0; c < 5; ++c) colSums[c] += values[n] * t.col[c][col + n];
-    for (int k = 0; k < kShCount; ++k)
-      sums[k] += glm::dvec3(colSums[kernel::kColOf[k]]) * double(t.row[kernel::kRowOf[k]][row]);
+    t.addRow(row, colSums, sums);
     return;
   }
   const std::size_t first = row * std::size_t(width_) + col;

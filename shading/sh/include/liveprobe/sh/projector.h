@@ -60,6 +60,13 @@ struct EquirectIntegrals {
   std::array<std::vector<float>, 6> row;
   static constexpr int kRowOf[9] = {0, 2, 1, 2, 4, 3, 5, 3, 4};
   static constexpr int kColOf[9] = {0, 2, 0, 1, 4, 2, 0, 1, 3};
+  /// Adds row y's part to the nine sums, from its five column-weighted sums (per channel).
+  template <class Vec3>
+  void addRow(std::size_t y, const Vec3 (&colSums)[5],
+              std::array<glm::dvec3, kShCount>& sums) const {
+    for (int k = 0; k < kShCount; ++k)
+      sums[std::size_t(k)] += glm::dvec3(colSums[kColOf[k]]) * double(row[kRowOf[k]][y]);
+  }
 };
 
 /// Projects frames of one (layout, size) to radiance coefficients L_lm (liveprobe/sh/sh.h). The
