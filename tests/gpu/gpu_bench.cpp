@@ -118,17 +118,29 @@ const TestFrame& makeFrame(Size s, bool u8) {
   return *f;
 }
 
-/// Timer-query milliseconds of one stage, averaged over the frames that answered.
+/// Timer-query milliseconds of one stage, averaged over the frames that answered (each frame
+/// once: what the timer's last beginFrame() read).
 struct GpuMs {
   double sum = 0;
   int n = 0;
   void add(const GpuTimer& t, GpuTimer::Stage s) {
-    if (auto ms = t.ms(s)) sum += *ms, ++n;
+    if (auto ms = t.justRead(s)) sum += *ms, ++n;
   }
   void report(benchmark::State& state, const char* name) const {
     if (n > 0) state.counters[name] = sum / n * 1e3;
   }
 };
+
+/// After a loop: waits for the GPU, then reads every frame still in flight (`add` after each
+/// beginFrame()), so that a run of fewer frames than the timer's latency reports too.
+template <class Add>
+void drain(GpuTimer& timer, Add add) {
+  glFinish();
+  for (int k = 0; k <= GpuTimer::kLatency; ++k) {
+    timer.beginFrame();
+    add();
+  }
+}
 
 /// Runs `work` once an iteration under the stage's timer query, then `after` (glFinish, or the
 /// wait for a result), and reports the stage's GPU time as gpu_us.
@@ -145,6 +157,7 @@ void timedLoop(benchmark::State& state, GpuTimer::Stage stage, Work work, After 
     timer.end();
     after();
   }
+  drain(timer, [&] { gpu.add(timer, stage); });
   gpu.report(state, "gpu_us");
 }
 
@@ -194,6 +207,7 @@ void uploadPbo(benchmark::State& state, Size s, bool u8) {
     writeSeconds += writeAndCommit(tex, frame.view, timer);
     glFinish();
   }
+  drain(timer, [&] { gpu.add(timer, GpuTimer::Upload); });
   gpu.report(state, "gpu_us");
   state.counters["cpu_write_us"] = writeSeconds / double(state.iterations()) * 1e6;
   state.counters["persistent"] = tex.persistent() ? 1 : 0;
@@ -242,20 +256,26 @@ GLuint floorProgram() {
 }
 
 /// The context, the frame and its texture, for a run that needs compute shaders: nullptr (and
-/// the run marked) where the context has none.
+/// the run marked) where the context has none. Made once per size and type and kept for the run:
+/// Google Benchmark calls a benchmark's function several times (to size the run, then once a
+/// repetition), and at 8K the buffers' allocation and the upload take longer than the timing.
 struct Uploaded {
   const TestFrame& frame;
   lp::gl::FrameTexture tex;
 };
-std::unique_ptr<Uploaded> uploaded(benchmark::State& state, Size s, bool u8) {
+Uploaded* uploaded(benchmark::State& state, Size s, bool u8) {
   context();
   if (!lp::gl::hasCompute()) {
     state.SkipWithError("no compute shaders (GL 4.3)");
     return nullptr;
   }
-  auto u = std::unique_ptr<Uploaded>(new Uploaded{makeFrame(s, u8), {}});
-  u->tex.upload(u->frame.view);
-  return u;
+  static std::map<std::tuple<int, int, bool>, std::unique_ptr<Uploaded>> kept;
+  auto& u = kept[{s.w, s.h, u8}];
+  if (!u) {
+    u = std::unique_ptr<Uploaded>(new Uploaded{makeFrame(s, u8), {}});
+    u->tex.upload(u->frame.view);
+  }
+  return u.get();
 }
 
 void readFloor(benchmark::State& state, Size s, bool u8) {
@@ -291,26 +311,44 @@ double relativeError(const lp::Sh9& a, const lp::Sh9& b) {
   return worst / double(l00);
 }
 
+/// A projector for the size and rows per group, and its coefficients' distance from the CPU's
+/// for the frame of that type: made and checked once, kept for the run.
+struct CheckedProjector {
+  std::unique_ptr<lp::gl::GpuProjector> gpu;
+  double error = 0;
+};
+CheckedProjector& checkedProjector(const Uploaded& up, Size s, bool u8, int rows) {
+  static std::map<std::tuple<int, int, bool, int>, CheckedProjector> kept;
+  CheckedProjector& c = kept[{s.w, s.h, u8, rows}];
+  if (!c.gpu) {
+    c.gpu = std::make_unique<lp::gl::GpuProjector>(lp::Layout::Equirect, s.w, s.h, rows);
+    lp::ThreadPool pool(0);
+    const lp::Sh9 cpu = lp::Projector(lp::Layout::Equirect, s.w, s.h).project(up.frame.view, &pool);
+    c.error = relativeError(c.gpu->project(up.tex, up.frame.view.decode), cpu);
+  }
+  return c;
+}
+
 void projectGpu(benchmark::State& state, Size s, bool u8, int rows = 0) {
   auto up = uploaded(state, s, u8);
   if (!up) return;
   const TestFrame& frame = up->frame;
   lp::gl::FrameTexture& tex = up->tex;
-  lp::gl::GpuProjector gpu(lp::Layout::Equirect, s.w, s.h, rows);
-  lp::ThreadPool pool(0);
-  const lp::Sh9 cpu = lp::Projector(lp::Layout::Equirect, s.w, s.h).project(frame.view, &pool);
-  const double error = relativeError(gpu.project(tex, frame.view.decode), cpu);
-  if (!(error <= 1e-5)) {
+  CheckedProjector& checked = checkedProjector(*up, s, u8, rows);
+  lp::gl::GpuProjector& gpu = *checked.gpu;
+  if (!(checked.error <= 1e-5)) {
     char why[128];
-    std::snprintf(why, sizeof why, "the GPU's coefficients are %.3g of L00 from the CPU's", error);
+    std::snprintf(why, sizeof why, "the GPU's coefficients are %.3g of L00 from the CPU's",
+                  checked.error);
     gMismatch = true;
     return state.SkipWithError(why);
   }
   timedLoop(
       state, GpuTimer::Project, [&] { gpu.dispatch(tex, frame.view.decode); },
       [&] { benchmark::DoNotOptimize(gpu.read(true)); });
-  state.counters["error_of_L00"] = error;
+  state.counters["error_of_L00"] = checked.error;
   state.counters["groups"] = gpu.groups();
+  state.counters["rows"] = gpu.rowsPerGroup();
 }
 
 void projectCpu(benchmark::State& state, Size s, bool u8) {
@@ -384,13 +422,33 @@ void frameLoop(benchmark::State& state, Size s, bool overlapped) {
     timer.end();
     if (!overlapped) glFinish();
   }
-  glFinish();
+  drain(timer, [&] {
+    upload.add(timer, GpuTimer::Upload);
+    project.add(timer, GpuTimer::Project);
+    render.add(timer, GpuTimer::Render);
+  });
   while (gpu.pending() > 0) gpu.read(true);
   upload.report(state, "gpu_upload_us");
   project.report(state, "gpu_project_us");
   render.report(state, "gpu_render_us");
   state.counters["cpu_write_us"] = writeSeconds / double(state.iterations()) * 1e6;
   state.counters["coeffs_late"] = late;
+}
+
+/// The GPU's multiprocessors and the warps each holds, where the GL says
+/// (NV_shader_thread_group): what the rows-per-group sweep's group counts are measured against.
+std::string multiprocessors() {
+  GLint n = 0;
+  glGetIntegerv(GL_NUM_EXTENSIONS, &n);
+  for (GLint i = 0; i < n; ++i)
+    if (std::strcmp(reinterpret_cast<const char*>(glGetStringi(GL_EXTENSIONS, GLuint(i))),
+                    "GL_NV_shader_thread_group") == 0) {
+      GLint sms = 0, warps = 0;
+      glGetIntegerv(0x933B, &sms);    // GL_SM_COUNT_NV
+      glGetIntegerv(0x933A, &warps);  // GL_WARPS_PER_SM_NV
+      return std::to_string(sms) + " SMs, " + std::to_string(warps) + " warps each";
+    }
+  return "not reported";
 }
 
 void registerAll() {
@@ -447,6 +505,7 @@ int main(int argc, char** argv) {
     return 1;
   }
   benchmark::AddCustomContext("gl", context().describe());
+  benchmark::AddCustomContext("gl_multiprocessors", multiprocessors());
   registerAll();
   benchmark::RunSpecifiedBenchmarks();
   benchmark::Shutdown();

@@ -79,6 +79,8 @@ class GpuProjector {
   int pending() const { return pending_; }
   /// Workgroups of the first pass (each writes 27 partial sums).
   int groups() const { return groupsX_ * groupsY_; }
+  /// The rows each of them sums.
+  int rowsPerGroup() const { return rowsPerGroup_; }
 
  private:
   struct Slot {
