@@ -4,7 +4,7 @@ FILTER come in families .../BASE and .../OTHER; with the repetitions randomly in
 slow moment of the machine falls on both), the median real time of each OTHER must be at most
 LIMIT times its BASE's.
 
-usage: bench_ratio.py LIVEPROBE_BENCH FILTER BASE OTHER LIMIT [REPETITIONS]
+usage: bench_ratio.py LIVEPROBE_BENCH FILTER BASE OTHER LIMIT [REPETITIONS [MIN_TIME]]
 """
 import json
 import statistics
@@ -15,9 +15,10 @@ import sys
 def main():
     bench, pattern, base, other, limit = sys.argv[1:6]
     reps = sys.argv[6] if len(sys.argv) > 6 else "7"
+    min_time = sys.argv[7] if len(sys.argv) > 7 else "0.1"  # seconds of timing a repetition
     out = subprocess.run(
         [bench, "--benchmark_filter=" + pattern, "--benchmark_repetitions=" + reps,
-         "--benchmark_enable_random_interleaving=true", "--benchmark_min_time=0.1",
+         "--benchmark_enable_random_interleaving=true", "--benchmark_min_time=" + min_time,
          "--benchmark_format=json"],
         check=True, capture_output=True, text=True).stdout
     times = {}
