@@ -5,7 +5,7 @@
 // polynomial the same loader makes of them). A cube stored upside down fails it. And where
 // Babylon puts the document's light in a scene of either handedness, with and without the
 // lines docs/engines.md gives.
-import { test } from 'node:test';
+import { after, test } from 'node:test';
 import assert from 'node:assert/strict';
 import { readFileSync } from 'node:fs';
 import { join, dirname } from 'node:path';
@@ -16,7 +16,7 @@ import { harmonicsFunctions } from './babylon_shader.mjs';
 import { SphericalHarmonics } from '@babylonjs/core/Maths/sphericalPolynomial.js';
 
 const modules = join(dirname(fileURLToPath(import.meta.url)), 'node_modules');
-const page = `<!doctype html><canvas id="c" width="64" height="64"></canvas>
+const page = `<!doctype html><body></body>
 <script type="importmap">{"imports": {"@babylonjs/core/": "/node_modules/@babylonjs/core/",
   "@babylonjs/loaders/": "/node_modules/@babylonjs/loaders/"}}</script>
 <script type="module">
@@ -36,11 +36,17 @@ import { Color3, Color4 } from '@babylonjs/core/Maths/math.color.js';
 import { CreateSphere } from '@babylonjs/core/Meshes/Builders/sphereBuilder.js';
 import { PBRMaterial } from '@babylonjs/core/Materials/PBR/pbrMaterial.js';
 import { ShaderMaterial } from '@babylonjs/core/Materials/shaderMaterial.js';
+// Each call draws on a canvas of its own: one page serves every test of the file.
+const freshCanvas = (size) => {
+  const canvas = document.createElement('canvas');
+  canvas.width = canvas.height = size;
+  document.body.replaceChildren(canvas);
+  return canvas;
+};
 // A white diffuse sphere lit by the document's light alone, seen from above (world +y) by an
 // orthographic camera; then the same pixels' world normals (a second pass that draws them).
 window.shade = async (rightHanded, size, albedo, fixed) => {
-  const canvas = document.getElementById('c');
-  canvas.width = canvas.height = size;
+  const canvas = freshCanvas(size);
   const engine = new Engine(canvas, false, { preserveDrawingBuffer: true });
   const scene = new Scene(engine);
   scene.useRightHandedSystem = rightHanded;
@@ -91,7 +97,7 @@ window.shade = async (rightHanded, size, albedo, fixed) => {
   return { shaded, normal };
 };
 window.project = async (gltf) => {
-  const engine = new Engine(document.getElementById('c'));
+  const engine = new Engine(freshCanvas(64));
   const scene = new Scene(engine);
   await AppendSceneAsync('/model.gltf', scene);
   const texture = scene.environmentTexture;
@@ -112,7 +118,9 @@ window.project = async (gltf) => {
   sh.convertIrradianceToLambertianRadiance();
   const fromCoefficients = SphericalPolynomial.FromHarmonics(sh);
   cube.scaleInPlace(texture.level);  // the light's intensity, which the shaders multiply in
-  return { cube: asObject(cube), coefficients: asObject(fromCoefficients), info };
+  const result = { cube: asObject(cube), coefficients: asObject(fromCoefficients), info };
+  engine.dispose();
+  return result;
 };
 window.ready = true;
 </script>`;
@@ -144,30 +152,43 @@ function evalPolynomial(p, [x, y, z]) {
 
 const types = { '.js': 'text/javascript', '.html': 'text/html', '.gltf': 'model/gltf+json' };
 
-async function withPage(gltf, body) {
+// One browser and one page for the whole file (Babylon's modules load once: a launch and a load
+// took 4 to 7 s of each test); `/model.gltf` is the document of the test that runs (routed
+// requests are never cached).
+let shared = null;
+let document_ = '';
+async function sharedPage() {
+  if (shared) return shared;
   const browser = await chromium.launch({
     executablePath: process.env.LIVEPROBE_CHROMIUM || '/usr/bin/chromium',
     args: ['--use-angle=swiftshader', '--enable-unsafe-swiftshader', '--ignore-gpu-blocklist'],
   });
-  try {
-    const tab = await browser.newPage();
-    const errors = [];
-    tab.on('pageerror', (e) => errors.push(String(e)));
-    await tab.route('http://lp.test/**', (route) => {
-      const path = new URL(route.request().url()).pathname;
-      const ext = path.slice(path.lastIndexOf('.'));
-      const body = path === '/' ? page : path === '/model.gltf' ? gltf
-        : readFileSync(join(modules, path.replace(/^\/node_modules\//, '')));
-      return route.fulfill({ status: 200, contentType: types[ext] || 'text/html', body });
-    });
-    await tab.goto('http://lp.test/');
-    await tab.waitForFunction(() => window.ready === true, null, { timeout: 30000 });
-    const result = await body(tab);
-    assert.deepEqual(errors, []);
-    return result;
-  } finally {
-    await browser.close();
-  }
+  const tab = await browser.newPage();
+  const errors = [];
+  tab.on('pageerror', (e) => errors.push(String(e)));
+  await tab.route('http://lp.test/**', (route) => {
+    const path = new URL(route.request().url()).pathname;
+    const ext = path.slice(path.lastIndexOf('.'));
+    const body = path === '/' ? page : path === '/model.gltf' ? document_
+      : readFileSync(join(modules, path.replace(/^\/node_modules\//, '')));
+    return route.fulfill({ status: 200, contentType: types[ext] || 'text/html', body });
+  });
+  await tab.goto('http://lp.test/');
+  await tab.waitForFunction(() => window.ready === true, null, { timeout: 30000 });
+  shared = { browser, tab, errors };
+  return shared;
+}
+after(async () => {
+  if (shared) await shared.browser.close();
+});
+
+async function withPage(gltf, body) {
+  const { tab, errors } = await sharedPage();
+  document_ = gltf;
+  errors.length = 0;
+  const result = await body(tab);
+  assert.deepEqual(errors, []);
+  return result;
 }
 
 // Where the light comes from in a Babylon scene of either handedness: a white diffuse sphere
