@@ -641,8 +641,9 @@ BracketView BracketMerger::prepare(const std::array<const std::uint8_t*, kMaxBra
     if (!v.usable[std::size_t(i)]) continue;
     const float s = v.scales[std::size_t(i)];
     if (s < v.scales[std::size_t(v.longest)]) v.longest = i;
+    // Exposures a quarter stop apart or less are one (a camera that rounds what was asked).
     if (std::none_of(distinct.begin(), distinct.end(),
-                     [&](float d) { return std::abs(d - s) <= 0.02f * s; }))
+                     [&](float d) { return std::abs(std::log2(d / s)) <= 0.25f; }))
       distinct.push_back(s);
   }
   exposures = int(distinct.size());

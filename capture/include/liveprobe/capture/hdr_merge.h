@@ -24,6 +24,7 @@
 // beside its clipped core), the newest frame too where it clips the pixel or one beside it.
 //
 // Each merge also says how far it can be trusted (FrameConfidence).
+#include <algorithm>
 #include <array>
 #include <cstddef>
 #include <cstdint>
@@ -113,13 +114,20 @@ struct FrameConfidence {
   /// of the window had when it was the newest: a scene that was moving then may have moved the
   /// light since.
   double agreement = 1;
-  int exposures = 1;  ///< distinct exposure times merged
+  int exposures = 1;  ///< distinct exposure times merged (over a quarter stop apart)
   /// Every frame of a full window merged, each at its own exposure: none missing (start-up) or
   /// left out whole (a hand over the lens, a flash). A hold ends only on a complete merge.
   bool complete = true;
 
-  /// One number in [0, 1]: (1 - clippedShare) (1 - darkShare) agreement.
-  double value() const { return (1.0 - clippedShare) * (1.0 - darkShare) * agreement; }
+  /// One number in [0, 1]: (1 - clippedShare) (1 - darkShare) agreement, and at most
+  /// kUnmeasuredBrightest where the brightest pixel clipped in every exposure: then its power
+  /// (the sun's share) is a lower bound at an unknown distance from the truth, and the clipped
+  /// share says how much is known to be missing, not how much is.
+  double value() const {
+    const double v = (1.0 - clippedShare) * (1.0 - darkShare) * agreement;
+    return brightestMeasured ? v : std::min(v, kUnmeasuredBrightest);
+  }
+  static constexpr double kUnmeasuredBrightest = 0.5;
 };
 
 struct BracketView;
