@@ -3,6 +3,7 @@
 // a little more every frame about any axis (a camera on a turning rig, a vehicle, a hand), saved
 // as float frames the emulated camera renders. Directions follow liveprobe's equirect convention
 // (liveprobe/sh/layout.h: row 0 next to +z, the centre column along -x).
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>

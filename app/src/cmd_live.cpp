@@ -110,9 +110,17 @@ std::vector<double> bracketStops(const std::string& text) {
 }
 
 #if LIVEPROBE_WITH_V4L2
-void startBracket(V4l2Source& camera, const std::vector<double>& stops, double locked,
-                  const CameraResponse& response) {
-  const std::vector<std::int32_t> asked = camera.bracket(stops, response);
+/// The camera, bracketing: the anchor taken, the first exposure asked, the plan said.
+std::unique_ptr<FrameSource> startBracket(std::unique_ptr<V4l2Source> camera,
+                                          const std::string& device,
+                                          const std::vector<double>& stops, std::int32_t locked,
+                                          const CameraResponse& response) {
+  V4l2Source& control = *camera;
+  const bool reports = camera->reportsExposure();
+  auto bracketed = std::make_unique<BracketedCamera>(
+      std::move(camera), control,
+      BracketOptions{stops, locked, response, device, [](const std::string& w) { warn(w); }});
+  const std::vector<std::int32_t>& asked = bracketed->bracketing().asked();
   // Each stop as the control gives it: its whole units (100 us) round a short exposure; its
   // range clamps the ends.
   std::string plan, moved;
@@ -121,18 +129,17 @@ void startBracket(V4l2Source& camera, const std::vector<double>& stops, double l
     const double want = locked * std::exp2(stops[i]);
     const double actual = std::log2(double(asked[i]) / locked);
     if (std::abs(actual - stops[i]) > 0.1)
-      moved += " " + formatNumber(stops[i]) + " EV is " + formatNumber(actual, 3) + " EV, " +
+      moved += "; " + formatNumber(stops[i]) + " EV is " + formatNumber(actual, 3) + " EV, " +
                (std::abs(double(asked[i]) - want) <= 0.5 ? "the nearest whole 100 us"
-                                                         : "the control's limit") +
-               ";";
+                                                         : "the control's limit");
   }
-  std::fprintf(stderr, "liveprobe live: bracket %s (x 100 us)%s; %s\n", plan.c_str(),
-               moved.empty() ? "" : (";" + moved).c_str(),
-               camera.reportsExposure()
-                   ? "each frame's exposure from the camera's metadata"
-                   : ("each frame's exposure measured from its pixels (" + response.name +
-                      " response; the camera sends no per-frame exposure times)")
-                         .c_str());
+  std::fprintf(stderr, "liveprobe live: bracket %s (x 100 us)%s; %s\n", plan.c_str(), moved.c_str(),
+               reports ? "each frame's exposure from the camera's metadata"
+                       : ("each frame's exposure measured from its pixels (" + response.name +
+                          " response; the camera sends no per-frame exposure times)")
+                             .c_str());
+  bracketed->start();
+  return bracketed;
 }
 
 #endif  // LIVEPROBE_WITH_V4L2
@@ -198,7 +205,6 @@ int runLive(const Args& a) {
   CameraSettings cs = cameraSettingsFrom(a.positional()[0], s);
   const std::vector<double>& stops = s.live.bracket;
   if (!stops.empty()) cs.metadataDevice = s.live.metadata.value_or(siblingMetadataNode(cs.device));
-  cs.onWarning = [](const std::string& w) { warn(w); };
   auto camera = std::make_unique<V4l2Source>(cs);
   try {
     camera->start();
@@ -216,8 +222,9 @@ int runLive(const Args& a) {
   LockedExposure locked;
   if (s.live.lockExposure || !stops.empty()) locked = lockExposure(s.live, *camera, "live");
   if (!stops.empty())
-    startBracket(*camera, stops, locked.exposure100us.value_or(1),
-                 responseOption(s.stream).value_or(CameraResponse::srgb()));
+    return runStreamForLive(
+        a, startBracket(std::move(camera), cs.device, stops, locked.exposure100us.value_or(1),
+                        responseOption(s.stream).value_or(CameraResponse::srgb())));
   return runStreamForLive(a, std::move(camera));
 }
 #else

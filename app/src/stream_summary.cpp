@@ -57,18 +57,20 @@ std::string stageMedians(const StreamTally& t) {
 
 void printSummary(const std::string& description, const PipelineStats& st, const StreamTally& t,
                   double smoothSeconds, bool interrupted, const RecordSinks& sinks) {
-  std::fprintf(stderr,
-               "liveprobe: %s: %zu frames captured, %zu drawn, %zu dropped (stale), %zu skipped "
-               "(corrupt)%s%s%s%s\n"
-               "  median ms: %s; saturated values %.1f per frame\n",
-               description.c_str(), st.captured, t.drawn, st.dropped, st.skipped,
-               st.unidentified == 0 ? ""
-                                    : (", " + std::to_string(st.unidentified) +
-                                       " left out of the bracket (exposure not told)")
-                                          .c_str(),
-               st.endReason.empty() ? "" : "; ", st.endReason.c_str(),
-               interrupted ? "; stopped by a signal" : "", stageMedians(t).c_str(),
-               t.frames() == 0 ? 0.0 : double(t.saturated) / double(t.frames()));
+  std::fprintf(
+      stderr,
+      "liveprobe: %s: %zu frames captured, %zu drawn, %zu dropped (stale), %zu skipped "
+      "(corrupt)%s%s%s%s\n"
+      "  median ms: %s; saturated values %.1f per frame\n",
+      description.c_str(), st.captured, t.drawn, st.dropped, st.skipped,
+      st.unidentified == 0
+          ? ""
+          : (", " + std::to_string(st.unidentified) + " left out of the bracket (" +
+             (st.unidentifiedReport.empty() ? "exposure not told" : st.unidentifiedReport) + ")")
+                .c_str(),
+      st.endReason.empty() ? "" : "; ", st.endReason.c_str(),
+      interrupted ? "; stopped by a signal" : "", stageMedians(t).c_str(),
+      t.frames() == 0 ? 0.0 : double(t.saturated) / double(t.frames()));
   if (!t.latency.empty())
     std::fprintf(stderr, "  latency ms (capture to shown): p50 %.1f, p95 %.1f, p99 %.1f\n",
                  percentile(t.latency, 0.5), percentile(t.latency, 0.95),

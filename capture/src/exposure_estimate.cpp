@@ -94,7 +94,7 @@ std::optional<double> ExposureIdentifier::identify(const Frame& frame) {
   return seconds;
 }
 
-std::optional<double> ExposureIdentifier::byRatio(Known& now) {
+std::optional<double> ExposureIdentifier::ratioEstimate(const Known& now) const {
   // Against the known frame that shares the most well-measured samples with this one.
   std::vector<float> logs, best;
   double bestSeconds = 0;
@@ -109,7 +109,13 @@ std::optional<double> ExposureIdentifier::byRatio(Known& now) {
   if (best.size() < std::max<std::size_t>(32, now.linear.size() / 200)) return std::nullopt;
   const auto mid = best.begin() + std::ptrdiff_t(best.size() / 2);
   std::nth_element(best.begin(), mid, best.end());
-  const double estimate = bestSeconds * std::exp(double(*mid));
+  return bestSeconds * std::exp(double(*mid));
+}
+
+std::optional<double> ExposureIdentifier::byRatio(Known& now) {
+  const std::optional<double> measured = ratioEstimate(now);
+  if (!measured) return std::nullopt;
+  const double estimate = *measured;
   lastEstimate_ = estimate;
   const auto nearest =
       std::min_element(candidates_.begin(), candidates_.end(), [&](double a, double b) {
@@ -119,6 +125,28 @@ std::optional<double> ExposureIdentifier::byRatio(Known& now) {
   // Within the estimate's own precision (8-bit steps, a codec's noise), the exposure asked (or
   // the base, the anchor) stands; beyond it, the camera rounded, and the estimate is the truth.
   return std::abs(estimate / *nearest - 1.0) <= kPrecision ? *nearest : estimate;
+}
+
+std::optional<double> ExposureIdentifier::measure(const Frame& frame) {
+  measured_ = sample(frame);
+  const std::optional<double> estimate = ratioEstimate(*measured_);
+  lastEstimate_ = estimate.value_or(0.0);
+  return estimate;
+}
+
+double ExposureIdentifier::contradiction(double seconds) const {
+  if (!measured_) return 0;
+  const std::vector<double> share = contradicted(*measured_, {seconds});
+  return share.empty() ? 0.0 : share[0];
+}
+
+void ExposureIdentifier::confirm(double seconds, bool alone) {
+  if (!measured_) return;
+  if (alone) known_.clear();
+  measured_->seconds = seconds;
+  known_.push_back(std::move(*measured_));
+  measured_.reset();
+  if (known_.size() > kKnown) known_.pop_front();
 }
 
 std::vector<double> ExposureIdentifier::contradicted(const Known& now,

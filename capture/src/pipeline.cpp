@@ -310,6 +310,7 @@ void CapturePipeline::run() {
     std::lock_guard lock(mutex_);
     stats_.skipped = source_->skippedFrames();
     stats_.unidentified = source_->unidentifiedFrames();
+    stats_.unidentifiedReport = source_->unidentifiedReport();
     stats_.endReason = source_->endReason();
     finished_ = true;
   }

@@ -15,7 +15,6 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
-#include "liveprobe/capture/exposure_estimate.h"
 #include "liveprobe/sh/error.h"
 #include "uvc_metadata.h"
 
@@ -402,88 +401,38 @@ bool V4l2Source::next(Frame& frame) {
     // and runs with different exposures.
     frame.radianceScale =
         frame.exposure100us && *frame.exposure100us > 0 ? 1.0 / (*frame.exposure100us * 1e-4) : 1.0;
-    // What the camera says this frame was taken with, where it says it: always wins (a frame
-    // whose metadata block was lost is left out: the exposure written is not the one taken, and
-    // pixels measured against the reported exposures of a camera that rounds would disagree).
-    // Without a metadata node, in a bracket, what the frame's pixels say against the frames
-    // before it.
-    const bool reported = readFrameExposure(frame, sequence);
-    if (!bracket_.empty() && !reported) {
-      if (const auto seconds = identifier_ ? identifier_->identify(frame) : std::nullopt) {
-        frame.radianceScale = 1.0 / *seconds;
-        frame.exposure100us = std::int32_t(std::lround(*seconds * 1e4));
-      } else {
-        if (!delayChecked_) ++sinceFirstSet_;  // taken at some exposure, as a frame is
-        ++unidentified_;  // a bracketed frame of unknown exposure cannot be merged
-        // A bracket that tells no exposure for many frames would stall the stream silently.
-        if (++unidentifiedRun_ > 4 * bracket_.size() + 10)
-          throw Error(settings_.device + ": " + std::to_string(unidentifiedRun_) +
-                      " bracketed frames in a row of an exposure " +
-                      (metadata_ ? "the metadata node did not report"
-                                 : "the pixels did not show (is the scene changing faster than "
-                                   "the bracket?)"));
-        continue;
-      }
-    }
-    if (!bracket_.empty()) {
-      unidentifiedRun_ = 0;
-      if (!delayChecked_) checkControlDelay(frame);
-      nextBracketExposure(frame);
-    }
+    // What the camera says this frame was taken with, where it says it (the metadata node).
+    frame.exposureReported = false;
+    readFrameExposure(frame, sequence);
     return true;
   }
 }
 
-bool V4l2Source::readFrameExposure(Frame& frame, std::uint32_t sequence) {
-  if (!metadata_) return false;
+void V4l2Source::readFrameExposure(Frame& frame, std::uint32_t sequence) {
+  if (!metadata_) return;
   const auto t = metadata_->exposureOf(sequence, 100);
-  if (!t) return false;
+  if (!t) return;
   frame.radianceScale = 1.0 / *t;
   frame.exposure100us = std::int32_t(std::lround(*t * 1e4));
-  return true;
+  frame.exposureReported = true;
 }
 
-std::vector<std::int32_t> V4l2Source::bracket(const std::vector<double>& stops,
-                                              const CameraResponse& response) {
-  require(State::Streaming, "bracket");
+std::pair<std::int32_t, std::int32_t> V4l2Source::exposureRange() {
+  require(State::Streaming, "exposureRange");
   v4l2_queryctrl q{};
   q.id = V4L2_CID_EXPOSURE_ABSOLUTE;
   if (xioctl(VIDIOC_QUERYCTRL, &q) < 0 || (q.flags & V4L2_CTRL_FLAG_DISABLED))
     throw Error(settings_.device + ": the camera has no exposure time control " +
                 "(V4L2_CID_EXPOSURE_ABSOLUTE): it cannot bracket");
-  if (!locked_ || !lockedExposure_)
-    throw Error(settings_.device + ": bracketing needs a locked exposure (lockExposure)");
-  bracket_.clear();
-  for (double stop : stops) {
-    const double want = *lockedExposure_ * std::exp2(stop);
-    bracket_.push_back(std::int32_t(std::clamp<double>(std::lround(want), q.minimum, q.maximum)));
-  }
-  bracketAt_ = 0, bracketFrames_ = 0, unidentified_ = 0;
-  // The delay is checked where the first exposure is a stop or more from the locked one (the
-  // frames before it look different) and the calibration measured one.
-  expectedDelay_ = response.controlDelay, sinceFirstSet_ = 0;
-  delayChecked_ =
-      !expectedDelay_ || std::abs(std::log2(double(bracket_[0]) / *lockedExposure_)) < 1;
-  reported_.clear();
-  identifier_.reset();
-  unidentifiedRun_ = 0;
-  if (!metadata_) {
-    // The anchor: a frame at the locked exposure, taken before the control moves.
-    std::vector<double> asked;
-    for (const std::int32_t e : bracket_) asked.push_back(e * 1e-4);
-    identifier_ = std::make_unique<ExposureIdentifier>(std::move(asked), response);
-    const std::vector<std::int32_t> cycle = std::exchange(bracket_, {});
-    Frame anchor;
-    if (!next(anchor)) throw Error(settings_.device + ": the stream ended");
-    identifier_->seed(anchor, 1.0 / anchor.radianceScale);  // the locked exposure, as written
-    bracket_ = cycle;
-  }
-  v4l2_control c{V4L2_CID_EXPOSURE_ABSOLUTE, bracket_[0]};
+  return {q.minimum, q.maximum};
+}
+
+void V4l2Source::requestExposure(std::int32_t exposure100us) {
+  v4l2_control c{V4L2_CID_EXPOSURE_ABSOLUTE, exposure100us};
   if (xioctl(VIDIOC_S_CTRL, &c) < 0)
     fail("VIDIOC_S_CTRL " + controlName(V4L2_CID_EXPOSURE_ABSOLUTE) + " = " +
-             std::to_string(bracket_[0]) + " (the camera refuses exposure changes)",
+             std::to_string(exposure100us) + " (the camera refuses exposure changes)",
          errno);
-  return bracket_;
 }
 
 std::int32_t V4l2Source::setExposure(std::int32_t exposure100us) {
@@ -501,41 +450,6 @@ std::int32_t V4l2Source::setExposure(std::int32_t exposure100us) {
          errno);
   lockedExposure_ = value;  // frames without metadata carry what was asked
   return value;
-}
-
-void V4l2Source::checkControlDelay(const Frame& frame) {
-  const double first = bracket_[0] * 1e-4;
-  if (std::abs(std::log2(first * frame.radianceScale)) > 0.3) {  // not yet the new exposure
-    if (++sinceFirstSet_ > 4 * bracket_.size() + 10) delayChecked_ = true;  // never seen: no say
-    return;
-  }
-  delayChecked_ = true;
-  if (expectedDelay_ && int(sinceFirstSet_) != *expectedDelay_ && settings_.onWarning)
-    settings_.onWarning(settings_.device + ": a new exposure showed " +
-                        std::to_string(sinceFirstSet_) + " frame" +
-                        (sinceFirstSet_ == 1 ? "" : "s") +
-                        " after it was asked; the calibration (--response) measured " +
-                        std::to_string(*expectedDelay_) +
-                        " (another mode, frame rate or camera? each frame is still merged at "
-                        "the exposure it shows)");
-}
-
-void V4l2Source::nextBracketExposure(const Frame& frame) {
-  // A camera that ignores the control reports one exposure, frame after frame.
-  const double t = 1.0 / frame.radianceScale;
-  if (std::none_of(reported_.begin(), reported_.end(),
-                   [&](double r) { return std::abs(r - t) <= 0.02 * r; }))
-    reported_.push_back(t);
-  if (++bracketFrames_ == 4 * bracket_.size() + 10 && reported_.size() < 2)
-    throw Error(settings_.device +
-                ": the camera ignores its exposure control: " + std::to_string(bracketFrames_) +
-                " frames all report " + std::to_string(std::lround(t * 1e4)) + " x 100 us");
-  bracketAt_ = (bracketAt_ + 1) % bracket_.size();
-  v4l2_control c{V4L2_CID_EXPOSURE_ABSOLUTE, bracket_[bracketAt_]};
-  if (xioctl(VIDIOC_S_CTRL, &c) < 0)
-    fail("VIDIOC_S_CTRL " + controlName(V4L2_CID_EXPOSURE_ABSOLUTE) + " = " +
-             std::to_string(bracket_[bracketAt_]),
-         errno);
 }
 
 std::string siblingMetadataNode(const std::string& videoNode) {

@@ -40,6 +40,20 @@ class ExposureIdentifier {
   /// The last frame's estimate before it was named (seconds; 0 when it could not be measured).
   double lastEstimate() const { return lastEstimate_; }
 
+  // A camera that follows a known schedule (Bracketing: each frame's exposure is the one asked
+  // some frames before it): the pixels confirm the schedule, they do not name the exposure.
+  /// The exposure `frame` (8-bit) was taken with, from its ratio to the known frame that shares
+  /// the most well-measured samples with it, whatever was asked; nullopt where too few samples
+  /// are shared (a dark or white frame, a stop far from every known one). Holds the frame for
+  /// contradiction() and confirm(); remembers nothing.
+  std::optional<double> measure(const Frame& frame);
+  /// The share of the measured frame's samples the known frames contradict, were it taken at
+  /// `seconds` (0 when nothing is known to compare with).
+  double contradiction(double seconds) const;
+  /// The measured frame is known to be taken at `seconds`, for the frames after it; `alone`:
+  /// the frames known before are forgotten (the scene changed past comparing with them).
+  void confirm(double seconds, bool alone = false);
+
  private:
   struct Known {
     std::vector<float> linear;  ///< green, response^-1, per sample; 0 where not well measured
@@ -49,6 +63,8 @@ class ExposureIdentifier {
   Known sample(const Frame& frame) const;
   void remember(const Frame& frame, double seconds);  ///< known, for the frames after it
   std::optional<double> byRatio(Known& now);
+  /// The estimate from the ratio to the known frames (seconds), or nullopt.
+  std::optional<double> ratioEstimate(const Known& now) const;
   std::optional<double> byContradiction(const Known& now) const;
   /// Per exposure in `times`: the share of samples the known frames contradict were this frame
   /// taken at it (empty when nothing is known to compare with).
@@ -58,6 +74,7 @@ class ExposureIdentifier {
   CameraResponse response_;
   std::deque<Known> known_;  ///< newest last
   double lastEstimate_ = 0;
+  std::optional<Known> measured_;  ///< the last measure()'s frame
 };
 
 }  // namespace lp

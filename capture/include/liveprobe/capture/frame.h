@@ -33,6 +33,9 @@ struct Frame {
   double captureTime = -1.0;
   /// A camera's exposure time (in 100 us, V4L2_CID_EXPOSURE_ABSOLUTE) and gain for this frame.
   std::optional<std::int32_t> exposure100us, gain;
+  /// The camera reported this frame's exposure time itself (UVC metadata): exposure100us and
+  /// radianceScale are what it was taken with, not what the control was last set to.
+  bool exposureReported = false;
 };
 
 /// Now on CLOCK_MONOTONIC, in seconds: the clock of Frame::captureTime.
@@ -71,6 +74,8 @@ class FrameSource {
   /// Bracketed frames left out because their exposure could not be told (a camera without
   /// per-frame exposure times, a frame taken while its sensor changed).
   virtual std::size_t unidentifiedFrames() const { return 0; }
+  /// Those frames by stop and cause, as a sentence's end; empty when none.
+  virtual std::string unidentifiedReport() const { return {}; }
 };
 
 struct SourceOptions {

@@ -70,16 +70,17 @@ struct PipelineOptions {
 inline constexpr double kStopPollSeconds = 0.02;
 
 struct PipelineStats {
-  std::size_t captured = 0;       ///< frames processed
-  std::size_t taken = 0;          ///< frames the consumer took
-  std::size_t dropped = 0;        ///< frames replaced in the slot, or left in it at the stop,
-                                  ///< before anyone took them: captured = taken + dropped
-  std::size_t skipped = 0;        ///< frames the source could not decode
-  std::size_t unidentified = 0;   ///< bracketed frames of an exposure not told (left out)
-  std::size_t gapsShortened = 0;  ///< timestamp gaps over PipelineOptions::maxGapSeconds
-  std::size_t held = 0;           ///< frames that kept the last good lighting (holdBelow)
-  std::string endReason;          ///< why the source ended early, if it did
-  std::string error;              ///< the fatal error that stopped capture, if any
+  std::size_t captured = 0;        ///< frames processed
+  std::size_t taken = 0;           ///< frames the consumer took
+  std::size_t dropped = 0;         ///< frames replaced in the slot, or left in it at the stop,
+                                   ///< before anyone took them: captured = taken + dropped
+  std::size_t skipped = 0;         ///< frames the source could not decode
+  std::size_t unidentified = 0;    ///< bracketed frames of an exposure not told (left out)
+  std::string unidentifiedReport;  ///< those by stop and cause (FrameSource::unidentifiedReport)
+  std::size_t gapsShortened = 0;   ///< timestamp gaps over PipelineOptions::maxGapSeconds
+  std::size_t held = 0;            ///< frames that kept the last good lighting (holdBelow)
+  std::string endReason;           ///< why the source ended early, if it did
+  std::string error;               ///< the fatal error that stopped capture, if any
 };
 
 /// Exponential moving average of coefficients: alpha = 1 - exp(-dt / tau). Exact on SH because

@@ -17,8 +17,8 @@
 #include <utility>
 #include <vector>
 
+#include "liveprobe/capture/bracketing.h"
 #include "liveprobe/capture/frame.h"
-#include "liveprobe/capture/hdr_merge.h"
 #include "liveprobe/sh/error.h"
 
 namespace lp {
@@ -102,9 +102,6 @@ struct CameraSettings {
   /// The camera's UVC metadata node, streamed beside the video for each frame's exposure time
   /// (empty: none). Frames then carry the exposure the camera reports, not the one asked for.
   std::string metadataDevice;
-  /// Told, once, what a user should know but that stops nothing (a control delay that differs
-  /// from the calibration's); unset: not told.
-  std::function<void(const std::string&)> onWarning;
 };
 
 /// The exposure time, in seconds, in one buffer of a UVC metadata node
@@ -116,7 +113,6 @@ std::optional<double> parseUvcExposure(const std::uint8_t* data, std::size_t byt
 std::string siblingMetadataNode(const std::string& videoNode);
 
 class UvcMetadata;
-class ExposureIdentifier;
 
 struct CameraControl {
   std::uint32_t id = 0;
@@ -152,7 +148,7 @@ struct LockedExposure {
   std::optional<std::int32_t> exposure100us, gain, whiteBalanceK;
 };
 
-class V4l2Source final : public FrameSource {
+class V4l2Source final : public FrameSource, public ExposureControl {
  public:
   explicit V4l2Source(CameraSettings settings) noexcept;
   ~V4l2Source() override;
@@ -192,19 +188,6 @@ class V4l2Source final : public FrameSource {
   /// balance), in that order: a driver ignores manual values while its auto mode is on.
   LockedExposure lockExposure(double seconds);
 
-  /// Exposure bracketing: from the next frame on, cycles V4L2_CID_EXPOSURE_ABSOLUTE through the
-  /// locked exposure times 2^stop (one frame each, clamped to the control's range), and delivers
-  /// only frames whose exposure is known: reported by the metadata node where it reports one,
-  /// else estimated from the frame's pixels against the frames before it (ExposureIdentifier,
-  /// through `response`; the first frame is taken at the locked exposure, as the anchor). Needs
-  /// lockExposure(). Returns the exposures asked for, in 100 us. Throws lp::Error (one line)
-  /// when the camera has no exposure control or refuses it; next() throws when every frame has
-  /// the same exposure (the camera ignores the control), or when 4 N + 10 frames in a row have
-  /// an exposure neither reported nor shown.
-  std::vector<std::int32_t> bracket(const std::vector<double>& stops,
-                                    const CameraResponse& response = CameraResponse::srgb());
-  std::size_t unidentifiedFrames() const override { return unidentified_; }
-
   /// After lockExposure(): asks for an exposure time (100 us), clamped to the control's range;
   /// returns what was asked. The camera may apply it some frames later, or round it: frames say
   /// what they were taken with where the metadata node reports it. Throws lp::Error when the
@@ -212,13 +195,16 @@ class V4l2Source final : public FrameSource {
   std::int32_t setExposure(std::int32_t exposure100us);
   /// Whether frames carry the exposure the camera reports (a metadata node is streaming).
   bool reportsExposure() const { return metadata_ != nullptr; }
+  /// ExposureControl, for bracketing (liveprobe/capture/bracketing.h): the control's range, and
+  /// a request written as it is (frames without metadata keep carrying the locked exposure).
+  std::pair<std::int32_t, std::int32_t> exposureRange() override;
+  void requestExposure(std::int32_t exposure100us) override;
 
   bool next(Frame& frame) override;
   bool rewind() override { return false; }
   std::string describe() const override;
   double fps() const override { return fps_; }
   std::size_t skippedFrames() const override { return dropped_; }
-  int bracketFrames() const override { return int(bracket_.size()); }
 
   /// What the driver actually set.
   std::uint32_t fourcc() const { return fourcc_; }
@@ -237,10 +223,8 @@ class V4l2Source final : public FrameSource {
   std::uint32_t chooseFourcc();
   std::pair<int, int> largestSize(std::uint32_t fourcc);
   void setRate();
-  /// The exposure this frame was taken with, from the metadata node; false: unreported.
-  bool readFrameExposure(Frame& frame, std::uint32_t sequence);
-  /// Bracketing: asks for the next exposure of the cycle; checks that the camera follows.
-  void nextBracketExposure(const Frame& frame);
+  /// The exposure this frame was taken with, from the metadata node, where it reports one.
+  void readFrameExposure(Frame& frame, std::uint32_t sequence);
   std::optional<std::int32_t> getControl(std::uint32_t id);
   /// Writes a control and reads it back. Returns false when the camera has no such control
   /// (VIDIOC_QUERYCTRL: EINVAL); a refused write, or a value that does not read back, is an
@@ -265,18 +249,6 @@ class V4l2Source final : public FrameSource {
   bool locked_ = false;
   std::string card_, bus_;
   std::unique_ptr<UvcMetadata> metadata_;
-  std::vector<std::int32_t> bracket_;  ///< the cycle, in 100 us (empty: not bracketing)
-  std::size_t bracketAt_ = 0, bracketFrames_ = 0;
-  std::vector<double> reported_;  ///< distinct exposures seen while bracketing (seconds)
-  /// Without per-frame metadata: each bracketed frame's exposure from its pixels.
-  std::unique_ptr<ExposureIdentifier> identifier_;
-  std::size_t unidentified_ = 0, unidentifiedRun_ = 0;
-  /// The control delay seen at the bracket's start against the calibration's: frames received
-  /// since the first exposure of the cycle was set, until one shows it.
-  std::optional<int> expectedDelay_;
-  std::size_t sinceFirstSet_ = 0;
-  bool delayChecked_ = true;
-  void checkControlDelay(const Frame& frame);
 };
 
 }  // namespace lp
