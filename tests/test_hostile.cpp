@@ -155,7 +155,8 @@ TEST(Hostile, SidecarExposuresMustBePositiveAndFinite) {
 }
 
 // A bracketed recording's sidecar: a bracket of 1 to 5 frames, every frame's exposure (the merge
-// weighs each frame by its own), and a camera response of three rising curves of 256 values.
+// weighs each frame by its own) and frame number (it turns older frames by their distance), and
+// a camera response of three rising curves of 256 values.
 TEST(Hostile, BracketSidecarsAreChecked) {
   lpt::TempDir tmp;
   const std::string sidecar = recordedSidecar(tmp, 3);
@@ -186,6 +187,9 @@ TEST(Hostile, BracketSidecarsAreChecked) {
       {"response", {curve, curve}, "3 curves"},
       {"response", {curve, curve, {1, 2}}, "256 values"},
       {"response", {curve, curve, falling}, "response"},
+      {"sequences", {4, 5}, "2 frame numbers for 3 timestamps"},
+      {"sequences", {4, -5, 6}, "frame number -5 is not a whole number"},
+      {"sequences", {4, 5.5, 6}, "frame number 5.5 is not a whole number"},
   };
   for (const Case& c : cases) {
     nlohmann::json bad = good;

@@ -142,6 +142,7 @@ void VideoRecorder::write(const Frame& f) {
   }
   impl_->writer.write(bgr);
   stamps_.push_back(f.timestamp);
+  sequences_.push_back(f.sequence);
   exposures_.push_back(exposure);
 }
 
@@ -160,6 +161,7 @@ void VideoRecorder::writeSequenceFrame(const Frame& f) {
     // The codes as they came; the sidecar keeps each frame's exposure.
     saveImage8(file, f.width, f.height, 3, f.bgr8.data());
     stamps_.push_back(f.timestamp);
+    sequences_.push_back(f.sequence);
     exposures_.push_back(1.0 / f.radianceScale);
     return;
   }
@@ -171,6 +173,7 @@ void VideoRecorder::writeSequenceFrame(const Frame& f) {
     for (float& v : img.rgb) v *= float(f.radianceScale);
   saveImage(file, img, true);
   stamps_.push_back(f.timestamp);
+  sequences_.push_back(f.sequence);
   exposures_.push_back(1.0);
 }
 
@@ -258,6 +261,7 @@ void VideoRecorder::writeSidecar() {
   j["frames"] = stamps_.size();
   j["timestamps"] = stamps_;
   j["exposures"] = exposures_;
+  j["sequences"] = sequences_;
   if (bracket_ > 0) {
     j["bracket"] = bracket_;
     j["response"] = nlohmann::json::parse(response_).at("response");
@@ -317,6 +321,17 @@ RecordingSidecar parseRecordingSidecar(std::string_view text, const std::string&
       const double s = t.get<double>();
       if (!std::isfinite(s)) throw Error(name + ": timestamp " + t.dump() + " is not finite");
       out.stamps.push_back(s);
+    }
+    // Recordings since the bracket's frame numbers keep every frame's.
+    if (j.contains("sequences")) {
+      for (const auto& q : j.at("sequences")) {
+        if (!q.is_number_unsigned())
+          throw Error(name + ": frame number " + q.dump() + " is not a whole number");
+        out.sequences.push_back(q.get<std::uint64_t>());
+      }
+      if (out.sequences.size() != out.stamps.size())
+        throw Error(name + ": " + std::to_string(out.sequences.size()) + " frame numbers for " +
+                    std::to_string(out.stamps.size()) + " timestamps");
     }
     // Recordings since the per-frame metadata keep every frame's exposure.
     if (j.contains("exposures"))

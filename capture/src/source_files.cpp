@@ -43,7 +43,7 @@ class ListSource : public FrameSource {
                   std::to_string(f.height) + " differs from the sequence's " + std::to_string(w_) +
                   "x" + std::to_string(h_));
     w_ = f.width, h_ = f.height;
-    f.sequence = i_;
+    f.sequence = i_ < sidecar_.sequences.size() ? sidecar_.sequences[i_] : i_;
     f.timestamp = i_ < sidecar_.stamps.size() ? sidecar_.stamps[i_] : double(i_) / fps_;
     if (i_ < sidecar_.scales.size()) f.radianceScale = sidecar_.scales[i_];
     ++i_;
@@ -132,6 +132,7 @@ class VideoSource final : public FrameSource {
       scale_ = sc.scale;
       stamps_ = std::move(sc.stamps);
       scales_ = std::move(sc.scales);
+      sequences_ = std::move(sc.sequences);
       bracket_ = sc.bracket;
       response_ = std::move(sc.response);
     }
@@ -170,7 +171,7 @@ class VideoSource final : public FrameSource {
       std::copy_n(m.ptr<std::uint8_t>(y), std::size_t(m.cols) * 3,
                   f.bgr8.data() + y * std::size_t(m.cols) * 3);
     const auto index = std::uint64_t(std::max(0.0, cap_.get(cv::CAP_PROP_POS_FRAMES) - 1));
-    f.sequence = index;
+    f.sequence = index < sequences_.size() ? sequences_[index] : index;
     const double ms = cap_.get(cv::CAP_PROP_POS_MSEC);
     f.timestamp =
         index < stamps_.size() ? stamps_[index] : (ms > 0 ? ms / 1000.0 : double(index) / fps());
@@ -213,6 +214,7 @@ class VideoSource final : public FrameSource {
   std::string endReason_;
   double scale_ = 1.0;
   std::vector<double> stamps_, scales_;
+  std::vector<std::uint64_t> sequences_;  ///< the recording's frame numbers, where it keeps them
   int bracket_ = 0;
   std::string response_;
 };

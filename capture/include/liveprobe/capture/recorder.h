@@ -14,6 +14,7 @@
 // exception) the destructor discards it, and so it does when a write was refused (a frame of
 // another size): nothing half-made is ever put in place.
 #include <memory>
+#include <cstdint>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -60,6 +61,7 @@ class VideoRecorder {
   std::unique_ptr<AtomicTextFile> sidecar_;  ///< FILE.json, likewise
   double fps_, exposure_ = 0;                ///< float frames: the one exposure chosen on the first
   std::vector<double> stamps_, exposures_;   ///< per frame
+  std::vector<std::uint64_t> sequences_;     ///< per frame: Frame::sequence
   int width_ = 0, height_ = 0;
   int bracket_ = 0;
   std::string response_;
@@ -74,6 +76,9 @@ void checkBracketRecording(const std::string& path);
 struct RecordingSidecar {
   double scale = 1.0;                  ///< radiance scale (1 / exposure) of every frame
   std::vector<double> stamps, scales;  ///< per frame; scales only in recordings that keep them
+  /// Per frame, the source's own frame numbers (a camera's skip where frames were lost or left
+  /// out of a bracket: the merge turns older frames by them); empty in older recordings.
+  std::vector<std::uint64_t> sequences;
   int bracket = 0;                     ///< frames per exposure bracket (0: not bracketed)
   std::string response;                ///< the bracket's camera response (CameraResponse::json())
 };
