@@ -84,10 +84,15 @@ std::vector<json> oneExposureFrames() {
       "--frames 8 --sun --coeffs-out " +
       emu.tmp / "c.jsonl");
   EXPECT_EQ(r.exitCode, 0) << r.output;
+  // The sun clipped in every frame: the summary says what measures it.
+  EXPECT_NE(r.output.find("hint: the brightest light clipped at 255"), std::string::npos)
+      << r.output;
+  EXPECT_NE(r.output.find("--bracket -12,-6,0 measures it"), std::string::npos) << r.output;
   return readJsonl(emu.tmp / "c.jsonl");
 }
 
-// Every frame's record in the HDR replay of an image sequence: the truth a bracket is held to.
+// Every frame's record in the replay of `pattern` (an HDR image sequence: the truth a bracket is
+// held to; or a bracket's recording).
 std::vector<json> hdrReplay(const std::string& pattern) {
   lpt::TempDir dir;
   const auto r = lpt::runLiveprobe("replay " + pattern +
@@ -483,12 +488,14 @@ TEST(LiveHdr, TheBracketPlanSaysWhyAStopMoved) {
                            " --lock-exposure 0.3 --headless --view-size 64x36 --frames 2");
     EXPECT_EQ(r.exitCode, 0) << r.output;
     EXPECT_NE(r.output.find(says), std::string::npos) << r.output;
+    EXPECT_EQ(r.output.find(";;"), std::string::npos) << r.output;
   }
 }
 
 // A camera whose response is a gamma of 2.6: --gamma 2.6 is the merge's curve, and the still
 // sky's targets hold in every complete bracket (the sun's share within 10%, L00 within 2%).
-// Merged as sRGB, the exposures contradict each other and no frame comes near.
+// Merged as sRGB, the exposures contradict each other, no frame comes near, and the summary
+// says to calibrate.
 TEST(LiveHdr, GammaIsTheMergesResponse) {
   const json truth = truthOf(skyFrame(30));
   const double share = truth["lights"][0]["share"].get<double>();
@@ -510,10 +517,28 @@ TEST(LiveHdr, GammaIsTheMergesResponse) {
       ASSERT_TRUE(f.contains("lights")) << "frame " << f["frame"];
       EXPECT_NEAR(f["lights"][0]["share"].get<double>(), share, 0.1 * share);
     }
+    // Merged as sRGB, the summary says the exposures disagree and what measures the response.
+    const bool hinted = r.output.find("hint: the exposures disagree") != std::string::npos &&
+                        r.output.find("liveprobe calibrate DEVICE") != std::string::npos;
+    EXPECT_EQ(hinted, gamma.empty()) << r.output;
     if (gamma.empty())
       EXPECT_EQ(near, 0) << r.output;
     else
       EXPECT_GE(complete, 8) << r.output;
+  }
+}
+
+// `recording` replayed gives the live run's records (`live`, a --coeffs-out file), to the last
+// digit: frame numbers, coefficients, lights and confidence.
+void expectReplayAsLive(const std::string& recording, const std::string& live,
+                        const std::string& what) {
+  const auto a = readJsonl(live), b = hdrReplay(recording);
+  ASSERT_EQ(a.size(), b.size()) << what;
+  for (std::size_t i = 0; i < a.size(); ++i) {
+    EXPECT_EQ(a[i]["sequence"], b[i]["sequence"]) << what << " frame " << i;
+    EXPECT_EQ(a[i]["coefficients"], b[i]["coefficients"]) << what << " frame " << i;
+    EXPECT_EQ(a[i].value("lights", json()), b[i].value("lights", json())) << what << " " << i;
+    EXPECT_EQ(a[i]["confidence"], b[i]["confidence"]) << what << " frame " << i;
   }
 }
 
@@ -529,18 +554,33 @@ TEST(LiveHdr, ABracketedRecordingReplaysAsLive) {
     const auto live = emu.run("live /dev/video7" + kBracket + "--frames 20 --sun --coeffs-out " +
                               emu.tmp / "live.jsonl --record " + emu.tmp / record);
     ASSERT_EQ(live.exitCode, 0) << live.output;
-    const auto replay = lpt::runLiveprobe("replay " + emu.tmp / replayed +
-                                          " --sun --headless --size 64x36 --no-background --quiet "
-                                          "--coeffs-out " +
-                                          emu.tmp / "replay.jsonl");
-    ASSERT_EQ(replay.exitCode, 0) << replay.output;
-    const auto a = readJsonl(emu.tmp / "live.jsonl"), b = readJsonl(emu.tmp / "replay.jsonl");
-    ASSERT_EQ(a.size(), b.size()) << record;
-    for (std::size_t i = 0; i < a.size(); ++i) {
-      EXPECT_EQ(a[i]["coefficients"], b[i]["coefficients"]) << record << " frame " << i;
-      EXPECT_EQ(a[i].value("lights", json()), b[i].value("lights", json())) << record << " " << i;
-      EXPECT_EQ(a[i]["confidence"], b[i]["confidence"]) << record << " frame " << i;
-    }
+    expectReplayAsLive(emu.tmp / replayed, emu.tmp / "live.jsonl", record);
+  }
+}
+
+// Without a metadata node too, a bracketed recording replays as the live run went, frame for
+// frame, on a still sky and on a turning scene: the frames left out before the camera's delay
+// was known leave gaps in the frame numbers, which the sidecar keeps, and the merge turns the
+// older frames by them.
+TEST(LiveHdr, ABracketWithoutMetadataReplaysAsLive) {
+  const double axis[3] = {0.57735, 0.57735, 0.57735};
+  lpt::TempDir turning;
+  const auto quarry =
+      lpt::turningFrames(std::string(LIVEPROBE_DATA_DIR) + "/equirect/quarry_01_1k.hdr", 4, axis,
+                         1.0, 40, turning.path);
+  for (const auto& [what, files, mode] :
+       std::vector<std::tuple<std::string, std::vector<std::string>, std::string>>{
+           {"still sky", {skyFrame(30)}, "MJPG_256x128"},
+           {"turning quarry", quarry, "YUYV_256x128"}}) {
+    Emulator emu(mode, files, "control_delay=2");
+    emu.env = "LPEMU_META_DEVICE= LPEMU_SENSITIVITY=0.5 ";
+    const auto live = emu.run(
+        "live /dev/video7 --bracket -13,-10,-7,-3,0 --lock-exposure 0.3 --headless "
+        "--view-size 64x36 --no-background --frames 25 --sun --coeffs-out " +
+        emu.tmp / "live.jsonl --record " + emu.tmp / "b.mkv");
+    ASSERT_EQ(live.exitCode, 0) << live.output;
+    EXPECT_NE(live.output.find("left out of the bracket"), std::string::npos) << live.output;
+    expectReplayAsLive(emu.tmp / "b.mkv", emu.tmp / "live.jsonl", what);
   }
 }
 
@@ -563,48 +603,53 @@ TEST(LiveHdr, ABracketGoesOnlyWhereItReplays) {
 }
 
 // A hand over the lens (10 frames gone dark, or white), starting on each exposure of the bracket
-// in turn: its first frame has confidence below 0.5 (a dark -12 EV frame is what a short exposure
-// of the sky reads, bar the sun it contradicts), every frame it covers is held at the last good
-// lighting, and the hold ends only on a complete bracket that agrees again (every exposure
-// merged, the sun measured unclipped), whose sun then has the HDR share: within 3 frames of the
-// hand's going.
+// in turn, with the camera's metadata and without it (the hand's frames then named by the
+// schedule, the run going on): its first frame has confidence below 0.5 (a dark -12 EV frame is
+// what a short exposure of the sky reads, bar the sun it contradicts), every frame it covers is
+// held at the last good lighting, and the hold ends only on a complete bracket that agrees again
+// (every exposure merged, the sun measured unclipped), whose sun then has the HDR share: within 3
+// frames of the hand's going.
 TEST(LiveHdr, HoldBelowKeepsTheLightingThroughAnOccluder) {
   const json truth = truthOf(skyFrame(30));
   const double share = truth["lights"][0]["share"].get<double>();
-  for (const std::string how : {"", ",occlude_white"})
-    for (const int from : {30, 31, 32}) {
-      const std::string what = (how.empty() ? "dark from " : "white from ") + std::to_string(from);
-      Emulator emu("MJPG_256x128", {skyFrame(30)},
-                   "control_delay=2,occlude_frames=10,occlude_from=" + std::to_string(from) + how);
-      const auto r =
-          emu.run("live /dev/video7" + kBracket +
-                  "--frames 50 --sun --hold-below 0.5 --coeffs-out " + emu.tmp / "c.jsonl");
-      ASSERT_EQ(r.exitCode, 0) << r.output;
-      json good;
-      int held = 0;
-      long released = -1;
-      for (const json& f : readJsonl(emu.tmp / "c.jsonl")) {
-        const long s = f["sequence"].get<long>();
-        const bool isHeld = f["confidence"]["held"].get<bool>();
-        held += isHeld;
-        if (s == from) EXPECT_LT(f["confidence"]["value"].get<double>(), 0.5) << what;
-        if (s >= from && s < from + 10) EXPECT_TRUE(isHeld) << what << ": frame " << s;
-        if (isHeld) {
-          EXPECT_EQ(f["coefficients"], good["coefficients"]) << what << ": frame " << s;
-        } else if (s < from) {
-          good = f;
-        } else {
-          if (released < 0) released = s;
-          EXPECT_TRUE(f["confidence"]["complete"].get<bool>()) << what << ": frame " << s;
-          ASSERT_TRUE(f.contains("lights")) << what << ": frame " << s;
-          EXPECT_NEAR(f["lights"][0]["share"].get<double>(), share, 0.1 * share)
-              << what << ": frame " << s;
+  for (const bool metadata : {true, false})
+    for (const std::string how : {"", ",occlude_white"})
+      for (const int from : {30, 31, 32}) {
+        const std::string what = (how.empty() ? "dark from " : "white from ") +
+                                 std::to_string(from) + (metadata ? "" : ", no metadata");
+        Emulator emu(
+            "MJPG_256x128", {skyFrame(30)},
+            "control_delay=2,occlude_frames=10,occlude_from=" + std::to_string(from) + how);
+        if (!metadata) emu.env = "LPEMU_META_DEVICE= ";
+        const auto r =
+            emu.run("live /dev/video7" + kBracket +
+                    "--frames 50 --sun --hold-below 0.5 --coeffs-out " + emu.tmp / "c.jsonl");
+        ASSERT_EQ(r.exitCode, 0) << r.output;
+        json good;
+        int held = 0;
+        long released = -1;
+        for (const json& f : readJsonl(emu.tmp / "c.jsonl")) {
+          const long s = f["sequence"].get<long>();
+          const bool isHeld = f["confidence"]["held"].get<bool>();
+          held += isHeld;
+          if (s == from) EXPECT_LT(f["confidence"]["value"].get<double>(), 0.5) << what;
+          if (s >= from && s < from + 10) EXPECT_TRUE(isHeld) << what << ": frame " << s;
+          if (isHeld) {
+            EXPECT_EQ(f["coefficients"], good["coefficients"]) << what << ": frame " << s;
+          } else if (s < from) {
+            good = f;
+          } else {
+            if (released < 0) released = s;
+            EXPECT_TRUE(f["confidence"]["complete"].get<bool>()) << what << ": frame " << s;
+            ASSERT_TRUE(f.contains("lights")) << what << ": frame " << s;
+            EXPECT_NEAR(f["lights"][0]["share"].get<double>(), share, 0.1 * share)
+                << what << ": frame " << s;
+          }
         }
+        EXPECT_GE(released, from + 10) << what;
+        EXPECT_LE(released, from + 13) << what;
+        EXPECT_NE(r.output.find(std::to_string(held) + " held"), std::string::npos) << r.output;
       }
-      EXPECT_GE(released, from + 10) << what;
-      EXPECT_LE(released, from + 13) << what;
-      EXPECT_NE(r.output.find(std::to_string(held) + " held"), std::string::npos) << r.output;
-    }
 }
 
 // calibrate on cameras whose responses are sRGB, a gamma of 1.8 and one of 2.6: every code from

@@ -342,9 +342,20 @@ int runCalibrate(const Args& a) {
       if (!seen && before >= 0 && std::abs(m - before) > std::max(1.0, 0.04 * before))
         delays.push_back(i), seen = true;
     }
+    // A camera that reports its exposure may stop short of what was asked (its frame time is
+    // the longest it can take): a stop that reports the last one's exposure is not a stop.
+    const int reported = int(std::lround(1e4 / f.radianceScale));
+    if (camera->reportsExposure() && !frames.empty() &&
+        reported == int(std::lround(1e4 / frames.back().radianceScale))) {
+      std::fprintf(stderr,
+                   "  %+d EV: %d x 100 us, the camera's limit (as the stop before): "
+                   "not counted\n",
+                   stop, reported);
+      return false;
+    }
     brightness.push_back(meanCode(f));
-    std::fprintf(stderr, "  %+d EV: %d x 100 us, mean code %.1f\n", stop,
-                 int(std::lround(1e4 / f.radianceScale)), brightness.back());
+    std::fprintf(stderr, "  %+d EV: %d x 100 us, mean code %.1f\n", stop, reported,
+                 brightness.back());
     frames.push_back(std::move(f));
     return true;
   };

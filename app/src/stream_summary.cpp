@@ -21,6 +21,7 @@ void recordSample(StreamTally& t, const ProcessedFrame& f, double uploadMs, doub
   for (std::size_t k = 0; k < kStageCount; ++k) t.stages[k].push_back(times.ms[k]);
   t.saturated += f.saturated;
   t.confidence.push_back(f.confidence.value());
+  t.agreement.push_back(f.confidence.agreement);
   t.brightestMeasured += f.confidence.brightestMeasured;
   if (!f.lights.empty()) ++t.withLight;
   if (std::any_of(f.lights.begin(), f.lights.end(), [](const Light& l) { return l.clipped; }))
@@ -98,6 +99,38 @@ void printSummary(const std::string& description, const PipelineStats& st, const
     std::fprintf(stderr,
                  "  --smooth %.3g s: lighting lags a step change by %.3g s (63%% of the step)\n",
                  smoothSeconds, smoothSeconds);
+}
+
+void printCameraHints(const StreamTally& t, bool bracketed) {
+  const std::size_t n = t.frames();
+  if (n == 0) return;
+  const std::size_t unmeasured = n - std::min(n, t.brightestMeasured);
+  if (!bracketed) {
+    // Most frames clipped their brightest light: a sun or a lamp the 8-bit codes cannot hold.
+    if (2 * unmeasured > n)
+      std::fprintf(stderr,
+                   "liveprobe live: hint: the brightest light clipped at 255 in %zu of %zu frames "
+                   "(%.0f values a frame): its power is a lower bound; --bracket -12,-6,0 "
+                   "measures it (docs/hdr.md)\n",
+                   unmeasured, n, double(t.saturated) / double(n));
+    return;
+  }
+  // The exposures contradict each other in most frames, on a scene not known to move: the
+  // codes are not turned into light as the camera made them.
+  if (percentile(t.agreement, 0.5) < 0.5)
+    std::fprintf(stderr,
+                 "liveprobe live: hint: the exposures disagree with each other (median agreement "
+                 "%.2f): is the camera's response the one merged (sRGB unless --gamma or "
+                 "--response)? liveprobe calibrate DEVICE --out response.json measures it; then "
+                 "--response response.json\n",
+                 percentile(t.agreement, 0.5));
+  else if (2 * unmeasured > n)
+    std::fprintf(stderr,
+                 "liveprobe live: hint: the brightest light clipped even in the shortest "
+                 "exposure in %zu of %zu frames: its share is a lower bound (confidence at most "
+                 "0.5); a shorter stop, or a neutral-density filter where the control is at its "
+                 "limit, measures it (docs/hdr.md)\n",
+                 unmeasured, n);
 }
 
 }  // namespace lp::cli

@@ -19,6 +19,7 @@ struct StreamTally {
   std::size_t drawn = 0, saturated = 0;
   std::size_t withLight = 0, clippedLight = 0;  ///< frames with a light; of them, clipped
   std::vector<double> confidence;               ///< each frame's
+  std::vector<double> agreement;                ///< each frame's (FrameConfidence::agreement)
   std::size_t brightestMeasured = 0;            ///< frames whose brightest pixel was measured
 
   std::size_t frames() const { return latency.size(); }
@@ -38,5 +39,11 @@ std::string stageMedians(const StreamTally& t);
 /// confidence, shortened gaps and --smooth's lag.
 void printSummary(const std::string& description, const PipelineStats& st, const StreamTally& t,
                   double smoothSeconds, bool interrupted, const RecordSinks& sinks);
+
+/// After a camera's run, what a user can do about what it measured, one line each, where it
+/// applies: a clipped light without --bracket; a bracket whose exposures disagree with each
+/// other (a response that is not the camera's); a bracket that never measured its brightest
+/// light (the control's limit: neutral density). `bracketed`: the run merged a bracket.
+void printCameraHints(const StreamTally& t, bool bracketed);
 
 }  // namespace lp::cli
