@@ -13,8 +13,8 @@
 // recorded up to a fault (a camera unplugged mid-stream) says so. Otherwise (an error, an
 // exception) the destructor discards it, and so it does when a write was refused (a frame of
 // another size): nothing half-made is ever put in place.
-#include <memory>
 #include <cstdint>
+#include <memory>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -79,8 +79,8 @@ struct RecordingSidecar {
   /// Per frame, the source's own frame numbers (a camera's skip where frames were lost or left
   /// out of a bracket: the merge turns older frames by them); empty in older recordings.
   std::vector<std::uint64_t> sequences;
-  int bracket = 0;                     ///< frames per exposure bracket (0: not bracketed)
-  std::string response;                ///< the bracket's camera response (CameraResponse::json())
+  int bracket = 0;       ///< frames per exposure bracket (0: not bracketed)
+  std::string response;  ///< the bracket's camera response (CameraResponse::json())
 };
 
 /// Parses a sidecar's text (the whole of it: trailing text is an error). Exposures must be
