@@ -9,6 +9,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <opencv2/imgcodecs.hpp>
 #include <regex>
 
@@ -353,6 +354,53 @@ void turningWithoutMetadata(int delay) {
   all.expectAll();
 }
 
+// The schedule names a frame's exposure as the camera's metadata would: on other maps turned
+// about another tilted axis (a dim overpass whose first frames the pixels cannot name while it
+// turns; a bright esplanade whose -9 EV frame the pixels, through 4:2:2 chroma, measure a third
+// of a stop off; a sunrise), the same run without the metadata node gives, frame for frame from
+// two brackets after the first complete merge on, the records of the run with it: the coefficients
+// within 1e-3 of L00, the confidence within 0.01, the brightest light measured or not alike.
+TEST(LiveHdr, WithoutMetadataAsWithIt) {
+  const double axis[3] = {0.8, 0, 0.6};
+  for (const std::string map : {"pedestrian_overpass", "royal_esplanade", "blouberg_sunrise_2"}) {
+    lpt::TempDir dir;
+    const auto files =
+        lpt::turningFrames(std::string(LIVEPROBE_DATA_DIR) + "/equirect/" + map + "_1k.hdr", 4,
+                           axis, 1.0, 80, dir.path);
+    std::map<long, json> with;
+    for (const bool metadata : {true, false}) {
+      Emulator emu("YUYV_256x128", files, "control_delay=2");
+      emu.env = std::string("LPEMU_SENSITIVITY=0.5 ") + (metadata ? "" : "LPEMU_META_DEVICE= ");
+      const auto r = emu.run(
+          "live /dev/video7 --bracket -13,-9,-4,0 --lock-exposure 0.3 --headless --view-size "
+          "64x36 --no-background --frames 50 --sun --coeffs-out " +
+          emu.tmp / "c.jsonl");
+      ASSERT_EQ(r.exitCode, 0) << map << "\n" << r.output;
+      const auto records = readJsonl(emu.tmp / "c.jsonl");
+      EXPECT_EQ(records.size(), 50u) << map;
+      int compared = 0;
+      long started = -1;  // the first complete merge, then two brackets for the turn's estimate
+      for (const json& f : records) {
+        const long s = f["sequence"].get<long>();
+        if (started < 0 && f["confidence"]["complete"].get<bool>()) started = s + 8;
+        if (metadata) {
+          if (started >= 0 && s >= started) with[s] = f;
+        } else if (started >= 0 && s >= started && with.count(s)) {
+          ++compared;
+          // (The turn the merge estimates from the last two brackets differs at first: the
+          // frames before the lag is known are not merged.)
+          EXPECT_LT(worstCoefficient(f["coefficients"], with[s]["coefficients"], 1.0), 1e-3)
+              << map << ": frame " << s;
+          const json &c = f["confidence"], &d = with[s]["confidence"];
+          EXPECT_NEAR(c["value"].get<double>(), d["value"].get<double>(), 0.01) << map << " " << s;
+          EXPECT_EQ(c["brightest_measured"], d["brightest_measured"]) << map << ": frame " << s;
+        }
+      }
+      if (!metadata) EXPECT_GE(compared, 25) << map << "\n" << r.output;
+    }
+  }
+}
+
 TEST(LiveHdr, ATurningSceneWithoutMetadataDelay1) { turningWithoutMetadata(1); }
 TEST(LiveHdr, ATurningSceneWithoutMetadataDelay2) { turningWithoutMetadata(2); }
 TEST(LiveHdr, ATurningSceneWithoutMetadataDelay3) { turningWithoutMetadata(3); }
@@ -417,10 +465,12 @@ TEST(LiveHdr, LateAndRoundedExposuresAreTakenAsReported) {
     EXPECT_LT(worstCoefficient(f["coefficients"], truth["coefficients"], gain), 0.005);
 }
 
-// A camera without a metadata node (most webcams), taking each exposure 1 to 3 frames late, or
-// rounding it to a power of two: each frame's exposure is told from its pixels, and every
-// complete bracket of the still sky meets the targets of the camera that reports them (the sun's
-// share within 10% and 1 degree, L00 within 2%).
+// A camera without a metadata node (most webcams), taking each exposure 1 to 3 frames late:
+// each frame's exposure is the schedule's, confirmed by its pixels, and every complete bracket
+// of the still sky meets the targets of the camera that reports them (the sun's share within
+// 10% and 1 degree, L00 within 2%). A camera that also rounds what it is asked to a power of two,
+// and says so nowhere, is merged at what was asked: L00 is off by the locked exposure's rounding
+// (3859 taken as 4096 x 100 us: 6.1% over), predicted within 2%, and the sun still within 10%.
 TEST(LiveHdr, ABracketWithoutMetadataToldFromThePixels) {
   const json truth = truthOf(skyFrame(30));
   const json& sun = truth["lights"][0];
@@ -435,6 +485,13 @@ TEST(LiveHdr, ABracketWithoutMetadataToldFromThePixels) {
     EXPECT_NE(r.output.find("each frame's exposure measured from its pixels"), std::string::npos)
         << r.output;
     const double gain = gainOf(r.output);
+    double rounding = 1;  // what a silent power of two does to the locked (0 EV) exposure
+    if (faults.find("exposure_pow2") != std::string::npos) {
+      std::smatch m;
+      ASSERT_TRUE(std::regex_search(r.output, m, std::regex("exposure ([0-9]+) x 100 us")));
+      const double locked = std::stod(m[1]);
+      rounding = std::exp2(std::round(std::log2(locked))) / locked;
+    }
     int complete = 0;
     for (const json& f : readJsonl(emu.tmp / "c.jsonl")) {
       if (f["confidence"]["exposures"] != 3) continue;
@@ -445,7 +502,7 @@ TEST(LiveHdr, ABracketWithoutMetadataToldFromThePixels) {
                   0.1 * sun["share"].get<double>())
           << faults << " frame " << f["frame"];
       EXPECT_LT(angleDeg(l["direction"], sun["direction"]), 1.0) << faults;
-      EXPECT_NEAR(f["coefficients"]["L00"][1].get<double>() / gain, l00, 0.02 * l00)
+      EXPECT_NEAR(f["coefficients"]["L00"][1].get<double>() / gain, rounding * l00, 0.02 * l00)
           << faults << " frame " << f["frame"];
     }
     EXPECT_GE(complete, 20) << faults << "\n" << r.output;

@@ -15,12 +15,6 @@ namespace {
 constexpr int kMaxLag = 7;
 // The exposures seen that a lag is locked or re-locked on, and how many stay known.
 constexpr std::size_t kSeenKept = 16;
-// How closely a pixel ratio measures an exposure (8-bit steps, a codec's noise): a camera that
-// rounds is told from one that does not beyond this.
-constexpr double kPrecision = 0.02;
-// The ratios a stop's rounding is the median of.
-constexpr std::size_t kRoundingKept = 9;
-
 std::string stopName(double ev) {
   char text[32];
   std::snprintf(text, sizeof text, "%+g EV", ev);
@@ -38,13 +32,6 @@ Bracketing::Bracketing(ExposureControl& control, BracketOptions options)
     asked_.push_back(std::int32_t(std::clamp<double>(std::lround(want), lo, hi)));
   }
   base_ = opt_.locked * 1e-4;
-  std::vector<double> all(asked_.begin(), asked_.end());
-  all.push_back(opt_.locked);
-  std::sort(all.begin(), all.end());
-  all.erase(std::unique(all.begin(), all.end()), all.end());
-  for (std::size_t i = 1; i < all.size(); ++i)
-    tolerance_ = std::min(tolerance_, 0.5 * std::log2(all[i] / all[i - 1]));
-  rounding_.resize(asked_.size());
   contradicted_.assign(asked_.size() + 1, 0);
   if (opt_.response.controlDelay) lag_ = *opt_.response.controlDelay + 1;
 }
@@ -73,19 +60,26 @@ int Bracketing::scheduled(std::uint64_t sequence, int lag) const {
 }
 
 double Bracketing::seconds(int stop) const {
-  if (stop < 0) return base_;
-  const double asked = asked_[std::size_t(stop)] * 1e-4;
-  const auto& r = rounding_[std::size_t(stop)];
-  if (r.empty()) return asked;
-  std::vector<double> sorted(r.begin(), r.end());
-  std::nth_element(sorted.begin(), sorted.begin() + std::ptrdiff_t(sorted.size() / 2),
-                   sorted.end());
-  const double ratio = sorted[sorted.size() / 2];
-  return std::abs(ratio - 1.0) <= kPrecision ? asked : asked * ratio;
+  return stop < 0 ? base_ : asked_[std::size_t(stop)] * 1e-4;
+}
+
+int Bracketing::nearestStop(double measured) const {
+  int best = -1;
+  for (int k = 0; k < int(asked_.size()); ++k)
+    if (std::abs(std::log2(measured / seconds(k))) < std::abs(std::log2(measured / seconds(best))))
+      best = k;
+  return best;
+}
+
+bool Bracketing::nearest(double measured, int stop) const {
+  // A ratio measured on few shared pixels, or through a response that is not quite the
+  // camera's, can be off by half a stop (a -7 EV frame against a 0 EV one); what it cannot do
+  // is land nearer another exposure.
+  return seconds(nearestStop(measured)) == seconds(stop);
 }
 
 bool Bracketing::explains(int lag, const Seen& s) const {
-  return std::abs(std::log2(s.seconds / seconds(scheduled(s.sequence, lag)))) <= tolerance_;
+  return nearest(s.seconds, scheduled(s.sequence, lag));
 }
 
 std::optional<int> Bracketing::explaining(std::size_t count) const {
@@ -113,12 +107,17 @@ void Bracketing::setLag(int lag) {
 }
 
 void Bracketing::lockLag() {
-  // Every exposure seen so far explained by one lag and by no other, once the cycle has shown
-  // two exposures.
-  if (distinct_.size() < 2 || seen_.size() < 4) return;
+  // The last exposures seen (a cycle and one more, at least four, two of them distinct)
+  // explained by one lag and by no other.
+  const std::size_t window = std::min(seen_.size(), std::max<std::size_t>(4, asked_.size() + 1));
+  if (distinct_.size() < 2 || window < 4) return;
+  const auto from = seen_.end() - std::ptrdiff_t(window);
+  if (std::all_of(from, seen_.end(),
+                  [&](const Seen& s) { return std::abs(s.seconds / from->seconds - 1) < 0.02; }))
+    return;  // one exposure throughout: no lag is told from another
   int only = 0;
   for (int lag = 1; lag <= kMaxLag; ++lag)
-    if (std::all_of(seen_.begin(), seen_.end(), [&](const Seen& s) { return explains(lag, s); })) {
+    if (std::all_of(from, seen_.end(), [&](const Seen& s) { return explains(lag, s); })) {
       if (only) return;  // two lags explain what was seen: not yet told apart
       only = lag;
     }
@@ -175,37 +174,37 @@ bool Bracketing::take(Frame& frame) {
       relock();
   } else if (!lag_) {
     // Not yet the schedule: the pixels name the exposure, against the frames known before.
-    if (const auto t = identifier_ ? identifier_->identify(frame) : std::nullopt) {
-      note(s, *t);
-      name(frame, *t);
+    const auto t = identifier_ ? identifier_->identify(frame) : std::nullopt;
+    // What they measured tells the lag even where it named no exposure (a frame the known ones
+    // contradict in part: the scene moved).
+    const double measured = t ? *t : (identifier_ ? identifier_->lastEstimate() : 0.0);
+    if (measured > 0) note(s, measured);
+    lockLag();
+    if (t) {
+      name(frame, seconds(nearestStop(*t)));  // as asked, as the schedule names them
       deliver = true;
-      lockLag();
+    } else if (lag_ && measured > 0 && explains(*lag_, seen_.back())) {
+      name(frame, seconds(scheduled(s, *lag_)));  // the frame that told the lag
+      deliver = true;
     } else {
       ++unnamed_;
     }
   } else {
-    const int stop = scheduled(s, *lag_);
-    const double planned = seconds(stop);
     const std::optional<double> measured = identifier_ ? identifier_->measure(frame) : std::nullopt;
     if (measured) {
       note(s, *measured);
       relock();
     }
-    const int now = scheduled(s, *lag_);  // after a re-lock
-    const double want = now == stop ? planned : seconds(now);
+    const int now = scheduled(s, *lag_);  // after any re-lock
+    const double want = seconds(now);
     if (!measured) {
       // The pixels cannot say (a dark or white frame, a stop far from the known ones): the
       // schedule names it; it is a reference for later frames where nothing contradicts it.
       deliver = true;
       if (identifier_ && identifier_->contradiction(want) <= 0.05) identifier_->confirm(want);
-    } else if (std::abs(std::log2(*measured / want)) <= tolerance_) {
+    } else if (nearest(*measured, now)) {
       deliver = true;
-      if (now >= 0) {
-        auto& r = rounding_[std::size_t(now)];
-        r.push_back(*measured / (asked_[std::size_t(now)] * 1e-4));
-        if (r.size() > kRoundingKept) r.pop_front();
-      }
-      identifier_->confirm(seconds(now));
+      identifier_->confirm(want);
     } else if (++run_ > 2 * asked_.size() + 2) {
       // Contradicted frame after frame, and no lag explains it: the scene changed past what
       // the known frames can be compared with. The schedule stands; the frames known start
@@ -215,8 +214,7 @@ bool Bracketing::take(Frame& frame) {
     } else {
       ++contradicted_[now < 0 ? asked_.size() : std::size_t(now)];
     }
-    // (A confirmed frame by what its stop is now known to take, its own ratio counted.)
-    if (deliver) name(frame, now == stop && !measured ? planned : seconds(now));
+    if (deliver) name(frame, want);
   }
   if (deliver) run_ = 0;
   checkFollows(frame);

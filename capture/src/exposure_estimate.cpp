@@ -51,8 +51,12 @@ ExposureIdentifier::Known ExposureIdentifier::sample(const Frame& f) const {
   const auto& green = response_.linear[1];
   for (int y = step / 2; y < f.height; y += step)
     for (int x = step / 2; x < f.width; x += step) {
-      const std::uint8_t code = f.bgr8[(std::size_t(y) * std::size_t(f.width) + x) * 3 + 1];
-      const bool well = code >= kLowest && code <= kHighest;
+      const std::uint8_t* px = &f.bgr8[(std::size_t(y) * std::size_t(f.width) + x) * 3];
+      const std::uint8_t code = px[1];
+      // Green read well, and no channel near its clip: a clipped red or blue pulls green with it
+      // through a camera's YUV (4:2:2 or 4:2:0 chroma shared by neighbours), by several percent.
+      const bool well =
+          code >= kLowest && code <= kHighest && std::max({px[0], px[1], px[2]}) <= kHighest;
       k.linear.push_back(well ? green[code] : 0.0f);
       // An interval with room for 8-bit steps and compression: a dark code is below what would
       // read kLowest, a clipped one above kHighest's value, a low one within a factor of two.

@@ -97,8 +97,13 @@ class Bracketing {
   };
   /// The stop the schedule gives frame `sequence` at `lag` (-1: the locked exposure).
   int scheduled(std::uint64_t sequence, int lag) const;
-  /// That stop's exposure time, seconds, with what the pixels showed of a camera that rounds.
+  /// That stop's exposure time, seconds, as asked.
   double seconds(int stop) const;
+  /// The stop whose exposure is nearest `measured` (seconds; -1: the locked one).
+  int nearestStop(double measured) const;
+  /// Whether `measured` names `stop`: no other exposure of the cycle, nor the locked one, is
+  /// nearer.
+  bool nearest(double measured, int stop) const;
   bool explains(int lag, const Seen& s) const;
   /// The smallest lag that explains the last `count` exposures seen (0: all of them).
   std::optional<int> explaining(std::size_t count) const;
@@ -113,21 +118,17 @@ class Bracketing {
   ExposureControl& control_;
   BracketOptions opt_;
   std::vector<std::int32_t> asked_;
-  double base_ = 0;         ///< the locked exposure, seconds
-  double tolerance_ = 0.3;  ///< in stops: half the smallest gap between two exposures
-  std::size_t next_ = 0;    ///< the cycle's next stop to ask
+  double base_ = 0;       ///< the locked exposure, seconds
+  std::size_t next_ = 0;  ///< the cycle's next stop to ask
   std::deque<Write> writes_;
   std::deque<Seen> seen_;  ///< exposures reported or measured, newest last
   std::optional<int> lag_;
   bool warned_ = false;
   std::unique_ptr<ExposureIdentifier> identifier_;  ///< without reports: the pixels
-  /// Per stop: what a camera that rounds takes for it, over what was asked (the last ratios
-  /// the pixels measured; their median counts where it is more than 2% from 1).
-  std::vector<std::deque<double>> rounding_;
-  std::size_t taken_ = 0, run_ = 0;        ///< frames taken; left out in a row
-  std::vector<double> distinct_;           ///< distinct exposures seen (seconds)
-  std::vector<std::size_t> contradicted_;  ///< per stop (the last: the locked exposure)
-  std::size_t unnamed_ = 0;                ///< before the lag was known: no exposure told
+  std::size_t taken_ = 0, run_ = 0;                 ///< frames taken; left out in a row
+  std::vector<double> distinct_;                    ///< distinct exposures seen (seconds)
+  std::vector<std::size_t> contradicted_;           ///< per stop (the last: the locked exposure)
+  std::size_t unnamed_ = 0;                         ///< before the lag was known: no exposure told
 };
 
 /// A camera that brackets: its frames, each named with its exposure (frames whose exposure is
