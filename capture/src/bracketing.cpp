@@ -110,7 +110,7 @@ void Bracketing::lockLag() {
   // The last exposures seen (a cycle and one more, at least four, two of them distinct)
   // explained by one lag and by no other.
   const std::size_t window = std::min(seen_.size(), std::max<std::size_t>(4, asked_.size() + 1));
-  if (distinct_.size() < 2 || window < 4) return;
+  if (!varied_ || window < 4) return;
   const auto from = seen_.end() - std::ptrdiff_t(window);
   if (std::all_of(from, seen_.end(),
                   [&](const Seen& s) { return std::abs(s.seconds / from->seconds - 1) < 0.02; }))
@@ -136,9 +136,8 @@ void Bracketing::relock() {
 void Bracketing::note(std::uint64_t sequence, double seconds) {
   seen_.push_back({sequence, seconds});
   if (seen_.size() > kSeenKept) seen_.pop_front();
-  if (std::none_of(distinct_.begin(), distinct_.end(),
-                   [&](double d) { return std::abs(d - seconds) <= 0.02 * d; }))
-    distinct_.push_back(seconds);
+  if (first_ == 0) first_ = seconds;
+  varied_ = varied_ || std::abs(seconds - first_) > 0.02 * first_;
 }
 
 void Bracketing::askNext(std::uint64_t after) {
@@ -155,10 +154,10 @@ void Bracketing::name(Frame& frame, double seconds) const {
 
 void Bracketing::checkFollows(const Frame& frame) {
   // A camera that ignores the control shows one exposure, frame after frame.
-  if (++taken_ != 4 * asked_.size() + 10 || distinct_.size() >= 2) return;
+  if (++taken_ != 4 * asked_.size() + 10 || varied_) return;
   throw Error(opt_.name + ": the camera ignores its exposure control: " + std::to_string(taken_) +
               " frames all " + (frame.exposureReported ? "report " : "show ") +
-              std::to_string(std::lround(distinct_.front() * 1e4)) + " x 100 us");
+              std::to_string(std::lround(first_ * 1e4)) + " x 100 us");
 }
 
 bool Bracketing::take(Frame& frame) {

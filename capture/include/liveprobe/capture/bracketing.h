@@ -126,9 +126,10 @@ class Bracketing {
   bool warned_ = false;
   std::unique_ptr<ExposureIdentifier> identifier_;  ///< without reports: the pixels
   std::size_t taken_ = 0, run_ = 0;                 ///< frames taken; left out in a row
-  std::vector<double> distinct_;                    ///< distinct exposures seen (seconds)
-  std::vector<std::size_t> contradicted_;           ///< per stop (the last: the locked exposure)
-  std::size_t unnamed_ = 0;                         ///< before the lag was known: no exposure told
+  double first_ = 0;                                ///< the first exposure seen (seconds)
+  bool varied_ = false;                    ///< an exposure 2% or more from the first was seen
+  std::vector<std::size_t> contradicted_;  ///< per stop (the last: the locked exposure)
+  std::size_t unnamed_ = 0;                ///< before the lag was known: no exposure told
 };
 
 /// A camera that brackets: its frames, each named with its exposure (frames whose exposure is
