@@ -7,7 +7,11 @@
 #include <array>
 #include <cmath>
 #include <cstring>
+#include <functional>
+#include <map>
 #include <nlohmann/json.hpp>
+#include <opencv2/imgproc.hpp>
+#include <opencv2/photo.hpp>
 #include <vector>
 
 #include "liveprobe/backends.h"
@@ -25,6 +29,7 @@
 #include "liveprobe/sh/projector.h"
 #include "liveprobe/sh/simd.h"
 #include "turned_map.h"
+#include "yuyv.h"
 
 namespace {
 
@@ -597,4 +602,122 @@ TEST(HdrMerge, ProjectingAsItMergesGivesTheMergedFramesCoefficients) {
   BracketMerger merger(MergeOptions{.frames = 3});
   Frame out;
   EXPECT_THROW(merger.add(still.front(), out, nullptr, wrong), lp::Error);
+}
+
+namespace {
+
+// A sweep of one still sky (stops -12 to +3 about a mid-grey exposure) through a camera's
+// response, as RGB24 or through YUYV (decoded as liveprobe decodes it).
+std::vector<Frame> sweep(const lp::Image& sky, const std::function<double(double)>& encode,
+                         bool yuyv) {
+  std::vector<float> lum;
+  for (std::size_t i = 0; i < sky.rgb.size(); i += 3) lum.push_back(sky.rgb[i + 1]);
+  std::nth_element(lum.begin(), lum.begin() + std::ptrdiff_t(lum.size() / 2), lum.end());
+  const double mid = 0.18 / lum[lum.size() / 2];
+  std::vector<Frame> frames;
+  for (int stop = -12; stop <= 3; ++stop) {
+    const double t = mid * std::exp2(stop);
+    cv::Mat bgr(sky.height, sky.width, CV_8UC3);
+    for (int y = 0; y < sky.height; ++y)
+      for (int x = 0; x < sky.width; ++x)
+        for (int c = 0; c < 3; ++c) {
+          const double v = std::clamp(
+              double(sky.rgb[(std::size_t(y) * std::size_t(sky.width) + std::size_t(x)) * 3 +
+                             std::size_t(c)]) *
+                  t,
+              0.0, 1.0);
+          bgr.at<cv::Vec3b>(y, x)[2 - c] = std::uint8_t(std::lround(255.0 * encode(v)));
+        }
+    if (yuyv) {
+      std::vector<std::uint8_t> sent = lpt::encodeYuyv(bgr);
+      cv::cvtColor(cv::Mat(sky.height, sky.width, CV_8UC2, sent.data()), bgr,
+                   cv::COLOR_YUV2BGR_YUYV);
+    }
+    Frame f;
+    f.format = lp::PanoramaFormat::BgrU8;
+    f.width = sky.width, f.height = sky.height;
+    f.radianceScale = 1.0 / t;
+    f.bgr8.assign(bgr.data, bgr.data + bgr.total() * 3);
+    frames.push_back(std::move(f));
+  }
+  return frames;
+}
+
+// The worst relative error of a recovered curve (linear per code, R G B) over codes
+// kDarkestCode..kBrightestCode in any channel, after the one scale a response leaves open
+// (fitted to green over codes 32-240); `within3` gets the lowest code from which every code up to
+// kBrightestCode is within 3%.
+double worstError(const std::function<double(int c, int code)>& recovered,
+                  const std::function<double(double)>& encode, int* within3 = nullptr) {
+  std::array<double, 256> truth{};  // the inverse of `encode` at each code
+  for (int code = 1; code < 256; ++code) {
+    double lo = 0, hi = 1;
+    for (int i = 0; i < 60; ++i)
+      ((encode(0.5 * (lo + hi)) < code / 255.0) ? lo : hi) = 0.5 * (lo + hi);
+    truth[std::size_t(code)] = 0.5 * (lo + hi);
+  }
+  double logScale = 0;
+  for (int code = 32; code <= 240; ++code)
+    logScale += std::log(recovered(1, code) / truth[std::size_t(code)]) / 209;
+  double worst = 0;
+  if (within3) *within3 = lp::kDarkestCode;
+  for (int c = 0; c < 3; ++c)
+    for (int code = lp::kDarkestCode; code <= lp::kBrightestCode; ++code) {
+      const double e =
+          std::abs(recovered(c, code) / std::exp(logScale) / truth[std::size_t(code)] - 1);
+      worst = std::max(worst, e);
+      if (within3 && e > 0.03) *within3 = std::max(*within3, code + 1);
+    }
+  return worst;
+}
+
+}  // namespace
+
+// liveprobe's response recovery against OpenCV's photo module (Debevec and Malik's
+// CalibrateDebevec, Robertson's CalibrateRobertson) on the same frames of a real scene (the quarry)
+// through three cameras' curves, as RGB24 and through YUYV: the worst code 4-250 of each against
+// the true curve. Ours is within 3% through RGB24, from code lp::kYuvTrustedFrom up through YUYV,
+// and nearer the truth than either of OpenCV's on every camera and format (the table in hdr.md).
+TEST(HdrMerge, TheResponseRecoveryAgainstOpenCvs) {
+  const lp::Image full =
+      lp::loadImage(std::string(LIVEPROBE_DATA_DIR) + "/equirect/quarry_01_1k.hdr");
+  const lp::Image sky = lp::reduceEquirect(full.rgb.data(), full.width, full.height, 4);
+  for (const auto& [name, encode] :
+       std::vector<std::pair<std::string, std::function<double(double)>>>{
+           {"sRGB", [](double v) { return double(lp::linearToSrgb(float(v))); }},
+           {"gamma 1.8", [](double v) { return std::pow(v, 1 / 1.8); }},
+           {"gamma 2.6", [](double v) { return std::pow(v, 1 / 2.6); }}})
+    for (const bool yuyv : {false, true}) {
+      const std::vector<Frame> frames = sweep(sky, encode, yuyv);
+      const CameraResponse ours =
+          lp::calibrateResponse(frames, yuyv ? lp::ChromaBlock{2, 1} : lp::ChromaBlock{});
+      int from = 0;
+      const double oursWorst = worstError(
+          [&](int c, int z) { return ours.linear[std::size_t(c)][std::size_t(z)]; }, encode, &from);
+      std::vector<cv::Mat> images;
+      std::vector<float> times;
+      for (const Frame& f : frames) {
+        images.push_back(
+            cv::Mat(f.height, f.width, CV_8UC3, const_cast<std::uint8_t*>(f.bgr8.data())));
+        times.push_back(float(1.0 / f.radianceScale));
+      }
+      std::map<std::string, double> theirs;
+      for (const auto& [method, calibrate] :
+           std::vector<std::pair<std::string, cv::Ptr<cv::CalibrateCRF>>>{
+               {"Debevec", cv::createCalibrateDebevec()},
+               {"Robertson", cv::createCalibrateRobertson()}}) {
+        cv::Mat crf;  // 256x1 CV_32FC3, B G R
+        calibrate->process(images, crf, times);
+        theirs[method] =
+            worstError([&](int c, int z) { return double(crf.at<cv::Vec3f>(z)[2 - c]); }, encode);
+      }
+      if (yuyv)
+        EXPECT_LE(from, lp::kYuvTrustedFrom) << name;
+      else
+        EXPECT_LE(oursWorst, 0.03) << name;
+      EXPECT_LT(oursWorst, std::min(theirs["Debevec"], theirs["Robertson"])) << name;
+      std::printf("%-10s %-6s within 3%% from %d; ours %.1f%%  Debevec %.1f%%  Robertson %.1f%%\n",
+                  name.c_str(), yuyv ? "YUYV" : "RGB24", from, 100 * oursWorst,
+                  100 * theirs["Debevec"], 100 * theirs["Robertson"]);
+    }
 }

@@ -772,6 +772,34 @@ TEST(LiveHdr, CalibrateRecoversTheResponse) {
   }
 }
 
+// calibrate through YUYV: the response from the pixels whose pair reads one colour, within 3% of
+// the camera's sRGB curve from code lp::kYuvTrustedFrom up in every channel, and a warning that
+// names the format and the one that reaches every code.
+TEST(LiveHdr, CalibrateThroughYuyvSaysWhatItHolds) {
+  Emulator emu("YUYV_256x128", {std::string(LIVEPROBE_DATA_DIR) + "/equirect/quarry_01_1k.hdr"},
+               "control_delay=2");
+  const auto cal = emu.run("calibrate /dev/video7 --lock-exposure 0.3 --out " + emu.tmp / "r.json");
+  ASSERT_EQ(cal.exitCode, 0) << cal.output;
+  EXPECT_NE(cal.output.find("warning: /dev/video7 sends YUYV, which shares each pixel's colour "
+                            "with its neighbours': the response holds within 3% from code " +
+                            std::to_string(lp::kYuvTrustedFrom) + " up"),
+            std::string::npos)
+      << cal.output;
+  EXPECT_NE(cal.output.find("--pixel-format rgb24"), std::string::npos) << cal.output;
+  const lp::CameraResponse response = lp::CameraResponse::load(emu.tmp / "r.json");
+  double logScale = 0;
+  for (int code = 32; code <= 240; ++code)
+    logScale +=
+        std::log(response.linear[1][std::size_t(code)] / lp::srgbToLinear(code / 255.0f)) / 209;
+  for (int c = 0; c < 3; ++c)
+    for (int code = lp::kYuvTrustedFrom; code <= lp::kBrightestCode; ++code)
+      EXPECT_NEAR(response.linear[std::size_t(c)][std::size_t(code)] / std::exp(logScale) /
+                      lp::srgbToLinear(code / 255.0f),
+                  1.0, 0.03)
+          << "channel "
+          << "RGB"[c] << ", code " << code;
+}
+
 // calibrate measures how many frames a camera takes to show a new exposure, with the metadata
 // node and without it (from the frames' brightness), and writes it with the response; live,
 // bracketing with that response, says in one warning when the camera it runs shows another

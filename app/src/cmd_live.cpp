@@ -375,7 +375,21 @@ int runCalibrate(const Args& a) {
   if (frames.size() < 3 || *hi - *lo < 8.0)
     throw Error(cs.device + ": the camera ignores its exposure control (mean code " +
                 formatNumber(*lo, 3) + " to " + formatNumber(*hi, 3) + " across the sweep)");
-  CameraResponse r = calibrateResponse(frames);
+  // A pixel's colour is its own only through RGB24: YUYV shares it between two pixels, NV12 and
+  // (most) MJPEG among four, and the response is read from pixels whose block reads one colour.
+  const std::string format = fourccText(camera->fourcc());
+  CameraResponse r = calibrateResponse(frames, format == "YUYV"   ? ChromaBlock{2, 1}
+                                               : format == "RGB3" ? ChromaBlock{1, 1}
+                                                                  : ChromaBlock{2, 2});
+  if (format != "RGB3")
+    std::fprintf(stderr,
+                 "warning: %s sends %s, which %s: the response holds within 3%% from code %d up "
+                 "(below, the format's own steps are more than 3%% of the light); calibrate "
+                 "through RGB24 (--pixel-format rgb24) where the camera offers it\n",
+                 cs.device.c_str(), format == "MJPG" ? "MJPEG" : format.c_str(),
+                 format == "MJPG" ? "compresses each pixel's colour with its neighbours'"
+                                  : "shares each pixel's colour with its neighbours'",
+                 kYuvTrustedFrom);
   if (!delays.empty()) {  // the most common delay over the stops that showed one
     std::map<int, int> count;
     for (const int d : delays) ++count[d];

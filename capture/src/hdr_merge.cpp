@@ -123,9 +123,44 @@ struct CodePair {
   double r;  ///< log(t_i / t_j)
 };
 
+// Per frame, the pixels whose colour is their own: those whose chroma block reads one colour (every
+// channel within kFlatBlock codes). Every pixel where the camera sends each pixel's colour.
+constexpr int kFlatBlock = 1;
+constexpr int kShadedEnd = 3;
+std::vector<std::vector<std::uint8_t>> ownColour(const std::vector<Frame>& frames,
+                                                 ChromaBlock chroma) {
+  std::vector<std::vector<std::uint8_t>> own;
+  for (const Frame& f : frames) {
+    std::vector<std::uint8_t> m(std::size_t(f.width) * std::size_t(f.height), 1);
+    if (chroma.width > 1 || chroma.height > 1)
+      for (int by = 0; by + chroma.height <= f.height; by += chroma.height)
+        for (int bx = 0; bx + chroma.width <= f.width; bx += chroma.width) {
+          std::array<int, 3> lo{255, 255, 255}, hi{0, 0, 0};
+          for (int y = by; y < by + chroma.height; ++y)
+            for (int x = bx; x < bx + chroma.width; ++x)
+              for (int c = 0; c < 3; ++c) {
+                const int v = f.bgr8[(std::size_t(y) * std::size_t(f.width) + std::size_t(x)) * 3 +
+                                     std::size_t(c)];
+                lo[std::size_t(c)] = std::min(lo[std::size_t(c)], v);
+                hi[std::size_t(c)] = std::max(hi[std::size_t(c)], v);
+              }
+          bool flat = true;
+          for (int c = 0; c < 3; ++c)
+            flat = flat && hi[std::size_t(c)] - lo[std::size_t(c)] <= kFlatBlock &&
+                   lo[std::size_t(c)] > kShadedEnd && hi[std::size_t(c)] < 255 - kShadedEnd;
+          for (int y = by; y < by + chroma.height; ++y)
+            for (int x = bx; x < bx + chroma.width; ++x)
+              m[std::size_t(y) * std::size_t(f.width) + std::size_t(x)] = flat;
+        }
+    own.push_back(std::move(m));
+  }
+  return own;
+}
+
 // Every pair of codes (both within (0, 255)) that one channel's pixels read in every pair of
 // frames of distinct exposures, from their joint histograms: built once, solved three times.
-std::vector<CodePair> codePairs(const std::vector<Frame>& frames, int channel) {
+std::vector<CodePair> codePairs(const std::vector<Frame>& frames,
+                                const std::vector<std::vector<std::uint8_t>>& own, int channel) {
   std::vector<CodePair> pairs;
   std::vector<std::uint32_t> joint(256 * 256);
   for (std::size_t i = 0; i < frames.size(); ++i)
@@ -136,7 +171,8 @@ std::vector<CodePair> codePairs(const std::vector<Frame>& frames, int channel) {
       const auto& p = frames[i].bgr8;
       const auto& q = frames[j].bgr8;
       for (std::size_t k = std::size_t(2 - channel); k < p.size(); k += 3)
-        if (p[k] > 0 && p[k] < 255 && q[k] > 0 && q[k] < 255) ++joint[p[k] * 256u + q[k]];
+        if (own[i][k / 3] && own[j][k / 3] && p[k] > 0 && p[k] < 255 && q[k] > 0 && q[k] < 255)
+          ++joint[p[k] * 256u + q[k]];
       for (int a = 1; a < 255; ++a)
         for (int b = 1; b < 255; ++b)
           if (const std::uint32_t n = joint[std::size_t(a * 256 + b)])
@@ -248,7 +284,7 @@ int darkestCode(const Frame& frame) {
   return 255;
 }
 
-CameraResponse calibrateResponse(const std::vector<Frame>& frames) {
+CameraResponse calibrateResponse(const std::vector<Frame>& frames, ChromaBlock chroma) {
   std::vector<double> distinct;
   for (const Frame& f : frames) {
     if (f.format != PanoramaFormat::BgrU8) throw Error("calibration takes 8-bit frames");
@@ -262,6 +298,7 @@ CameraResponse calibrateResponse(const std::vector<Frame>& frames) {
   if (distinct.size() < 3)
     throw Error("calibration needs frames at 3 or more exposure times; got " +
                 std::to_string(distinct.size()));
+  const auto own = ownColour(frames, chroma);
   std::array<std::array<double, 256>, 3> g{};
   std::array<std::array<std::size_t, 256>, 3> support{};
   for (int c = 0; c < 3; ++c) {
@@ -270,7 +307,7 @@ CameraResponse calibrateResponse(const std::vector<Frame>& frames) {
     // slope comes from the last solve, starting from a gamma of 2.2.
     std::array<double, 256> noise{};
     for (int z = 0; z < 256; ++z) noise[std::size_t(z)] = std::pow(2.2 / std::max(z, 1), 2) / 12;
-    const std::vector<CodePair> pairs = codePairs(frames, c);
+    const std::vector<CodePair> pairs = codePairs(frames, own, c);
     for (int pass = 0; pass < 3; ++pass) {
       const std::array<double, 256> last = g[std::size_t(c)];
       g[std::size_t(c)] =

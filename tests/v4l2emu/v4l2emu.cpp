@@ -66,6 +66,8 @@
 #include <thread>
 #include <vector>
 
+#include "../yuyv.h"
+
 namespace fs = std::filesystem;
 
 #ifndef V4L2_META_FMT_UVC_MSXU_1_5
@@ -288,22 +290,8 @@ struct Emu {
       out.assign(i420.data, i420.data + ysz);
       for (std::size_t i = 0; i < csz; ++i)
         out.push_back(i420.data[ysz + i]), out.push_back(i420.data[ysz + csz + i]);
-    } else {  // YUYV, BT.601 limited range (what OpenCV's YUV2BGR_YUYV inverts)
-      out.resize(std::size_t(md.w) * md.h * 2);
-      for (int y = 0; y < md.h; ++y)
-        for (int x = 0; x < md.w; x += 2) {
-          const auto* p = bgr.ptr<cv::Vec3b>(y) + x;
-          auto Y = [](const cv::Vec3b& c) {
-            return std::clamp(16.0 + 0.257 * c[2] + 0.504 * c[1] + 0.098 * c[0], 0.0, 255.0);
-          };
-          const double r = (p[0][2] + p[1][2]) / 2.0, g = (p[0][1] + p[1][1]) / 2.0,
-                       b = (p[0][0] + p[1][0]) / 2.0;
-          const double u = std::clamp(128.0 - 0.148 * r - 0.291 * g + 0.439 * b, 0.0, 255.0);
-          const double v = std::clamp(128.0 + 0.439 * r - 0.368 * g - 0.071 * b, 0.0, 255.0);
-          std::uint8_t* o = out.data() + (std::size_t(y) * md.w + x) * 2;
-          o[0] = std::uint8_t(std::lround(Y(p[0]))), o[1] = std::uint8_t(std::lround(u));
-          o[2] = std::uint8_t(std::lround(Y(p[1]))), o[3] = std::uint8_t(std::lround(v));
-        }
+    } else {  // YUYV
+      out = lpt::encodeYuyv(bgr);
     }
     return out;
   }

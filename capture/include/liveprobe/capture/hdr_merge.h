@@ -92,7 +92,17 @@ int darkestCode(const Frame& frame);
 /// at code 255; readFrom..readTo the codes every channel read. Throws lp::Error with fewer than 3
 /// distinct exposures, with too few codes read, or when the recovered curve falls somewhere (too
 /// few tones in the scene, or a scene that moved).
-CameraResponse calibrateResponse(const std::vector<Frame>& frames);
+///
+/// A camera that sends a colour shared by a block of pixels (YUYV: 2x1, NV12 and most MJPEG:
+/// 2x2) gives a pixel's code in each channel only where its block reads one colour: only those
+/// pixels are read, and not within 3 codes of 0 or 255 (where the YUV steps make a clipped
+/// channel read as unclipped). The YUV's own 8-bit steps remain: such a curve holds within 3%
+/// from kYuvTrustedFrom up (HdrMerge.TheResponseRecoveryAgainstOpenCvs).
+struct ChromaBlock {
+  int width = 1, height = 1;
+};
+inline constexpr int kYuvTrustedFrom = 16;
+CameraResponse calibrateResponse(const std::vector<Frame>& frames, ChromaBlock chroma = {});
 
 /// How far a frame's lighting can be trusted.
 struct FrameConfidence {
