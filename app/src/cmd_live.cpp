@@ -13,6 +13,7 @@
 #include "environment.h"
 #include "liveprobe/backends.h"
 #include "liveprobe/capture/atomic_file.h"
+#include "liveprobe/capture/bracketing.h"
 #include "liveprobe/capture/hdr_merge.h"
 #include "liveprobe/capture/recorder.h"
 #include "liveprobe/capture/v4l2.h"

@@ -13,7 +13,7 @@
 #include <vector>
 
 #include "liveprobe/capture/frame.h"
-#include "liveprobe/capture/hdr_merge.h"
+#include "liveprobe/capture/frame_confidence.h"
 #include "liveprobe/capture/image.h"
 #include "liveprobe/capture/photometry.h"
 #include "liveprobe/capture/processed_frame.h"

@@ -8,7 +8,7 @@
 #include <vector>
 
 #include "liveprobe/capture/frame.h"
-#include "liveprobe/capture/hdr_merge.h"
+#include "liveprobe/capture/frame_confidence.h"
 #include "liveprobe/capture/image.h"
 #include "liveprobe/capture/stages.h"
 #include "liveprobe/sh/layout.h"

@@ -17,7 +17,7 @@
 #include <utility>
 #include <vector>
 
-#include "liveprobe/capture/bracketing.h"
+#include "liveprobe/capture/exposure_control.h"
 #include "liveprobe/capture/frame.h"
 #include "liveprobe/sh/error.h"
 
