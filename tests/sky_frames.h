@@ -10,8 +10,9 @@
 #include <string>
 #include <vector>
 
-#include "liveprobe/capture/frame.h"
 #include "liveprobe/capture/image.h"
+#include "liveprobe/capture/open_source.h"
+#include "liveprobe/frame/frame.h"
 
 namespace lpt {
 

@@ -15,10 +15,11 @@
 #include <vector>
 
 #include "liveprobe/backends.h"
-#include "liveprobe/capture/exposure_estimate.h"
 #include "liveprobe/capture/frame_processor.h"
-#include "liveprobe/capture/hdr_merge.h"
 #include "liveprobe/capture/image.h"
+#include "liveprobe/hdr/calibrate.h"
+#include "liveprobe/hdr/exposure_estimate.h"
+#include "liveprobe/hdr/merge.h"
 #if LIVEPROBE_WITH_V4L2
 #include <linux/uvcvideo.h>
 

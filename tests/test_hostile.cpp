@@ -16,7 +16,7 @@
 #include <vector>
 
 #include "liveprobe/backends.h"
-#include "liveprobe/capture/frame.h"
+#include "liveprobe/frame/frame.h"
 #if LIVEPROBE_WITH_V4L2
 #include <linux/videodev2.h>
 

@@ -10,8 +10,9 @@
 #include <vector>
 
 #include "layout_dirs.h"
-#include "liveprobe/capture/frame.h"
 #include "liveprobe/capture/image.h"
+#include "liveprobe/capture/open_source.h"
+#include "liveprobe/frame/frame.h"
 #include "liveprobe/sh/layout.h"
 #include "liveprobe/sh/projector.h"
 #include "test_util.h"

@@ -13,10 +13,11 @@
 #include <random>
 
 #include "layout_dirs.h"
-#include "liveprobe/capture/frame.h"
 #include "liveprobe/capture/image.h"
+#include "liveprobe/capture/open_source.h"
 #include "liveprobe/capture/pipeline.h"
 #include "liveprobe/exchange/coeffs_io.h"
+#include "liveprobe/frame/frame.h"
 #include "liveprobe/sh/image.h"
 #include "liveprobe/sh/lights.h"
 #include "liveprobe/sh/projector.h"

@@ -15,8 +15,8 @@
 #include <set>
 
 #include "emulator.h"
-#include "liveprobe/capture/frame.h"
 #include "liveprobe/capture/image.h"
+#include "liveprobe/frame/frame.h"
 #include "liveprobe/sh/sh.h"
 #include "sky_frames.h"
 #include "test_util.h"

@@ -14,9 +14,10 @@
 #include <regex>
 
 #include "emulator.h"
-#include "liveprobe/capture/frame.h"
-#include "liveprobe/capture/hdr_merge.h"
 #include "liveprobe/capture/image.h"
+#include "liveprobe/frame/frame.h"
+#include "liveprobe/hdr/calibrate.h"
+#include "liveprobe/hdr/merge.h"
 #include "test_util.h"
 #include "turned_map.h"
 

@@ -9,13 +9,14 @@
 #include <random>
 #include <thread>
 
-#include "liveprobe/capture/frame.h"
 #include "liveprobe/capture/frame_processor.h"
-#include "liveprobe/capture/hdr_merge.h"
 #include "liveprobe/capture/image.h"
+#include "liveprobe/capture/open_source.h"
 #include "liveprobe/capture/pipeline.h"
 #include "liveprobe/capture/recorder.h"
 #include "liveprobe/capture/resample.h"
+#include "liveprobe/frame/frame.h"
+#include "liveprobe/hdr/merge.h"
 #include "liveprobe/sh/error.h"
 #include "liveprobe/sh/executor.h"
 #include "liveprobe/sh/projector.h"

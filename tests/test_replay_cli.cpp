@@ -11,7 +11,8 @@
 #include <regex>
 #include <thread>
 
-#include "liveprobe/capture/frame.h"
+#include "liveprobe/capture/open_source.h"
+#include "liveprobe/frame/frame.h"
 #include "liveprobe/sh/projector.h"
 #include "liveprobe/sh/sh.h"
 #include "test_util.h"

@@ -21,6 +21,7 @@
 #include "hud.h"
 #include "liveprobe/backends.h"
 #include "liveprobe/capture/frame_processor.h"
+#include "liveprobe/capture/open_source.h"
 #include "liveprobe/gl/context.h"
 #include "liveprobe/gl/mesh.h"
 #include "liveprobe/gl/renderer.h"

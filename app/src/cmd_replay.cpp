@@ -10,6 +10,7 @@
 #include "dynamic_resolution.h"
 #include "environment.h"
 #include "hud.h"
+#include "liveprobe/capture/open_source.h"
 #include "liveprobe/capture/pipeline.h"
 #include "liveprobe/capture/recorder.h"
 #include "liveprobe/sh/error.h"

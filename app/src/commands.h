@@ -8,8 +8,8 @@
 #include <vector>
 
 #include "args.h"
-#include "liveprobe/capture/frame.h"
-#include "liveprobe/capture/hdr_merge.h"
+#include "liveprobe/frame/frame.h"
+#include "liveprobe/hdr/merge.h"
 #include "liveprobe/sh/lights.h"
 #include "settings.h"
 

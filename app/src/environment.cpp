@@ -7,9 +7,10 @@
 
 #include "commands.h"
 #include "liveprobe/capture/frame_processor.h"
-#include "liveprobe/capture/input_file.h"
+#include "liveprobe/capture/open_source.h"
 #include "liveprobe/capture/photometry.h"
 #include "liveprobe/exchange/coeffs_io.h"
+#include "liveprobe/frame/input_file.h"
 #include "liveprobe/sh/error.h"
 #include "progress.h"
 

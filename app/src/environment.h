@@ -6,9 +6,9 @@
 #include <string>
 #include <vector>
 
-#include "liveprobe/capture/frame.h"
 #include "liveprobe/capture/image.h"
 #include "liveprobe/capture/processed_frame.h"
+#include "liveprobe/frame/frame.h"
 #include "liveprobe/sh/layout.h"
 #include "liveprobe/sh/lights.h"
 #include "liveprobe/sh/sh.h"

@@ -10,10 +10,10 @@
 #include <string>
 #include <vector>
 
-#include "liveprobe/capture/hdr_merge.h"
 #include "liveprobe/capture/stages.h"
 #include "liveprobe/gl/context.h"
 #include "liveprobe/gl/renderer.h"
+#include "liveprobe/hdr/merge.h"
 #include "liveprobe/sh/lights.h"
 #include "liveprobe/sh/sh.h"
 #include "window_input.h"

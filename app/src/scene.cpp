@@ -3,7 +3,7 @@
 #include <filesystem>
 #include <glm/gtc/matrix_transform.hpp>
 
-#include "liveprobe/capture/input_file.h"
+#include "liveprobe/frame/input_file.h"
 #include "liveprobe/sh/error.h"
 
 namespace lp::cli {

@@ -8,7 +8,7 @@
 
 #include "commands.h"
 #include "liveprobe/backends.h"
-#include "liveprobe/capture/input_file.h"
+#include "liveprobe/frame/input_file.h"
 #include "liveprobe/sh/error.h"
 #include "progress.h"
 #if LIVEPROBE_WITH_MQTT

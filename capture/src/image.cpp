@@ -14,21 +14,13 @@
 #include <opencv2/imgproc.hpp>
 
 #include "liveprobe/capture/atomic_file.h"
-#include "liveprobe/capture/frame.h"
-#include "liveprobe/capture/input_file.h"
+#include "liveprobe/frame/frame.h"
+#include "liveprobe/frame/input_file.h"
 #include "liveprobe/sh/error.h"
 
 namespace lp {
 
 namespace fs = std::filesystem;
-
-float srgbToLinear(float v) {
-  return v <= 0.04045f ? v / 12.92f : std::pow((v + 0.055f) / 1.055f, 2.4f);
-}
-float linearToSrgb(float v) {
-  v = std::clamp(v, 0.0f, 1.0f);
-  return v <= 0.0031308f ? v * 12.92f : 1.055f * std::pow(v, 1.0f / 2.4f) - 0.055f;
-}
 
 namespace {
 

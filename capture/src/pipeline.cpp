@@ -1,7 +1,5 @@
 #include "liveprobe/capture/pipeline.h"
 
-#include <time.h>
-
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -13,18 +11,6 @@
 #include "liveprobe/sh/executor.h"
 
 namespace lp {
-
-double monotonicSeconds() {
-  timespec t{};
-  clock_gettime(CLOCK_MONOTONIC, &t);
-  return double(t.tv_sec) + 1e-9 * double(t.tv_nsec);
-}
-
-std::string formatFps(double fps) {
-  char text[64];
-  std::snprintf(text, sizeof text, "%.4g fps", fps);
-  return text;
-}
 
 namespace {
 using Clock = std::chrono::steady_clock;

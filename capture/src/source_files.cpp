@@ -11,8 +11,9 @@
 #include <optional>
 
 #include "liveprobe/capture/image.h"
-#include "liveprobe/capture/input_file.h"
+#include "liveprobe/capture/open_source.h"
 #include "liveprobe/capture/recorder.h"
+#include "liveprobe/frame/input_file.h"
 #include "liveprobe/sh/error.h"
 #include "sources.h"
 

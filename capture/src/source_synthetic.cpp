@@ -1,7 +1,8 @@
 #include <cmath>
 #include <glm/glm.hpp>
 
-#include "liveprobe/capture/frame.h"
+#include "liveprobe/capture/open_source.h"
+#include "liveprobe/frame/frame.h"
 #include "liveprobe/sh/sh.h"
 #include "sources.h"
 

@@ -4,7 +4,8 @@
 #include <optional>
 #include <string>
 
-#include "liveprobe/capture/frame.h"
+#include "liveprobe/capture/open_source.h"
+#include "liveprobe/frame/frame.h"
 
 namespace lp {
 

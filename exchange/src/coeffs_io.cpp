@@ -7,7 +7,7 @@
 #include <limits>
 #include <sstream>
 
-#include "liveprobe/capture/input_file.h"
+#include "liveprobe/frame/input_file.h"
 #include "liveprobe/sh/error.h"
 
 namespace lp {

@@ -17,14 +17,15 @@
 #endif
 
 #include "../turned_map.h"
-#include "liveprobe/capture/frame.h"
-#include "liveprobe/capture/hdr_merge.h"
 #include "liveprobe/capture/image.h"
+#include "liveprobe/capture/open_source.h"
 #include "liveprobe/capture/photometry.h"
 #include "liveprobe/capture/resample.h"
+#include "liveprobe/frame/frame.h"
 #include "liveprobe/gl/context.h"
 #include "liveprobe/gl/mesh.h"
 #include "liveprobe/gl/renderer.h"
+#include "liveprobe/hdr/merge.h"
 #include "liveprobe/sh/brute.h"
 #include "liveprobe/sh/executor.h"
 #include "liveprobe/sh/layout.h"

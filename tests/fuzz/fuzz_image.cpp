@@ -7,8 +7,8 @@
 #include <cstdlib>
 #include <string>
 
-#include "liveprobe/capture/frame.h"
 #include "liveprobe/capture/image.h"
+#include "liveprobe/frame/frame.h"
 #include "liveprobe/sh/error.h"
 #include "temp_input.h"
 

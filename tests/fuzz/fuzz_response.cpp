@@ -6,7 +6,7 @@
 #include <cstdlib>
 #include <string>
 
-#include "liveprobe/capture/hdr_merge.h"
+#include "liveprobe/hdr/merge.h"
 #include "liveprobe/sh/error.h"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {

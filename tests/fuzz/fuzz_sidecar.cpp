@@ -8,8 +8,8 @@
 #include <cstdlib>
 #include <string_view>
 
-#include "liveprobe/capture/hdr_merge.h"
 #include "liveprobe/capture/recorder.h"
+#include "liveprobe/hdr/merge.h"
 #include "liveprobe/sh/error.h"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {

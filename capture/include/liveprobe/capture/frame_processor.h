@@ -12,12 +12,12 @@
 #include <string>
 #include <vector>
 
-#include "liveprobe/capture/frame.h"
-#include "liveprobe/capture/frame_confidence.h"
 #include "liveprobe/capture/image.h"
 #include "liveprobe/capture/photometry.h"
 #include "liveprobe/capture/processed_frame.h"
 #include "liveprobe/capture/stages.h"
+#include "liveprobe/frame/frame.h"
+#include "liveprobe/frame/frame_confidence.h"
 #include "liveprobe/sh/executor.h"
 #include "liveprobe/sh/layout.h"
 #include "liveprobe/sh/lights.h"
@@ -98,7 +98,7 @@ class FrameProcessor {
   ProjectedView view(const Frame& frame, const Image* linear = nullptr);
   /// The scale the coefficients of `frame`'s own pixels take (Frame::radianceScale, and for a
   /// float frame the photometry's exposure): view()'s, for a frame projected as it was made (a
-  /// bracket merged and projected in one pass, liveprobe/capture/hdr_merge.h).
+  /// bracket merged and projected in one pass, liveprobe/hdr/merge.h).
   float projectionScale(const Frame& frame) const;
   /// The lighting from the coefficients of view(frame) projected elsewhere: scaled and turned as
   /// process() does. Without lights (they are searched in the frame's pixels): throws lp::Error

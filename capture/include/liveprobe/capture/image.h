@@ -5,6 +5,7 @@
 #include <string>
 #include <vector>
 
+#include "liveprobe/frame/srgb.h"
 #include "liveprobe/sh/image.h"
 
 namespace lp {
@@ -15,10 +16,6 @@ namespace lp {
 inline constexpr std::int64_t kDefaultMaxImagePixels = std::int64_t(1) << 28;
 std::int64_t maxImagePixels();
 void setMaxImagePixels(std::int64_t pixels);
-
-/// sRGB transfer function, decode (8-bit code value / 255 -> linear) and encode.
-float srgbToLinear(float v);
-float linearToSrgb(float v);
 
 struct Frame;
 

@@ -6,8 +6,8 @@
 #include <array>
 #include <cstddef>
 
-#include "liveprobe/capture/frame.h"
 #include "liveprobe/capture/image.h"
+#include "liveprobe/frame/frame.h"
 
 namespace lp {
 

@@ -14,13 +14,13 @@
 #include <string>
 #include <thread>
 
-#include "liveprobe/capture/frame.h"
 #include "liveprobe/capture/frame_processor.h"
-#include "liveprobe/capture/hdr_merge.h"
 #include "liveprobe/capture/image.h"
 #include "liveprobe/capture/photometry.h"
 #include "liveprobe/capture/processed_frame.h"
 #include "liveprobe/capture/stages.h"
+#include "liveprobe/frame/frame.h"
+#include "liveprobe/hdr/merge.h"
 #include "liveprobe/sh/executor.h"
 #include "liveprobe/sh/layout.h"
 #include "liveprobe/sh/lights.h"
@@ -48,7 +48,7 @@ struct PipelineOptions {
   /// Light extraction (--sun, --lights K); maxLights = 0 (the default) leaves it off.
   LightOptions lights{.maxLights = 0};
   /// Exposure bracketing: each frame is merged with the ones before it into radiance
-  /// (liveprobe/capture/hdr_merge.h) before anything else sees it (onFrame sees each as it came).
+  /// (liveprobe/hdr/merge.h) before anything else sees it (onFrame sees each as it came).
   std::optional<MergeOptions> bracket;
   /// A frame whose confidence is below this keeps the last good frame's lighting (0: off).
   double holdBelow = 0;

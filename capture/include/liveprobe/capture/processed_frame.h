@@ -7,10 +7,10 @@
 #include <memory>
 #include <vector>
 
-#include "liveprobe/capture/frame.h"
-#include "liveprobe/capture/frame_confidence.h"
 #include "liveprobe/capture/image.h"
 #include "liveprobe/capture/stages.h"
+#include "liveprobe/frame/frame.h"
+#include "liveprobe/frame/frame_confidence.h"
 #include "liveprobe/sh/layout.h"
 #include "liveprobe/sh/lights.h"
 #include "liveprobe/sh/sh.h"

@@ -19,7 +19,7 @@
 #include <string_view>
 #include <vector>
 
-#include "liveprobe/capture/frame.h"
+#include "liveprobe/frame/frame.h"
 
 namespace lp {
 

@@ -17,8 +17,8 @@
 #include <utility>
 #include <vector>
 
-#include "liveprobe/capture/exposure_control.h"
-#include "liveprobe/capture/frame.h"
+#include "liveprobe/frame/exposure_control.h"
+#include "liveprobe/frame/frame.h"
 #include "liveprobe/sh/error.h"
 
 namespace lp {
@@ -195,7 +195,7 @@ class V4l2Source final : public FrameSource, public ExposureControl {
   std::int32_t setExposure(std::int32_t exposure100us);
   /// Whether frames carry the exposure the camera reports (a metadata node is streaming).
   bool reportsExposure() const { return metadata_ != nullptr; }
-  /// ExposureControl, for bracketing (liveprobe/capture/bracketing.h): the control's range, and
+  /// ExposureControl, for bracketing (liveprobe/hdr/bracketing.h): the control's range, and
   /// a request written as it is (frames without metadata keep carrying the locked exposure).
   std::pair<std::int32_t, std::int32_t> exposureRange() override;
   void requestExposure(std::int32_t exposure100us) override;

@@ -1,7 +1,7 @@
 #pragma once
 // Exposure bracketing of a camera: cycles its exposure time through a set of stops, one frame
 // each, and names the exposure every frame was taken with, so that the merge
-// (liveprobe/capture/hdr_merge.h) can turn the codes into radiance.
+// (liveprobe/hdr/merge.h) can turn the codes into radiance.
 //
 // A camera applies a new exposure some frames after it is asked (its lag: the control delay and
 // the buffers queued ahead) and then keeps it: frame s was taken with the exposure asked after
@@ -29,9 +29,9 @@
 #include <utility>
 #include <vector>
 
-#include "liveprobe/capture/exposure_control.h"
-#include "liveprobe/capture/frame.h"
-#include "liveprobe/capture/hdr_merge.h"
+#include "liveprobe/frame/exposure_control.h"
+#include "liveprobe/frame/frame.h"
+#include "liveprobe/hdr/merge.h"
 
 namespace lp {
 

@@ -35,75 +35,14 @@
 #include <string>
 #include <vector>
 
-#include "liveprobe/capture/frame.h"
-#include "liveprobe/capture/frame_confidence.h"
+#include "liveprobe/frame/frame.h"
+#include "liveprobe/frame/frame_confidence.h"
+#include "liveprobe/hdr/response.h"
 #include "liveprobe/sh/executor.h"
 #include "liveprobe/sh/projector.h"
 #include "liveprobe/sh/sh.h"
 
 namespace lp {
-
-/// A camera's response, inverted: the linear exposure (1 at the sensor's clip) each 8-bit code
-/// stands for, per channel in R, G, B order. Monotonic non-decreasing in the code.
-struct CameraResponse {
-  std::array<std::array<float, 256>, 3> linear{};
-  std::string name;  ///< "sRGB", "gamma 2.6", or the file it came from
-  /// The codes a calibration read in every channel, from..to (the curve beyond continues the
-  /// read part's shape, unmeasured): a merge counts no reading outside them. 0..255 for a
-  /// response known whole.
-  int readFrom = 0, readTo = 255;
-  /// Frames a calibration saw at the old exposure after the control was set (the camera's
-  /// control delay, as liveprobe receives frames); unknown for a response not calibrated.
-  std::optional<int> controlDelay;
-
-  static CameraResponse srgb();
-  static CameraResponse gamma(float g);
-  /// Reads a response written by json(). Throws lp::Error naming `path` when it is missing, is not
-  /// a response, or is not monotonic.
-  static CameraResponse load(const std::string& path);
-  /// Parses json() text; `name` is what errors call it.
-  static CameraResponse parse(const std::string& text, const std::string& name);
-  /// {"response": [[256 R], [256 G], [256 B]], "read": [from, to], "control_delay_frames": N}:
-  /// linear exposure per code, normalised so that the green channel's power law reaches 1 at
-  /// code 255; "read" only where it is not 0..255, the delay only where it was measured.
-  std::string json() const;
-  /// The first code (and channel) at which the curve falls, or -1 when it never does.
-  int firstDecrease(int* channel = nullptr) const;
-};
-
-/// The power law linear = atClip (code / 255)^gamma nearest to a curve over codes 32..240 (least
-/// squares in log-log): what a response is like, and where it reaches code 255.
-struct PowerLaw {
-  double gamma = 1, atClip = 1;
-};
-PowerLaw fitPowerLaw(const std::function<double(int)>& linear);
-
-/// The codes a calibration answers for: from kDarkestCode to kBrightestCode, each within 3% on a
-/// scene that reaches them (the codes outside continue the curve).
-inline constexpr int kDarkestCode = 4, kBrightestCode = 250;
-
-/// The darkest code an 8-bit frame reads over a part of its scene (0.05% of its samples or more,
-/// any channel): a calibration sweep goes shorter until this is kDarkestCode.
-int darkestCode(const Frame& frame);
-
-/// A camera's response recovered from 8-bit frames of one static scene, each with its own
-/// exposure time (Frame::radianceScale = 1 / exposure): the least squares of the codes each pixel
-/// took in each pair of frames (comparametric equations), with a smoothness over log(code) that
-/// any power law passes freely; normalised so that green's power law over codes 32-240 reaches 1
-/// at code 255; readFrom..readTo the codes every channel read. Throws lp::Error with fewer than 3
-/// distinct exposures, with too few codes read, or when the recovered curve falls somewhere (too
-/// few tones in the scene, or a scene that moved).
-///
-/// A camera that sends a colour shared by a block of pixels (YUYV: 2x1, NV12 and most MJPEG:
-/// 2x2) gives a pixel's code in each channel only where its block reads one colour: only those
-/// pixels are read, and not within 3 codes of 0 or 255 (where the YUV steps make a clipped
-/// channel read as unclipped). The YUV's own 8-bit steps remain: such a curve holds within 3%
-/// from kYuvTrustedFrom up (HdrMerge.TheResponseRecoveryAgainstOpenCvs).
-struct ChromaBlock {
-  int width = 1, height = 1;
-};
-inline constexpr int kYuvTrustedFrom = 16;
-CameraResponse calibrateResponse(const std::vector<Frame>& frames, ChromaBlock chroma = {});
 
 struct BracketView;
 struct MergeTally;

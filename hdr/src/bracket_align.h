@@ -24,7 +24,7 @@
 #include <glm/glm.hpp>
 #include <vector>
 
-#include "liveprobe/capture/frame.h"
+#include "liveprobe/frame/frame.h"
 #include "liveprobe/sh/executor.h"
 
 namespace lp::align {

@@ -1,4 +1,4 @@
-#include "liveprobe/capture/exposure_estimate.h"
+#include "liveprobe/hdr/exposure_estimate.h"
 
 #include <algorithm>
 #include <cmath>

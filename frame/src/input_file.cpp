@@ -1,4 +1,4 @@
-#include "liveprobe/capture/input_file.h"
+#include "liveprobe/frame/input_file.h"
 
 #include <filesystem>
 #include <fstream>

@@ -1,5 +1,5 @@
 #pragma once
-// The one thing exposure bracketing (liveprobe/capture/bracketing.h) asks of a camera.
+// The one thing exposure bracketing (liveprobe/hdr/bracketing.h) asks of a camera.
 #include <cstdint>
 #include <utility>
 

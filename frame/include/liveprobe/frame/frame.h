@@ -1,7 +1,7 @@
 #pragma once
-// Frames and the sources that produce them: still images, image sequences, cube-face sets, video
-// files (OpenCV videoio with FFmpeg), a synthetic sky, and V4L2 cameras. One small
-// interface; one factory, openSource().
+// Frames and the one small interface of the sources that produce them (still images, image
+// sequences, cube-face sets, video files, a synthetic sky, V4L2 cameras: liveprobe::capture,
+// whose factory is openSource() in liveprobe/capture/open_source.h).
 #include <cstdint>
 #include <glm/glm.hpp>
 #include <memory>
@@ -66,7 +66,7 @@ class FrameSource {
   /// a sequence's files); -1 for an endless source (synthetic, a camera) or an unknown length.
   virtual std::int64_t frameCount() const { return -1; }
   /// An exposure-bracketed source (a bracketing camera, a recording of one): the frames in one
-  /// bracket, each with its own exposure, to be merged (liveprobe/capture/hdr_merge.h); 0: none.
+  /// bracket, each with its own exposure, to be merged (liveprobe/hdr/merge.h); 0: none.
   virtual int bracketFrames() const { return 0; }
   /// The camera response the bracket was recorded with (CameraResponse::json()); empty: none
   /// recorded.
@@ -77,27 +77,5 @@ class FrameSource {
   /// Those frames by stop and cause, as a sentence's end; empty when none.
   virtual std::string unidentifiedReport() const { return {}; }
 };
-
-struct SourceOptions {
-  double fps = 30.0;  ///< for image sequences and stills, which carry no timing
-};
-
-/// Opens SOURCE:
-///   synthetic[:WxH[@FPS]]       the procedural sky (default 512x256 at 30 fps)
-///   DIR with px,nx,py,ny,pz,nz  six cube faces, assembled into a horizontal cross
-///   DIR                         an image sequence (image files in name order)
-///   PATTERN with %d or %0Nd     an image sequence by frame number (frame_%04d.png; the one
-///                               pattern is parsed here, never used as a printf format)
-///   *.mp4|webm|mkv|avi|mov|m4v  a video file, decoded by FFmpeg through OpenCV
-///   anything else               a still image
-/// Throws lp::Error naming the source on failure.
-std::unique_ptr<FrameSource> openSource(const std::string& spec, const SourceOptions& options = {});
-
-/// The synthetic sky at time t (seconds): an equirect HDR with a moving sun, a sky gradient, a
-/// ground, and two coloured area lights moving around the horizon. Deterministic in t.
-void renderSyntheticSky(int width, int height, double t, std::vector<float>& rgb);
-/// Where the synthetic sky's sun is at time t: a full turn of azimuth every 20 s, elevation
-/// 30 + 20 sin(2 pi t / 10) degrees (unit, R&H frame). The truth that light tracking is tested on.
-glm::vec3 syntheticSunDirection(double t);
 
 }  // namespace lp

@@ -1,11 +1,11 @@
-#include "liveprobe/capture/bracketing.h"
+#include "liveprobe/hdr/bracketing.h"
 
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <utility>
 
-#include "liveprobe/capture/exposure_estimate.h"
+#include "liveprobe/hdr/exposure_estimate.h"
 #include "liveprobe/sh/error.h"
 
 namespace lp {

@@ -18,8 +18,8 @@
 #include <optional>
 #include <vector>
 
-#include "liveprobe/capture/frame.h"
-#include "liveprobe/capture/hdr_merge.h"
+#include "liveprobe/frame/frame.h"
+#include "liveprobe/hdr/merge.h"
 
 namespace lp {
 

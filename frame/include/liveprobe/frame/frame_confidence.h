@@ -1,6 +1,6 @@
 #pragma once
 // How far a frame's lighting can be trusted: what the frame path carries of a merge (an 8-bit
-// exposure bracket merged to radiance, liveprobe/capture/hdr_merge.h) or of a single frame.
+// exposure bracket merged to radiance, liveprobe/hdr/merge.h) or of a single frame.
 #include <algorithm>
 
 namespace lp {
