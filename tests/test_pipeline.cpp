@@ -16,6 +16,7 @@
 #include "liveprobe/capture/recorder.h"
 #include "liveprobe/capture/resample.h"
 #include "liveprobe/frame/frame.h"
+#include "liveprobe/hdr/bracketed_source.h"
 #include "liveprobe/hdr/merge.h"
 #include "liveprobe/sh/error.h"
 #include "liveprobe/sh/executor.h"
@@ -323,7 +324,7 @@ TEST(Background, ThePipelineDrawsFrameProcessorRunsBackground) {
 
 // A bracketing camera's frames, shot here from a float map at three exposures through the sRGB
 // curve, each with its exposure (Frame::radianceScale = 1 / t).
-class BracketSource : public lp::FrameSource {
+class BracketSource : public lp::FrameSource, public lp::BracketedSource {
  public:
   explicit BracketSource(const lp::Image& map) {
     for (int n = 0; n < 7; ++n) {

@@ -307,82 +307,26 @@ int runCalibrate(const Args& a) {
   if (!locked.exposure100us)
     throw Error(cs.device + ": the camera has no exposure time control " +
                 "(V4L2_CID_EXPOSURE_ABSOLUTE): it cannot be calibrated");
-  // One frame per stop, after the camera has taken the new exposure. The sweep goes on below LO
-  // until its shortest frame reads some of the scene at the darkest codes the response is
-  // recovered for (kDarkestCode), so that every code is read by a pixel another exposure reads
-  // well; it stops at the control's limit, or 12 stops further.
-  // The control delay: after each change, the frames that still show the old exposure (the
-  // metadata's report where the camera sends it, else the first frame whose mean code moved by
-  // more than 4% and a code; a one-stop change moves it far more unless the frame clips or is
-  // black, and such a stop says nothing).
-  std::vector<Frame> frames;
-  std::vector<double> brightness;
-  std::vector<int> delays;
-  std::int32_t previous = -1;
-  const auto meanCode = [](const Frame& f) {
-    double sum = 0;
-    for (const std::uint8_t v : f.bgr8) sum += v;
-    return sum / double(std::max<std::size_t>(1, f.bgr8.size()));
-  };
-  const auto take = [&](int stop) {
-    const std::int32_t asked =
-        camera->setExposure(std::int32_t(std::lround(*locked.exposure100us * std::exp2(stop))));
-    if (asked == previous) return false;  // clamped to the control's limit: already taken
-    previous = asked;
-    if (stopRequested()) return false;
-    Frame f;
-    const double before = brightness.empty() ? -1.0 : brightness.back();
-    bool seen = false;
-    for (int i = 0; i < settle; ++i) {
-      if (!camera->next(f)) throw Error(cs.device + ": the stream ended");
-      if (camera->reportsExposure()) {
-        if (std::lround(1e4 / f.radianceScale) != asked) continue;
-        delays.push_back(i);
-        break;
-      }
-      const double m = meanCode(f);
-      if (!seen && before >= 0 && std::abs(m - before) > std::max(1.0, 0.04 * before))
-        delays.push_back(i), seen = true;
-    }
-    // A camera that reports its exposure may stop short of what was asked (its frame time is
-    // the longest it can take): a stop that reports the last one's exposure is not a stop.
-    const int reported = int(std::lround(1e4 / f.radianceScale));
-    if (camera->reportsExposure() && !frames.empty() &&
-        reported == int(std::lround(1e4 / frames.back().radianceScale))) {
-      std::fprintf(stderr,
-                   "  %+d EV: %d x 100 us, the camera's limit (as the stop before): "
-                   "not counted\n",
-                   stop, reported);
-      return false;
-    }
-    brightness.push_back(meanCode(f));
-    std::fprintf(stderr, "  %+d EV: %d x 100 us, mean code %.1f\n", stop, reported,
-                 brightness.back());
-    frames.push_back(std::move(f));
-    return true;
-  };
-  const int lowest = int(std::ceil(range[0]));
-  for (int stop = lowest; stop <= int(std::floor(range[1])); ++stop) take(stop);
-  std::size_t shortest = 0;  // frames[0] is the lowest stop, then each one taken below it
-  for (int stop = lowest - 1; stop >= lowest - 12 && !frames.empty(); --stop) {
-    if (darkestCode(frames[shortest]) <= kDarkestCode || !take(stop)) break;
-    shortest = frames.size() - 1;
-  }
-  if (stopRequested()) {
+  SweepOptions sweepOptions{
+      .lowest = int(std::ceil(range[0])),
+      .highest = int(std::floor(range[1])),
+      .locked = *locked.exposure100us,
+      .settle = settle,
+      .name = cs.device,
+      .stopRequested = stopRequested,
+      .onStop = [](const std::string& line) { std::fprintf(stderr, "%s\n", line.c_str()); }};
+  const Sweep sweep = sweepExposures(*camera, *camera, sweepOptions);
+  if (sweep.stopped) {
     std::fprintf(stderr, "liveprobe calibrate: stopped by a signal; nothing written\n");
     return exitStatusFor(stopSignal());
   }
-  // A camera that takes the control but not the exposure shows one brightness at every stop.
-  const auto [lo, hi] = std::minmax_element(brightness.begin(), brightness.end());
-  if (frames.size() < 3 || *hi - *lo < 8.0)
-    throw Error(cs.device + ": the camera ignores its exposure control (mean code " +
-                formatNumber(*lo, 3) + " to " + formatNumber(*hi, 3) + " across the sweep)");
   // A pixel's colour is its own only through RGB24: YUYV shares it between two pixels, NV12 and
   // (most) MJPEG among four, and the response is read from pixels whose block reads one colour.
   const std::string format = fourccText(camera->fourcc());
-  CameraResponse r = calibrateResponse(frames, format == "YUYV"   ? ChromaBlock{2, 1}
-                                               : format == "RGB3" ? ChromaBlock{1, 1}
-                                                                  : ChromaBlock{2, 2});
+  CameraResponse r = calibrateResponse(sweep.frames, format == "YUYV"   ? ChromaBlock{2, 1}
+                                                     : format == "RGB3" ? ChromaBlock{1, 1}
+                                                                        : ChromaBlock{2, 2});
+  r.controlDelay = sweep.controlDelay;
   if (format != "RGB3")
     std::fprintf(stderr,
                  "warning: %s sends %s, which %s: the response holds within 3%% from code %d up "
@@ -392,13 +336,6 @@ int runCalibrate(const Args& a) {
                  format == "MJPG" ? "compresses each pixel's colour with its neighbours'"
                                   : "shares each pixel's colour with its neighbours'",
                  kYuvTrustedFrom);
-  if (!delays.empty()) {  // the most common delay over the stops that showed one
-    std::map<int, int> count;
-    for (const int d : delays) ++count[d];
-    r.controlDelay = std::max_element(count.begin(), count.end(), [](auto& a, auto& b) {
-                       return a.second < b.second;
-                     })->first;
-  }
   AtomicTextFile out(*s.output.out);
   out.line(r.json());
   out.commit();
@@ -417,8 +354,8 @@ int runCalibrate(const Args& a) {
   std::fprintf(stderr,
                "liveprobe calibrate: %zu exposures; the response rises with the code (green is "
                "like a gamma of %.2f over codes 32-240); codes %d-%d read%s; %s; written to %s\n",
-               frames.size(), like.gamma, r.readFrom, r.readTo, unread.c_str(), delayText.c_str(),
-               s.output.out->c_str());
+               sweep.frames.size(), like.gamma, r.readFrom, r.readTo, unread.c_str(),
+               delayText.c_str(), s.output.out->c_str());
   return 0;
 }
 #else

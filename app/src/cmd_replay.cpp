@@ -13,6 +13,7 @@
 #include "liveprobe/capture/open_source.h"
 #include "liveprobe/capture/pipeline.h"
 #include "liveprobe/capture/recorder.h"
+#include "liveprobe/hdr/bracketed_source.h"
 #include "liveprobe/sh/error.h"
 #include "progress.h"
 #include "scene.h"
@@ -205,14 +206,15 @@ PipelineOptions pipelineOptionsFrom(const Settings& s, const FrameSource& source
   opt.holdBelow = st.holdBelow;
   // A bracketed source is merged; so is any 8-bit stream with its own response (a bracket of one
   // frame: the response's three curves decode it).
-  if (source.bracketFrames() > 0 || st.response) {
+  const BracketedSource* bracket = bracketOf(source);
+  if (bracket || st.response) {
     MergeOptions m;
-    m.frames = std::max(1, source.bracketFrames());
+    m.frames = bracket ? bracket->bracketFrames() : 1;
     if (auto told = responseOption(st))  // the merge decodes with the curve it is told
       m.response = std::move(*told);
-    else if (!source.bracketResponse().empty())
+    else if (bracket && !bracket->bracketResponse().empty())
       m.response =
-          CameraResponse::parse(source.bracketResponse(), source.describe() + ": response");
+          CameraResponse::parse(bracket->bracketResponse(), source.describe() + ": response");
     m.equirect = opt.layout.layout == Layout::Equirect;
     opt.bracket = m;
   }
@@ -384,8 +386,8 @@ void wireCaptureOutputs(StreamPlan& p, StreamOutputs& out, RecordSinks& sinks,
     };
   // --record (live): the raw stream, finalised even when capture stops on a fault.
   if (VideoRecorder* rec = out.record.get()) {
-    if (source.bracketFrames() > 0)  // replayed through the same merge
-      rec->setBracket(source.bracketFrames(), p.opt.bracket->response.json());
+    if (const BracketedSource* bracket = bracketOf(source))  // replayed through the same merge
+      rec->setBracket(bracket->bracketFrames(), p.opt.bracket->response.json());
     p.opt.onFrame = [rec](const Frame& f) { rec->write(f); };
   }
 }

@@ -7,6 +7,7 @@
 #include <utility>
 
 #include "liveprobe/capture/resample.h"
+#include "liveprobe/hdr/bracketed_source.h"
 #include "liveprobe/sh/error.h"
 #include "liveprobe/sh/executor.h"
 
@@ -295,8 +296,10 @@ void CapturePipeline::run() {
   {
     std::lock_guard lock(mutex_);
     stats_.skipped = source_->skippedFrames();
-    stats_.unidentified = source_->unidentifiedFrames();
-    stats_.unidentifiedReport = source_->unidentifiedReport();
+    if (const BracketedSource* b = bracketOf(*source_)) {
+      stats_.unidentified = b->unidentifiedFrames();
+      stats_.unidentifiedReport = b->unidentifiedReport();
+    }
     stats_.endReason = source_->endReason();
     finished_ = true;
   }

@@ -14,6 +14,7 @@
 #include "liveprobe/capture/open_source.h"
 #include "liveprobe/capture/recorder.h"
 #include "liveprobe/frame/input_file.h"
+#include "liveprobe/hdr/bracketed_source.h"
 #include "liveprobe/sh/error.h"
 #include "sources.h"
 
@@ -32,7 +33,7 @@ bool isImageFile(const fs::path& p) {
 }
 
 // A fixed list of frames in memory or on disk, read one after another.
-class ListSource : public FrameSource {
+class ListSource : public FrameSource, public BracketedSource {
  public:
   ListSource(std::vector<std::string> files, double fps, std::string what)
       : files_(std::move(files)), fps_(fps), what_(std::move(what)) {}
@@ -122,7 +123,7 @@ class CubeFacesSource final : public FrameSource {
 
 // A video file through OpenCV's FFmpeg backend. A frame that fails to decode in the middle is
 // skipped and counted; after kMaxBadRun failures in a row the stream is over (a truncated file).
-class VideoSource final : public FrameSource {
+class VideoSource final : public FrameSource, public BracketedSource {
  public:
   explicit VideoSource(std::string path) : path_(std::move(path)) {
     open();

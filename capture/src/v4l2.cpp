@@ -435,23 +435,6 @@ void V4l2Source::requestExposure(std::int32_t exposure100us) {
          errno);
 }
 
-std::int32_t V4l2Source::setExposure(std::int32_t exposure100us) {
-  require(State::Streaming, "setExposure");
-  v4l2_queryctrl q{};
-  q.id = V4L2_CID_EXPOSURE_ABSOLUTE;
-  if (xioctl(VIDIOC_QUERYCTRL, &q) < 0 || (q.flags & V4L2_CTRL_FLAG_DISABLED))
-    throw Error(settings_.device + ": the camera has no exposure time control " +
-                "(V4L2_CID_EXPOSURE_ABSOLUTE)");
-  const std::int32_t value = std::clamp(exposure100us, q.minimum, q.maximum);
-  v4l2_control c{V4L2_CID_EXPOSURE_ABSOLUTE, value};
-  if (xioctl(VIDIOC_S_CTRL, &c) < 0)
-    fail("VIDIOC_S_CTRL " + controlName(V4L2_CID_EXPOSURE_ABSOLUTE) + " = " +
-             std::to_string(value) + " (the camera refuses exposure changes)",
-         errno);
-  lockedExposure_ = value;  // frames without metadata carry what was asked
-  return value;
-}
-
 std::string siblingMetadataNode(const std::string& videoNode) {
   std::size_t digits = videoNode.size();
   while (digits > 0 && std::isdigit(static_cast<unsigned char>(videoNode[digits - 1]))) --digits;

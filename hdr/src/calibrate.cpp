@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <map>
 #include <opencv2/core.hpp>
 
 #include "liveprobe/sh/error.h"
@@ -255,6 +256,86 @@ CameraResponse calibrateResponse(const std::vector<Frame>& frames, ChromaBlock c
     throw Error("the frames read only codes " + std::to_string(r.readFrom) + " to " +
                 std::to_string(r.readTo) + " in every channel: the scene needs more tones");
   return r;
+}
+
+Sweep sweepExposures(FrameSource& camera, ExposureControl& control, const SweepOptions& o) {
+  const auto [least, most] = control.exposureRange();
+  Sweep sweep;
+  std::vector<double> brightness;
+  std::vector<int> delays;
+  std::int32_t previous = -1;
+  const auto meanCode = [](const Frame& f) {
+    double sum = 0;
+    for (const std::uint8_t v : f.bgr8) sum += v;
+    return sum / double(std::max<std::size_t>(1, f.bgr8.size()));
+  };
+  const auto say = [&](const std::string& line) {
+    if (o.onStop) o.onStop(line);
+  };
+  const auto take = [&](int stop) {
+    const std::int32_t asked =
+        std::clamp(std::int32_t(std::lround(double(o.locked) * std::exp2(stop))), least, most);
+    if (asked == previous) return false;  // clamped to the control's limit: already taken
+    previous = asked;
+    if (o.stopRequested && o.stopRequested()) return sweep.stopped = true, false;
+    control.requestExposure(asked);
+    Frame f;
+    const double before = brightness.empty() ? -1.0 : brightness.back();
+    bool seen = false;
+    for (int i = 0; i < o.settle; ++i) {
+      if (!camera.next(f)) throw Error(o.name + ": the stream ended");
+      if (f.exposureReported) {
+        if (std::lround(1e4 / f.radianceScale) != asked) continue;
+        delays.push_back(i);
+        break;
+      }
+      const double m = meanCode(f);
+      if (!seen && before >= 0 && std::abs(m - before) > std::max(1.0, 0.04 * before))
+        delays.push_back(i), seen = true;
+    }
+    if (!f.exposureReported) f.radianceScale = 1e4 / asked, f.exposure100us = asked;
+    const int reported = int(std::lround(1e4 / f.radianceScale));
+    char line[160];
+    if (f.exposureReported && !sweep.frames.empty() &&
+        reported == int(std::lround(1e4 / sweep.frames.back().radianceScale))) {
+      std::snprintf(line, sizeof line,
+                    "  %+d EV: %d x 100 us, the camera's limit (as the stop before): not counted",
+                    stop, reported);
+      say(line);
+      return false;
+    }
+    brightness.push_back(meanCode(f));
+    std::snprintf(line, sizeof line, "  %+d EV: %d x 100 us, mean code %.1f", stop, reported,
+                  brightness.back());
+    say(line);
+    sweep.frames.push_back(std::move(f));
+    return true;
+  };
+  for (int stop = o.lowest; stop <= o.highest && !sweep.stopped; ++stop) take(stop);
+  std::size_t shortest = 0;  // frames[0] is the lowest stop, then each one taken below it
+  for (int stop = o.lowest - 1; stop >= o.lowest - 12 && !sweep.frames.empty() && !sweep.stopped;
+       --stop) {
+    if (darkestCode(sweep.frames[shortest]) <= kDarkestCode || !take(stop)) break;
+    shortest = sweep.frames.size() - 1;
+  }
+  if (sweep.stopped) return sweep;
+  // A camera that takes the control but not the exposure shows one brightness at every stop.
+  const auto [lo, hi] = std::minmax_element(brightness.begin(), brightness.end());
+  if (sweep.frames.size() < 3 || *hi - *lo < 8.0) {
+    char range[64];
+    std::snprintf(range, sizeof range, "%.3g to %.3g", brightness.empty() ? 0.0 : *lo,
+                  brightness.empty() ? 0.0 : *hi);
+    throw Error(o.name + ": the camera ignores its exposure control (mean code " + range +
+                " across the sweep)");
+  }
+  if (!delays.empty()) {  // the most common delay over the stops that showed one
+    std::map<int, int> count;
+    for (const int d : delays) ++count[d];
+    sweep.controlDelay = std::max_element(count.begin(), count.end(), [](auto& a, auto& b) {
+                           return a.second < b.second;
+                         })->first;
+  }
+  return sweep;
 }
 
 }  // namespace lp

@@ -188,15 +188,12 @@ class V4l2Source final : public FrameSource, public ExposureControl {
   /// balance), in that order: a driver ignores manual values while its auto mode is on.
   LockedExposure lockExposure(double seconds);
 
-  /// After lockExposure(): asks for an exposure time (100 us), clamped to the control's range;
-  /// returns what was asked. The camera may apply it some frames later, or round it: frames say
-  /// what they were taken with where the metadata node reports it. Throws lp::Error when the
-  /// camera has no exposure control or refuses the value.
-  std::int32_t setExposure(std::int32_t exposure100us);
   /// Whether frames carry the exposure the camera reports (a metadata node is streaming).
   bool reportsExposure() const { return metadata_ != nullptr; }
-  /// ExposureControl, for bracketing (liveprobe/hdr/bracketing.h): the control's range, and
-  /// a request written as it is (frames without metadata keep carrying the locked exposure).
+  /// ExposureControl, for bracketing and calibration (liveprobe/hdr/bracketing.h,
+  /// liveprobe/hdr/calibrate.h): the control's range, and a request written as it is (frames
+  /// without metadata keep carrying the locked exposure; those with it say what they were taken
+  /// with).
   std::pair<std::int32_t, std::int32_t> exposureRange() override;
   void requestExposure(std::int32_t exposure100us) override;
 

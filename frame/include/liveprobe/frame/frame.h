@@ -65,17 +65,6 @@ class FrameSource {
   /// Frames from the first to the end, where the source knows it (a file: a video's own count,
   /// a sequence's files); -1 for an endless source (synthetic, a camera) or an unknown length.
   virtual std::int64_t frameCount() const { return -1; }
-  /// An exposure-bracketed source (a bracketing camera, a recording of one): the frames in one
-  /// bracket, each with its own exposure, to be merged (liveprobe/hdr/merge.h); 0: none.
-  virtual int bracketFrames() const { return 0; }
-  /// The camera response the bracket was recorded with (CameraResponse::json()); empty: none
-  /// recorded.
-  virtual std::string bracketResponse() const { return {}; }
-  /// Bracketed frames left out because their exposure could not be told (a camera without
-  /// per-frame exposure times, a frame taken while its sensor changed).
-  virtual std::size_t unidentifiedFrames() const { return 0; }
-  /// Those frames by stop and cause, as a sentence's end; empty when none.
-  virtual std::string unidentifiedReport() const { return {}; }
 };
 
 }  // namespace lp

@@ -31,6 +31,7 @@
 
 #include "liveprobe/frame/exposure_control.h"
 #include "liveprobe/frame/frame.h"
+#include "liveprobe/hdr/bracketed_source.h"
 #include "liveprobe/hdr/merge.h"
 
 namespace lp {
@@ -123,7 +124,7 @@ class Bracketing {
 
 /// A camera that brackets: its frames, each named with its exposure (frames whose exposure is
 /// not known are left out). Owns the camera.
-class BracketedCamera final : public FrameSource {
+class BracketedCamera final : public FrameSource, public BracketedSource {
  public:
   /// `control` is the camera's own exposure control (the same object, or one it owns).
   BracketedCamera(std::unique_ptr<FrameSource> camera, ExposureControl& control,
