@@ -207,17 +207,7 @@ int runLive(const Args& a) {
   CameraSettings cs = cameraSettingsFrom(a.positional()[0], s);
   const std::vector<double>& stops = s.live.bracket;
   if (!stops.empty()) cs.metadataDevice = s.live.metadata.value_or(siblingMetadataNode(cs.device));
-  auto camera = std::make_unique<V4l2Source>(cs);
-  try {
-    camera->start();
-  } catch (const Error&) {
-    // Without a metadata node (most webcams), exposures are measured from the frames; one named
-    // with --metadata must work.
-    if (cs.metadataDevice.empty() || s.live.metadata) throw;
-    cs.metadataDevice.clear();
-    camera = std::make_unique<V4l2Source>(cs);
-    camera->start();
-  }
+  auto camera = startCamera(cs, s.live.metadata.has_value());
   std::fprintf(stderr, "liveprobe live: %s%s\n", camera->describe().c_str(),
                s.output.frames || s.output.duration ? "" : "; running until Ctrl-C");
   // Bracketing counts its stops from a locked exposure.
@@ -292,15 +282,7 @@ int runCalibrate(const Args& a) {
   const int settle = s.live.settle;
   // The metadata node when there is one (frames then say their exposure); the settle otherwise.
   cs.metadataDevice = s.live.metadata.value_or(siblingMetadataNode(cs.device));
-  auto camera = std::make_unique<V4l2Source>(cs);
-  try {
-    camera->start();
-  } catch (const Error&) {
-    if (s.live.metadata) throw;
-    cs.metadataDevice.clear();
-    camera = std::make_unique<V4l2Source>(cs);
-    camera->start();
-  }
+  auto camera = startCamera(cs, s.live.metadata.has_value());
   std::fprintf(stderr, "liveprobe calibrate: %s%s\n", camera->describe().c_str(),
                camera->reportsExposure() ? "; frames report their exposure" : "");
   const LockedExposure locked = lockExposure(s.live, *camera, "calibrate");

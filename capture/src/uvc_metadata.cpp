@@ -20,13 +20,6 @@ namespace lp {
 
 namespace {
 
-int retry(int fd, unsigned long request, void* arg) {
-  int r;
-  do r = ::ioctl(fd, request, arg);
-  while (r == -1 && errno == EINTR);
-  return r;
-}
-
 template <class T>
 T readLe(const std::uint8_t* p) {
   T v;
@@ -72,7 +65,7 @@ UvcMetadata::UvcMetadata(const std::string& path, const std::string& bus) : path
   fd_.reset(::open(path.c_str(), O_RDWR | O_NONBLOCK | O_CLOEXEC));
   if (!fd_.isValid()) throw Error(path + ": no metadata node here (" + std::strerror(errno) + ")");
   v4l2_capability cap{};
-  if (retry(fd_.get(), VIDIOC_QUERYCAP, &cap) < 0)
+  if (v4l2Ioctl(fd_.get(), VIDIOC_QUERYCAP, &cap) < 0)
     throw Error(path + ": not a V4L2 device (VIDIOC_QUERYCAP: " + std::strerror(errno) + ")");
   const std::uint32_t caps =
       (cap.capabilities & V4L2_CAP_DEVICE_CAPS) ? cap.device_caps : cap.capabilities;
@@ -87,7 +80,7 @@ UvcMetadata::UvcMetadata(const std::string& path, const std::string& bus) : path
     v4l2_fmtdesc d{};
     d.index = i;
     d.type = V4L2_BUF_TYPE_META_CAPTURE;
-    if (retry(fd_.get(), VIDIOC_ENUM_FMT, &d) < 0) break;
+    if (v4l2Ioctl(fd_.get(), VIDIOC_ENUM_FMT, &d) < 0) break;
     if (d.pixelformat == V4L2_META_FMT_UVC_MSXU_1_5 || d.pixelformat == V4L2_META_FMT_D4XX)
       chosen = d.pixelformat;
   }
@@ -99,41 +92,39 @@ UvcMetadata::UvcMetadata(const std::string& path, const std::string& bus) : path
   v4l2_format f{};
   f.type = V4L2_BUF_TYPE_META_CAPTURE;
   f.fmt.meta.dataformat = chosen;
-  if (retry(fd_.get(), VIDIOC_S_FMT, &f) < 0 || f.fmt.meta.dataformat != chosen)
+  if (v4l2Ioctl(fd_.get(), VIDIOC_S_FMT, &f) < 0 || f.fmt.meta.dataformat != chosen)
     throw Error(path + ": VIDIOC_S_FMT of the metadata format failed");
   v4l2_requestbuffers req{};
   req.count = 8;
   req.type = V4L2_BUF_TYPE_META_CAPTURE;
   req.memory = V4L2_MEMORY_MMAP;
-  if (retry(fd_.get(), VIDIOC_REQBUFS, &req) < 0 || req.count == 0)
+  if (v4l2Ioctl(fd_.get(), VIDIOC_REQBUFS, &req) < 0 || req.count == 0)
     throw Error(path + ": VIDIOC_REQBUFS: " + std::strerror(errno));
   for (std::uint32_t i = 0; i < req.count; ++i) {
     v4l2_buffer b{};
     b.type = V4L2_BUF_TYPE_META_CAPTURE;
     b.memory = V4L2_MEMORY_MMAP;
     b.index = i;
-    if (retry(fd_.get(), VIDIOC_QUERYBUF, &b) < 0)
+    if (v4l2Ioctl(fd_.get(), VIDIOC_QUERYBUF, &b) < 0)
       throw Error(path + ": VIDIOC_QUERYBUF: " + std::strerror(errno));
-    void* p = ::mmap(nullptr, b.length, PROT_READ | PROT_WRITE, MAP_SHARED, fd_.get(), b.m.offset);
-    if (p == MAP_FAILED) throw Error(path + ": mmap: " + std::strerror(errno));
-    maps_.push_back({p, b.length});
-    if (retry(fd_.get(), VIDIOC_QBUF, &b) < 0)
+    maps_.emplace_back(fd_.get(), b);
+    if (!maps_.back().valid()) throw Error(path + ": mmap: " + std::strerror(errno));
+    if (v4l2Ioctl(fd_.get(), VIDIOC_QBUF, &b) < 0)
       throw Error(path + ": VIDIOC_QBUF: " + std::strerror(errno));
   }
   int type = V4L2_BUF_TYPE_META_CAPTURE;
-  if (retry(fd_.get(), VIDIOC_STREAMON, &type) < 0)
+  if (v4l2Ioctl(fd_.get(), VIDIOC_STREAMON, &type) < 0)
     throw Error(path + ": VIDIOC_STREAMON: " + std::strerror(errno));
 }
 
 UvcMetadata::~UvcMetadata() {
   int type = V4L2_BUF_TYPE_META_CAPTURE;
-  retry(fd_.get(), VIDIOC_STREAMOFF, &type);
-  for (const Mapping& m : maps_) ::munmap(m.start, m.length);
-  maps_.clear();
+  v4l2Ioctl(fd_.get(), VIDIOC_STREAMOFF, &type);
+  maps_.clear();  // unmaps
   v4l2_requestbuffers req{};
   req.type = V4L2_BUF_TYPE_META_CAPTURE;
   req.memory = V4L2_MEMORY_MMAP;
-  retry(fd_.get(), VIDIOC_REQBUFS, &req);
+  v4l2Ioctl(fd_.get(), VIDIOC_REQBUFS, &req);
 }
 
 void UvcMetadata::drain() {
@@ -141,12 +132,11 @@ void UvcMetadata::drain() {
     v4l2_buffer b{};
     b.type = V4L2_BUF_TYPE_META_CAPTURE;
     b.memory = V4L2_MEMORY_MMAP;
-    if (retry(fd_.get(), VIDIOC_DQBUF, &b) < 0) return;  // EAGAIN: nothing more for now
+    if (v4l2Ioctl(fd_.get(), VIDIOC_DQBUF, &b) < 0) return;  // EAGAIN: nothing more for now
     if (b.index < maps_.size() && !(b.flags & V4L2_BUF_FLAG_ERROR))
-      seen_[b.sequence] =
-          parseUvcExposure(static_cast<const std::uint8_t*>(maps_[b.index].start),
-                           std::min<std::size_t>(b.bytesused, maps_[b.index].length));
-    retry(fd_.get(), VIDIOC_QBUF, &b);
+      seen_[b.sequence] = parseUvcExposure(
+          maps_[b.index].data(), std::min<std::size_t>(b.bytesused, maps_[b.index].length()));
+    v4l2Ioctl(fd_.get(), VIDIOC_QBUF, &b);
     while (seen_.size() > 64) seen_.erase(seen_.begin());
   }
 }

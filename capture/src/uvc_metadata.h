@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "liveprobe/capture/v4l2.h"
+#include "v4l2_device.h"
 
 namespace lp {
 
@@ -36,11 +37,7 @@ class UvcMetadata {
   void drain();
   std::string path_;
   UniqueFd fd_;
-  struct Mapping {
-    void* start;
-    std::size_t length;
-  };
-  std::vector<Mapping> maps_;
+  std::vector<MappedBuffer> maps_;
   std::map<std::uint32_t, std::optional<double>> seen_;  ///< by sequence, the newest few
 };
 

@@ -17,6 +17,7 @@
 
 #include "liveprobe/sh/error.h"
 #include "uvc_metadata.h"
+#include "v4l2_device.h"
 
 namespace lp {
 
@@ -44,15 +45,27 @@ std::uint32_t fourccOf(CameraFormat f) {
   return 0;
 }
 
-// ioctl, retried when a signal interrupts it.
-int retryIoctl(int fd, unsigned long request, void* arg) {
+}  // namespace
+
+int v4l2Ioctl(int fd, unsigned long request, void* arg) {
   int r;
   do r = ::ioctl(fd, request, arg);
   while (r == -1 && errno == EINTR);
   return r;
 }
 
-}  // namespace
+MappedBuffer::MappedBuffer(int fd, const v4l2_buffer& b) : length_(b.length) {
+  void* p = ::mmap(nullptr, b.length, PROT_READ | PROT_WRITE, MAP_SHARED, fd, b.m.offset);
+  start_ = p == MAP_FAILED ? nullptr : p;
+}
+
+MappedBuffer::MappedBuffer(MappedBuffer&& o) noexcept : start_(o.start_), length_(o.length_) {
+  o.start_ = nullptr;
+}
+
+MappedBuffer::~MappedBuffer() {
+  if (start_) ::munmap(start_, length_);
+}
 
 void UniqueFd::reset(int fd) {
   if (fd_ >= 0) ::close(fd_);
@@ -60,12 +73,8 @@ void UniqueFd::reset(int fd) {
 }
 
 // One memory-mapped buffer; unmapped when destroyed.
-struct V4l2Source::Buffer {
-  void* start = MAP_FAILED;
-  std::size_t length = 0;
-  ~Buffer() {
-    if (start != MAP_FAILED) ::munmap(start, length);
-  }
+struct V4l2Source::Buffer : MappedBuffer {
+  using MappedBuffer::MappedBuffer;
 };
 
 V4l2Source::V4l2Source(CameraSettings settings) noexcept : settings_(std::move(settings)) {}
@@ -79,7 +88,7 @@ void V4l2Source::fail(const std::string& what, int err) const {
 }
 
 int V4l2Source::xioctl(unsigned long request, void* arg) {
-  return retryIoctl(fd_.get(), request, arg);
+  return v4l2Ioctl(fd_.get(), request, arg);
 }
 
 std::string_view V4l2Source::stateName(State s) {
@@ -292,11 +301,8 @@ void V4l2Source::allocateBuffers() {
       releaseBuffers();
       fail("VIDIOC_QUERYBUF", e);
     }
-    auto buf = std::make_unique<Buffer>();
-    buf->length = b.length;
-    buf->start =
-        ::mmap(nullptr, b.length, PROT_READ | PROT_WRITE, MAP_SHARED, fd_.get(), b.m.offset);
-    if (buf->start == MAP_FAILED) {
+    auto buf = std::make_unique<Buffer>(fd_.get(), b);
+    if (!buf->valid()) {
       const int e = errno;
       releaseBuffers();
       fail("mmap", e);
@@ -375,10 +381,9 @@ bool V4l2Source::next(Frame& frame) {
     const std::uint32_t sequence = b.sequence;
     if (!corrupt) {
       const Buffer& buf = *buffers_[b.index];
-      decodeCameraFrame(
-          {fourcc_, width_, height_, bytesPerLine_, static_cast<const std::uint8_t*>(buf.start),
-           std::min<std::size_t>(b.bytesused, buf.length)},
-          settings_.mjpegReduce, frame);
+      decodeCameraFrame({fourcc_, width_, height_, bytesPerLine_, buf.data(),
+                         std::min<std::size_t>(b.bytesused, buf.length())},
+                        settings_.mjpegReduce, frame);
     }
     if (xioctl(VIDIOC_QBUF, &b) < 0) {
       const int e = errno;
@@ -433,6 +438,19 @@ void V4l2Source::requestExposure(std::int32_t exposure100us) {
     fail("VIDIOC_S_CTRL " + controlName(V4L2_CID_EXPOSURE_ABSOLUTE) + " = " +
              std::to_string(exposure100us) + " (the camera refuses exposure changes)",
          errno);
+}
+
+std::unique_ptr<V4l2Source> startCamera(CameraSettings settings, bool metadataRequired) {
+  auto camera = std::make_unique<V4l2Source>(settings);
+  try {
+    camera->start();
+  } catch (const Error&) {
+    if (settings.metadataDevice.empty() || metadataRequired) throw;
+    settings.metadataDevice.clear();
+    camera = std::make_unique<V4l2Source>(settings);
+    camera->start();
+  }
+  return camera;
 }
 
 std::string siblingMetadataNode(const std::string& videoNode) {
@@ -516,7 +534,7 @@ CameraInfo queryCamera(const std::string& path) {
     throw Error(path + ": " + (e == ENOENT ? std::string("no such device") : std::strerror(e)));
   }
   v4l2_capability cap{};
-  if (retryIoctl(fd.get(), VIDIOC_QUERYCAP, &cap) < 0)
+  if (v4l2Ioctl(fd.get(), VIDIOC_QUERYCAP, &cap) < 0)
     throw Error(path + ": not a V4L2 video device (VIDIOC_QUERYCAP: " + std::strerror(errno) + ")");
   CameraInfo info;
   info.path = path;
@@ -537,12 +555,12 @@ CameraInfo queryCamera(const std::string& path) {
     v4l2_fmtdesc d{};
     d.index = i;
     d.type = V4L2_BUF_TYPE_VIDEO_CAPTURE;
-    if (retryIoctl(fd.get(), VIDIOC_ENUM_FMT, &d) < 0) break;
+    if (v4l2Ioctl(fd.get(), VIDIOC_ENUM_FMT, &d) < 0) break;
     for (std::uint32_t j = 0;; ++j) {
       v4l2_frmsizeenum s{};
       s.index = j;
       s.pixel_format = d.pixelformat;
-      if (retryIoctl(fd.get(), VIDIOC_ENUM_FRAMESIZES, &s) < 0) break;
+      if (v4l2Ioctl(fd.get(), VIDIOC_ENUM_FRAMESIZES, &s) < 0) break;
       CameraFrameSize m;
       m.fourcc = d.pixelformat;
       m.width = int(s.type == V4L2_FRMSIZE_TYPE_DISCRETE ? s.discrete.width : s.stepwise.max_width);
@@ -554,7 +572,7 @@ CameraInfo queryCamera(const std::string& path) {
         iv.pixel_format = d.pixelformat;
         iv.width = std::uint32_t(m.width);
         iv.height = std::uint32_t(m.height);
-        if (retryIoctl(fd.get(), VIDIOC_ENUM_FRAMEINTERVALS, &iv) < 0) break;
+        if (v4l2Ioctl(fd.get(), VIDIOC_ENUM_FRAMEINTERVALS, &iv) < 0) break;
         if (iv.type == V4L2_FRMIVAL_TYPE_DISCRETE) {
           if (iv.discrete.numerator)
             m.fps.push_back(double(iv.discrete.denominator) / iv.discrete.numerator);
@@ -572,7 +590,7 @@ CameraInfo queryCamera(const std::string& path) {
   }
   v4l2_queryctrl q{};
   q.id = V4L2_CTRL_FLAG_NEXT_CTRL;
-  while (retryIoctl(fd.get(), VIDIOC_QUERYCTRL, &q) == 0) {
+  while (v4l2Ioctl(fd.get(), VIDIOC_QUERYCTRL, &q) == 0) {
     if (!(q.flags & V4L2_CTRL_FLAG_DISABLED) && q.type != V4L2_CTRL_TYPE_CTRL_CLASS) {
       CameraControl c;
       c.id = q.id;
@@ -582,7 +600,7 @@ CameraInfo queryCamera(const std::string& path) {
       c.defaultValue = q.default_value;
       v4l2_control v{};
       v.id = q.id;
-      if (retryIoctl(fd.get(), VIDIOC_G_CTRL, &v) == 0) c.value = v.value;
+      if (v4l2Ioctl(fd.get(), VIDIOC_G_CTRL, &v) == 0) c.value = v.value;
       info.controls.push_back(c);
     }
     q.id |= V4L2_CTRL_FLAG_NEXT_CTRL;

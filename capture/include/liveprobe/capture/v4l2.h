@@ -109,6 +109,14 @@ struct CameraSettings {
 /// capture statistics); nullopt when no block carries one. Torn blocks end the parse.
 std::optional<double> parseUvcExposure(const std::uint8_t* data, std::size_t bytes);
 
+class V4l2Source;
+
+/// Opens and starts the camera `settings` names, with its metadata node (metadataDevice) where
+/// one is named. Where that node cannot stream (most webcams have none: their exposures are then
+/// told from the frames), the camera is started without it, unless `metadataRequired` (a node the
+/// user named must work). Throws lp::Error naming the device or the node.
+std::unique_ptr<V4l2Source> startCamera(CameraSettings settings, bool metadataRequired);
+
 /// The metadata node uvcvideo creates beside a video node: /dev/videoN -> /dev/video(N+1).
 std::string siblingMetadataNode(const std::string& videoNode);
 
