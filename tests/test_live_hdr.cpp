@@ -510,6 +510,51 @@ TEST(LiveHdr, ABracketWithoutMetadataToldFromThePixels) {
   }
 }
 
+// The sun clipped even at the shortest exposure is said once, in the first cycles, with what
+// measures it: neutral density where the stop is at the control's limit (the emulated sensor 8
+// times as sensitive: -12 EV is 1 x 100 us), a shorter stop where it is not (-6,-3,0); every
+// record's confidence is then at most 0.5 and its light clipped. One stop of neutral density
+// (a sensor 4 times as sensitive) measures the sun: nothing is said.
+TEST(LiveHdr, ASunClippedAtTheShortestExposureIsSaidOnce) {
+  struct Case {
+    std::string sensitivity, bracket, said;
+  };
+  for (const Case& c : std::vector<Case>{
+           {"8", kBracket,
+            "warning: /dev/video7: the brightest light clips even at -12 EV (1 x 100 us, the "
+            "control's limit): its share is a lower bound (confidence at most 0.5); add neutral "
+            "density, a stop at a time, until a run no longer says this ("},
+           {"1",
+            " --bracket -6,-3,0 --lock-exposure 0.3 --headless --view-size 64x36 "
+            "--no-background ",
+            "warning: /dev/video7: the brightest light clips even at -6 EV (60 x 100 us, the "
+            "shortest of the bracket): a shorter stop measures it (the control goes down to 1 x "
+            "100 us)"},
+           {"4", kBracket, ""}}) {
+    Emulator emu("RGB3_256x128", {skyFrame(30)}, "control_delay=2");
+    emu.env = "LPEMU_SENSITIVITY=" + c.sensitivity + " ";
+    const auto r = emu.run("live /dev/video7" + c.bracket + "--frames 15 --sun --coeffs-out " +
+                           emu.tmp / "c.jsonl");
+    ASSERT_EQ(r.exitCode, 0) << r.output;
+    const std::size_t at = r.output.find("the brightest light clips even at");
+    if (c.said.empty()) {
+      EXPECT_EQ(at, std::string::npos) << r.output;
+      continue;
+    }
+    EXPECT_NE(r.output.find(c.said), std::string::npos) << r.output;
+    EXPECT_EQ(r.output.find("the brightest light clips even at", at + 1), std::string::npos)
+        << "said twice:\n"
+        << r.output;
+    for (const json& f : readJsonl(emu.tmp / "c.jsonl")) {
+      if (!f["confidence"]["complete"].get<bool>()) continue;
+      EXPECT_LE(f["confidence"]["value"].get<double>(), 0.5) << "frame " << f["frame"];
+      EXPECT_FALSE(f["confidence"]["brightest_measured"].get<bool>()) << "frame " << f["frame"];
+      ASSERT_TRUE(f.contains("lights")) << "frame " << f["frame"];
+      EXPECT_TRUE(f["lights"][0]["clipped"].get<bool>()) << "frame " << f["frame"];
+    }
+  }
+}
+
 // Cameras that cannot bracket say so in one line and exit 1.
 TEST(LiveHdr, CamerasThatCannotBracketAreRefused) {
   const std::vector<std::tuple<std::string, std::string, std::string>> cases = {

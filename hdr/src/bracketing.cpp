@@ -27,6 +27,7 @@ Bracketing::Bracketing(ExposureControl& control, BracketOptions options)
   if (!(opt_.locked > 0))
     throw Error(opt_.name + ": bracketing needs a locked exposure (lockExposure)");
   const auto [lo, hi] = control_.exposureRange();
+  least_ = lo;
   for (const double stop : opt_.stops) {
     const double want = opt_.locked * std::exp2(stop);
     asked_.push_back(std::int32_t(std::clamp<double>(std::lround(want), lo, hi)));
@@ -215,7 +216,7 @@ bool Bracketing::take(Frame& frame) {
     }
     if (deliver) name(frame, want);
   }
-  if (deliver) run_ = 0;
+  if (deliver) run_ = 0, watchClip(frame);
   checkFollows(frame);
   askNext(s);
   // A camera whose lag could not be told from the first frames: the lag that explains most.
@@ -230,6 +231,50 @@ bool Bracketing::take(Frame& frame) {
     setLag(best);
   }
   return deliver;
+}
+
+void Bracketing::watchClip(const Frame& frame) {
+  if (clipTold_ || !opt_.onWarning || frame.format != PanoramaFormat::BgrU8 || asked_.size() < 2)
+    return;
+  // The cycle's two shortest distinct exposures.
+  std::vector<std::int32_t> order = asked_;
+  std::sort(order.begin(), order.end());
+  order.erase(std::unique(order.begin(), order.end()), order.end());
+  if (order.size() < 2) return;
+  const std::size_t which = frame.exposure100us == order[0]   ? 0
+                            : frame.exposure100us == order[1] ? 1
+                                                              : 2;
+  if (which > 1) return;
+  const int clip = MergeOptions{}.clipLevel;
+  std::size_t n = 0;
+  for (std::size_t i = 0; i + 2 < frame.bgr8.size(); i += 3)
+    n += std::max({frame.bgr8[i], frame.bgr8[i + 1], frame.bgr8[i + 2]}) >= clip;
+  clipped_[which] = n, ++clipSeen_[which];
+  if (clipSeen_[0] < 2 || clipSeen_[1] < 2) return;  // the second cycle: past the start-up
+  clipTold_ = true;
+  if (clipped_[0] == 0) return;
+  const auto stopOf = [&](std::int32_t e) {  // as the bracket names it
+    for (std::size_t i = 0; i < asked_.size(); ++i)
+      if (asked_[i] == e) return stopName(opt_.stops[i]);
+    return stopName(std::log2(double(e) / double(opt_.locked)));
+  };
+  std::string text = opt_.name + ": the brightest light clips even at " + stopOf(order[0]) + " (" +
+                     std::to_string(order[0]) + " x 100 us";
+  if (order[0] > least_) {
+    text +=
+        ", the shortest of the bracket): a shorter stop measures it (the control goes down to " +
+        std::to_string(least_) + " x 100 us)";
+  } else {
+    // How far above the clip a clipped light lies is not in the frames: its clipped area
+    // shrinking as the exposure falls (a glow) or not (a sharp disk) says nothing of its core.
+    // Extrapolating the area asked 7 to 15 stops of a sun that 1 to 3 stops measured.
+    text +=
+        ", the control's limit): its share is a lower bound (confidence at most 0.5); add "
+        "neutral density, a stop at a time, until a run no longer says this (" +
+        std::to_string(clipped_[0]) + (clipped_[0] == 1 ? " pixel" : " pixels") + " clipped at " +
+        stopOf(order[0]) + ", " + std::to_string(clipped_[1]) + " at " + stopOf(order[1]) + ")";
+  }
+  opt_.onWarning(text);
 }
 
 std::size_t Bracketing::leftOut() const {

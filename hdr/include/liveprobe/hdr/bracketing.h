@@ -19,6 +19,7 @@
 // delay, a lost frame the sequence numbers do not show) is re-locked from the frames: when the
 // last frames the pixels measured contradict it and another lag explains them. Nothing the scene
 // does ends a run: only a camera that ignores its exposure control is refused, once, at start.
+#include <array>
 #include <cstddef>
 #include <cstdint>
 #include <deque>
@@ -104,6 +105,8 @@ class Bracketing {
   void askNext(std::uint64_t after);
   void name(Frame& frame, double seconds) const;
   void checkFollows(const Frame& frame);
+  /// The first cycles' frames at the two shortest stops: where the shortest clips, told once.
+  void watchClip(const Frame& frame);
 
   ExposureControl& control_;
   BracketOptions opt_;
@@ -120,6 +123,11 @@ class Bracketing {
   bool varied_ = false;                    ///< an exposure 2% or more from the first was seen
   std::vector<std::size_t> contradicted_;  ///< per stop (the last: the locked exposure)
   std::size_t unnamed_ = 0;                ///< before the lag was known: no exposure told
+  std::int32_t least_ = 0;                 ///< the control's shortest exposure, 100 us
+  /// Pixels clipped at the shortest and the next shorter exposure of the cycle, and how many
+  /// frames of each were counted; the verdict is told once.
+  std::array<std::size_t, 2> clipped_{}, clipSeen_{};
+  bool clipTold_ = false;
 };
 
 /// A camera that brackets: its frames, each named with its exposure (frames whose exposure is
