@@ -259,7 +259,8 @@ CameraResponse calibrateResponse(const std::vector<Frame>& frames, ChromaBlock c
 }
 
 Sweep sweepExposures(FrameSource& camera, ExposureControl& control, const SweepOptions& o) {
-  const auto [least, most] = control.exposureRange();
+  const std::pair<std::int32_t, std::int32_t> range = control.exposureRange();
+  const std::int32_t least = range.first, most = range.second;  // captured: no bindings
   Sweep sweep;
   std::vector<double> brightness;
   std::vector<int> delays;
