@@ -29,6 +29,7 @@
 #include "liveprobe/sh/lights.h"
 #include "liveprobe/sh/projector.h"
 #include "liveprobe/sh/simd.h"
+#include "test_util.h"
 #include "turned_map.h"
 #include "yuyv.h"
 
@@ -501,8 +502,7 @@ double sunShare(const float* rgb, int w, int h) {
 // turned to the newest by the rotation the frames show, the sun keeps its share of the HDR
 // frame's in every frame past start-up; merged as they come, it does not.
 TEST(HdrMerge, ATurningCamerasFramesAreAlignedBeforeTheyMerge) {
-  const lp::Image full =
-      lp::loadImage(std::string(LIVEPROBE_DATA_DIR) + "/equirect/quarry_01_1k.hdr");
+  const lp::Image full = lp::loadImage(lpt::dataPath("equirect/quarry_01_1k.hdr"));
   const lp::Image map = lp::reduceEquirect(full.rgb.data(), full.width, full.height, 4);
   std::vector<float> lum;
   for (std::size_t i = 0; i < map.rgb.size(); i += 3) lum.push_back(map.rgb[i + 1]);
@@ -542,8 +542,7 @@ TEST(HdrMerge, ATurningCamerasFramesAreAlignedBeforeTheyMerge) {
 // a turning camera whose older frames are turned before they merge; with the frame written and
 // without, and the confidence the same.
 TEST(HdrMerge, ProjectingAsItMergesGivesTheMergedFramesCoefficients) {
-  const lp::Image full =
-      lp::loadImage(std::string(LIVEPROBE_DATA_DIR) + "/equirect/quarry_01_1k.hdr");
+  const lp::Image full = lp::loadImage(lpt::dataPath("equirect/quarry_01_1k.hdr"));
   const lp::Image map = lp::reduceEquirect(full.rgb.data(), full.width, full.height, 4);
   const double axis[3] = {0.57735, 0.57735, 0.57735};
   std::vector<Frame> turning, still;
@@ -680,8 +679,7 @@ double worstError(const std::function<double(int c, int code)>& recovered,
 // the true curve. Ours is within 3% through RGB24, from code lp::kYuvTrustedFrom up through YUYV,
 // and nearer the truth than either of OpenCV's on every camera and format (the table in hdr.md).
 TEST(HdrMerge, TheResponseRecoveryAgainstOpenCvs) {
-  const lp::Image full =
-      lp::loadImage(std::string(LIVEPROBE_DATA_DIR) + "/equirect/quarry_01_1k.hdr");
+  const lp::Image full = lp::loadImage(lpt::dataPath("equirect/quarry_01_1k.hdr"));
   const lp::Image sky = lp::reduceEquirect(full.rgb.data(), full.width, full.height, 4);
   for (const auto& [name, encode] :
        std::vector<std::pair<std::string, std::function<double(double)>>>{

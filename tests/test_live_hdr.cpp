@@ -211,8 +211,8 @@ struct TurningQuarry {
   std::vector<std::string> files;
   std::vector<json> truth;
   TurningQuarry(const double axis[3], int frames)
-      : files(lpt::turningFrames(std::string(LIVEPROBE_DATA_DIR) + "/equirect/quarry_01_1k.hdr", 4,
-                                 axis, 1.0, frames, dir.path)),
+      : files(lpt::turningFrames(lpt::dataPath("equirect/quarry_01_1k.hdr"), 4, axis, 1.0, frames,
+                                 dir.path)),
         truth(hdrReplay(dir / "%04d.exr")) {
     EXPECT_EQ(truth.size(), std::size_t(frames));
   }
@@ -365,9 +365,8 @@ TEST(LiveHdr, WithoutMetadataAsWithIt) {
   const double axis[3] = {0.8, 0, 0.6};
   for (const std::string map : {"pedestrian_overpass", "royal_esplanade", "blouberg_sunrise_2"}) {
     lpt::TempDir dir;
-    const auto files =
-        lpt::turningFrames(std::string(LIVEPROBE_DATA_DIR) + "/equirect/" + map + "_1k.hdr", 4,
-                           axis, 1.0, 80, dir.path);
+    const auto files = lpt::turningFrames(lpt::dataPath("equirect/" + map + "_1k.hdr"), 4, axis,
+                                          1.0, 80, dir.path);
     std::map<long, json> with;
     for (const bool metadata : {true, false}) {
       Emulator emu("YUYV_256x128", files, "control_delay=2");
@@ -668,9 +667,8 @@ TEST(LiveHdr, ABracketedRecordingReplaysAsLive) {
 TEST(LiveHdr, ABracketWithoutMetadataReplaysAsLive) {
   const double axis[3] = {0.57735, 0.57735, 0.57735};
   lpt::TempDir turning;
-  const auto quarry =
-      lpt::turningFrames(std::string(LIVEPROBE_DATA_DIR) + "/equirect/quarry_01_1k.hdr", 4, axis,
-                         1.0, 40, turning.path);
+  const auto quarry = lpt::turningFrames(lpt::dataPath("equirect/quarry_01_1k.hdr"), 4, axis, 1.0,
+                                         40, turning.path);
   for (const auto& [what, files, mode] :
        std::vector<std::tuple<std::string, std::vector<std::string>, std::string>>{
            {"still sky", {skyFrame(30)}, "MJPG_256x128"},
@@ -822,8 +820,7 @@ TEST(LiveHdr, CalibrateRecoversTheResponse) {
 // the camera's sRGB curve from code lp::kYuvTrustedFrom up in every channel, and a warning that
 // names the format and the one that reaches every code.
 TEST(LiveHdr, CalibrateThroughYuyvSaysWhatItHolds) {
-  Emulator emu("YUYV_256x128", {std::string(LIVEPROBE_DATA_DIR) + "/equirect/quarry_01_1k.hdr"},
-               "control_delay=2");
+  Emulator emu("YUYV_256x128", {lpt::dataPath("equirect/quarry_01_1k.hdr")}, "control_delay=2");
   const auto cal = emu.run("calibrate /dev/video7 --lock-exposure 0.3 --out " + emu.tmp / "r.json");
   ASSERT_EQ(cal.exitCode, 0) << cal.output;
   EXPECT_NE(cal.output.find("warning: /dev/video7 sends YUYV, which shares each pixel's colour "

@@ -363,8 +363,7 @@ class BracketSource : public lp::FrameSource, public lp::BracketedSource {
 // through the one frame path (exposure and orientation applied once), and the display's
 // background is the merged frame.
 TEST(Bracket, ThePipelinesOnePassIsTheMergedFrameProjected) {
-  const lp::Image map =
-      lp::loadImage(std::string(LIVEPROBE_DATA_DIR) + "/probes/latlong_256x128/grace.hdr");
+  const lp::Image map = lp::loadImage(lpt::dataPath("probes/latlong_256x128/grace.hdr"));
   const BracketSource shots(map);
   const lp::Photometry photometry{.exposure = 2.0f};
   const glm::mat3 turn = lp::rotationYawPitchRoll(10, 20, 30);

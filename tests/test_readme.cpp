@@ -1,12 +1,13 @@
 // Every command example in README.md and the manual (docs/*.md) runs as written, so they cannot
 // drift from the program. An example is a line starting with `liveprobe ` inside a ```sh block (a
 // trailing backslash continues it). It runs with `liveprobe` on PATH, from a working folder where
-// ../shared/data and recordings/ resolve as they do from the source tree, under Xvfb (so the
-// window path is taken, as on a desktop), and for `live` and `calibrate` against the emulated
-// camera (tests/v4l2emu) standing in for the device it names (bracketing and calibration with
-// its metadata node, a control delay of two frames, and the synthetic sky's HDR frames). It must
-// exit 0, or with the status a trailing "# exits N" gives; one marked "# runs until Esc or Ctrl-C"
-// must still be running after a few seconds, and then stop cleanly on SIGINT (exit 130).
+// data/ (the test data, wherever LIVEPROBE_DATA_DIR is) and recordings/ resolve as they do from
+// the source tree, under Xvfb (so the window path is taken, as on a desktop), and for `live` and
+// `calibrate` against the emulated camera (tests/v4l2emu) standing in for the device it names
+// (bracketing and calibration with its metadata node, a control delay of two frames, and the
+// synthetic sky's HDR frames). It must exit 0, or with the status a trailing "# exits N" gives;
+// one marked "# runs until Esc or Ctrl-C" must still be running after a few seconds, and then stop
+// cleanly on SIGINT (exit 130).
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -120,15 +121,14 @@ void makeHdrModes(const fs::path& dir, bool still) {
 TEST_P(ReadmeExample, RunsAsWritten) {
   const Example& e = GetParam();
   lpt::TempDir tmp;
-  // tmp/shared -> the data's parent; tmp/work/recordings/* -> the project's recordings (links, so
+  // tmp/work/data -> the test data; tmp/work/recordings/* -> the project's recordings (links, so
   // an example that records there replaces the link, never the file, and the test sees it).
-  const fs::path data = fs::path(LIVEPROBE_DATA_DIR);
-  fs::create_directory_symlink(fs::absolute(data.parent_path()), tmp.path / "shared");
   const fs::path work = tmp.path / "work";
   fs::create_directories(work / "recordings");
+  fs::create_directory_symlink(fs::absolute(fs::path(LIVEPROBE_DATA_DIR)), work / "data");
   for (const auto& f : fs::directory_iterator(std::string(LIVEPROBE_SOURCE_DIR) + "/recordings"))
     fs::create_symlink(f.path(), work / "recordings" / f.path().filename());
-  ASSERT_TRUE(fs::exists(work / "../shared/data")) << "the README's data paths must resolve";
+  ASSERT_TRUE(fs::exists(work / "data/equirect")) << "the README's data paths must resolve";
 
   std::string env = "export PATH=" + fs::path(LIVEPROBE_BIN).parent_path().string() + ":$PATH; ";
   // A bench compared with its baseline times its stages between glFinish calls. On llvmpipe each

@@ -14,8 +14,9 @@ namespace lpt {
 
 inline std::string dataPath(const std::string& rel) {
   const std::string p = std::string(LIVEPROBE_DATA_DIR) + "/" + rel;
-  EXPECT_TRUE(std::filesystem::exists(p))
-      << "test data missing: " << p << " (set -DLIVEPROBE_DATA_DIR=...)";
+  EXPECT_TRUE(std::filesystem::exists(p)) << "test data missing: " << p
+                                          << " (scripts/data fetches it into data/; or "
+                                             "-DLIVEPROBE_DATA_DIR=DIR names a folder with it)";
   return p;
 }
 

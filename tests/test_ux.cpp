@@ -576,8 +576,7 @@ TEST(Background, StillsDrawFrameProcessorRunsBackground) {
   for (std::size_t i = 0; i < rgb.size(); ++i) rgb[i] = std::uint8_t((i * 53) % 256);
   const std::string png = tmp / "pano.png";
   lp::saveRgb8(png, 64, 32, rgb.data());
-  for (const std::string& file :
-       {png, std::string(LIVEPROBE_DATA_DIR) + "/probes/latlong_256x128/grace.hdr"}) {
+  for (const std::string& file : {png, lpt::dataPath("probes/latlong_256x128/grace.hdr")}) {
     SCOPED_TRACE(file);
     const lp::cli::Environment env =
         lp::cli::loadEnvironment(file, lp::cli::PanoramaSettings{}, {.maxLights = 0}, true);

@@ -56,7 +56,7 @@ const Example kExamples[] = {
      "--lock-exposure "
      "--sun"},
     {"The coefficients and the sun of a map, in three.js's frame and order:",
-     "liveprobe coeffs ../shared/data/equirect/pedestrian_overpass_1k.hdr --sun --format three > "
+     "liveprobe coeffs data/equirect/pedestrian_overpass_1k.hdr --sun --format three > "
      "three.json"},
     {"A camera's response for --response, from an exposure sweep:",
      "liveprobe calibrate /dev/video0 --out response.json --stops -6,3"},

@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # scripts/data against a mirror (the suite's own data folder): every file of the manifest comes
 # with its SHA-256 checked; a second run keeps them all; a mirror with one corrupted file gets that
-# file refused in one line naming it, and nothing of it (nor a partial file) is left in place.
+# file refused in one line naming it, and nothing of it (nor a partial file) is left in place; a
+# clone with nothing beside it reads the data from its own data/ once fetched.
 set -euo pipefail
 root=$1 mirror=$2
 tmp=$(mktemp -d)
@@ -33,4 +34,13 @@ grep -q '^scripts/data: models/teapot.obj: SHA-256 .* expected 1b5396fe.*: refus
 # A mirror that is not there is one line, and exit 1.
 if out=$("$root/scripts/data" --from "$tmp/none" --to "$tmp/x" 2>&1); then fail "no mirror: exit 0"; fi
 [[ $(wc -l <<< "$out") == 1 && $out == *"no such folder"* ]] || fail "$out"
-echo "scripts/data: $files files fetched and checked; a corrupted one refused"
+# A clone with nothing beside it: --where names ../shared/data and fails until scripts/data has
+# filled the clone's data/, then names that; CMake and the scripts read the folder it names.
+mkdir -p "$tmp/alone/clone/scripts"
+cp "$root/scripts/data" "$root/scripts/data.manifest" "$tmp/alone/clone/scripts/"
+if out=$(LIVEPROBE_DATA_DIR= "$tmp/alone/clone/scripts/data" --where); then fail "--where with no data: exit 0 ($out)"; fi
+[[ $out == "$tmp/alone/shared/data" ]] || fail "--where with no data names $out"
+"$tmp/alone/clone/scripts/data" --from "$mirror" 2> /dev/null || fail "the clone's fetch"
+out=$(LIVEPROBE_DATA_DIR= "$tmp/alone/clone/scripts/data" --where) || fail "--where after the fetch: $out"
+[[ $out == "$tmp/alone/clone/data" ]] || fail "--where after the fetch names $out"
+echo "scripts/data: $files files fetched and checked; a corrupted one refused; --where follows"
