@@ -77,8 +77,8 @@ std::unique_ptr<RecordSink> openStream([[maybe_unused]] const StreamSettings& st
   o.threeDir = o.webDir + "/three";
   if (!fs::exists(o.threeDir + "/three.module.js"))
     warn("--serve: three.js is not in " + o.threeDir +
-         " (the build stages it from app/web/node_modules, which scripts/build installs with "
-         "npm); the page will not draw");
+         " (the build stages it there from app/web/vendor/three; LIVEPROBE_WEB_DIR names another "
+         "folder); the page will not draw");
   std::unique_ptr<StreamServer> server;
   try {
     server = std::make_unique<StreamServer>(o);

@@ -14,7 +14,7 @@ renderer.setPixelRatio(1);
 renderer.setSize(innerWidth, innerHeight);
 renderer.toneMapping = THREE.NoToneMapping;  // the pixel is albedo * E / pi, sRGB-encoded
 renderer.shadowMap.enabled = true;
-renderer.shadowMap.type = THREE.PCFSoftShadowMap;
+renderer.shadowMap.type = THREE.PCFShadowMap;  // filtered (three.js r187 has no "soft" one)
 document.body.appendChild(renderer.domElement);
 
 const scene = new THREE.Scene();

@@ -7,7 +7,7 @@
 // of the page.
 import { test } from 'node:test';
 import assert from 'node:assert/strict';
-import { copyFileSync, mkdirSync, mkdtempSync, writeFileSync } from 'node:fs';
+import { copyFileSync, mkdirSync, mkdtempSync, readFileSync, writeFileSync } from 'node:fs';
 import { tmpdir } from 'node:os';
 import { join } from 'node:path';
 import { chromium } from 'playwright-core';
@@ -34,6 +34,8 @@ test('the page draws the model lit by the stream', async () => {
     const failed = [];
     page.on('requestfailed', (r) => failed.push(r.url()));
     page.on('response', (r) => { if (r.status() >= 400) failed.push(`${r.status()} ${r.url()}`); });
+    const warned = [];  // three.js warns of what it no longer has (a removed shadow type, say)
+    page.on('console', (m) => { if (m.type() === 'warning' || m.type() === 'error') warned.push(m.text()); });
     await page.goto(`http://127.0.0.1:${port}/?freeze=1`);
     await page.waitForFunction(() => {
       const t = document.getElementById('state').textContent;
@@ -51,6 +53,7 @@ test('the page draws the model lit by the stream', async () => {
     }, [x, y]);
     const pixel = await at(320, 180);
     assert.deepEqual(failed, [], 'every request the page made was answered');
+    assert.deepEqual(warned.filter((t) => /THREE/.test(t)), [], 'three.js warned of nothing');
     // E at the sphere's centre, normal (0, 0, 1) in three's frame, from three's own code.
     const c = state.coefficients;
     const n = new Vector3(0, 0, 1);
@@ -90,7 +93,7 @@ test('the page draws the model lit by the stream', async () => {
   }
 });
 
-// A page served without three.js (a build where npm never installed it) says so in the browser,
+// A page served without three.js (LIVEPROBE_WEB_DIR naming a folder without it) says so in the browser,
 // in its status line, with what to do; the terminal's warning is not the only word.
 test('without three.js the page says what is missing', async () => {
   const web = mkdtempSync(join(tmpdir(), 'lp-web-'));
@@ -107,9 +110,31 @@ test('without three.js the page says what is missing', async () => {
                                { timeout: 30000 });
     const status = await page.textContent('#status');
     assert.match(status, /three\.js did not load/);
-    assert.match(status, /npm ci in app\/web/);
+    assert.match(status, /app\/web\/vendor\/three/);
   } finally {
     await browser.close();
+    s.proc.kill('SIGINT');
+    await s.exited;
+  }
+});
+
+// The page's three.js (app/web/vendor/three, what every build stages and serves) is byte for byte
+// the release whose own code these tests run (tests/engines' package-lock), and the build served
+// it: the page is tested as it ships.
+test('the page serves the three.js the tests run', async () => {
+  const here = (p) => fileURLToPath(new URL(p, import.meta.url));
+  const s = serve(['synthetic:64x32', '--headless', '--size', '32x18', '--duration', '60', '--serve', '0',
+                   '--quiet']);
+  try {
+    const port = await s.port;
+    for (const f of ['three.module.js', 'three.core.js']) {
+      const vendored = readFileSync(here(`../../app/web/vendor/three/${f}`));
+      assert.ok(vendored.equals(readFileSync(here(`node_modules/three/build/${f}`))),
+                `app/web/vendor/three/${f} is tests/engines' three.js`);
+      const served = Buffer.from(await (await fetch(`http://127.0.0.1:${port}/three/${f}`)).arrayBuffer());
+      assert.ok(served.equals(vendored), `/three/${f} is the vendored file`);
+    }
+  } finally {
     s.proc.kill('SIGINT');
     await s.exited;
   }
