@@ -1,6 +1,6 @@
 # The Debian package, made by CPack from the install rules of the "runtime" component: the
 # program, its run-time data (share/liveprobe), the man page and the bash completion, with
-# /usr/share/doc/liveprobe/{copyright,changelog.gz}. The libraries, headers and CMake config
+# /usr/share/doc/liveprobe/{copyright,changelog.gz} and the manual (README.md, docs/). The libraries, headers and CMake config
 # stay out of it (they are for building against liveprobe, from the tree). Run-time dependencies
 # are found by dpkg-shlibdeps. scripts/package builds it and checks it with lintian.
 set(doc_dir ${CMAKE_BINARY_DIR}/package-doc)
@@ -16,6 +16,11 @@ add_custom_target(liveprobe_package_doc ALL DEPENDS ${doc_dir}/changelog.gz)
 add_dependencies(liveprobe liveprobe_package_doc)
 install(FILES ${CMAKE_SOURCE_DIR}/cmake/package/copyright ${doc_dir}/changelog.gz
         DESTINATION ${CMAKE_INSTALL_DOCDIR} COMPONENT runtime)
+# The manual as the source has it: README.md, and docs/ (its pages and their pictures) beside it,
+# so the README's links and the pages' own resolve in /usr/share/doc/liveprobe as in the tree.
+install(FILES ${CMAKE_SOURCE_DIR}/README.md DESTINATION ${CMAKE_INSTALL_DOCDIR} COMPONENT runtime)
+install(DIRECTORY ${CMAKE_SOURCE_DIR}/docs/ DESTINATION ${CMAKE_INSTALL_DOCDIR}/docs
+        COMPONENT runtime FILES_MATCHING PATTERN "*.md" PATTERN "*.png" PATTERN "measurements" EXCLUDE)
 
 set(CPACK_GENERATOR DEB)
 set(CPACK_PACKAGE_NAME liveprobe)

@@ -41,6 +41,7 @@ const ExitCode kExitCodes[] = {
     {1, "a bad input, command line or device: one line on standard error names it"},
     {2, "bench: a stage over the threshold, but the machine was too busy to tell (run it again)"},
     {3, "the run failed at run time: --publish reached no MQTT broker, or an internal error"},
+    {129, "stopped by SIGHUP, the terminal closed (outputs are finalised first)"},
     {130, "stopped by SIGINT or SIGTERM (outputs are finalised first)"},
 };
 
@@ -202,8 +203,10 @@ std::string man(const std::string& version) {
   for (const auto& e : kExitCodes) m << ".TP\n.B " << e.code << "\n" << roff(e.text) << "\n";
   m << ".SH FILES\n.TP\n.I PREFIX/share/liveprobe/\nthe bundled recording (recordings/sky.mkv "
        "with its sidecar) and the web page of \\-\\-serve, found beside the program.\n"
-    << ".SH SEE ALSO\nThe manual, README.md and docs/ in the source, and "
-       "docs/reference.md, which this page is generated with.\n";
+    << ".TP\n.I /usr/share/doc/liveprobe/\nthe manual, where the package installed it: README.md "
+       "and the pages of docs/ (README.md and docs/ in the source).\n"
+    << ".SH SEE ALSO\nThe manual in /usr/share/doc/liveprobe/ (README.md, then docs/), and "
+       "docs/reference.md, this page's own text.\n";
   return m.str();
 }
 

@@ -3,8 +3,11 @@
 (or "N libFuzzer targets") in README.md and docs/ is the number of tests/fuzz/fuzz_*.cpp, every
 "N stages" is the number of stages `liveprobe bench` times, and every list that names four or
 more of those stages (the generated reference included) names all of them in the program's order,
-and the committed baseline's numbers the manual quotes ("calibration kernel X ms, render Y ms
-median, contention xZ") are the file's, as rounded. Prints each page:line that differs. Usage: doc_counts.py ROOT LIVEPROBE"""
+the committed baseline's numbers the manual quotes ("calibration kernel X ms, render Y ms
+median, contention xZ") are the file's, as rounded, and every exit-status table (the Markdown
+tables headed "exit status" or "code", the man page's EXIT STATUS) lists every status the
+program returns: 0, 1 and app/src/progress.h's kExit* constants. Prints each page:line that differs. Usage: doc_counts.py ROOT LIVEPROBE"""
+import itertools
 import json
 import pathlib
 import re
@@ -77,8 +80,30 @@ def main(root, liveprobe):
                     bad += 1
                     print(f'{page.relative_to(root)}:{n}: {name} {text}, but '
                           f'recordings/bench-baseline.json has {value:.{digits + 2}f}')
-    print(f'{checked} stated counts and stage lists checked ({fuzz} fuzz targets, '
-          f'{len(stages)} stages)')
+    # The exit statuses: the program's, against every table of them.
+    codes = {0, 1} | {int(c) for c in re.findall(r'constexpr int kExit\w+ = (\d+);',
+                                                   (root / 'app/src/progress.h').read_text())}
+    tables = []
+    for page in pages:
+        lines = page.read_text().splitlines()
+        for n, line in enumerate(lines):
+            if re.match(r'\| (exit status|code) \|', line):
+                rows = itertools.takewhile(lambda l: l.startswith('|'), lines[n + 2:])
+                tables.append((f'{page.relative_to(root)}:{n + 1}',
+                               {int(m.group(1)) for r in rows if (m := re.match(r'\| (\d+) \|', r))}))
+    man = (root / 'docs/liveprobe.1').read_text()
+    section = man.split('.SH EXIT STATUS\n', 1)[1].split('\n.SH ', 1)[0]
+    tables.append(('docs/liveprobe.1 EXIT STATUS', {int(c) for c in re.findall(r'^\.B (\d+)$', section, re.M)}))
+    for where, listed in tables:
+        checked += 1
+        if listed != codes:
+            bad += 1
+            print(f'{where}: exit statuses {sorted(listed)}, but the program returns {sorted(codes)}')
+    if len(tables) < 3:
+        bad += 1
+        print(f'{len(tables)} exit-status tables found; commands.md, reference.md and the man page have one each')
+    print(f'{checked} stated counts, stage lists and exit tables checked ({fuzz} fuzz targets, '
+          f'{len(stages)} stages, exit statuses {sorted(codes)})')
     return 1 if bad else 0
 
 
