@@ -6,7 +6,8 @@ more of those stages (the generated reference included) names all of them in the
 the committed baseline's numbers the manual quotes ("calibration kernel X ms, render Y ms
 median, contention xZ") are the file's, as rounded, and every exit-status table (the Markdown
 tables headed "exit status" or "code", the man page's EXIT STATUS) lists every status the
-program returns: 0, 1 and app/src/progress.h's kExit* constants. Prints each page:line that differs. Usage: doc_counts.py ROOT LIVEPROBE"""
+program returns: 0, 1 and app/src/progress.h's kExit* constants; a frame rate measured over a
+run's --duration is its frames over that time, and no picture's caption states a rate of its own. Prints each page:line that differs. Usage: doc_counts.py ROOT LIVEPROBE"""
 import itertools
 import json
 import pathlib
@@ -33,6 +34,17 @@ def bench_stages(liveprobe):
         return list(json.loads(out.read_text())['stages'])
 
 
+def paragraphs(page):
+    """(first line, text) of each run of non-empty lines, joined by spaces."""
+    lines = page.read_text().splitlines()
+    start = 0
+    for n, line in enumerate(lines + [''], 1):
+        if not line.strip():
+            if n - 1 > start:
+                yield start + 1, ' '.join(lines[start:n - 1])
+            start = n
+
+
 def main(root, liveprobe):
     root = pathlib.Path(root)
     fuzz = len(list((root / 'tests/fuzz').glob('fuzz_*.cpp')))
@@ -53,16 +65,38 @@ def main(root, liveprobe):
                 if count(m.group(1)) != len(stages):
                     bad += 1
                     print(f'{where}: "{m.group(0)}", but bench times {len(stages)}: {stages}')
-            # A list of stages: names joined by commas (a parenthesis may follow a name).
-            for m in re.finditer(r'\b[a-z]+(?: \([^)]*\))?(?:, (?:and )?[a-z]+(?: \([^)]*\))?){3,}',
-                                 line):
-                named = re.findall(r'\b([a-z]+)(?: \([^)]*\))?(?=,|$)', m.group(0))
+        # A measured frame rate: in a paragraph that gives a run's --duration D, every "N of
+        # [its] M [frames] (F frames/s)" is N / D, and no picture's caption there states a rate of
+        # its own (the picture is a moment of a measured run, not another measurement).
+        for par_start, par in paragraphs(page):
+            d = re.search(r'--duration (\d+(?:\.\d+)?)', par)
+            if not d:
+                continue
+            for m in re.finditer(r'(\d+) of (?:its )?\d+(?: frames)? \((\d+(?:\.\d+)?) frames/s', par):
+                checked += 1
+                rate = int(m.group(1)) / float(d.group(1))
+                digits = len(m.group(2).split('.')[1]) if '.' in m.group(2) else 0
+                if abs(float(m.group(2)) - round(rate, digits)) > 1e-9:
+                    bad += 1
+                    print(f'{page.relative_to(root)}:{par_start}: "{m.group(0)}", but {m.group(1)} frames '
+                          f'in {d.group(1)} s are {rate:.2f} frames/s')
+        for n, line in enumerate(page.read_text().splitlines(), 1):
+            if re.match(r'!\[[^\]]*\d frames/s', line):
+                bad += 1
+                print(f'{page.relative_to(root)}:{n}: a caption states a frame rate; the text measures it')
+        # A list of stages, within a paragraph (a list may break across lines): names joined by
+        # commas or "and" (a parenthesis may follow a name).
+        for par_start, text in paragraphs(page):
+            sep = r'(?:,? and |, )'
+            for m in re.finditer(r'\b[a-z]+(?: \([^)]*\))?(?:' + sep + r'[a-z]+(?: \([^)]*\))?){3,}',
+                                 text):
+                named = re.findall(r'\b([a-z]+)(?: \([^)]*\))?(?=' + sep + r'|$)', m.group(0))
                 if sum(name in stages for name in named) < 4:
                     continue
                 checked += 1
                 if named != stages:
                     bad += 1
-                    print(f'{where}: stages {named}, but bench times {stages}')
+                    print(f'{page.relative_to(root)}:{par_start}: stages {named}, but bench times {stages}')
     # The committed baseline, as the manual quotes it.
     base = json.loads((root / 'recordings/bench-baseline.json').read_text())
     quoted = {'calibration kernel': base['calibration_ms'],
