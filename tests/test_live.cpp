@@ -164,6 +164,30 @@ TEST(LiveFaults, BusyDevice) {
   atReqbufs.expectNoLeak();
 }
 
+// A node the user may not open (not in the video group): the line says what to do.
+TEST(LiveFaults, PermissionDenied) {
+  Emulator emu({"MJPG_320x160"}, "denied_open");
+  expectFault(emu, "", "open: permission denied (camera nodes belong to the video group");
+  expectFault(emu, "", "sudo usermod -aG video $USER");
+}
+
+// A camera that sends fewer frames than its mode says (auto exposure in dim light): the run goes
+// on, and its end says the rate the driver's timestamps show and what keeps the mode's. The
+// emulated camera paces 6 frames a second in a 30 frames/s mode; a loaded machine can only make
+// it slower.
+TEST(LiveHints, ACameraSlowerThanItsModeIsSaid) {
+  Emulator emu({"MJPG_320x160"}, "slow_fps=6");
+  const auto r = emu.run("live /dev/video7 --frames 20" + kCommon);
+  EXPECT_EQ(r.exitCode, 0) << r.output;
+  std::smatch m;
+  ASSERT_TRUE(std::regex_search(r.output, m,
+                                std::regex(R"(hint: the camera sent ([0-9.]+) frames/s, not the )"
+                                           R"(30 fps of its mode: .*--lock-exposure)")))
+      << r.output;
+  EXPECT_GT(std::stod(m[1]), 2.0) << r.output;
+  EXPECT_LT(std::stod(m[1]), 6.5) << r.output;
+}
+
 TEST(LiveFaults, FewerBuffersGranted) {
   Emulator two({"MJPG_320x160"}, "grant=2");
   expectFault(two, "", "granted 2 buffers, need at least 3");

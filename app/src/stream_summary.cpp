@@ -12,11 +12,23 @@ namespace lp::cli {
 
 double StreamTally::median(Stage s) const { return percentile(stages[std::size_t(s)], 0.5); }
 
+double StreamTally::deliveredFps(double minSeconds) const {
+  const double span = lastTimestamp - firstTimestamp;
+  if (frames() < 2 || !(span >= minSeconds) || lastSequence <= firstSequence) return 0;
+  return double(lastSequence - firstSequence) / span;
+}
+
 void recordSample(StreamTally& t, const ProcessedFrame& f, double uploadMs, double renderMs,
                   double latencyMs, Hud* hud, const PipelineStats& st, const RecordSinks& sinks) {
   StageTimes times = f.times;
   times[Stage::Upload] = uploadMs;
   times[Stage::Render] = renderMs;
+  if (t.latency.empty()) {
+    t.firstSequence = f.sequence;
+    t.firstTimestamp = f.timestamp;
+  }
+  t.lastSequence = f.sequence;
+  t.lastTimestamp = f.timestamp;
   t.latency.push_back(latencyMs);
   for (std::size_t k = 0; k < kStageCount; ++k) t.stages[k].push_back(times.ms[k]);
   t.saturated += f.saturated;
@@ -101,9 +113,17 @@ void printSummary(const std::string& description, const PipelineStats& st, const
                  smoothSeconds, smoothSeconds);
 }
 
-void printCameraHints(const StreamTally& t, bool bracketed) {
+void printCameraHints(const StreamTally& t, bool bracketed, double modeFps) {
   const std::size_t n = t.frames();
   if (n == 0) return;
+  // The camera sent fewer frames than its mode asks, over two seconds or more: the driver's own
+  // sequence and timestamps, so frames lost on the way count as sent.
+  if (const double fps = t.deliveredFps(2.0); fps > 0 && modeFps > 0 && fps < 0.8 * modeFps)
+    std::fprintf(stderr,
+                 "liveprobe live: hint: the camera sent %.1f frames/s, not the %s of its mode: "
+                 "in dim light its auto exposure lengthens each frame (--lock-exposure keeps "
+                 "the rate), or the USB link is full (--pixel-format mjpeg, or a smaller --size)\n",
+                 fps, formatFps(modeFps).c_str());
   const std::size_t unmeasured = n - std::min(n, t.brightestMeasured);
   if (!bracketed) {
     // Most frames clipped their brightest light: a sun or a lamp the 8-bit codes cannot hold.

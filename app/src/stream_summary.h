@@ -21,6 +21,14 @@ struct StreamTally {
   std::vector<double> confidence;               ///< each frame's
   std::vector<double> agreement;                ///< each frame's (FrameConfidence::agreement)
   std::size_t brightestMeasured = 0;            ///< frames whose brightest pixel was measured
+  /// The source's frame number and timestamp (s) of the first and the last frame drawn: the rate
+  /// it delivered at, lost frames included.
+  std::uint64_t firstSequence = 0, lastSequence = 0;
+  double firstTimestamp = 0, lastTimestamp = 0;
+
+  /// Frames per second the source delivered between the first and the last frame drawn; 0 over
+  /// less than `minSeconds`.
+  double deliveredFps(double minSeconds) const;
 
   std::size_t frames() const { return latency.size(); }
   double median(Stage s) const;
@@ -44,6 +52,6 @@ void printSummary(const std::string& description, const PipelineStats& st, const
 /// applies: a clipped light without --bracket; a bracket whose exposures disagree with each
 /// other (a response that is not the camera's); a bracket that never measured its brightest
 /// light (the control's limit: neutral density). `bracketed`: the run merged a bracket.
-void printCameraHints(const StreamTally& t, bool bracketed);
+void printCameraHints(const StreamTally& t, bool bracketed, double modeFps);
 
 }  // namespace lp::cli

@@ -47,6 +47,24 @@ std::uint32_t fourccOf(CameraFormat f) {
 
 }  // namespace
 
+int openV4l2Node(const std::string& path) {
+  const int fd = ::open(path.c_str(), O_RDWR | O_NONBLOCK | O_CLOEXEC);
+  if (fd >= 0) return fd;
+  const int e = errno;
+  switch (e) {
+    case ENOENT:
+      throw Error(path + ": open: no such device");
+    case EACCES:
+      throw Error(path +
+                  ": open: permission denied (camera nodes belong to the video group: sudo "
+                  "usermod -aG video $USER, then log in again)");
+    case EBUSY:
+      throw Error(path + ": open: device busy (another program is using it)");
+    default:
+      throw Error(path + ": open: " + std::strerror(e));
+  }
+}
+
 int v4l2Ioctl(int fd, unsigned long request, void* arg) {
   int r;
   do r = ::ioctl(fd, request, arg);
@@ -132,13 +150,7 @@ void V4l2Source::start() {
 
 void V4l2Source::open() {
   require(State::Closed, "open");
-  const int fd = ::open(settings_.device.c_str(), O_RDWR | O_NONBLOCK | O_CLOEXEC);
-  if (fd < 0) {
-    const int e = errno;
-    if (e == ENOENT) throw Error(settings_.device + ": open: no such device");
-    fail("open", e);
-  }
-  fd_.reset(fd);
+  fd_.reset(openV4l2Node(settings_.device));
   v4l2_capability cap{};
   if (xioctl(VIDIOC_QUERYCAP, &cap) < 0) {
     const int e = errno;
@@ -528,11 +540,7 @@ std::string V4l2Source::describe() const {
 }
 
 CameraInfo queryCamera(const std::string& path) {
-  UniqueFd fd(::open(path.c_str(), O_RDWR | O_NONBLOCK | O_CLOEXEC));
-  if (!fd.isValid()) {
-    const int e = errno;
-    throw Error(path + ": " + (e == ENOENT ? std::string("no such device") : std::strerror(e)));
-  }
+  UniqueFd fd(openV4l2Node(path));
   v4l2_capability cap{};
   if (v4l2Ioctl(fd.get(), VIDIOC_QUERYCAP, &cap) < 0)
     throw Error(path + ": not a V4L2 video device (VIDIOC_QUERYCAP: " + std::strerror(errno) + ")");

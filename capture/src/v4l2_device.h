@@ -7,8 +7,14 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <string>
 
 namespace lp {
+
+/// open(2) of a V4L2 node, read-write and non-blocking (as the kernel's V4L2 open() page asks of
+/// a streaming reader). Returns the descriptor; throws lp::Error naming `path` and what to do:
+/// "no such device" (ENOENT), the video group for EACCES, "device busy" (EBUSY), else strerror.
+int openV4l2Node(const std::string& path);
 
 /// ioctl(2) on a V4L2 node, again while a signal interrupts it (EINTR).
 int v4l2Ioctl(int fd, unsigned long request, void* arg);

@@ -22,7 +22,8 @@
 //                  V4L2_META_FMT_UVC_MSXU_1_5 (the whole header, with Microsoft's capture
 //                  statistics: the exposure time each frame was actually taken with)
 //   LPEMU_FPS      frame rate (default 30)
-//   LPEMU_FAULTS   comma list: busy_open, busy_reqbufs, grant=N, einval_fmt, stop_after=N,
+//   LPEMU_FAULTS   comma list: busy_open, denied_open (EACCES), busy_reqbufs, grant=N, einval_fmt,
+//   stop_after=N,
 //                  eintr, unplug_after=N, exposure_walk (auto exposure changes every frame),
 //                  refuse=ID (S_CTRL of that control id fails with EBUSY), latency=MS (each
 //                  frame's timestamp is MS before its dequeue); faults that recur, for soak
@@ -34,7 +35,9 @@
 //                  exposure_pow2 (the sensor applies the nearest power of two of what was asked),
 //                  no_exposure (no V4L2_CID_EXPOSURE_ABSOLUTE), ignore_exposure (written values
 //                  are taken and read back but never reach the sensor); occlusion: occlude_from=N,
-//                  occlude_frames=K (default 10), occlude_white (white, not dark, frames)
+//                  occlude_frames=K (default 10), occlude_white (white, not dark, frames);
+//                  slow_fps=F (frames come at F a second while the mode says its own rate, as
+//                  a camera's auto exposure does in dim light)
 //   LPEMU_LOG      file to which each call is appended as one line (for assertions)
 // What it cannot prove about real drivers: README, "Testing without a camera".
 #include <dlfcn.h>
@@ -680,6 +683,7 @@ int emuOpen(const char* path) {
   std::lock_guard lock(e.m);
   e.say(std::string("open ") + path);
   if (e.fault("busy_open")) return e.fail(EBUSY);
+  if (e.fault("denied_open")) return e.fail(EACCES);
   if (e.modes.empty()) return e.fail(ENODEV);
   int& fd = env("LPEMU_META_DEVICE") == path ? e.metaNode.fd : e.fd;
   if (fd >= 0) return e.fail(EBUSY);
@@ -827,7 +831,8 @@ int poll(struct pollfd* fds, nfds_t n, int timeout) {
   std::this_thread::sleep_until(due);
   lock.lock();
   e.nextFrame = std::max(due, std::chrono::steady_clock::now() - std::chrono::milliseconds(100)) +
-                std::chrono::microseconds(long(1e6 / e.fps));
+                std::chrono::microseconds(
+                    long(1e6 / (e.fault("slow_fps") ? double(e.faults["slow_fps"]) : e.fps)));
   if (e.fault("unplug_after") && e.served >= std::uint32_t(e.faults["unplug_after"])) {
     e.unplugged = true;
     e.say("unplug");
