@@ -29,9 +29,9 @@ const CommandSpec kRenderSpec{
     "render",
     "",
     "Renders one image of a model lit by nine SH coefficients (diffuse albedo * E / pi, exposure,\n"
-    "tone map, sRGB, 4x MSAA), with the environment behind it. Offscreen through OSMesa when "
-    "there\n"
-    "is no display (or with --headless); otherwise in a GLFW window, read back before it is shown.",
+    "tone map, sRGB, 4x MSAA), with the environment behind it. Offscreen when there is no display\n"
+    "(or with --headless): EGL on a GPU where there is one, else OSMesa on the CPU (--gl picks);\n"
+    "otherwise in a GLFW window, read back before it is shown.",
     concat(concat(lightingOptions(), sceneOptions()),
            {opt::size("image size", 16384, "1280x720", "Output"),
             opt::out("FILE.png", "output image, .png or .jpg (default render.png)",

@@ -29,7 +29,9 @@ const Variable kEnvironment[] = {
     {"LIVEPROBE_WEB_DIR",
      "the folder --serve serves the web page from (default: share/liveprobe/web)."},
     {"LIVEPROBE_MQTT_PASSWORD", "the MQTT password, kept off the command line."},
-    {"DISPLAY, WAYLAND_DISPLAY", "without either, windowed commands render headless (OSMesa)."},
+    {"DISPLAY, WAYLAND_DISPLAY",
+     "without either, windowed commands render headless: EGL on a GPU where there is one, "
+     "else OSMesa on the CPU (--gl picks)."},
 };
 
 struct ExitCode {
