@@ -512,6 +512,28 @@ TEST(Stops, ASecondSignalLeavesNoTemporaries) {
 }
 
 #if LIVEPROBE_WITH_MQTT
+// With no broker there (plain or TLS), the run ends when its summary is out: the MQTT client's
+// thread, asleep in a reconnect's backoff or a handshake, does not hold the exit for seconds.
+// Timed from the summary's line to the exit, which a loaded machine lengthens by little.
+TEST(Stops, ARunWithNoBrokerEndsAtItsSummary) {
+  for (const char* scheme : {"mqtt", "mqtts"}) {
+    const auto r = runShell(
+        "python3 -c 'import subprocess, sys, time\n"
+        "p = subprocess.Popen(sys.argv[1:], stderr=subprocess.PIPE, text=True)\n"
+        "t = None\n"
+        "for line in p.stderr:\n"
+        "    if \"reached the broker\" in line: t = time.monotonic()\n"
+        "p.wait()\n"
+        "print(\"gap=%.2f\" % (time.monotonic() - t) if t else \"no summary\")' "
+        "\"$LP\" replay synthetic:64x32@30 --headless --msaa 1 --size 64x36 --frames 10 "
+        "--publish " +
+        std::string(scheme) + "://127.0.0.1:1/t");
+    std::smatch m;
+    ASSERT_TRUE(std::regex_search(r.output, m, std::regex(R"(gap=([0-9.]+))"))) << r.output;
+    EXPECT_LT(std::stod(m[1]), 4.0) << scheme << ": the exit waited after the summary";
+  }
+}
+
 // The wait for an MQTT broker (up to 3 s for one that accepts the connection and does not answer
 // yet) wakes on a stop: the run ends without waiting it out, so the warning the wait's end
 // prints never comes, and the summary does.
@@ -531,6 +553,27 @@ TEST(Stops, ASignalEndsTheWaitForABroker) {
   EXPECT_NE(r.output.find("frames captured"), std::string::npos) << "no summary: " << r.output;
 }
 #endif
+
+// The brute-force integral of a large map takes minutes; a signal stops it between normals at
+// once: exit 130, a line that says how far it got, and no output file.
+TEST(Stops, ASignalStopsTheBruteForceIntegral) {
+  lpt::TempDir tmp;
+  const std::string out = (tmp.path / "E.exr").string();
+  const auto r = runShell("\"$LP\" irradiance " +
+                          lpt::shellQuote(lpt::dataPath("equirect/venice_sunset_1k.hdr")) +
+                          " --method brute --size 512x256 --out " + lpt::shellQuote(out) +
+                          " & pid=$!; " + kAwaitSigintHandler +
+                          "sleep 1.5; kill -INT $pid; s=$SECONDS; wait $pid; echo rc=$? "
+                          "waited=$((SECONDS - s))");
+  EXPECT_NE(r.output.find("rc=130"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("irradiance stopped by a signal after"), std::string::npos) << r.output;
+  std::smatch m;
+  ASSERT_TRUE(std::regex_search(r.output, m, std::regex(R"(waited=(\d+))"))) << r.output;
+  EXPECT_LE(std::stoi(m[1]), 5) << "the stop waited for the integral: " << r.output;
+  EXPECT_FALSE(fs::exists(out)) << r.output;
+  for (const auto& f : fs::directory_iterator(tmp.path))
+    ADD_FAILURE() << "left behind: " << f.path();
+}
 
 // Counts that add up however a run is stopped: frames captured = drawn + dropped, records
 // offered to the broker (published + lost) = captured, and --coeffs-out's lines = the records

@@ -187,7 +187,23 @@ int runIrradiance(const Args& a) {
     auto samples = layoutSamples(env.layout, env.image().width, env.image().height);
     for (auto& smp : samples) smp.dir = env.orientation * smp.dir;
     ThreadPool pool(0);
-    e = bruteIrradiance(env.image().rgb.data(), 3, samples.data(), samples.size(), normals, &pool);
+    // O(normals x pixels): minutes on a large map, so it shows its progress and a signal stops
+    // it between normals, with nothing written.
+    Progress progress("irradiance: brute force", std::int64_t(normals.size()), false, "normals");
+    std::size_t done = 0;
+    e = bruteIrradiance(env.image().rgb.data(), 3, samples.data(), samples.size(), normals, &pool,
+                        [&](std::size_t n) {
+                          progress.update(std::int64_t(done = n));
+                          return !stopRequested();
+                        });
+    progress.finish();
+    if (stopRequested()) {
+      std::fprintf(stderr,
+                   "liveprobe: irradiance stopped by a signal after %zu of %zu normals; %s not "
+                   "written\n",
+                   done, normals.size(), s.output.out->c_str());
+      return kExitInterrupted;
+    }
   }
   Image out(w, h);
   for (std::size_t i = 0; i < e.size(); ++i)  // (cells of the cross outside the faces: black)

@@ -174,7 +174,9 @@ MqttPublisher::MqttPublisher(MqttTarget target, const std::function<bool()>& int
 
 MqttPublisher::~MqttPublisher() {
   mosquitto_disconnect(mosq_);
-  mosquitto_loop_stop(mosq_, false);
+  // Connected: the loop sends the disconnect and ends. Not connected, it may be asleep in a
+  // reconnect's backoff (up to 8 s) or a TLS handshake with nothing to deliver: cancelled.
+  mosquitto_loop_stop(mosq_, !connected_);
   mosquitto_destroy(mosq_);
 }
 
