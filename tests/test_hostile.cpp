@@ -106,14 +106,47 @@ TEST(Hostile, RecordRatesOutOfRange) {
                   fps);
 }
 
-// Every write is checked, stdout's included: a full disk is an error, not a silent exit 0.
+// Every write is checked, stdout's included: a full disk is an error, not a silent exit 0, and
+// it is named as one whatever the output's size (a glTF with its picture is 85 kB).
 TEST(Hostile, FullStdoutIsAnError) {
-  const auto r =
-      lpt::runCommand("( " + std::string(LIVEPROBE_BIN) + " coeffs " +
-                      lpt::dataPath("probes/latlong_256x128/grace.hdr") + " > /dev/full )");
-  EXPECT_EQ(r.exitCode, 1) << r.output;
-  EXPECT_EQ(lpt::lineCount(r.output), 1) << r.output;
-  EXPECT_NE(r.output.find("standard output: no space left"), std::string::npos) << r.output;
+  for (const char* format : {"text", "gltf"}) {
+    const auto r = lpt::runCommand("( " + std::string(LIVEPROBE_BIN) + " coeffs " +
+                                   lpt::dataPath("probes/latlong_256x128/grace.hdr") +
+                                   " --format " + format + " > /dev/full )");
+    EXPECT_EQ(r.exitCode, 1) << format << ": " << r.output;
+    EXPECT_EQ(lpt::lineCount(r.output), 1) << format << ": " << r.output;
+    EXPECT_NE(r.output.find("standard output: no space left"), std::string::npos)
+        << format << ": " << r.output;
+  }
+}
+
+// A name the file system cannot hold is refused in one line naming the user's file and the
+// limit, for a file written whole and for a recording's frames (written in a hidden folder
+// first); a name that fits to the byte is written (its temporary's name is cut to fit).
+TEST(Hostile, NamesAtTheFileSystemsLimit) {
+  lpt::TempDir tmp;
+  const std::size_t max = std::size_t(::pathconf(tmp.path.c_str(), _PC_NAME_MAX));
+  ASSERT_GT(max, 16u);
+  const std::string fits = std::string(max - 4, 'a') + ".png";
+  auto r = lpt::runCommand("cd " + lpt::shellQuote(tmp.path.string()) + " && " + LIVEPROBE_BIN +
+                           " render --coeff L00=1 --size 16x16 --out " + fits);
+  EXPECT_EQ(r.exitCode, 0) << r.output;
+  EXPECT_TRUE(fs::exists(tmp.path / fits)) << r.output;
+  fs::remove(tmp.path / fits);
+  const std::string over = std::string(max - 3, 'a') + ".png";
+  expectRefused(tmp, "render --coeff L00=1 --size 16x16 --out " + over, over,
+                "the file name is too long (" + std::to_string(max + 1) + " bytes");
+  // Frames whose names take the limit exactly, then one byte more.
+  r = lpt::runCommand("cd " + lpt::shellQuote(tmp.path.string()) + " && " + LIVEPROBE_BIN +
+                      " record synthetic:64x32 --frames 2 --out " + std::string(max - 9, 'c') +
+                      "_%04d.exr");
+  EXPECT_EQ(r.exitCode, 0) << r.output;
+  EXPECT_TRUE(fs::exists(tmp.path / (std::string(max - 9, 'c') + "_0001.exr"))) << r.output;
+  fs::remove_all(tmp.path);
+  fs::create_directories(tmp.path);
+  const std::string stem = std::string(max - 8, 'c');
+  expectRefused(tmp, "record synthetic:64x32 --frames 2 --out " + stem + "_%04d.exr",
+                stem + "_0000.exr", "the file name is too long");
 }
 
 // JSON inputs are read whole: text after the value is an error, not ignored.

@@ -1,6 +1,8 @@
 // liveprobe: real-time diffuse lighting from panoramas with nine SH coefficients.
 // The one place that prints errors and chooses the exit code: 0 success, 1 a bad input or
 // command line (one line on stderr), 130 stopped by SIGINT or SIGTERM, 3 an internal error.
+#include <unistd.h>
+
 #include <cerrno>
 #include <csignal>
 #include <cstdio>
@@ -57,6 +59,11 @@ int main(int argc, char** argv) {
   // Under a file-size limit (ulimit -f) a write past it then fails with EFBIG and is reported
   // and cleaned up as a full disk is, instead of SIGXFSZ killing the process mid-write.
   std::signal(SIGXFSZ, SIG_IGN);
+  // Standard output, where it is not a terminal, reaches the kernel at the end in one write where
+  // it fits in 1 MiB (a coefficient file, a glTF with its picture): a failed write is then seen
+  // by the check after the command, with its reason still in errno.
+  static char stdoutBuffer[1 << 20];
+  if (!::isatty(STDOUT_FILENO)) std::setvbuf(stdout, stdoutBuffer, _IOFBF, sizeof stdoutBuffer);
   // One limit on decoded pixels for every decoder: ours check it from the header, OpenCV's read
   // their own variable, set here to the same number before any image is opened.
   if (const char* env = std::getenv("LIVEPROBE_MAX_PIXELS")) {
@@ -105,8 +112,9 @@ int main(int argc, char** argv) {
       errno = 0;
       if (std::fflush(stdout) != 0 || std::ferror(stdout))
         throw lp::Error(std::string("standard output: ") +
-                        (errno == ENOSPC
-                             ? "no space left on the device"
+                        (errno == ENOSPC ? "no space left on the device"
+                         : errno == 0
+                             ? "write failed (the output was cut short)"
                              : "write failed (" + std::string(std::strerror(errno)) + ")"));
       // A stop asked for by a signal is the run's status, whatever the command made of it (one
       // that finished its work before it looked at the flag, one that says 130 for a SIGHUP).

@@ -59,9 +59,21 @@ AtomicOutput::AtomicOutput(std::string path) : path_(std::move(path)) {
   if (!fs::is_directory(dir, ec))
     throw Error(path_ + ": folder " + dir.string() + " does not exist");
   if (fs::is_directory(p, ec)) throw Error(path_ + ": is a folder");
-  tmp_ = (dir /
-          ("." + p.stem().string() + ".tmp" + std::to_string(::getpid()) + p.extension().string()))
-             .string();
+  // The longest name the folder's file system takes (NAME_MAX: 255 bytes on most).
+  const long named = ::pathconf(dir.c_str(), _PC_NAME_MAX);
+  const std::size_t nameMax = named > 0 ? std::size_t(named) : 255;
+  const std::string name = p.filename().string(), ext = p.extension().string();
+  if (name.size() > nameMax)
+    throw Error(path_ + ": the file name is too long (" + std::to_string(name.size()) +
+                " bytes; the file system takes " + std::to_string(nameMax) + ")");
+  // The temporary: hidden, beside the target, its extension kept (encoders read it); the stem is
+  // cut where the name would pass the limit, and a count keeps two such apart.
+  static std::atomic<unsigned> made{0};
+  const std::string tag = ".tmp" + std::to_string(::getpid()) + "-" + std::to_string(made++);
+  std::string stem = p.stem().string();
+  if (1 + stem.size() + tag.size() + ext.size() > nameMax)
+    stem.resize(nameMax > 1 + tag.size() + ext.size() ? nameMax - 1 - tag.size() - ext.size() : 0);
+  tmp_ = (dir / ("." + stem + tag + ext)).string();
   slot_ = claimTemporary(tmp_);
 }
 

@@ -155,11 +155,22 @@ void VideoRecorder::writeSequenceFrame(const Frame& f) {
   std::error_code ec;
   if (stamps_.empty() && !fs::create_directory(impl_->partial, ec) && ec)
     throw Error(path_ + ": cannot create " + impl_->partial.string() + " (" + ec.message() + ")");
-  const std::string file =
-      (impl_->partial / fs::path(impl_->pattern->at(int(stamps_.size()))).filename()).string();
+  // The frame is written in the hidden folder and moved into place at the end; a failure names
+  // the file the user asked for, not the folder's.
+  const std::string target = impl_->pattern->at(int(stamps_.size()));
+  const std::string file = (impl_->partial / fs::path(target).filename()).string();
+  const auto named = [&](const Error& e) {
+    std::string what = e.what();
+    if (what.rfind(file, 0) == 0) what.replace(0, file.size(), target);
+    return Error(what);
+  };
   if (impl_->codes) {
     // The codes as they came; the sidecar keeps each frame's exposure.
-    saveImage8(file, f.width, f.height, 3, f.bgr8.data());
+    try {
+      saveImage8(file, f.width, f.height, 3, f.bgr8.data());
+    } catch (const Error& e) {
+      throw named(e);
+    }
     stamps_.push_back(f.timestamp);
     sequences_.push_back(f.sequence);
     exposures_.push_back(1.0 / f.radianceScale);
@@ -171,7 +182,11 @@ void VideoRecorder::writeSequenceFrame(const Frame& f) {
   impl_->linearizer.convert(f, img);
   if (f.radianceScale != 1.0)
     for (float& v : img.rgb) v *= float(f.radianceScale);
-  saveImage(file, img, true);
+  try {
+    saveImage(file, img, true);
+  } catch (const Error& e) {
+    throw named(e);
+  }
   stamps_.push_back(f.timestamp);
   sequences_.push_back(f.sequence);
   exposures_.push_back(1.0);
