@@ -37,7 +37,7 @@ TEST(CliGl, RenderHeadlessWithEnvironment) {
 
 #if LIVEPROBE_WITH_GLFW
 // The window path runs for real: GLFW on Xvfb (xvfb-run), screenshot not blank, and the same
-// pixels as the OSMesa path (both are llvmpipe; stack-notes.md found them byte-identical).
+// pixels as the OSMesa path (both are llvmpipe, drawing the same commands).
 TEST(CliGl, ViewWindowUnderXvfb) {
   lpt::TempDir tmp;
   const std::string common =

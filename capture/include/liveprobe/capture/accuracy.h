@@ -22,7 +22,7 @@ struct CompareResult {
   double minShOverMean = 0;                    ///< min Y(E_sh) / mean irradiance
   double shMs = 0, bruteMs = 0;
   Sh9 radiance;  ///< the map's coefficients (lights included), unwindowed, in the world frame
-  /// With lights (compare --sun): SH of the residual plus the lights, its errors, and the lights.
+  /// With lights taken out: SH of the residual plus the lights, its errors, and the lights.
   bool sun = false;
   std::vector<float> ySun;
   double meanFracTotalSun = 0, maxFracTotalSun = 0;
@@ -51,8 +51,8 @@ CompareResult compareIrradiance(const Image& img, const LayoutSpec& layout,
                                 const glm::mat3& orientation = glm::mat3(1.0f),
                                 const BruteProgress& progress = {});
 
-/// The SH map (with --sun: SH of the rest plus the lights), the brute-force map (same exposure)
-/// and |error| / total intensity with a colour scale, side by side, as an 8-bit PNG.
+/// The SH map (with lights taken out: SH of the rest plus the lights), the brute-force map (same
+/// exposure) and |error| / total intensity with a colour scale, side by side, as an 8-bit PNG.
 void saveCompareFigure(const std::string& path, const CompareResult& r);
 
 }  // namespace lp

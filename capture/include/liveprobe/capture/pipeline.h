@@ -45,7 +45,7 @@ struct PipelineOptions {
   bool keepImages = true;  ///< hand the linear frame over too (for the background)
   unsigned threads = 2;    ///< threads for one frame's projection
   int reduce = 1;          ///< equirect: project an f x f area average (reduceEquirect)
-  /// Light extraction (--sun, --lights K); maxLights = 0 (the default) leaves it off.
+  /// Light extraction (liveprobe/sh/lights.h); maxLights = 0 (the default) leaves it off.
   LightOptions lights{.maxLights = 0};
   /// Exposure bracketing: each frame is merged with the ones before it into radiance
   /// (liveprobe/hdr/merge.h) before anything else sees it (onFrame sees each as it came).
@@ -60,9 +60,9 @@ struct PipelineOptions {
   /// Polled while capture waits (pacing, a pause): true ends capture within kStopPollSeconds,
   /// as stop() does. The app passes its signal flag (a signal handler cannot wake a waiter).
   std::function<bool()> interrupted;
-  /// --realtime: a gap between two frames' timestamps beyond this many seconds (and beyond ten
-  /// frame intervals) is not waited out; the frame comes one frame interval after the previous
-  /// one (counted in PipelineStats::gapsShortened).
+  /// Paced at the source's time (`realtime`): a gap between two frames' timestamps beyond this many
+  /// seconds (and beyond ten frame intervals) is not waited out; the frame comes one frame interval
+  /// after the previous one (counted in PipelineStats::gapsShortened).
   double maxGapSeconds = 10.0;
 };
 
@@ -151,7 +151,7 @@ class CapturePipeline {
   /// The frame through its FrameProcessor (lighting, background, stage times), judged, held or
   /// smoothed.
   void project(Loop& s, ProcessedFrame& out);
-  void pace(Loop& s, double timestamp);  ///< --realtime: waits for the frame's time
+  void pace(Loop& s, double timestamp);  ///< paced runs: waits for the frame's time
   /// Waits on cv_ until ready(), stop, `until`, or PipelineOptions::interrupted (polled).
   template <class Ready>
   void waitPolling(std::unique_lock<std::mutex>& lock, std::chrono::steady_clock::time_point until,

@@ -6,13 +6,13 @@
 // or below 95% (a sun's few pixels clip, as on a camera).
 // Or an image sequence (a frame-number pattern, like frames/%04d.exr: .exr frames as 16-bit
 // floats, or .hdr), which keeps linear radiance whole, a sun included: frames numbered from 0,
-// replayed at --fps (no sidecar). Or .png frames (frames/%04d.png): a camera's 8-bit codes as
-// they came, with a sidecar (frames/%04d.png.json) as a video's.
-// The video is written under a temporary name and renamed, with its sidecar, only by finish()
-// (a sequence's frames go to a hidden folder beside them first): a caller that keeps what was
-// recorded up to a fault (a camera unplugged mid-stream) says so. Otherwise (an error, an
-// exception) the destructor discards it, and so it does when a write was refused (a frame of
-// another size): nothing half-made is ever put in place.
+// replayed at the rate the reader gives (no sidecar). Or .png frames (frames/%04d.png): a camera's
+// 8-bit codes as they came, with a sidecar (frames/%04d.png.json) as a video's. The video is
+// written under a temporary name and renamed, with its sidecar, only by finish() (a sequence's
+// frames go to a hidden folder beside them first): a caller that keeps what was recorded up to a
+// fault (a camera unplugged mid-stream) says so. Otherwise (an error, an exception) the destructor
+// discards it, and so it does when a write was refused (a frame of another size): nothing half-made
+// is ever put in place.
 #include <cstdint>
 #include <memory>
 #include <string>

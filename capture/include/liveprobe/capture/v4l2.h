@@ -151,7 +151,7 @@ std::string fourccText(std::uint32_t fourcc);
 /// Queries a device without streaming (formats, sizes, rates, controls). Throws lp::Error.
 CameraInfo queryCamera(const std::string& path);
 
-/// The values --lock-exposure read and fixed.
+/// The exposure values a lock read from the camera's automatic controls and fixed.
 struct LockedExposure {
   std::optional<std::int32_t> exposure100us, gain, whiteBalanceK;
 };

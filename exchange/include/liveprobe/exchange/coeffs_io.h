@@ -22,7 +22,7 @@ nlohmann::ordered_json coefficientsJson(const Sh9& radiance);
 /// +z up) and units (power: radiance times steradians, the irradiance facing the light).
 nlohmann::ordered_json lightsJson(const std::vector<Light>& lights);
 
-/// Reads the "coefficients" object of `liveprobe coeffs` JSON (or a bare coefficients object).
+/// Reads the "coefficients" object of a coefficients document (or a bare coefficients object).
 /// Throws lp::Error naming `source` for a missing name, a non-numeric or non-finite value.
 Sh9 coefficientsFromJson(const nlohmann::json& j, const std::string& source);
 
@@ -36,7 +36,8 @@ std::string lightText(const Light& light);
 /// at or above zero.
 std::vector<Light> lightsFromJson(const nlohmann::json& j, const std::string& source);
 
-/// Reads a file written by `liveprobe coeffs --format json`; its lights, if any, into `lights`.
+/// Reads a coefficients JSON file: {"coefficients": coefficientsJson, "lights": lightsJson} (the
+/// lights optional) or a bare coefficients object; its lights, if any, into `lights`.
 Sh9 loadCoefficients(const std::string& path, std::vector<Light>* lights = nullptr);
 
 std::string coefficientsText(const Sh9& radiance);

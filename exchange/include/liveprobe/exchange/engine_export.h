@@ -1,7 +1,7 @@
 #pragma once
 // The coefficients and lights in each engine's convention (liveprobe/sh/engines.h says the
-// frames and forms), and the one serializer of a frame's record: --coeffs-out lines, the
-// WebSocket stream and MQTT messages are all frameRecord().
+// frames and forms), and the one serializer of a frame's record: a coefficients log's lines,
+// the WebSocket stream's and MQTT's messages are all frameRecord().
 #include <nlohmann/json.hpp>
 #include <string>
 #include <vector>

@@ -1,5 +1,5 @@
 #pragma once
-// Fan-out through an MQTT broker (replay/live --publish mqtt[s]://[USER@]HOST:PORT/TOPIC): every
+// Fan-out through an MQTT broker (a target mqtt[s]://[USER@]HOST:PORT/TOPIC): every
 // frame's record (engine_export.h's frameRecord) published retained, QoS 0, with libmosquitto, so a
 // late subscriber gets the newest frame at once. A lost broker never stalls capture: libmosquitto
 // reconnects on its own thread with exponential backoff, and what could not be handed to the
@@ -20,9 +20,9 @@ struct MqttTarget {
   int port = 1883;  ///< 8883 for mqtts://
   std::string topic;
   bool tls = false;      ///< mqtts://: TLS, the broker checked against the CA store or `cafile`
-  std::string cafile;    ///< --mqtt-cafile: the CAs to trust instead of the system's
+  std::string cafile;    ///< a PEM file of the CAs to trust instead of the system's
   std::string username;  ///< from the URL's user part
-  std::string password;  ///< from the URL, LIVEPROBE_MQTT_PASSWORD or --mqtt-password-file
+  std::string password;  ///< from the URL, or given apart (kept off a command line)
   /// The URL as messages may show it: never the password.
   std::string describe() const;
 };

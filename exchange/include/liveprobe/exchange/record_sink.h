@@ -1,8 +1,8 @@
 #pragma once
-// Where a frame's record goes besides the screen: the --coeffs-out file, the WebSocket stream
-// (--serve) and the MQTT broker (--publish). Every sink takes each captured frame on capture's
-// thread and never waits on its reader; a sink that wants the frame as drawn (headless
-// --coeffs-out logs the render time) takes that too, on the render loop's thread.
+// Where a frame's record goes besides the screen: a coefficients log file, the WebSocket stream
+// and an MQTT broker. Every sink takes each captured frame on capture's thread and never waits
+// on its reader; a sink that wants the frame as drawn (a headless run's log keeps the render
+// time) takes that too, on the render loop's thread.
 #include <optional>
 #include <string>
 
@@ -10,7 +10,7 @@
 
 namespace lp {
 
-/// One captured frame and its record in the run's --coeffs-format, serialized at most once
+/// One captured frame and its record in the run's record format, serialized at most once
 /// however many sinks take it as text.
 class FrameRecord {
  public:

@@ -1,5 +1,5 @@
 #pragma once
-// The live coefficient stream (replay/live --serve): a WebSocket server (libwebsockets) that sends
+// The live coefficient stream: a WebSocket server (libwebsockets) that sends
 // every client the newest frame's record (engine_export.h's frameRecord, in the format the client
 // asked for) and answers HTTP at / with the web page of app/web (a three.js scene lit by the
 // stream). Latest-value semantics: a slow client gets the newest frame when it can take one,

@@ -50,7 +50,7 @@ class FrameSource {
   virtual ~FrameSource() = default;
   /// The next frame; false at the end of the stream. Throws lp::Error on a fatal failure.
   virtual bool next(Frame& frame) = 0;
-  /// Back to the first frame (for --loop); false if the source cannot.
+  /// Back to the first frame (a looping replay); false if the source cannot.
   virtual bool rewind() = 0;
   virtual std::string describe() const = 0;
   /// Nominal frame rate, 0 if unknown.

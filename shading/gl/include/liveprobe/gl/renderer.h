@@ -50,10 +50,10 @@ struct ShadingSettings {
   int samples = 1;
   /// An 8-bit (sRGB) background is shown as the source looks: no exposure, no tone map.
   bool displayReferredBackground = true;
-  /// --shadows: the first light casts the model's shadow through a shadow map (on the model and
+  /// The first light casts the model's shadow through a shadow map (on the model and
   /// the ground), its soft edge sized by the light's angular radius.
   bool shadows = false;
-  /// --ground: a shadow catcher plane under the model (the background, darkened by the model's
+  /// A shadow catcher plane under the model (the background, darkened by the model's
   /// shadow and ambient occlusion).
   bool ground = false;
   /// The 3D view drawn at this fraction of the frame's width and height (into an offscreen
@@ -150,7 +150,7 @@ class Renderer {
   // Variants: without lights, with lights, with lights and the shadow map (see shaders.cpp).
   Program modelProgram_, modelLitProgram_, modelShadowProgram_, backgroundProgram_, probeProgram_,
       depthProgram_, groundProgram_, groundShadowProgram_;
-  // The shadow map (--shadows) and the ground (--ground).
+  // The shadow map (`shadows`) and the ground (`ground`).
   static constexpr int kShadowSize = 2048;
   Framebuffer shadowFbo_;
   Texture shadowDepth_;

@@ -22,9 +22,9 @@
 //   for W >= 64).
 //
 // mirrorball: a photo of a chrome sphere, any frame size, the ball's circle given in pixels
-//   (--circle cx,cy,r). The angular map's frame with t = 2 asin(r) instead of pi r: the ball's
-//   centre reflects the direction back towards the camera, which this frame calls the front (-x).
-//   dw = 4 (pixel area inside the circle) / R^2: uniform, since d(omega) = 4 r dr dp.
+//   (LayoutSpec::circle: cx, cy, r). The angular map's frame with t = 2 asin(r) instead of pi r:
+//   the ball's centre reflects the direction back towards the camera, which this frame calls the
+//   front (-x). dw = 4 (pixel area inside the circle) / R^2: uniform, since d(omega) = 4 r dr dp.
 //
 // cube (OpenGL's face convention; a horizontal 4:3 cross or a vertical 3:4 cross):
 //        [+Y]                     [+Y]

@@ -50,8 +50,8 @@
 
 namespace lp {
 
-/// The most lights one frame carries: extracted (--lights K), read from a coefficients file, and
-/// drawn (the shaders' MAX_LIGHTS).
+/// The most lights one frame carries: extracted (LightOptions::maxLights), read from a coefficients
+/// file, and drawn (the shaders' MAX_LIGHTS).
 inline constexpr int kMaxLights = 8;
 
 /// A small disc light at infinity, in the R&H world frame.
@@ -66,7 +66,7 @@ struct Light {
 };
 
 struct LightOptions {
-  int maxLights = 1;              ///< --lights K; 0 turns extraction off
+  int maxLights = 1;              ///< the most lights taken out; 0 turns extraction off
   float minShare = 0.05f;         ///< smallest luminance power share of a light
   float minClippedShare = 0.01f;  ///< the same for a clipped core (a lower bound)
   float maxRadiusDeg = 8.0f;      ///< largest core radius of a light

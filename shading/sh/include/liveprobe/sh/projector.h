@@ -72,8 +72,9 @@ struct EquirectIntegrals {
 /// Projects frames of one (layout, size) to radiance coefficients L_lm (liveprobe/sh/sh.h). The
 /// per-pixel directions and solid angles (for equirect, the exact separable row and column
 /// integrals of the basis) are computed once here and reused for every frame.
-///   - equirect: 15 multiply-adds per pixel (five column-weighted sums per channel, combined
-///     with the row integrals once per row); exact for radiance constant over each pixel.
+///   - equirect: 15 multiply-adds per pair of pixels half a turn apart (five column-weighted
+///     sums per channel; the pair shares its column integrals up to sign), combined with the
+///     row integrals once per row; exact for radiance constant over each pixel.
 ///   - other layouts: nine precomputed weights Y_lm(dir) dw per pixel, 27 multiply-adds.
 /// Sums run in float over at most a row (or 4096 pixels) and in double beyond, so a 4K frame
 /// keeps ~1e-7 of L00. The kernels are SIMD (liveprobe/sh/simd.h picks the instruction set).
