@@ -11,6 +11,8 @@
 #include <string>
 #include <vector>
 
+#include "liveprobe/capture/stages.h"
+
 namespace lp::cli {
 
 inline constexpr int kExitInterrupted = 130;  ///< 128 + SIGINT, as shells report it
@@ -58,7 +60,6 @@ class Progress {
 /// One warning line on stderr ("liveprobe: warning: ..."); the run goes on.
 void warn(const std::string& text);
 
-/// The p-quantile (0..1) of `v`, linearly interpolated; 0 for no values.
-double percentile(std::vector<double> v, double p);
+using lp::percentile;  // (liveprobe/capture/stages.h)
 
 }  // namespace lp::cli

@@ -4,13 +4,13 @@
 #include <cstdint>
 #include <cstdlib>
 
-#include "baseline.h"
+#include "liveprobe/bench/verdict.h"
 #include "liveprobe/sh/error.h"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   try {
     const nlohmann::json b =
-        lp::cli::parseBaseline({reinterpret_cast<const char*>(data), size}, "fuzz.json");
+        lp::bench::parseBaseline({reinterpret_cast<const char*>(data), size}, "fuzz.json");
     const double cal = b.at("calibration_ms").get<double>();
     if (!(cal > 0) || !std::isfinite(cal)) std::abort();
     for (const auto& [name, st] : b.at("stages").items()) {

@@ -4,7 +4,8 @@
 # (liveprobe::hdr) knows frames and nothing of capture; the V4L2 device and the frame path
 # (processed_frame.h, frame_processor.h) include nothing of HDR; what reads a frame's record
 # (exchange) includes the frame it reads (liveprobe/capture/processed_frame.h), never the
-# pipeline that makes it. Each rule is a
+# pipeline that makes it; the bench harness (liveprobe::bench) knows the SH core and the frame
+# path's stages, no GL and nothing of the program. Each rule is a
 # grep over the module's own sources; a line that breaks one is printed and fails the test.
 # The GL context is a platform only: at most five calls besides its destructor, no void*.
 set -euo pipefail
@@ -33,6 +34,10 @@ done
 forbid exchange '#include "liveprobe/capture/pipeline\.h"' \
   'exchange reads frames (processed_frame.h), not the pipeline'
 forbid capture '#include "liveprobe/(gl|exchange)/' 'capture knows no GL and no exchange'
+forbid bench '#include [<"](GL/|glad/|EGL/|GLFW/|opencv2/|liveprobe/(gl|exchange|hdr)/)' \
+  'the bench harness knows the SH core and the frame path'"'"'s stages, no GL'
+forbid bench '#include "[a-z_]+\.h"' 'the bench harness includes nothing of the program'
+
 ctx=$root/shading/gl/include/liveprobe/gl/context.h
 body=$(sed -n '/^class GlContext {/,/^};/p' "$ctx")
 calls=$(grep -cE '^ *virtual [^~]' <<< "$body" || true)

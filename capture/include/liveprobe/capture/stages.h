@@ -7,6 +7,7 @@
 #include <chrono>
 #include <cstddef>
 #include <string_view>
+#include <vector>
 
 namespace lp {
 
@@ -57,6 +58,9 @@ struct StageTimes {
 
 /// The one stage timer of the frame path (FrameProcessor::run, the capture pipeline, bench): a
 /// frame's work timed as laps on the steady clock, each lap's time added to its stage.
+/// The p-quantile (0..1) of `v`, linear between the two nearest values; 0 for none.
+double percentile(std::vector<double> v, double p);
+
 class StageClock {
  public:
   using Clock = std::chrono::steady_clock;
