@@ -87,7 +87,30 @@ TEST(FrameProcessor, OneExposureOneProjectionEveryFormat) {
     for (int k = 0; k < lp::kShCount; ++k)
       EXPECT_NEAR(t.c[k][1], want.c[k][1], 2e-5 * truth.c[0][1] + 1e-6) << "turned " << k;
 
+    // The coefficients projected elsewhere (the GPU's way in: given the frame as the projection
+    // reads it, here projected by the test itself) are scaled and turned as the CPU's: the same
+    // truth; and so are the coefficients of the frame's own pixels handed in (a merge's way in).
+    const auto shared = std::make_shared<lp::Frame>(*frame);
+    int calls = 0;
+    const lp::FrameResult elsewhere =
+        turned.run(shared, {.projectWith = [&](const lp::PanoramaView& v) {
+                     ++calls;
+                     return lp::project(v);
+                   }});
+    EXPECT_EQ(calls, 1);
+    // (An 8-bit frame's own pixels are read through its table, which carries the exposure 2.)
+    lp::Sh9 own = truth;
+    own *= frame == &hdr ? 1.0f / 6.0f : 1.0f / 3.0f;
+    const lp::FrameResult merged = turned.run(shared, {.projected = own});
+    for (int k = 0; k < lp::kShCount; ++k) {
+      EXPECT_NEAR(elsewhere.lighting.radiance.c[k][1], want.c[k][1], 2e-5 * truth.c[0][1] + 1e-6)
+          << "projected elsewhere " << k;
+      EXPECT_NEAR(merged.lighting.radiance.c[k][1], want.c[k][1], 2e-5 * truth.c[0][1] + 1e-6)
+          << "projected as it was made " << k;
+    }
+    // Lights are searched in the frame's pixels: not with coefficients from elsewhere.
     lp::FrameProcessor withSun({lp::LayoutSpec(), photometry, std::nullopt, 1, {.maxLights = 1}});
+    EXPECT_THROW(withSun.run(shared, {.projected = own}), lp::Error);
     const lp::FrameLighting s = withSun.process(*frame);
     ASSERT_EQ(s.lights.size(), 1u);
     const lp::Sh9 sum = s.radiance + lp::lightsToSh(s.lights);

@@ -26,16 +26,18 @@ void onGpuTimer(BenchScene& scene, gl::GpuTimer::Stage stage, F work) {
   scene.timer->end();
 }
 
-/// The projection on the GPU: view() of the frame uploaded (8-bit codes as they are), the two
-/// compute passes, the coefficients read back, then scaled and turned as on the CPU.
-Sh9 projectOnGpu(RunState& run, const LayoutSpec& layout) {
-  const FrameProcessor::ProjectedView v = run.processor.view(*run.frame);
-  if (!run.gpu || run.gpuFrame.width() != v.view.width || run.gpuFrame.height() != v.view.height)
-    run.gpu = std::make_unique<gl::GpuProjector>(layout, v.view.width, v.view.height);
-  run.gpuFrame.upload(v.view);
-  const Sh9 whole =
-      run.gpu->project(run.gpuFrame, v.view.decode, v.view.format == PanoramaFormat::BgrU8);
-  return run.processor.fromProjected(whole, v.scale).radiance;
+/// The projection on the GPU: the frame as the projection reads it uploaded (8-bit codes as they
+/// are), the two compute passes, the coefficients read back (the frame path scales and turns
+/// them as the CPU's).
+Sh9 projectOnGpu(BenchScene& scene, RunState& run, const PanoramaView& v) {
+  Sh9 whole;
+  onGpuTimer(scene, gl::GpuTimer::Project, [&] {
+    if (!run.gpu || run.gpuFrame.width() != v.width || run.gpuFrame.height() != v.height)
+      run.gpu = std::make_unique<gl::GpuProjector>(scene.layout, v.width, v.height);
+    run.gpuFrame.upload(v);
+    whole = run.gpu->project(run.gpuFrame, v.decode, v.format == PanoramaFormat::BgrU8);
+  });
+  return whole;
 }
 
 }  // namespace
@@ -59,24 +61,19 @@ BenchTimes timeFrame(BenchScene& scene, RunState& run, FrameSource& source,
   for (int k = 0; k < gl::GpuTimer::kStages; ++k)
     if (auto ms = scene.timer->justRead(gl::GpuTimer::Stage(k)))
       scene.gpuTimes[std::size_t(k)].push_back(*ms);
-  Sh9 sh;
   FrameResult r;
   try {
-    r = run.processor.run(
-        run.frame, {.background = true, .project = !scene.gpuProjection, .linearInto = run.linear},
-        &pool);
+    FrameRequest request{.background = true, .linearInto = run.linear};
+    if (scene.gpuProjection)
+      request.projectWith = [&](const PanoramaView& v) { return projectOnGpu(scene, run, v); };
+    r = run.processor.run(run.frame, request, &pool);
     clock.skip();  // (timed by run() itself)
     clock.times += r.times;
-    if (scene.gpuProjection) {
-      onGpuTimer(scene, gl::GpuTimer::Project, [&] { sh = projectOnGpu(run, scene.layout); });
-      clock.lap(Stage::Project);
-    } else {
-      sh = r.lighting.radiance;
-    }
   } catch (const Error& e) {
     throw Error(sourceName + ": " + e.what());
   }
   for (const Stage stage : {Stage::Convert, Stage::Project, Stage::Resample}) lap(stage);
+  const Sh9& sh = r.lighting.radiance;
   run.last = sh;
   if (first) run.exposure = autoExposure(sh);
   gl::Renderer& renderer = *scene.viewer.renderer;

@@ -119,8 +119,17 @@ FrameResult FrameProcessor::run(std::shared_ptr<const Frame> frame, const FrameR
     r.saturated = countSaturated(f);
   }
   clock.lap(Stage::Convert);
-  if (request.project) {
-    r.lighting = process(f, executor, linear.get());
+  if (request.projected) {
+    // Projected as it was made: its time is that stage's (a merge's), not this one's.
+    r.lighting = fromProjected(*request.projected, projectionScale(f));
+    clock.skip();
+  } else {
+    if (request.projectWith) {
+      const ProjectedView v = view(f, linear.get());
+      r.lighting = fromProjected(request.projectWith(v.view), v.scale);
+    } else {
+      r.lighting = process(f, executor, linear.get());
+    }
     clock.lap(Stage::Project);
   }
   const float scale = float(f.radianceScale);

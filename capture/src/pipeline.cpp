@@ -194,11 +194,11 @@ void CapturePipeline::project(Loop& s, ProcessedFrame& out) {
   FrameResult r;
   try {
     r = s.processor.run(
-        s.frame, {.background = opt_.keepImages, .saturation = true, .project = !s.projected},
+        s.frame,
+        {.background = opt_.keepImages,
+         .saturation = true,
+         .projected = s.projected ? std::optional(s.projection.coefficients) : std::nullopt},
         s.pool.get());
-    if (s.projected)
-      r.lighting = s.processor.fromProjected(s.projection.coefficients,
-                                             s.processor.projectionScale(*s.frame));
   } catch (const Error& e) {
     throw Error(source_->describe() + ": frame " + std::to_string(out.index + 1) + ": " + e.what());
   }

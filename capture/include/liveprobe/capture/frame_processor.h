@@ -7,6 +7,7 @@
 // Frame::radianceScale scales both), an optional area-averaged reduction, the coefficients and
 // the lights, then the orientation; and the background as the frame itself where the display
 // decodes it, or a linear copy resampled where GL does not draw the layout.
+#include <functional>
 #include <memory>
 #include <optional>
 #include <string>
@@ -47,9 +48,16 @@ struct FrameRequest {
   bool background = false;  ///< the display's background (Background)
   bool linear = false;      ///< the linear frame in its own layout (the brute force, exports)
   bool saturation = false;  ///< count the values at 255 (a linear copy counts them anyway)
-  /// Project on the CPU; false: the caller projects view() elsewhere (the GPU), and the result's
-  /// lighting is left empty.
-  bool project = true;
+  /// Where the coefficients come from, when not from the CPU's projection here. `projected`: the
+  /// coefficients of the frame's own pixels, projected as it was made (a bracket merged and
+  /// projected in one pass, liveprobe/hdr/merge.h); they are scaled and turned as the CPU's are.
+  std::optional<Sh9> projected;
+  /// `projectWith`: a projector of the caller's (the GPU, liveprobe/gl/gpu_projector.h), given
+  /// the frame as the projection reads it (an 8-bit frame with the lookup table that carries the
+  /// photometry, a float frame as it is, a reduction's average); timed as the Project stage. With
+  /// either, lights cannot be searched (they are found in the frame's pixels): lp::Error where the
+  /// options ask for them.
+  std::function<Sh9(const PanoramaView&)> projectWith;
   /// Where the linear copy goes: a buffer of the caller's that nothing else reads any more (bench
   /// reuses one from frame to frame); none: a new one, as a frame handed to another thread needs.
   std::shared_ptr<Image> linearInto = nullptr;
@@ -87,24 +95,6 @@ class FrameProcessor {
   FrameLighting process(const Frame& frame, Executor* executor = nullptr,
                         const Image* linear = nullptr);
 
-  /// The frame as the projection reads it (an 8-bit frame with the lookup table that carries
-  /// the photometry, a float frame as it is, a reduction's average) and the scale its
-  /// coefficients take afterwards: what process() projects, for a projection made elsewhere (the
-  /// GPU, liveprobe/gl/gpu_projector.h). Valid until the next call.
-  struct ProjectedView {
-    PanoramaView view;
-    float scale = 1.0f;
-  };
-  ProjectedView view(const Frame& frame, const Image* linear = nullptr);
-  /// The scale the coefficients of `frame`'s own pixels take (Frame::radianceScale, and for a
-  /// float frame the photometry's exposure): view()'s, for a frame projected as it was made (a
-  /// bracket merged and projected in one pass, liveprobe/hdr/merge.h).
-  float projectionScale(const Frame& frame) const;
-  /// The lighting from the coefficients of view(frame) projected elsewhere: scaled and turned as
-  /// process() does. Without lights (they are searched in the frame's pixels): throws lp::Error
-  /// where the options ask for them.
-  FrameLighting fromProjected(const Sh9& whole, float scale) const;
-
   /// How far one frame's lighting (from process()) can be trusted: an 8-bit frame's pixels with
   /// a channel at 255 are clipped, their power (by solid angle) a lower bound against the whole
   /// map's (from L00), and then the brightest source is not known to be measured. Reads only the
@@ -122,6 +112,18 @@ class FrameProcessor {
   const FrameProcessorOptions& options() const { return opt_; }
 
  private:
+  /// The frame as the projection reads it and the scale its coefficients take afterwards. Valid
+  /// until the next call.
+  struct ProjectedView {
+    PanoramaView view;
+    float scale = 1.0f;
+  };
+  ProjectedView view(const Frame& frame, const Image* linear = nullptr);
+  /// The scale the coefficients of `frame`'s own pixels take (Frame::radianceScale, and for a
+  /// float frame the photometry's exposure).
+  float projectionScale(const Frame& frame) const;
+  /// The lighting from coefficients projected elsewhere, scaled and turned as process()'s.
+  FrameLighting fromProjected(const Sh9& whole, float scale) const;
   /// Scale, finiteness and orientation: the end of process() and fromProjected().
   FrameLighting finish(Sh9 whole, LightSplit split, float scale) const;
   FrameProcessorOptions opt_;
