@@ -450,7 +450,7 @@ int finishStream(const StreamPlan& p, const PipelineStats& st, const StreamTally
   if (out.video) out.video->finish();
   if (out.frames) out.frames->keep();
   printSummary(p.description, st, tally, p.opt.smoothSeconds, stopRequested(), sinks);
-  if (p.live && !p.quiet) printCameraHints(tally, p.opt.bracket.has_value(), p.fps);
+  if (p.live && !p.quiet) printCameraHints(tally, st, p.opt.bracket.has_value(), p.fps);
   // Headless with nowhere to put what it made (no display, and no output asked for): said, so
   // that a run which only measures is one by choice.
   if (p.headless && !out.frames && !out.video && !out.coeffs && !out.record && sinks.all.empty() &&

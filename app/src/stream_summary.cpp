@@ -33,7 +33,6 @@ void recordSample(StreamTally& t, const ProcessedFrame& f, double uploadMs, doub
   for (std::size_t k = 0; k < kStageCount; ++k) t.stages[k].push_back(times.ms[k]);
   t.saturated += f.saturated;
   t.confidence.push_back(f.confidence.value());
-  t.agreement.push_back(f.confidence.agreement);
   t.brightestMeasured += f.confidence.brightestMeasured;
   if (!f.lights.empty()) ++t.withLight;
   if (std::any_of(f.lights.begin(), f.lights.end(), [](const Light& l) { return l.clipped; }))
@@ -113,7 +112,8 @@ void printSummary(const std::string& description, const PipelineStats& st, const
                  smoothSeconds, smoothSeconds);
 }
 
-void printCameraHints(const StreamTally& t, bool bracketed, double modeFps) {
+void printCameraHints(const StreamTally& t, const PipelineStats& st, bool bracketed,
+                      double modeFps) {
   const std::size_t n = t.frames();
   if (n == 0) return;
   // The camera sent fewer frames than its mode asks, over two seconds or more: the driver's own
@@ -135,15 +135,15 @@ void printCameraHints(const StreamTally& t, bool bracketed, double modeFps) {
                    unmeasured, n, double(t.saturated) / double(n));
     return;
   }
-  // The exposures contradict each other in most frames, on a scene not known to move: the
-  // codes are not turned into light as the camera made them.
-  if (percentile(t.agreement, 0.5) < 0.5)
+  // The exposures contradict each other in most merges (every frame captured, drawn or not):
+  // the codes are not turned into light as the camera made them.
+  if (st.mergesTelling > 0 && 2 * st.mergesDisagreeing > st.mergesTelling)
     std::fprintf(stderr,
-                 "liveprobe live: hint: the exposures disagree with each other (median agreement "
-                 "%.2f): is the camera's response the one merged (sRGB unless --gamma or "
+                 "liveprobe live: hint: the exposures disagree with each other in %zu of %zu "
+                 "merges: is the camera's response the one merged (sRGB unless --gamma or "
                  "--response)? liveprobe calibrate DEVICE --out response.json measures it; then "
                  "--response response.json\n",
-                 percentile(t.agreement, 0.5));
+                 st.mergesDisagreeing, st.mergesTelling);
   else if (2 * unmeasured > n)
     std::fprintf(stderr,
                  "liveprobe live: hint: the brightest light clipped even in the shortest "

@@ -19,7 +19,6 @@ struct StreamTally {
   std::size_t drawn = 0, saturated = 0;
   std::size_t withLight = 0, clippedLight = 0;  ///< frames with a light; of them, clipped
   std::vector<double> confidence;               ///< each frame's
-  std::vector<double> agreement;                ///< each frame's (FrameConfidence::agreement)
   std::size_t brightestMeasured = 0;            ///< frames whose brightest pixel was measured
   /// The source's frame number and timestamp (s) of the first and the last frame drawn: the rate
   /// it delivered at, lost frames included.
@@ -52,6 +51,7 @@ void printSummary(const std::string& description, const PipelineStats& st, const
 /// applies: a clipped light without --bracket; a bracket whose exposures disagree with each
 /// other (a response that is not the camera's); a bracket that never measured its brightest
 /// light (the control's limit: neutral density). `bracketed`: the run merged a bracket.
-void printCameraHints(const StreamTally& t, bool bracketed, double modeFps);
+void printCameraHints(const StreamTally& t, const PipelineStats& st, bool bracketed,
+                      double modeFps);
 
 }  // namespace lp::cli

@@ -213,8 +213,15 @@ void CapturePipeline::project(Loop& s, ProcessedFrame& out) {
   if (!s.merger) {
     // Without values at 255 the frame is trusted whole.
     if (out.saturated > 0) out.confidence = s.processor.confidence(*s.frame, lit);
-  } else if (!out.confidence.brightestMeasured && !lit.lights.empty())
-    lit.lights.front().clipped = true;
+  } else {
+    if (!out.confidence.brightestMeasured && !lit.lights.empty()) lit.lights.front().clipped = true;
+    const FrameConfidence& c = out.confidence;
+    if (c.exposures > 1 || c.agreement < 1) {
+      std::lock_guard lock(mutex_);
+      ++stats_.mergesTelling;
+      stats_.mergesDisagreeing += c.agreement < 0.5;
+    }
+  }
   // Below --hold-below the last good lighting stands, and the smoothing does not see the frame.
   if (hold(s, out)) return;
   out.unsmoothed = lit.radiance;

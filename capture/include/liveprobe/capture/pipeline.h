@@ -79,8 +79,12 @@ struct PipelineStats {
   std::string unidentifiedReport;  ///< those by stop and cause (FrameSource::unidentifiedReport)
   std::size_t gapsShortened = 0;   ///< timestamp gaps over PipelineOptions::maxGapSeconds
   std::size_t held = 0;            ///< frames that kept the last good lighting (holdBelow)
-  std::string endReason;           ///< why the source ended early, if it did
-  std::string error;               ///< the fatal error that stopped capture, if any
+  /// Merged frames that tell whether a bracket's exposures agree (several merged, or one that
+  /// contradicted the others), and of them those that disagreed on most of the power they kept
+  /// (FrameConfidence::agreement under 0.5): a response other than the camera's does so.
+  std::size_t mergesTelling = 0, mergesDisagreeing = 0;
+  std::string endReason;  ///< why the source ended early, if it did
+  std::string error;      ///< the fatal error that stopped capture, if any
 };
 
 /// Exponential moving average of coefficients: alpha = 1 - exp(-dt / tau). Exact on SH because
