@@ -6,22 +6,9 @@
 #include "liveprobe/bench/calibration.h"
 #include "liveprobe/bench/contention.h"
 #include "liveprobe/capture/stages.h"
+#include "text.h"
 
 namespace lp::bench {
-
-namespace {
-
-std::string plural(long n, const char* word) {
-  return std::to_string(n) + " " + word + (n == 1 ? "" : "s");
-}
-
-std::string line(const char* fmt, auto... args) {
-  char b[256];
-  std::snprintf(b, sizeof b, fmt, args...);
-  return b;
-}
-
-}  // namespace
 
 Runs measure(std::vector<std::string> stages, int repeat, int framesPerRun, const RunHooks& hooks) {
   Runs r;
@@ -57,9 +44,9 @@ Runs measure(std::vector<std::string> stages, int repeat, int framesPerRun, cons
 Summary summarize(const Runs& r, const std::string& description) {
   Summary out;
   const long runs = r.runMedians.empty() ? 0 : long(r.runMedians[0].size());
-  out.lines.push_back(line("%-9s %9s %9s %9s %9s   (ms; %s of %s, %s)", "stage", "median", "p95",
-                           "p99", "max", plural(runs, "run").c_str(),
-                           plural(r.framesPerRun, "frame").c_str(), description.c_str()));
+  out.lines.push_back(format("%-9s %9s %9s %9s %9s   (ms; %s of %s, %s)", "stage", "median", "p95",
+                             "p99", "max", plural(runs, "run").c_str(),
+                             plural(r.framesPerRun, "frame").c_str(), description.c_str()));
   nlohmann::ordered_json stages;
   for (std::size_t s = 0; s < r.stages.size(); ++s) {
     std::vector<double> v;
@@ -68,7 +55,7 @@ Summary summarize(const Runs& r, const std::string& description) {
                  p99 = percentile(v, 0.99), max = percentile(v, 1.0);
     stages[r.stages[s]] = {{"median_ms", med}, {"p95_ms", p95}, {"p99_ms", p99}, {"max_ms", max}};
     out.lines.push_back(
-        line("%-9s %9.3f %9.3f %9.3f %9.3f", r.stages[s].c_str(), med, p95, p99, max));
+        format("%-9s %9.3f %9.3f %9.3f %9.3f", r.stages[s].c_str(), med, p95, p99, max));
   }
   out.json["stages"] = stages;
   std::vector<double> latency;
@@ -78,13 +65,13 @@ Summary summarize(const Runs& r, const std::string& description) {
                p99 = percentile(latency, 0.99);
   out.json["latency_ms"] = {{"p50", p50}, {"p95", p95}, {"p99", p99}};
   out.lines.push_back(
-      line("latency (grab to shown) ms: p50 %.2f, p95 %.2f, p99 %.2f", p50, p95, p99));
+      format("latency (grab to shown) ms: p50 %.2f, p95 %.2f, p99 %.2f", p50, p95, p99));
   out.json["calibration_ms"] = r.calibrationMs;
-  out.lines.push_back(line("calibration kernel: %.3f ms", r.calibrationMs));
+  out.lines.push_back(format("calibration kernel: %.3f ms", r.calibrationMs));
   out.json["contention"] = r.contention;
   out.lines.push_back(
-      line("contention: x%.2f (the run's threads waited for a CPU %.0f%% as long as they ran)",
-           r.contention, 100 * (r.contention - 1)));
+      format("contention: x%.2f (the run's threads waited for a CPU %.0f%% as long as they ran)",
+             r.contention, 100 * (r.contention - 1)));
   return out;
 }
 

@@ -36,7 +36,8 @@ forbid exchange '#include "liveprobe/capture/pipeline\.h"' \
 forbid capture '#include "liveprobe/(gl|exchange)/' 'capture knows no GL and no exchange'
 forbid bench '#include [<"](GL/|glad/|EGL/|GLFW/|opencv2/|liveprobe/(gl|exchange|hdr)/)' \
   'the bench harness knows the SH core and the frame path'"'"'s stages, no GL'
-forbid bench '#include "[a-z_]+\.h"' 'the bench harness includes nothing of the program'
+app=$(cd "$root/app/src" && ls *.h | sed 's/\./\\./' | paste -sd'|')
+forbid bench "#include \"($app)\"" 'the bench harness includes nothing of the program'
 
 ctx=$root/shading/gl/include/liveprobe/gl/context.h
 body=$(sed -n '/^class GlContext {/,/^};/p' "$ctx")
