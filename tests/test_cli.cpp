@@ -45,9 +45,10 @@ TEST(Cli, CoeffsJsonIsExactlyTheDocumentedShape) {
   const auto j = nlohmann::ordered_json::parse(r.output);
   std::vector<std::string> keys;
   for (auto& [k, v] : j.items()) keys.push_back(k);
-  EXPECT_EQ(keys,
-            (std::vector<std::string>{"source", "layout", "width", "height", "coefficients"}));
+  EXPECT_EQ(keys, (std::vector<std::string>{"source", "layout", "width", "height", "coverage",
+                                            "coefficients"}));
   EXPECT_EQ(j["layout"], "equirect");
+  EXPECT_EQ(j["coverage"], 1.0);
   EXPECT_EQ(j["width"], 64);
   std::vector<std::string> names;
   for (auto& [k, v] : j["coefficients"].items()) names.push_back(k);

@@ -97,7 +97,7 @@ class ReadmeExample : public ::testing::TestWithParam<Example> {};
 
 // The emulated camera's modes: an MJPEG equirect sky at the sizes the README's live examples ask.
 void makeCameraModes(const fs::path& dir) {
-  for (const auto& [w, h] : {std::pair{1920, 960}, std::pair{1280, 720}}) {
+  for (const auto& [w, h] : {std::pair{1920, 960}, std::pair{1280, 720}, std::pair{640, 480}}) {
     const fs::path m = dir / ("MJPG_" + std::to_string(w) + "x" + std::to_string(h));
     fs::create_directories(m);
     for (int i = 0; i < 4; ++i)

@@ -50,6 +50,24 @@ Environment loadEnvironment(const Args& a, const LightOptions& lights = {.maxLig
   return cli::loadEnvironment(a.positional().at(0), a.settings().panorama, lights);
 }
 
+/// The brute force integrates the pixels the frame measured. Where the frame does not see the
+/// whole sphere the coefficients also hold the --unseen fill: like is compared with like only
+/// when the fill is nothing.
+void requireMeasuredOnly(const Environment& env, const std::string& what) {
+  if (env.coverage < 1.0 && env.layout.unseen.fill != UnseenRule::Fill::Black) {
+    char share[32];
+    std::snprintf(share, sizeof share, "%.1f%%", 100 * env.coverage);
+    throw Error(what + ": the brute force integrates what the frame measured (" + share +
+                " of the sphere), not the --unseen fill: give --unseen black");
+  }
+}
+
+/// What the coefficients cover, for the JSON outputs: the measured share and, below 1, the fill.
+void addCoverage(nlohmann::ordered_json& j, const Environment& env) {
+  j["coverage"] = env.coverage;
+  if (env.coverage < 1.0) j["unseen"] = unseenName(env.layout.unseen);
+}
+
 /// Resolves --window against the coefficients; reports an automatic choice on stderr.
 BandWindow chooseWindow(const StillSettings& s, const Sh9& radiance) {
   using Kind = WindowChoice::Kind;
@@ -115,13 +133,17 @@ int runCoeffs(const Args& a) {
     j["layout"] = std::string(layoutName(env.layout.layout));
     j["width"] = env.image().width;
     j["height"] = env.image().height;
+    addCoverage(j, env);
     j["coefficients"] = coefficientsJson(L);
     if (lights.maxLights > 0) j["lights"] = lightsJson(env.lights);
     std::cout << j.dump() << "\n";
   } else if (format == "text") {
     std::cout << a.positional()[0] << " (" << layoutName(env.layout.layout) << ", "
-              << env.image().width << "x" << env.image().height << ")\n"
-              << coefficientsText(L);
+              << env.image().width << "x" << env.image().height << ")\n";
+    if (env.coverage < 1.0)
+      std::printf("coverage: %.1f%% of the sphere measured, the rest filled by --unseen %s\n",
+                  100 * env.coverage, unseenName(env.layout.unseen).c_str());
+    std::cout << coefficientsText(L);
     if (lights.maxLights > 0 && env.lights.empty())
       std::printf("lights: none (no compact source holds 5%% of the power)\n");
     for (const Light& l : env.lights) std::printf("light: %s\n", lightText(l).c_str());
@@ -184,6 +206,7 @@ int runIrradiance(const Args& a) {
         irradianceMatrices(applyWindow(env.radiance, chooseWindow(s.still, env.radiance)));
     for (std::size_t i = 0; i < normals.size(); ++i) e[i] = evalIrradianceQuadratic(m, normals[i]);
   } else {
+    requireMeasuredOnly(env, "irradiance --brute");
     auto samples = layoutSamples(env.layout, env.image().width, env.image().height);
     for (auto& smp : samples) smp.dir = env.orientation * smp.dir;
     ThreadPool pool(0);
@@ -236,6 +259,7 @@ int runCompare(const Args& a) {
   // The map is projected once, here, and the comparison takes that projection and its time.
   const LightOptions lights = chooseLights(s);
   Environment env = loadEnvironment(a, lights);
+  requireMeasuredOnly(env, "compare");
   installStopHandlers();
   Progress progress("compare: brute force", std::int64_t(w) * h, s.output.quiet, "normals");
   const CompareResult r =
@@ -257,6 +281,7 @@ int runCompare(const Args& a) {
     j["layout"] = std::string(layoutName(env.layout.layout));
     j["input"] = std::to_string(env.image().width) + "x" + std::to_string(env.image().height);
     j["size"] = std::to_string(w) + "x" + std::to_string(h);
+    addCoverage(j, env);
     j["mean_frac_total"] = r.meanFracTotal;
     j["max_frac_total"] = r.maxFracTotal;
     j["mean_rel_mean"] = r.meanRelMean;

@@ -48,6 +48,7 @@ int runBench(const Args&);
 int runLive(const Args&);
 int runDevices(const Args&);
 int runCalibrate(const Args&);
+int runCalibrateLens(const Args&);
 /// The replay pipeline with an opened camera as its source (cmd_replay.cpp).
 int runStreamForLive(const Args& a, std::unique_ptr<FrameSource> camera);
 std::vector<OptionSpec> streamOptions();
@@ -114,6 +115,7 @@ std::string shareDir();
 std::string defaultRecording();
 
 extern const CommandSpec kCoeffsSpec, kIrradianceSpec, kCompareSpec, kRenderSpec, kViewSpec,
-    kReplaySpec, kRecordSpec, kBenchSpec, kLiveSpec, kDevicesSpec, kCalibrateSpec;
+    kReplaySpec, kRecordSpec, kBenchSpec, kLiveSpec, kDevicesSpec, kCalibrateSpec,
+    kCalibrateLensSpec;
 
 }  // namespace lp::cli

@@ -7,6 +7,7 @@
 
 #include "commands.h"
 #include "liveprobe/capture/frame_processor.h"
+#include "liveprobe/capture/lens.h"
 #include "liveprobe/capture/open_source.h"
 #include "liveprobe/capture/photometry.h"
 #include "liveprobe/exchange/coeffs_io.h"
@@ -49,6 +50,20 @@ LayoutSpec layoutSpec(const PanoramaSettings& p, const FrameSource* source) {
     if (spec.layout != Layout::DualFisheye) throw Error("--fov applies to --layout fisheye only");
     spec.fisheyeFovDeg = float(*p.fov);
   }
+  if (p.lens) {
+    if (p.layout && spec.layout != Layout::Lens)
+      throw Error("--lens applies to --layout lens only");
+    if (known && native != Layout::Lens)
+      throw Error(source->describe() + ": the frames are a " + std::string(layoutName(native)) +
+                  " layout; --lens does not apply");
+    spec.layout = Layout::Lens;
+    spec.lens = makeLensModel(readLensCalibration(*p.lens));
+  } else if (spec.layout == Layout::Lens) {
+    throw Error(
+        "--layout lens needs --lens FILE: the camera's calibration (OpenCV FileStorage YAML/JSON "
+        "or ROS camera_info)");
+  }
+  if (p.unseen) spec.unseen = *p.unseen;
   return spec;
 }
 
@@ -74,12 +89,13 @@ Environment loadEnvironment(const std::string& source, const PanoramaSettings& p
     throw Error(source + ": " + e.what());
   }
   env.projectMs = r.times[Stage::Project];
+  env.coverage = processor.projector()->coverage();
   env.radiance = r.lighting.radiance;
   env.lights = std::move(r.lighting.lights);
   env.whole = r.lighting.whole;
   env.linear = std::move(r.linear);
   env.background = std::move(r.background);
-  warnIfLayoutLooksWrong(source, env.layout, p.layout.has_value(), env.image().width,
+  warnIfLayoutLooksWrong(source, env.layout, p.layout || p.lens, env.image().width,
                          env.image().height, env.image().rgb.data());
   return env;
 }
@@ -87,7 +103,9 @@ Environment loadEnvironment(const std::string& source, const PanoramaSettings& p
 void warnIfLayoutLooksWrong(const std::string& source, const LayoutSpec& layout, bool given, int w,
                             int h, const float* rgb) {
   const bool guessedEquirect = layout.layout == Layout::Equirect && !given;
-  if (guessedEquirect && w == h) {
+  if (layout.lens && !layout.lens->scaling(w, h).empty()) {
+    warn(source + ": " + layout.lens->scaling(w, h));
+  } else if (guessedEquirect && w == h) {
     warn(source +
          ": a square image taken as equirect (an angular map or a mirror ball? give --layout)");
   } else if (guessedEquirect && std::abs(double(w) / h - 16.0 / 9.0) < 0.02) {

@@ -37,6 +37,7 @@ struct Environment {
   std::vector<Light> lights;    ///< the dominant compact lights, when asked, turned likewise
   Sh9 whole;                    ///< the whole map's coefficients, lights included
   double projectMs = 0;         ///< the frame path's time for it (its tables made beforehand)
+  double coverage = 1;          ///< the share of the sphere the frame measures (Projector)
 };
 /// Reads the first frame of `source` and takes it through the frame path (FrameProcessor: one
 /// projection, the lights split out when `lights` asks), in the layout and orientation the

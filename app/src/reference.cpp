@@ -73,7 +73,8 @@ const char* const kDescription =
     "liveprobe computes the nine spherical-harmonic coefficients of the diffuse light an "
     "environment casts (Ramamoorthi and Hanrahan, 2001) from panoramas: still maps, recordings, "
     "image sequences and V4L2 cameras, in equirect, angular, mirror-ball, dual-fisheye and cube "
-    "layouts. It re-projects them every frame, lights a model with them in a window or headless, "
+    "layouts and through calibrated lenses. It re-projects them every frame, lights a model with "
+    "them in a window or headless, "
     "and exports them to engines, a WebSocket stream and MQTT.";
 
 // "line one\nline two" -> "line one line two"

@@ -99,21 +99,29 @@ std::vector<OptionSpec> sceneOptions() {
   return o;
 }
 
-std::vector<OptionSpec> layoutOptions() {
-  const std::string g = "Panorama";
-  OptionSpec layout{"--layout",
-                    "equirect|angular|mirrorball|cube|fisheye",
-                    "panorama layout (default equirect)",
-                    false,
-                    false,
-                    g};
-  layout.set = [](Settings& s, const std::string& v) {
+namespace {
+/// An option whose value one of the core's parsers reads, its error said with the option's name.
+template <class Parse, class F>
+OptionSpec parsedOption(const std::string& name, std::string value, std::string help,
+                        const std::string& group, Parse parse, F field) {
+  OptionSpec o = declared(name, std::move(value), std::move(help), group);
+  o.set = [name, parse, field](Settings& s, const std::string& v) {
     try {
-      s.panorama.layout = parseLayout(v);
+      field(s) = parse(v);
     } catch (const Error& e) {
-      throw Error("--layout: " + std::string(e.what()));
+      throw Error(name + ": " + std::string(e.what()));
     }
   };
+  return o;
+}
+}  // namespace
+
+std::vector<OptionSpec> layoutOptions() {
+  const std::string g = "Panorama";
+  OptionSpec layout = parsedOption(
+      "--layout", "equirect|angular|mirrorball|cube|fisheye|lens",
+      "panorama layout (default equirect; lens with --lens)", g,
+      [](const std::string& v) { return parseLayout(v); }, LP_FIELD(panorama.layout));
   OptionSpec circle = tripleOption("--circle", "CX,CY,R", "mirrorball: the ball's circle in pixels",
                                    "cx,cy,r with r > 0", LP_FIELD(panorama.circle), g);
   circle.set = [](Settings& s, const std::string& v) {
@@ -121,9 +129,20 @@ std::vector<OptionSpec> layoutOptions() {
     if (!(c[2] > 0)) throw Error("--circle " + v + ": expected cx,cy,r with r > 0");
     s.panorama.circle = c;
   };
-  return {layout, circle,
+  OptionSpec unseen = parsedOption(
+      "--unseen", "ground[=ALBEDO]|mean|black",
+      "what fills the directions the frame does not see (a lens's): a ground of that albedo lit "
+      "by the seen sky, the edge's mean, or nothing (default ground=0.2)",
+      g, [](const std::string& v) { return parseUnseen(v); }, LP_FIELD(panorama.unseen));
+  return {layout,
+          circle,
           numberOption("--fov", "DEG", "fisheye: field of view of each lens", {180, 360}, "190",
                        LP_FIELD(panorama.fov), g),
+          textOption("--lens", "FILE",
+                     "lens: the camera's calibration (OpenCV FileStorage YAML/JSON or ROS "
+                     "camera_info; implies --layout lens)",
+                     LP_FIELD(panorama.lens), g),
+          unseen,
           tripleOption("--env-rotate,--rotate", "YAW,PITCH,ROLL",
                        "turn the environment, lighting and background together (degrees, about "
                        "+z, +y, +x)",

@@ -27,9 +27,11 @@ using Triple = std::array<double, 3>;
 /// The panorama's layout and orientation (layoutOptions).
 struct PanoramaSettings {
   std::optional<Layout> layout;
-  std::optional<Triple> circle;  ///< cx, cy, r in pixels
-  std::optional<double> fov;     ///< degrees
-  std::optional<Triple> rotate;  ///< yaw, pitch, roll in degrees
+  std::optional<Triple> circle;      ///< cx, cy, r in pixels
+  std::optional<double> fov;         ///< degrees
+  std::optional<std::string> lens;   ///< --lens FILE: a lens calibration
+  std::optional<UnseenRule> unseen;  ///< --unseen RULE
+  std::optional<Triple> rotate;      ///< yaw, pitch, roll in degrees
   bool flip = false;
 };
 
@@ -106,6 +108,13 @@ struct LiveSettings {
   int settle = 8;
 };
 
+/// calibrate-lens: the board and the lens model.
+struct LensCalibrationSettings {
+  std::optional<Size> board;     ///< --board COLSxROWS (inner corners)
+  std::optional<double> square;  ///< --square SIZE
+  std::string model = "fisheye";
+};
+
 /// --window: the band window against ringing.
 struct WindowChoice {
   enum class Kind : std::uint8_t { None, Auto, Cmgen, Hann } kind = Kind::None;
@@ -143,6 +152,7 @@ struct Settings {
   LiveSettings live;
   StillSettings still;
   BenchSettings bench;
+  LensCalibrationSettings lensCalibration;
 };
 
 // The parsers behind the builders: each throws lp::Error "NAME VALUE: expected ..." (one line).

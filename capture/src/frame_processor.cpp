@@ -16,7 +16,10 @@ bool displayTakesFrameAsIs(const Frame& frame, const Photometry& photometry,
 }
 
 FrameProcessor::FrameProcessor(FrameProcessorOptions options)
-    : opt_(std::move(options)), linearizer_(opt_.photometry) {}
+    : opt_(std::move(options)), linearizer_(opt_.photometry) {
+  // The ground of the unseen fill lies below the world's horizon, whatever the turn.
+  if (opt_.rotation) opt_.layout.unseen.up = glm::transpose(*opt_.rotation) * glm::vec3(0, 0, 1);
+}
 FrameProcessor::~FrameProcessor() = default;
 FrameProcessor::FrameProcessor(FrameProcessor&&) noexcept = default;
 FrameProcessor& FrameProcessor::operator=(FrameProcessor&&) noexcept = default;

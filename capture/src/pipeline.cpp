@@ -176,7 +176,7 @@ bool CapturePipeline::hold(Loop& s, ProcessedFrame& out) {
   // lets go (a window still holding a frame of the occluder, or missing one, does not).
   if (opt_.holdBelow <= 0 || !s.lastGood) return false;
   const FrameConfidence& c = out.confidence;
-  const bool good = c.value() >= opt_.holdBelow;
+  const bool good = c.measured() >= opt_.holdBelow;
   // Agreeing again: whole, and measuring the brightest source where the last good frame did.
   const bool agrees = c.complete && (c.brightestMeasured || !s.lastGood->brightestMeasured);
   s.holding = s.holding ? !(good && agrees) : !good;
@@ -222,12 +222,13 @@ void CapturePipeline::project(Loop& s, ProcessedFrame& out) {
       stats_.mergesDisagreeing += c.agreement < 0.5;
     }
   }
+  if (const Projector* p = s.processor.projector()) out.confidence.coverage = p->coverage();
   // Below --hold-below the last good lighting stands, and the smoothing does not see the frame.
   if (hold(s, out)) return;
   out.unsmoothed = lit.radiance;
   out.lights = s.lightSmoother.update(lit.lights, out.timestamp);
   out.radiance = s.smoother.update(lit.radiance, out.timestamp);
-  if (opt_.holdBelow > 0 && out.confidence.value() >= opt_.holdBelow && out.confidence.complete)
+  if (opt_.holdBelow > 0 && out.confidence.measured() >= opt_.holdBelow && out.confidence.complete)
     s.lastGood =
         Loop::Lit{out.radiance, out.unsmoothed, out.lights, out.confidence.brightestMeasured};
 }

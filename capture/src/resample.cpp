@@ -2,6 +2,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <memory>
+#include <optional>
 
 #include "liveprobe/sh/error.h"
 
@@ -9,9 +11,30 @@ namespace lp {
 
 Image resampleToEquirect(const Image& frame, const LayoutSpec& spec, int width, int height) {
   Image out(width, height);
-  const auto grid = equirectSamples(width, height);
-  for (std::size_t i = 0; i < grid.size(); ++i) {
-    const auto px = layoutPixel(spec, frame.width, frame.height, grid[i].dir);
+  // Where each output pixel lands in the frame. A lens asks OpenCV for all at once, and a stream
+  // of one lens and size asks once: the last answer is kept per thread.
+  struct Landing {
+    std::weak_ptr<const LensModel> lens;  ///< weak: a new lens at a freed one's address differs
+    int frameWidth = 0, frameHeight = 0, width = 0, height = 0;
+    std::vector<glm::vec2> at;
+  };
+  thread_local Landing last;
+  const Landing key{spec.lens, frame.width, frame.height, width, height, {}};
+  const bool kept = spec.layout == Layout::Lens && spec.lens && last.lens.lock() == spec.lens &&
+                    last.frameWidth == key.frameWidth && last.frameHeight == key.frameHeight &&
+                    last.width == width && last.height == height;
+  if (!kept) {
+    const auto grid = equirectSamples(width, height);
+    std::vector<glm::vec3> dirs(grid.size());
+    for (std::size_t i = 0; i < grid.size(); ++i) dirs[i] = grid[i].dir;
+    last = key;
+    last.at.resize(grid.size());
+    layoutPixels(spec, frame.width, frame.height, dirs.data(), dirs.size(), last.at.data());
+    if (spec.layout != Layout::Lens) last.lens.reset();
+  }
+  for (std::size_t i = 0; i < last.at.size(); ++i) {
+    const std::optional<glm::vec2> px =
+        std::isfinite(last.at[i].x) ? std::optional(last.at[i]) : std::nullopt;
     if (!px) continue;
     // Bilinear between pixel centres, clamped at the frame's edges.
     const float fx = std::clamp(px->x - 0.5f, 0.0f, float(frame.width - 1));

@@ -431,10 +431,15 @@ std::string frameRecord(const ProcessedFrame& f, const CoeffFormat& format, Reco
   tm["render"] = t.renderMs < 0 ? ojson(nullptr) : ojson(t.renderMs);
   j["timings_ms"] = tm;
   const FrameConfidence& c = f.confidence;
-  j["confidence"] = {{"value", c.value()},        {"clipped_share", c.clippedShare},
-                     {"dark_share", c.darkShare}, {"brightest_measured", c.brightestMeasured},
-                     {"agreement", c.agreement},  {"exposures", c.exposures},
-                     {"complete", c.complete},    {"held", f.held}};
+  j["confidence"] = {{"value", c.value()},
+                     {"clipped_share", c.clippedShare},
+                     {"dark_share", c.darkShare},
+                     {"brightest_measured", c.brightestMeasured},
+                     {"agreement", c.agreement},
+                     {"exposures", c.exposures},
+                     {"complete", c.complete},
+                     {"coverage", c.coverage},
+                     {"held", f.held}};
   // Glass-to-light latency from the capture time (a camera's driver timestamp, or the grab of a
   // file's frame): to the coefficients, and to the frame that shows them.
   ojson l;

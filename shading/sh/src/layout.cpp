@@ -1,6 +1,8 @@
 #include "liveprobe/sh/layout.h"
 
 #include <cmath>
+#include <cstdio>
+#include <cstdlib>
 #include <functional>
 
 #include "liveprobe/sh/axes.h"
@@ -20,6 +22,8 @@ std::string_view layoutName(Layout layout) {
       return "cube";
     case Layout::DualFisheye:
       return "fisheye";
+    case Layout::Lens:
+      return "lens";
   }
   return "?";
 }
@@ -30,8 +34,47 @@ Layout parseLayout(std::string_view name) {
   if (name == "mirrorball" || name == "ball") return Layout::MirrorBall;
   if (name == "cube" || name == "cross") return Layout::Cube;
   if (name == "fisheye" || name == "dual-fisheye") return Layout::DualFisheye;
+  if (name == "lens") return Layout::Lens;
   throw Error("unknown layout " + std::string(name) +
-              " (expected equirect, angular, mirrorball, cube or fisheye)");
+              " (expected equirect, angular, mirrorball, cube, fisheye or lens)");
+}
+
+std::string unseenName(const UnseenRule& rule) {
+  switch (rule.fill) {
+    case UnseenRule::Fill::Ground: {
+      char albedo[32];
+      std::snprintf(albedo, sizeof albedo, "%g", double(rule.albedo));
+      return std::string("ground=") + albedo;
+    }
+    case UnseenRule::Fill::Mean:
+      return "mean";
+    case UnseenRule::Fill::Black:
+      return "black";
+  }
+  return "?";
+}
+
+UnseenRule parseUnseen(std::string_view text) {
+  UnseenRule rule;
+  if (text == "mean") {
+    rule.fill = UnseenRule::Fill::Mean;
+  } else if (text == "black") {
+    rule.fill = UnseenRule::Fill::Black;
+  } else if (text == "ground") {
+    rule.fill = UnseenRule::Fill::Ground;
+  } else if (text.starts_with("ground=")) {
+    const std::string value(text.substr(7));
+    char* end = nullptr;
+    const double albedo = std::strtod(value.c_str(), &end);
+    if (value.empty() || *end != '\0' || !(albedo >= 0.0 && albedo <= 1.0))
+      throw Error("unseen " + std::string(text) +
+                  ": the ground's albedo must be a number from 0 to 1");
+    rule.albedo = float(albedo);
+  } else {
+    throw Error("unknown unseen rule " + std::string(text) +
+                " (expected ground, ground=ALBEDO, mean or black)");
+  }
+  return rule;
 }
 
 std::string layoutMismatch(const LayoutSpec& spec, int width, int height) {
@@ -64,6 +107,9 @@ std::string layoutMismatch(const LayoutSpec& spec, int width, int height) {
       if (!(spec.fisheyeFovDeg > 180.0f && spec.fisheyeFovDeg <= 270.0f))
         return "the fisheye field of view must be in (180, 270] degrees";
       return {};
+    case Layout::Lens:
+      if (!spec.lens) return "the lens layout needs the camera's lens calibration";
+      return spec.lens->mismatch(width, height);
   }
   return {};
 }
@@ -321,6 +367,8 @@ std::vector<SphereSample> layoutSamples(const LayoutSpec& spec, int width, int h
       return cubeSamples(width, height);
     case Layout::DualFisheye:
       return fisheyeSamples(spec, width, height);
+    case Layout::Lens:
+      return spec.lens->samples(width, height);
   }
   return {};
 }
@@ -368,8 +416,26 @@ std::optional<glm::vec2> layoutPixel(const LayoutSpec& spec, int width, int heig
       if (t > halfFov) return std::nullopt;
       return onDisc(front ? width / 4.0 : 3.0 * width / 4.0, height / 2.0, radius, t / halfFov, p);
     }
+    case Layout::Lens: {
+      if (!spec.lens) return std::nullopt;
+      glm::vec2 at;
+      const glm::vec3 unit(d);
+      spec.lens->pixels(width, height, &unit, 1, &at);
+      if (!std::isfinite(at.x) || !std::isfinite(at.y)) return std::nullopt;
+      return at;
+    }
   }
   return std::nullopt;
+}
+
+void layoutPixels(const LayoutSpec& spec, int width, int height, const glm::vec3* dirs,
+                  std::size_t count, glm::vec2* out) {
+  if (spec.layout == Layout::Lens && spec.lens) {
+    spec.lens->pixels(width, height, dirs, count, out);
+    return;
+  }
+  for (std::size_t i = 0; i < count; ++i)
+    out[i] = layoutPixel(spec, width, height, dirs[i]).value_or(glm::vec2(NAN));
 }
 
 }  // namespace lp

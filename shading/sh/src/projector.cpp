@@ -6,6 +6,7 @@
 
 #include "liveprobe/sh/error.h"
 #include "project_kernel.h"
+#include "unseen.h"
 
 namespace lp {
 
@@ -150,10 +151,13 @@ struct Projector::Tables {
 Projector::Projector(const LayoutSpec& spec, int width, int height)
     : spec_(spec), width_(width), height_(height), samples_(layoutSamples(spec, width, height)) {
   auto t = std::make_unique<Tables>();
-  if (spec.layout == Layout::Equirect)
+  coverage_ = unseen::coverage(samples_);
+  if (spec.layout == Layout::Equirect) {
     t->equirect = equirectTables(width, height);
-  else
+  } else {
     t->weights = weightsInBlocks(samples_);
+    unseen::addFill(spec, width, height, samples_, t->weights);
+  }
   t->blockUsed.assign((samples_.size() + 15) / 16, 0);
   for (std::size_t i = 0; i < samples_.size(); ++i)
     if (samples_[i].solidAngle != 0.0f) t->blockUsed[i / 16] = 1;
@@ -255,7 +259,6 @@ std::array<double, 27> Projector::equirectSums(const PanoramaView& v, Executor* 
 // sums, in the frame's channel order.
 std::array<double, 27> Projector::sampleSums(const PanoramaView& v, Executor* ex) const {
   const kernel::Kernels& k = kernel::active();
-  const bool bgr = v.format == PanoramaFormat::BgrU8;
   const std::size_t w = std::size_t(width_);
   const float* weights = tables_->weights.data();
   const auto& used = tables_->blockUsed;
@@ -283,11 +286,14 @@ std::array<double, 27> Projector::sampleSums(const PanoramaView& v, Executor* ex
       const std::size_t row = i / w, first = i % w, n = std::min(w - first, i1 - i);
       if (i % 16 == 0) {
         k.weightedSums(rows.read(int(row), first, n), n, weights + i * kShCount, sums.data());
-      } else {  // a row start inside a block: per sample, from the directions
-        const Sh9 part = projectSamples(rows.read(int(row), first, n), 3, samples_.data() + i, n);
-        for (int c = 0; c < kShCount; ++c)
-          for (int ch = 0; ch < 3; ++ch)
-            sums[3 * c + ch] += bgr ? part.c[c][2 - ch] : part.c[c][ch];
+      } else {  // a row start inside a block: per pixel, from the same weights
+        const float* px = rows.read(int(row), first, n);
+        for (std::size_t q = 0; q < n; ++q)
+          for (int c = 0; c < kShCount; ++c) {
+            const double wq =
+                weights[(((i + q) / 16) * kShCount + std::size_t(c)) * 16 + (i + q) % 16];
+            for (int ch = 0; ch < 3; ++ch) sums[3 * c + ch] += wq * px[3 * q + ch];
+          }
       }
       i += n;
     }

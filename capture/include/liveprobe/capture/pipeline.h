@@ -50,7 +50,8 @@ struct PipelineOptions {
   /// Exposure bracketing: each frame is merged with the ones before it into radiance
   /// (liveprobe/hdr/merge.h) before anything else sees it (onFrame sees each as it came).
   std::optional<MergeOptions> bracket;
-  /// A frame whose confidence is below this keeps the last good frame's lighting (0: off).
+  /// A frame whose confidence in what it measured (FrameConfidence::measured(): the unseen share
+  /// aside) is below this keeps the last good frame's lighting (0: off).
   double holdBelow = 0;
   /// Called on the capture thread for every frame handed over (at its time where capture is
   /// paced), just before the handoff: as many calls as PipelineStats::captured.

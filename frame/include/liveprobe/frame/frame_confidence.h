@@ -30,14 +30,21 @@ struct FrameConfidence {
   /// left out whole (a hand over the lens, a flash). A hold ends only on a complete merge.
   bool complete = true;
 
-  /// One number in [0, 1]: (1 - clippedShare) (1 - darkShare) agreement, and at most
-  /// kUnmeasuredBrightest where the brightest pixel clipped in every exposure: then its power
-  /// (the sun's share) is a lower bound at an unknown distance from the truth, and the clipped
-  /// share says how much is known to be missing, not how much is.
-  double value() const {
+  /// The share of the sphere the frame measures (a lens sees part of it; the rest is the
+  /// layout's unseen fill, liveprobe/sh/layout.h). 1 for the panoramic layouts.
+  double coverage = 1;
+
+  /// How well what was measured was measured, in [0, 1]: (1 - clippedShare) (1 - darkShare)
+  /// agreement, and at most kUnmeasuredBrightest where the brightest pixel clipped in every
+  /// exposure: then its power (the sun's share) is a lower bound at an unknown distance from the
+  /// truth, and the clipped share says how much is known to be missing, not how much is.
+  double measured() const {
     const double v = (1.0 - clippedShare) * (1.0 - darkShare) * agreement;
     return brightestMeasured ? v : std::min(v, kUnmeasuredBrightest);
   }
+  /// One number in [0, 1]: measured() times coverage, since the unseen share is filled, not
+  /// measured.
+  double value() const { return measured() * coverage; }
   static constexpr double kUnmeasuredBrightest = 0.5;
 };
 

@@ -47,6 +47,16 @@
 //   Where the lenses overlap (polar angle in [180 - fov/2, fov/2]) each pixel is weighted by a
 //   linear feather that falls from 1 to 0 across the band; the two weights sum to 1 for every
 //   direction. dw = (fov/2 / R)^2 sin(theta)/theta per pixel area, times that weight.
+//
+// lens: a calibrated camera (LayoutSpec::lens, a LensModel; liveprobe/capture/lens.h makes one
+//   from a calibration through OpenCV). A direction in OpenCV's camera frame (x right, y down,
+//   z along the optical axis) is the same vector in the world frame: a camera looking straight up
+//   sees the zenith at its centre. dw is the pixel's own solid angle on the sphere, 0 where the
+//   lens sees nothing.
+//
+// What a layout does not see (a lens's unseen cone; coverage below 1) is filled by
+// LayoutSpec::unseen when frames are projected (liveprobe/sh/projector.h).
+#include <memory>
 #include <optional>
 #include <string>
 #include <string_view>
@@ -56,17 +66,58 @@
 
 namespace lp {
 
-enum class Layout : std::uint8_t { Equirect, Angular, MirrorBall, Cube, DualFisheye };
+enum class Layout : std::uint8_t { Equirect, Angular, MirrorBall, Cube, DualFisheye, Lens };
 
 std::string_view layoutName(Layout layout);
-/// Parses equirect|angular|mirrorball|cube|fisheye; throws lp::Error naming the bad value.
+/// Parses equirect|angular|mirrorball|cube|fisheye|lens; throws lp::Error naming the bad value.
 Layout parseLayout(std::string_view name);
+
+/// A real camera's lens as the core sees it: where each pixel of a frame looks, and back. The
+/// core knows no lens model; liveprobe/capture/lens.h implements this from a calibration.
+class LensModel {
+ public:
+  virtual ~LensModel() = default;
+  /// Empty when a W x H frame is this lens's; otherwise why not, in words.
+  virtual std::string mismatch(int width, int height) const = 0;
+  /// Empty when a W x H frame is the lens as calibrated; a note, in words, when it is the lens
+  /// scaled (a camera mode of the same aspect at another size).
+  virtual std::string scaling(int width, int height) const = 0;
+  /// One sample per pixel of a W x H frame, row-major: the world direction of the pixel's centre
+  /// and its solid angle on the sphere (0 where the lens sees nothing).
+  virtual std::vector<SphereSample> samples(int width, int height) const = 0;
+  /// Where each of `count` world directions lands in a W x H frame, in pixel coordinates (x
+  /// right, y down, pixel centres at +0.5); NaN where the lens does not see it.
+  virtual void pixels(int width, int height, const glm::vec3* dirs, std::size_t count,
+                      glm::vec2* out) const = 0;
+  /// What the lens is, for messages: its model and where it came from.
+  virtual std::string describe() const = 0;
+};
+
+/// What fills the directions a frame does not see (the share 1 - coverage of the sphere).
+struct UnseenRule {
+  enum class Fill : std::uint8_t {
+    Ground,  ///< below the horizon a Lambertian ground, L = albedo E_up / pi, lit by what is
+             ///< seen above it; unseen directions above the horizon take the nearest seen pixel
+    Mean,    ///< the mean radiance of the edge of what is seen
+    Black,   ///< nothing
+  };
+  Fill fill = Fill::Ground;
+  float albedo = 0.2f;  ///< Ground: the ground's reflectance (grass and asphalt: about 0.2)
+  /// Ground: the world's up as a direction of the frame's own (where the frame is turned into
+  /// the world, liveprobe/capture/frame_processor.h sets it from the turn).
+  glm::vec3 up{0.0f, 0.0f, 1.0f};
+};
+std::string unseenName(const UnseenRule& rule);
+/// Parses ground[=ALBEDO]|mean|black; throws lp::Error naming the bad value.
+UnseenRule parseUnseen(std::string_view text);
 
 /// A layout with its parameters.
 struct LayoutSpec {
   Layout layout = Layout::Equirect;
   glm::vec3 circle{0.0f};  ///< mirrorball: centre x, centre y, radius, in pixels (r = 0: unset)
-  float fisheyeFovDeg = 190.0f;  ///< fisheye: field of view of each lens
+  float fisheyeFovDeg = 190.0f;           ///< fisheye: field of view of each lens
+  std::shared_ptr<const LensModel> lens;  ///< lens: the camera's lens
+  UnseenRule unseen;                      ///< what fills the directions the frame does not see
 
   LayoutSpec() = default;
   LayoutSpec(Layout l) : layout(l) {}  // NOLINT: a bare layout is a spec with default parameters
@@ -95,5 +146,9 @@ glm::vec3 cubeFaceDirection(int face, double s, double t);
 /// (x right, y down, pixel centres at +0.5), or nullopt where the layout does not see it. The
 /// inverse of layoutSamples' directions (for resampling, backgrounds and tests).
 std::optional<glm::vec2> layoutPixel(const LayoutSpec& spec, int width, int height, glm::vec3 dir);
+/// layoutPixel for `count` directions at once (a lens asks its model once for all); NaN where the
+/// layout does not see a direction.
+void layoutPixels(const LayoutSpec& spec, int width, int height, const glm::vec3* dirs,
+                  std::size_t count, glm::vec2* out);
 
 }  // namespace lp

@@ -75,7 +75,8 @@ struct EquirectIntegrals {
 ///   - equirect: 15 multiply-adds per pair of pixels half a turn apart (five column-weighted
 ///     sums per channel; the pair shares its column integrals up to sign), combined with the
 ///     row integrals once per row; exact for radiance constant over each pixel.
-///   - other layouts: nine precomputed weights Y_lm(dir) dw per pixel, 27 multiply-adds.
+///   - other layouts: nine precomputed weights Y_lm(dir) dw per pixel, 27 multiply-adds; what
+///     the frame does not see is filled by the layout's UnseenRule through the same weights.
 /// Sums run in float over at most a row (or 4096 pixels) and in double beyond, so a 4K frame
 /// keeps ~1e-7 of L00. The kernels are SIMD (liveprobe/sh/simd.h picks the instruction set).
 class Projector {
@@ -91,6 +92,9 @@ class Projector {
   int height() const { return height_; }
   /// The per-pixel samples (directions and solid angles), row-major.
   const std::vector<SphereSample>& samples() const { return samples_; }
+  /// The share of the sphere the frame measures: exactly 1 for the panoramic layouts, less for
+  /// a lens, whose rest spec().unseen fills in every projection.
+  double coverage() const { return coverage_; }
 
   /// Radiance coefficients of `frame`, which must have this projector's size and layout (throws
   /// lp::Error otherwise, and for an 8-bit view without its decode table). With an executor the
@@ -125,6 +129,7 @@ class Projector {
   LayoutSpec spec_;
   int width_, height_;
   std::vector<SphereSample> samples_;
+  double coverage_ = 1.0;
   std::unique_ptr<const Tables> tables_;
 };
 
