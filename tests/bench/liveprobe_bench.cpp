@@ -18,6 +18,7 @@
 
 #include "../turned_map.h"
 #include "liveprobe/capture/image.h"
+#include "liveprobe/capture/lens.h"
 #include "liveprobe/capture/open_source.h"
 #include "liveprobe/capture/photometry.h"
 #include "liveprobe/capture/resample.h"
@@ -72,8 +73,22 @@ lp::ThreadPool* pool(int threads) {
   return threads > 1 ? p.get() : nullptr;
 }
 
-void projectBench(benchmark::State& state, lp::Layout layout, bool u8, Size s, int threads,
-                  const std::string& simd) {
+// The tests' fisheye (tests/test_lens.cpp): Kannala-Brandt, 1280x960, 180 degrees; other sizes
+// of its aspect are the lens scaled.
+lp::LayoutSpec benchLens() {
+  lp::LensCalibration c;
+  c.model = lp::LensCalibration::Model::Fisheye;
+  c.width = 1280, c.height = 960;
+  c.K = {285, 0, 641.3, 0, 286.5, 478.6, 0, 0, 1};
+  c.distortion = {0.021, -0.0043, 0.0012, -0.00021};
+  c.source = "the bench's fisheye";
+  lp::LayoutSpec spec(lp::Layout::Lens);
+  spec.lens = lp::makeLensModel(c);
+  return spec;
+}
+
+void projectBench(benchmark::State& state, const lp::LayoutSpec& layout, bool u8, Size s,
+                  int threads, const std::string& simd) {
   lp::simd::select(simd);
   struct Restore {  // the other benchmarks run on the best path
     ~Restore() { lp::simd::select("native"); }
@@ -432,18 +447,20 @@ void mergeBench(benchmark::State& state, Size s, int threads, MergeCase what) {
 
 void registerAll() {
   // Angular maps are square: their sizes keep the equirect's pixel counts roughly.
-  const std::vector<std::pair<lp::Layout, std::vector<Size>>> layouts = {
+  // A lens's frames are a camera's: 4:3 from 1280x960 up.
+  const std::vector<std::pair<lp::LayoutSpec, std::vector<Size>>> layouts = {
       {lp::Layout::Equirect, {{300, 300}, {1024, 512}, {2048, 1024}, {3840, 1920}}},
-      {lp::Layout::Angular, {{300, 300}, {1024, 1024}, {2048, 2048}}}};
+      {lp::Layout::Angular, {{300, 300}, {1024, 1024}, {2048, 2048}}},
+      {benchLens(), {{1280, 960}, {2560, 1920}}}};
   for (const auto& [layout, sizes] : layouts)
     for (const char* type : {"f32", "u8"})
       for (Size s : sizes)
         for (int threads : {1, 2})
           for (const std::string& simd : lp::simd::available()) {  // every path this CPU runs
             const bool u8 = std::string(type) == "u8";
-            const std::string name = "Project/" + std::string(lp::layoutName(layout)) + "/" + type +
-                                     "/" + sizeName(s) + "/threads:" + std::to_string(threads) +
-                                     "/simd:" + simd;
+            const std::string name = "Project/" + std::string(lp::layoutName(layout.layout)) + "/" +
+                                     type + "/" + sizeName(s) +
+                                     "/threads:" + std::to_string(threads) + "/simd:" + simd;
             benchmark::RegisterBenchmark(
                 name.c_str(),
                 [=](benchmark::State& st) { projectBench(st, layout, u8, s, threads, simd); })
@@ -477,7 +494,7 @@ void registerAll() {
             [=](benchmark::State& st) { lightsBench(st, std::string(type) == "u8", s, mode); })
             ->UseRealTime()
             ->Unit(benchmark::kMicrosecond);
-  for (Size s : {Size{300, 300}, Size{3840, 1920}})
+  for (Size s : {Size{300, 300}, Size{1280, 960}, Size{2560, 1920}, Size{3840, 1920}})
     benchmark::RegisterBenchmark(("Reference/equirect/f32/" + sizeName(s) + "/threads:1").c_str(),
                                  [=](benchmark::State& st) { referenceLoop(st, s); })
         ->UseRealTime()
