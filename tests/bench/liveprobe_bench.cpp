@@ -34,6 +34,7 @@
 #include "liveprobe/sh/projector.h"
 #include "liveprobe/sh/sh.h"
 #include "liveprobe/sh/simd.h"
+#include "plain_loop.h"
 
 namespace {
 
@@ -172,6 +173,17 @@ void referenceLoop(benchmark::State& state, Size s) {
     }
     benchmark::DoNotOptimize(acc);
   }
+  state.counters["ns_per_pixel"] =
+      benchmark::Counter(double(s.w) * s.h * 1e-9, benchmark::Counter::kIsIterationInvariantRate |
+                                                       benchmark::Counter::kInvert);
+}
+
+// The plain equirect loop of plain_loop.cpp (-march=native -ffast-math, one thread): the
+// yardstick the lens layout's projection is held to (at most 2x its time at the same size).
+void plainLoop(benchmark::State& state, Size s) {
+  const lpbench::PlainEquirect plain(s.w, s.h);
+  const auto& rgb = skyF32(s);
+  for (auto _ : state) benchmark::DoNotOptimize(plain.project(rgb.data()));
   state.counters["ns_per_pixel"] =
       benchmark::Counter(double(s.w) * s.h * 1e-9, benchmark::Counter::kIsIterationInvariantRate |
                                                        benchmark::Counter::kInvert);
@@ -494,7 +506,12 @@ void registerAll() {
             [=](benchmark::State& st) { lightsBench(st, std::string(type) == "u8", s, mode); })
             ->UseRealTime()
             ->Unit(benchmark::kMicrosecond);
-  for (Size s : {Size{300, 300}, Size{1280, 960}, Size{2560, 1920}, Size{3840, 1920}})
+  for (Size s : {Size{1024, 1024}, Size{1280, 960}, Size{2560, 1920}})
+    benchmark::RegisterBenchmark(("Reference/plain/f32/" + sizeName(s) + "/threads:1").c_str(),
+                                 [=](benchmark::State& st) { plainLoop(st, s); })
+        ->UseRealTime()
+        ->Unit(benchmark::kMicrosecond);
+  for (Size s : {Size{300, 300}, Size{3840, 1920}})
     benchmark::RegisterBenchmark(("Reference/equirect/f32/" + sizeName(s) + "/threads:1").c_str(),
                                  [=](benchmark::State& st) { referenceLoop(st, s); })
         ->UseRealTime()
