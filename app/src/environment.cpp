@@ -103,8 +103,9 @@ Environment loadEnvironment(const std::string& source, const PanoramaSettings& p
 void warnIfLayoutLooksWrong(const std::string& source, const LayoutSpec& layout, bool given, int w,
                             int h, const float* rgb) {
   const bool guessedEquirect = layout.layout == Layout::Equirect && !given;
-  if (layout.lens && !layout.lens->scaling(w, h).empty()) {
-    warn(source + ": " + layout.lens->scaling(w, h));
+  const std::string scaled = layout.lens ? layout.lens->scaling(w, h) : std::string();
+  if (!scaled.empty()) {
+    warn(source + ": " + scaled);
   } else if (guessedEquirect && w == h) {
     warn(source +
          ": a square image taken as equirect (an angular map or a mirror ball? give --layout)");
