@@ -293,6 +293,43 @@ TEST(Lens, AFisheyeSkyIsTheMapsSeenHemispherePlusTheDeclaredFill) {
   });
 }
 
+TEST(Lens, TheProjectionCountsEachPixelWithTheWeightsAGpuUploads) {
+  // The CPU projects a lens frame from each pixel's direction and solid angle, plus one sum for
+  // the ground and extra weights on the edge; Projector::blockedWeights() holds every pixel's
+  // nine weights whole (what the GPU uploads). The two agree for every fill, on a packed frame
+  // and on one whose rows are padded.
+  const lp::Image map = lp::loadImage(lpt::dataPath("equirect/quarry_01_1k.hdr"));
+  FisheyeCamera camera;
+  const glm::dmat3 world = tilt(35.0);
+  const lp::Image frame = fisheyeFrame(map, camera.kb, world);
+  const std::size_t w = std::size_t(frame.width), h = std::size_t(frame.height);
+  std::vector<float> strided(h * (3 * w + 9), -1.0f);
+  for (std::size_t y = 0; y < h; ++y)
+    std::copy_n(frame.rgb.data() + 3 * w * y, 3 * w, strided.data() + (3 * w + 9) * y);
+  lp::LayoutSpec spec = camera.spec;
+  spec.unseen.up = glm::vec3(glm::transpose(world) * glm::dvec3(0, 0, 1));
+  for (const auto fill : {lp::UnseenRule::Fill::Ground, lp::UnseenRule::Fill::Mean}) {
+    spec.unseen.fill = fill;
+    const lp::Projector projector(spec, frame.width, frame.height);
+    const auto& blocked = projector.blockedWeights();
+    std::array<glm::dvec3, 9> want{};
+    for (std::size_t p = 0; p < w * h; ++p)
+      for (int k = 0; k < 9; ++k)
+        want[k] += glm::dvec3(frame.rgb[3 * p], frame.rgb[3 * p + 1], frame.rgb[3 * p + 2]) *
+                   double(blocked[((p / 16) * 9 + std::size_t(k)) * 16 + p % 16]);
+    auto view = lp::PanoramaView::rgbF32(frame.rgb.data(), frame.width, frame.height, spec);
+    const lp::Sh9 packed = projector.project(view);
+    view.data = strided.data();
+    view.rowStride = (3 * w + 9) * sizeof(float);
+    const lp::Sh9 padded = projector.project(view);
+    for (int k = 0; k < 9; ++k)
+      for (int c = 0; c < 3; ++c) {
+        EXPECT_NEAR(packed.c[k][c], want[k][c], 2e-6 * want[0][c]) << k << " " << c;
+        EXPECT_NEAR(padded.c[k][c], want[k][c], 2e-6 * want[0][c]) << k << " " << c;
+      }
+  }
+}
+
 TEST(Lens, TheSunThroughAFisheyeIsWhereTheMapHasIt) {
   const lp::Image map = lp::loadImage(lpt::dataPath("equirect/quarry_01_1k.hdr"));
   // The map's sun: the luminance-weighted centre of its pixels above half the peak.

@@ -14,6 +14,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstring>
+#include <utility>
 
 #include "project_kernel.h"
 
@@ -147,55 +148,90 @@ void EquirectRow(const EquirectTables& t, const float* HWY_RESTRICT row, int i, 
     EquirectRowImpl<false>(t, row, i, acc, nullptr);
 }
 
-// Nine weights times three channels is 27 accumulators, more than 16 registers hold (32 on
-// AVX-512): each run of pixels is swept once per group of coefficients [K0, K1), and the later
-// sweeps read the run from L1.
+// The products of SampleStreams from a pixel's four stream values.
+template <int K>
+HWY_INLINE VF Product(VF q, VF x, VF y, VF z, const VF (&up)[3]) {
+  if constexpr (K == 0) return hn::Mul(q, q);
+  if constexpr (K == 1) return hn::Mul(q, y);
+  if constexpr (K == 2) return hn::Mul(q, z);
+  if constexpr (K == 3) return hn::Mul(q, x);
+  if constexpr (K == 4) return hn::Mul(x, y);
+  if constexpr (K == 5) return hn::Mul(y, z);
+  if constexpr (K == 6) return hn::MulSub(hn::Add(z, hn::Add(z, z)), z, hn::Mul(q, q));
+  if constexpr (K == 7) return hn::Mul(x, z);
+  if constexpr (K == 8) return hn::Mul(hn::Sub(x, y), hn::Add(x, y));
+  if constexpr (K == 9) {
+    const VF c = hn::MulAdd(x, up[0], hn::MulAdd(y, up[1], hn::Mul(z, up[2])));
+    return hn::Mul(hn::ZeroIfNegative(c), q);
+  }
+}
+
+// Ten products times three channels is 30 accumulators, more than 16 registers hold (32 on
+// AVX-512): each run of pixels is swept once per group of products [K0, K1), the later sweeps
+// reading the run from L1. Each product is made from the pixel's streams (16 bytes a pixel,
+// where a table of nine weights would be 36).
 template <int K0, int K1>
-void WeightedSweep(const float* HWY_RESTRICT rgb, std::size_t b0, std::size_t b1,
-                   const float* HWY_RESTRICT blocked, double* out) {
+void SampleSweep(const float* HWY_RESTRICT r, const float* HWY_RESTRICT g,
+                 const float* HWY_RESTRICT b, std::size_t count, const SampleStreams& s,
+                 const float* up, double* out) {
   constexpr int kN = K1 - K0;
   const DF d;
   const std::size_t n = hn::Lanes(d);
+  const VF u[3] = {hn::Set(d, up[0]), hn::Set(d, up[1]), hn::Set(d, up[2])};
   VF acc[kN][3];
   for (auto& a : acc)
     for (auto& v : a) v = hn::Zero(d);
-  auto step = [&](const float* px, const float* w) HWY_ATTR {
-    VF x, y, z;
-    hn::LoadInterleaved3(d, px, x, y, z);
-    for (int k = 0; k < kN; ++k) {
-      const VF wk = hn::LoadU(d, w + 16 * k);
-      acc[k][0] = hn::MulAdd(wk, x, acc[k][0]);
-      acc[k][1] = hn::MulAdd(wk, y, acc[k][1]);
-      acc[k][2] = hn::MulAdd(wk, z, acc[k][2]);
+  for (std::size_t i = 0; i < count; i += n) {
+    const VF vr = hn::Load(d, r + i), vg = hn::Load(d, g + i), vb = hn::Load(d, b + i);
+    const VF q = hn::LoadU(d, s.q + i), x = hn::LoadU(d, s.x + i), y = hn::LoadU(d, s.y + i),
+             z = hn::LoadU(d, s.z + i);
+    [&]<std::size_t... K>(std::index_sequence<K...>) HWY_ATTR {
+      ((acc[K][0] = hn::MulAdd(Product<K0 + int(K)>(q, x, y, z, u), vr, acc[K][0]),
+        acc[K][1] = hn::MulAdd(Product<K0 + int(K)>(q, x, y, z, u), vg, acc[K][1]),
+        acc[K][2] = hn::MulAdd(Product<K0 + int(K)>(q, x, y, z, u), vb, acc[K][2])),
+       ...);
     }
-  };
-  std::size_t i = b0;  // b0 is a multiple of 16
-  for (; i + 16 <= b1; i += 16) {
-    const float* w = blocked + (i / 16) * 9 * 16 + K0 * 16;
-    for (std::size_t l = 0; l < 16; l += n) step(rgb + 3 * (i + l), w + l);
-  }
-  if (i < b1) {  // the last pixels, zero-padded (as are the weights)
-    alignas(64) float tail[3 * 16] = {};
-    std::memcpy(tail, rgb + 3 * i, sizeof(float) * 3 * (b1 - i));
-    const float* w = blocked + (i / 16) * 9 * 16 + K0 * 16;
-    for (std::size_t l = 0; l < 16; l += n) step(tail + 3 * l, w + l);
+    (std::make_index_sequence<kN>{});
   }
   for (int k = 0; k < kN; ++k)
     for (int c = 0; c < 3; ++c)
       out[3 * (K0 + k) + c] += double(hn::GetLane(hn::SumOfLanes(d, acc[k][c])));
 }
 
-void WeightedSums(const float* rgb, std::size_t n, const float* blocked, double* out) {
-  constexpr std::size_t kRun = 1024;  // 12 KB of pixels: stays in L1 for the later sweeps
+void SampleSums(const float* rgb, std::size_t n, SampleStreams s, const float* up, double* out) {
+  // Runs of 512 pixels made planar once (6 KB, zero past the run's end: the streams are
+  // readable there), then read from L1 by each sweep.
+  constexpr std::size_t kRun = 512;
+  const DF d;
+  const std::size_t lanes = hn::Lanes(d);
+  alignas(64) float r[kRun], g[kRun], b[kRun];
   for (std::size_t b0 = 0; b0 < n; b0 += kRun) {
-    const std::size_t b1 = std::min(n, b0 + kRun);
+    const std::size_t count = std::min(n - b0, kRun);
+    const std::size_t whole = count / lanes * lanes;
+    const float* px = rgb + 3 * b0;
+    for (std::size_t i = 0; i < whole; i += lanes) {
+      VF vr, vg, vb;
+      hn::LoadInterleaved3(d, px + 3 * i, vr, vg, vb);
+      hn::Store(vr, d, r + i), hn::Store(vg, d, g + i), hn::Store(vb, d, b + i);
+    }
+    std::size_t padded = whole;
+    if (whole < count) {
+      padded += lanes;
+      for (std::size_t i = whole; i < padded; ++i) {
+        const bool in = i < count;
+        r[i] = in ? px[3 * i] : 0.0f, g[i] = in ? px[3 * i + 1] : 0.0f,
+        b[i] = in ? px[3 * i + 2] : 0.0f;
+      }
+    }
+    const SampleStreams at{s.q + b0, s.x + b0, s.y + b0, s.z + b0};
 #if HWY_TARGET == HWY_AVX3
-    WeightedSweep<0, 5>(rgb, b0, b1, blocked, out);
-    WeightedSweep<5, 9>(rgb, b0, b1, blocked, out);
+    SampleSweep<0, 5>(r, g, b, padded, at, up, out);
+    SampleSweep<5, 10>(r, g, b, padded, at, up, out);
 #else
-    WeightedSweep<0, 3>(rgb, b0, b1, blocked, out);
-    WeightedSweep<3, 6>(rgb, b0, b1, blocked, out);
-    WeightedSweep<6, 9>(rgb, b0, b1, blocked, out);
+    SampleSweep<0, 3>(r, g, b, padded, at, up, out);
+    SampleSweep<3, 6>(r, g, b, padded, at, up, out);
+    SampleSweep<6, 8>(r, g, b, padded, at, up, out);
+    SampleSweep<8, 10>(r, g, b, padded, at, up, out);
 #endif
   }
 }
@@ -263,7 +299,7 @@ float MaxOf(const float* HWY_RESTRICT p, std::size_t n) {
 }
 
 // NOLINTNEXTLINE(cert-err58-cpp): a constant table, no allocation
-const Kernels kKernels = {&EquirectRow, &WeightedSums, &DecodeU8, &DecodeF16, &MaxOf};
+const Kernels kKernels = {&EquirectRow, &SampleSums, &DecodeU8, &DecodeF16, &MaxOf};
 
 }  // namespace HWY_NAMESPACE
 }  // namespace lp::kernel

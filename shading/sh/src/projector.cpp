@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <mutex>
 #include <optional>
 
 #include "liveprobe/sh/error.h"
@@ -66,17 +67,19 @@ kernel::EquirectTables equirectTables(int width, int height) {
   return tables;
 }
 
-/// Sample layouts: nine weights Y_lm(dir) dw per pixel, in blocks of 16 (kernel::Kernels).
-std::vector<float> weightsInBlocks(const std::vector<SphereSample>& samples) {
-  const std::size_t count = samples.size();
-  std::vector<float> w((count + 15) / 16 * 16 * kShCount, 0.0f);
-  for (std::size_t i = 0; i < count; ++i) {
-    if (samples[i].solidAngle == 0.0f) continue;
-    const auto y = shBasis(samples[i].dir);
-    for (int k = 0; k < kShCount; ++k)
-      w[((i / 16) * kShCount + k) * 16 + i % 16] = y[k] * samples[i].solidAngle;
+/// Sample layouts: q = sqrt(dw) and q dir per pixel, as kernel::SampleStreams, each padded with
+/// a vector of zeros.
+std::array<std::vector<float>, 4> sampleStreams(const std::vector<SphereSample>& samples) {
+  std::array<std::vector<float>, 4> out;
+  for (auto& s : out) s.assign(samples.size() + kernel::kMaxLanes, 0);
+  for (std::size_t i = 0; i < samples.size(); ++i) {
+    const float q = std::sqrt(samples[i].solidAngle);
+    out[0][i] = q;
+    out[1][i] = q * samples[i].dir.x;
+    out[2][i] = q * samples[i].dir.y;
+    out[3][i] = q * samples[i].dir.z;
   }
-  return w;
+  return out;
 }
 
 using Sums = std::array<double, 27>;
@@ -144,8 +147,16 @@ std::size_t PanoramaView::bytesPerPixel() const {
 
 struct Projector::Tables {
   std::optional<kernel::EquirectTables> equirect;
-  std::vector<float> weights;   ///< sample layouts
+  std::array<std::vector<float>, 4> streams;  ///< sample layouts: kernel::SampleStreams
+  unseen::Fill fill;                          ///< sample layouts: what fills the unseen
   std::vector<char> blockUsed;  ///< per block of 16 pixels: any weight non-zero (in the image)
+  mutable std::once_flag weightsOnce;
+  mutable std::vector<float> weights;  ///< blockedWeights(), made when first asked
+
+  kernel::SampleStreams streamsAt(std::size_t pixel) const {
+    return {streams[0].data() + pixel, streams[1].data() + pixel, streams[2].data() + pixel,
+            streams[3].data() + pixel};
+  }
 };
 
 Projector::Projector(const LayoutSpec& spec, int width, int height)
@@ -155,8 +166,8 @@ Projector::Projector(const LayoutSpec& spec, int width, int height)
   if (spec.layout == Layout::Equirect) {
     t->equirect = equirectTables(width, height);
   } else {
-    t->weights = weightsInBlocks(samples_);
-    unseen::addFill(spec, width, height, samples_, t->weights);
+    t->streams = sampleStreams(samples_);
+    t->fill = unseen::fill(spec, width, height, samples_);
   }
   t->blockUsed.assign((samples_.size() + 15) / 16, 0);
   for (std::size_t i = 0; i < samples_.size(); ++i)
@@ -164,10 +175,31 @@ Projector::Projector(const LayoutSpec& spec, int width, int height)
   tables_ = std::move(t);
 }
 
+std::array<float, kShCount> Projector::pixelWeights(std::size_t p) const {
+  const SphereSample& s = samples_[p];
+  auto w = tables_->fill.at(p, s);
+  if (s.solidAngle == 0.0f) return w;
+  const auto y = shBasis(s.dir);
+  for (int k = 0; k < kShCount; ++k) w[k] += y[k] * s.solidAngle;
+  return w;
+}
+
 const EquirectIntegrals* Projector::equirectIntegrals() const {
   return tables_->equirect ? &*tables_->equirect : nullptr;
 }
-const std::vector<float>& Projector::blockedWeights() const { return tables_->weights; }
+
+const std::vector<float>& Projector::blockedWeights() const {
+  const Tables& t = *tables_;
+  std::call_once(t.weightsOnce, [&] {
+    if (t.equirect) return;
+    t.weights.assign((samples_.size() + 15) / 16 * 16 * kShCount, 0.0f);
+    for (std::size_t p = 0; p < samples_.size(); ++p) {
+      const auto w = pixelWeights(p);
+      for (int k = 0; k < kShCount; ++k) t.weights[((p / 16) * kShCount + k) * 16 + p % 16] = w[k];
+    }
+  });
+  return t.weights;
+}
 
 Projector::~Projector() = default;
 Projector::Projector(Projector&&) noexcept = default;
@@ -214,12 +246,10 @@ void Projector::addPixels(std::size_t row, std::size_t col, const Rgb* values, s
     return;
   }
   const std::size_t first = row * std::size_t(width_) + col;
-  const float* blocked = tables_->weights.data();
   std::array<Rgb, kShCount> runSums{};
   for (std::size_t n = 0; n < count; ++n) {
-    const std::size_t index = first + n;
-    for (int k = 0; k < kShCount; ++k)
-      runSums[k] += values[n] * blocked[((index / 16) * kShCount + k) * 16 + index % 16];
+    const auto w = pixelWeights(first + n);
+    for (int k = 0; k < kShCount; ++k) runSums[k] += values[n] * w[k];
   }
   for (int k = 0; k < kShCount; ++k) sums[k] += glm::dvec3(runSums[k]);
 }
@@ -255,51 +285,59 @@ std::array<double, 27> Projector::equirectSums(const PanoramaView& v, Executor* 
   return parallelReduce(ex, std::size_t(height_), Split{32}, Sums{}, band, addSums);
 }
 
-// Other layouts: runs of pixels (multiples of 16, the weights' block) through the weighted
-// sums, in the frame's channel order.
+// Other layouts: runs of pixels through the products of their streams (the frame's channel
+// order), skipping blocks of 16 wholly outside the layout's disc or circles (a fifth of an
+// angular map); then the basis constants, the ground's share of the cosine sums, and the edge
+// pixels' fill.
 std::array<double, 27> Projector::sampleSums(const PanoramaView& v, Executor* ex) const {
   const kernel::Kernels& k = kernel::active();
+  const Tables& t = *tables_;
   const std::size_t w = std::size_t(width_);
-  const float* weights = tables_->weights.data();
-  const auto& used = tables_->blockUsed;
+  const float up[3] = {t.fill.up.x, t.fill.up.y, t.fill.up.z};
+  using Products = std::array<double, 3 * kernel::kProducts>;
   const auto run = [&](std::size_t i0, std::size_t i1) {
     RowReader rows(v, k);
-    Sums sums{};
-    if (packed(v)) {
-      // The frame is one array: each run of blocks that hold any of the layout's pixels in one
-      // call. Blocks wholly outside the layout's disc or circles (a fifth of an angular map) are
-      // skipped.
-      for (std::size_t b = i0 / 16, e = (i1 + 15) / 16; b < e;) {
-        if (!used[b]) {
-          ++b;
+    Products sums{};
+    // All of a packed frame's run at once; a strided one row by row.
+    for (std::size_t i = i0; i < i1;) {
+      const std::size_t end = packed(v) ? i1 : std::min(i1, (i / w + 1) * w);
+      for (std::size_t b = i; b < end;) {
+        if (!t.blockUsed[b / 16]) {
+          b = std::min(end, (b / 16 + 1) * 16);
           continue;
         }
-        std::size_t b1 = b;
-        while (b1 < e && used[b1]) ++b1;
-        const std::size_t p0 = b * 16, p1 = std::min(i1, b1 * 16);
-        k.weightedSums(rows.read(0, p0, p1 - p0), p1 - p0, weights + p0 * kShCount, sums.data());
-        b = b1;
+        std::size_t e = b;
+        while (e < end && t.blockUsed[e / 16]) e = std::min(end, (e / 16 + 1) * 16);
+        const float* px = rows.read(int(b / w), b % w, e - b);
+        k.sampleSums(px, e - b, t.streamsAt(b), up, sums.data());
+        b = e;
       }
-      return sums;
-    }
-    for (std::size_t i = i0; i < i1;) {  // strided rows: row by row
-      const std::size_t row = i / w, first = i % w, n = std::min(w - first, i1 - i);
-      if (i % 16 == 0) {
-        k.weightedSums(rows.read(int(row), first, n), n, weights + i * kShCount, sums.data());
-      } else {  // a row start inside a block: per pixel, from the same weights
-        const float* px = rows.read(int(row), first, n);
-        for (std::size_t q = 0; q < n; ++q)
-          for (int c = 0; c < kShCount; ++c) {
-            const double wq =
-                weights[(((i + q) / 16) * kShCount + std::size_t(c)) * 16 + (i + q) % 16];
-            for (int ch = 0; ch < 3; ++ch) sums[3 * c + ch] += wq * px[3 * q + ch];
-          }
-      }
-      i += n;
+      i = end;
     }
     return sums;
   };
-  return parallelReduce(ex, samples_.size(), Split{16384}, Sums{}, run, addSums);
+  const Products p = parallelReduce(ex, samples_.size(), Split{16384}, Products{}, run,
+                                    [](Products& into, const Products& part) {
+                                      for (std::size_t q = 0; q < into.size(); ++q)
+                                        into[q] += part[q];
+                                    });
+  Sums out{};
+  const double c[9] = {kY00, kY1, kY1, kY1, kY2, kY2, kY20, kY2, kY22};
+  for (int j = 0; j < kShCount; ++j)
+    for (int ch = 0; ch < 3; ++ch) {
+      double s = c[j] * p[3 * j + ch];
+      if (t.fill.hasGround) s += double(t.fill.ground[j]) * p[3 * 9 + ch];
+      out[3 * j + ch] = s;
+    }
+  // Edge pixels in the frame's channel order, as the sums (readPixel gives R, G, B).
+  const bool bgr = v.format == PanoramaFormat::BgrU8;
+  for (std::size_t e = 0; e < t.fill.pixels.size(); ++e) {
+    const Rgb px = readPixel(v, t.fill.pixels[e]);
+    const double ch[3] = {bgr ? px.b : px.r, px.g, bgr ? px.r : px.b};
+    for (int j = 0; j < kShCount; ++j)
+      for (int q = 0; q < 3; ++q) out[3 * j + q] += double(t.fill.weights[e][j]) * ch[q];
+  }
+  return out;
 }
 
 namespace {

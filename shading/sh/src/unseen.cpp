@@ -106,33 +106,52 @@ std::vector<std::size_t> edgePixels(int width, int height,
   return edge;
 }
 
-void addWeights(std::vector<float>& weights, std::size_t pixel, const std::array<double, 9>& w,
-                double scale) {
-  for (int k = 0; k < kShCount; ++k)
-    weights[((pixel / 16) * kShCount + std::size_t(k)) * 16 + pixel % 16] += float(w[k] * scale);
-}
-
 void addBasis(std::array<double, 9>& into, const Piece& piece) {
   const auto y = shBasis(piece.dir);
   for (int k = 0; k < kShCount; ++k) into[k] += double(y[k]) * piece.solidAngle;
 }
 
+std::array<float, kShCount> toFloat(const std::array<double, 9>& w) {
+  std::array<float, kShCount> out{};
+  for (int k = 0; k < kShCount; ++k) out[k] = float(w[k]);
+  return out;
+}
+
 }  // namespace
 
-void addFill(const LayoutSpec& spec, int width, int height,
-             const std::vector<SphereSample>& samples, std::vector<float>& weights) {
-  if (spec.unseen.fill == UnseenRule::Fill::Black || coverage(samples) == 1.0) return;
+std::array<float, kShCount> Fill::at(std::size_t p, const SphereSample& s) const {
+  std::array<float, kShCount> out{};
+  if (hasGround) {
+    const float cosine = s.solidAngle * std::max(0.0f, glm::dot(s.dir, up));
+    for (int k = 0; k < kShCount; ++k) out[k] = cosine * ground[k];
+  }
+  const auto it = std::lower_bound(pixels.begin(), pixels.end(), p);
+  if (it != pixels.end() && *it == p) {
+    const auto& w = weights[std::size_t(it - pixels.begin())];
+    for (int k = 0; k < kShCount; ++k) out[k] += w[k];
+  }
+  return out;
+}
+
+Fill fill(const LayoutSpec& spec, int width, int height, const std::vector<SphereSample>& samples) {
+  Fill out;
+  if (spec.unseen.fill == UnseenRule::Fill::Black || coverage(samples) == 1.0) return out;
   const std::vector<Piece> pieces = unseenPieces(spec, width, height, samples);
   const std::vector<std::size_t> edge = edgePixels(width, height, samples);
-  if (pieces.empty() || edge.empty()) return;
+  if (pieces.empty() || edge.empty()) return out;
+  out.pixels = edge;
 
   if (spec.unseen.fill == UnseenRule::Fill::Mean) {
     std::array<double, 9> all{};
     for (const Piece& piece : pieces) addBasis(all, piece);
     double edgeAngle = 0;
     for (const std::size_t p : edge) edgeAngle += samples[p].solidAngle;
-    for (const std::size_t p : edge) addWeights(weights, p, all, samples[p].solidAngle / edgeAngle);
-    return;
+    for (const std::size_t p : edge) {
+      std::array<double, 9> w{};
+      for (int k = 0; k < kShCount; ++k) w[k] = all[k] * samples[p].solidAngle / edgeAngle;
+      out.weights.push_back(toFloat(w));
+    }
+    return out;
   }
 
   // Ground: the unseen sky takes its nearest edge pixel (directions as structure of arrays for
@@ -161,16 +180,18 @@ void addFill(const LayoutSpec& spec, int width, int height,
     addBasis(fromEdge[best], piece);
     upFromEdge[best] += double(height) * piece.solidAngle;
   }
-  for (std::size_t e = 0; e < edge.size(); ++e) addWeights(weights, edge[e], fromEdge[e], 1.0);
-  // L_ground = albedo E_up / pi, E_up = sum over pixels of L max(z, 0) dw (and the sky's fill).
+  // L_ground = albedo E_up / pi, E_up = sum over pixels of L max(dir . up, 0) dw (and the sky's
+  // fill, which the edge pixels carry).
   const double k = double(spec.unseen.albedo) / kPi;
-  for (std::size_t p = 0; p < samples.size(); ++p) {
-    const double cosine =
-        double(samples[p].solidAngle) * std::max(0.0f, glm::dot(samples[p].dir, up));
-    if (cosine > 0) addWeights(weights, p, ground, k * cosine);
+  for (int c = 0; c < kShCount; ++c) ground[c] *= k;
+  for (std::size_t e = 0; e < edge.size(); ++e) {
+    for (int c = 0; c < kShCount; ++c) fromEdge[e][c] += ground[c] * upFromEdge[e];
+    out.weights.push_back(toFloat(fromEdge[e]));
   }
-  for (std::size_t e = 0; e < edge.size(); ++e)
-    if (upFromEdge[e] > 0) addWeights(weights, edge[e], ground, k * upFromEdge[e]);
+  out.hasGround = true;
+  out.ground = toFloat(ground);
+  out.up = up;
+  return out;
 }
 
 }  // namespace lp::unseen

@@ -75,8 +75,10 @@ struct EquirectIntegrals {
 ///   - equirect: 15 multiply-adds per pair of pixels half a turn apart (five column-weighted
 ///     sums per channel; the pair shares its column integrals up to sign), combined with the
 ///     row integrals once per row; exact for radiance constant over each pixel.
-///   - other layouts: nine precomputed weights Y_lm(dir) dw per pixel, 27 multiply-adds; what
-///     the frame does not see is filled by the layout's UnseenRule through the same weights.
+///   - other layouts: Y_lm(dir) dw made per pixel from sqrt(dw) and sqrt(dw) dir (16 bytes a
+///     pixel, read beside the frame), 30 multiply-adds; what the frame does not see is filled by
+///     the layout's UnseenRule, linear in the pixels: the ground from one more sum (the pixels'
+///     cosines to the up), the rest through extra weights of the edge's pixels.
 /// Sums run in float over at most a row (or 4096 pixels) and in double beyond, so a 4K frame
 /// keeps ~1e-7 of L00. The kernels are SIMD (liveprobe/sh/simd.h picks the instruction set).
 class Projector {
@@ -107,8 +109,9 @@ class Projector {
 
   /// The equirect layout's pixel integrals; nullptr for the other layouts.
   const EquirectIntegrals* equirectIntegrals() const;
-  /// The other layouts' weights Y_lm(dir) dw, in blocks of 16 pixels: weight k of pixel p at
-  /// [((p / 16) * 9 + k) * 16 + p % 16], zero-padded to a whole block; empty for equirect.
+  /// The other layouts' weights Y_lm(dir) dw with the fill's, in blocks of 16 pixels: weight k of
+  /// pixel p at [((p / 16) * 9 + k) * 16 + p % 16], zero-padded to a whole block (what a GPU
+  /// uploads; made when first asked); empty for equirect.
   const std::vector<float>& blockedWeights() const;
 
   /// Adds to `sums` (per coefficient, R G B in double) the coefficients of `values`, radiance
@@ -126,6 +129,8 @@ class Projector {
   std::array<double, 27> equirectSums(const PanoramaView& frame, Executor* executor,
                                       std::vector<float>* rowPeaks) const;
   std::array<double, 27> sampleSums(const PanoramaView& frame, Executor* executor) const;
+  /// A sample layout's nine weights of pixel p: Y_lm(dir) dw and its share of the fill.
+  std::array<float, kShCount> pixelWeights(std::size_t p) const;
   LayoutSpec spec_;
   int width_, height_;
   std::vector<SphereSample> samples_;
