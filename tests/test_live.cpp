@@ -9,6 +9,7 @@
 #include <cstdlib>
 #include <fstream>
 #include <nlohmann/json.hpp>
+#include <opencv2/core/persistence.hpp>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/videoio.hpp>
 #include <regex>
@@ -367,6 +368,55 @@ TEST(LiveFaults, MissingDevicesFailFast) {
     EXPECT_GT(lines, 0);
     EXPECT_EQ(opens, 1) << dev << " opened " << opens << " times";
   }
+}
+
+TEST(LiveCamera, CalibratesALensFromBoardsHeldStill) {
+  // recordings/fisheye/boards: 16 photos of a 9x6 board through the tests' fisheye (test_lens's
+  // KannalaBrandt, 1280x960; recordings/fisheye/lens.yaml is it at 640x480). The camera shows
+  // each for three frames, as a hand holds a board still, and the first again after the second:
+  // that place is kept once.
+  const fs::path boards = fs::path(LIVEPROBE_SOURCE_DIR) / "recordings/fisheye/boards";
+  std::vector<std::string> photos;
+  for (const auto& e : fs::directory_iterator(boards)) photos.push_back(e.path().string());
+  std::sort(photos.begin(), photos.end());
+  ASSERT_EQ(photos.size(), 16u);
+  std::vector<std::string> frames;
+  for (std::size_t i = 0; i < photos.size(); ++i) {
+    for (int r = 0; r < 3; ++r) frames.push_back(photos[i]);
+    if (i == 1)
+      for (int r = 0; r < 3; ++r) frames.push_back(photos[0]);
+  }
+  Emulator emu("YUYV_1280x960", frames);
+  lpt::TempDir out;
+  const std::string file = (out.path / "lens.yaml").string();
+  const auto r = emu.run(
+      "calibrate-lens --device /dev/video7 --board 9x6 --square 0.03 --boards "
+      "16 --out " +
+      file);
+  ASSERT_EQ(r.exitCode, 0) << r.output;
+  EXPECT_NE(r.output.find("16 frames of /dev/video7 keep the 9x6 board still"), std::string::npos)
+      << r.output;
+  // Kept: the middle frame of each board's three (the first shows it moving in), never one of
+  // the first board's second visit (frames 6 to 8).
+  std::set<int> kept;
+  const std::regex line(R"(board \d+ of 16 kept \(frame (\d+)\))");
+  for (auto it = std::sregex_iterator(r.output.begin(), r.output.end(), line);
+       it != std::sregex_iterator(); ++it)
+    kept.insert(std::stoi((*it)[1]));
+  EXPECT_EQ(kept.size(), 16u) << r.output;
+  for (int f = 6; f <= 8; ++f) EXPECT_EQ(kept.count(f), 0u) << f << "\n" << r.output;
+  // The truth, scaled from 640x480 (OpenCV's pixel centres are whole numbers).
+  cv::FileStorage truth(std::string(LIVEPROBE_SOURCE_DIR) + "/recordings/fisheye/lens.yaml",
+                        cv::FileStorage::READ);
+  cv::Mat K0, K;
+  truth["camera_matrix"] >> K0;
+  cv::FileStorage got(file, cv::FileStorage::READ);
+  got["camera_matrix"] >> K;
+  ASSERT_FALSE(K.empty()) << r.output;
+  EXPECT_NEAR(K.at<double>(0, 0), 2 * K0.at<double>(0, 0), 0.01 * 2 * K0.at<double>(0, 0));
+  EXPECT_NEAR(K.at<double>(1, 1), 2 * K0.at<double>(1, 1), 0.01 * 2 * K0.at<double>(1, 1));
+  EXPECT_NEAR(K.at<double>(0, 2), 2 * K0.at<double>(0, 2) + 0.5, 2.0);
+  EXPECT_NEAR(K.at<double>(1, 2), 2 * K0.at<double>(1, 2) + 0.5, 2.0);
 }
 
 }  // namespace

@@ -2,9 +2,12 @@
 #include <algorithm>
 #include <cstdio>
 #include <filesystem>
+#include <tuple>
 
 #include "commands.h"
+#include "liveprobe/backends.h"
 #include "liveprobe/capture/lens_calibrate.h"
+#include "liveprobe/capture/v4l2.h"
 #include "liveprobe/sh/error.h"
 #include "progress.h"
 
@@ -45,16 +48,54 @@ std::vector<std::string> photosOf(const std::vector<std::string>& args) {
   return photos;
 }
 
+/// Boards from a live camera: each kept when held still in a new place, until --boards are kept
+/// or a signal stops it.
+LensFit calibrateFromCamera(const Settings& s, const Chessboard& board,
+                            LensCalibration::Model model) {
+#if LIVEPROBE_WITH_V4L2
+  const auto& c = s.lensCalibration;
+  CameraSettings cs = s.camera;
+  cs.device = *c.device;
+  if (s.output.size) std::tie(cs.width, cs.height) = *s.output.size;
+  auto camera = startCamera(cs, false);
+  std::fprintf(stderr,
+               "liveprobe calibrate-lens: %s; hold the %dx%d board still in %d places, across the "
+               "whole field and tilted (Ctrl-C to calibrate from those kept so far)\n",
+               camera->describe().c_str(), board.cols, board.rows, c.boards);
+  BoardCollector boards(board);
+  Frame frame;
+  while (int(boards.views().size()) < c.boards && !stopRequested()) {
+    if (!camera->next(frame))
+      throw Error(cs.device + ": the camera stopped sending frames" +
+                  (camera->endReason().empty() ? "" : " (" + camera->endReason() + ")"));
+    if (boards.offer(frame) == BoardCollector::Seen::Kept)
+      std::fprintf(stderr, "liveprobe calibrate-lens: board %zu of %d kept (frame %llu)\n",
+                   boards.views().size(), c.boards,
+                   static_cast<unsigned long long>(frame.sequence));
+  }
+  if (int(boards.views().size()) < kMinCalibrationBoards)
+    throw Error(cs.device + ": " + std::to_string(boards.views().size()) +
+                " boards held still in different places; a calibration needs at least " +
+                std::to_string(kMinCalibrationBoards));
+  return fitLens(boards.views(), boards.width(), boards.height(), board, model);
+#else
+  (void)s, (void)board, (void)model;
+  requireBackend(OptionalBackend::V4l2, "--device");
+  return {};
+#endif
+}
+
 }  // namespace
 
 const CommandSpec kCalibrateLensSpec{
     "calibrate-lens",
-    "PHOTO...",
+    "[PHOTO...]",
     "Calibrates a camera's lens from photos of a flat chessboard held in different places and\n"
     "angles, with OpenCV's detector and calibration (cv::fisheye for a fisheye, the Kannala-\n"
     "Brandt model; cv::calibrateCamera for an ordinary lens, Brown-Conrady with 5 coefficients),\n"
     "and writes the calibration for --lens. Says the RMS reprojection error, the photos used and\n"
-    "refused, and which parts of the field the boards did not reach.",
+    "refused, and which parts of the field the boards did not reach. With --device, from a live\n"
+    "camera: a frame is kept each time the board is held still in a new place.",
     {boardOption(),
      numberOption("--square", "SIZE",
                   "the side of a square, in any unit (required; the calibration is in pixels)",
@@ -62,9 +103,15 @@ const CommandSpec kCalibrateLensSpec{
      choiceOption("--lens-model",
                   "the lens model: fisheye (Kannala-Brandt) or pinhole (Brown-Conrady)",
                   {"fisheye", "pinhole"}, "fisheye", LP_FIELD(lensCalibration.model), kGroup),
+     textOption("--device", "DEVICE",
+                "a V4L2 camera to take the boards from instead of photos (e.g. /dev/video0)",
+                LP_FIELD(lensCalibration.device), kGroup),
+     integerOption("--boards", "N", "with --device: how many boards to keep", kMinCalibrationBoards,
+                   200, "20", LP_FIELD(lensCalibration.boards), kGroup),
+     opt::size("with --device: the capture size asked of the camera", 16384, "its largest", kGroup),
      opt::out("FILE.yaml", "where the calibration goes (required; OpenCV FileStorage YAML or JSON)",
               {".yaml", ".yml", ".json"}, "Output")},
-    1,
+    0,
     1024,
     "the photos, or one folder holding them"};
 
@@ -77,12 +124,22 @@ int runCalibrateLens(const Args& a) {
   const Chessboard board{c.board->first, c.board->second, *c.square};
   const auto model =
       c.model == "fisheye" ? LensCalibration::Model::Fisheye : LensCalibration::Model::Pinhole;
-  const std::vector<std::string> photos = photosOf(a.positional());
-  const LensFit fit = calibrateLens(photos, board, model);
+  if (c.device && !a.positional().empty())
+    throw Error("photos or --device " + *c.device + ", not both");
+  if (!c.device && a.positional().empty())
+    throw Error("the photos (or a folder of them), or --device DEVICE");
+  const std::vector<std::string> photos =
+      c.device ? std::vector<std::string>{} : photosOf(a.positional());
+  const LensFit fit =
+      c.device ? calibrateFromCamera(s, board, model) : calibrateLens(photos, board, model);
   writeLensCalibration(*s.output.out, fit);
   const LensCalibration& l = fit.lens;
-  std::printf("%zu of %zu photos show the %dx%d board", fit.used.size(), photos.size(), board.cols,
-              board.rows);
+  if (c.device)
+    std::printf("%zu frames of %s keep the %dx%d board still in different places", fit.used.size(),
+                c.device->c_str(), board.cols, board.rows);
+  else
+    std::printf("%zu of %zu photos show the %dx%d board", fit.used.size(), photos.size(),
+                board.cols, board.rows);
   for (std::size_t i = 0; i < fit.refused.size(); ++i)
     std::printf("%s%s: %s", i ? "; " : " (refused: ", fit.refused[i].first.c_str(),
                 fit.refused[i].second.c_str());

@@ -102,7 +102,8 @@ const std::vector<Command>& commands() {
       {kLiveSpec, runLive, "a live light probe from a V4L2 camera"},
       {kDevicesSpec, runDevices, "list cameras: formats, sizes, frame rates, controls"},
       {kCalibrateSpec, runCalibrate, "a camera's response curve, for --response"},
-      {kCalibrateLensSpec, runCalibrateLens, "a lens from chessboard photos, for --lens"},
+      {kCalibrateLensSpec, runCalibrateLens,
+       "a lens from chessboard photos or a live camera, for --lens"},
       {kBenchSpec, runBench, "frame-time regression run against a baseline"},
   };
   return all;

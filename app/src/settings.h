@@ -113,6 +113,8 @@ struct LensCalibrationSettings {
   std::optional<Size> board;     ///< --board COLSxROWS (inner corners)
   std::optional<double> square;  ///< --square SIZE
   std::string model = "fisheye";
+  std::optional<std::string> device;  ///< --device: boards from a live camera
+  int boards = 20;                    ///< --boards: how many the camera keeps
 };
 
 /// --window: the band window against ringing.

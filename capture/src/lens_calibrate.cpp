@@ -67,6 +67,11 @@ double fisheyeRms(const std::vector<std::vector<cv::Point3d>>& object,
   return n ? std::sqrt(sum / double(n)) : std::numeric_limits<double>::infinity();
 }
 
+void checkBoard(const Chessboard& board) {
+  if (board.cols < 2 || board.rows < 2 || !(board.square > 0))
+    throw Error("the board needs at least 2x2 inner corners and a square of positive size");
+}
+
 void checkFit(const cv::Matx33d& K, const std::vector<double>& D, cv::Size size) {
   bool ok = K(0, 0) > 0 && K(1, 1) > 0 && K(0, 2) > 0 && K(1, 2) > 0 && K(0, 2) < size.width &&
             K(1, 2) < size.height;
@@ -76,16 +81,31 @@ void checkFit(const cv::Matx33d& K, const std::vector<double>& D, cv::Size size)
 
 }  // namespace
 
+std::optional<std::vector<std::array<float, 2>>> findBoard(const std::uint8_t* grey, int width,
+                                                           int height, std::size_t stride,
+                                                           const Chessboard& board, bool quick) {
+  const cv::Mat image(height, width, CV_8UC1, const_cast<std::uint8_t*>(grey), stride);
+  std::vector<cv::Point2f> found;
+  if (!cv::findChessboardCornersSB(image, cv::Size(board.cols, board.rows), found,
+                                   quick ? 0 : cv::CALIB_CB_EXHAUSTIVE | cv::CALIB_CB_ACCURACY))
+    return std::nullopt;
+  // Each corner refined where it is: the sector detector's fit assumes straight lines across
+  // the board, which a fisheye bends.
+  if (!quick)
+    cv::cornerSubPix(image, found, cv::Size(4, 4), cv::Size(-1, -1),
+                     cv::TermCriteria(cv::TermCriteria::COUNT + cv::TermCriteria::EPS, 50, 1e-4));
+  std::vector<std::array<float, 2>> out;
+  out.reserve(found.size());
+  for (const cv::Point2f& p : found) out.push_back({p.x, p.y});
+  return out;
+}
+
 LensFit calibrateLens(const std::vector<std::string>& paths, const Chessboard& board,
                       LensCalibration::Model model) {
-  if (board.cols < 2 || board.rows < 2 || !(board.square > 0))
-    throw Error("the board needs at least 2x2 inner corners and a square of positive size");
-  LensFit fit;
+  checkBoard(board);
   cv::Size size;
-  const std::vector<cv::Point3f> corners3 = boardPoints(board);
-  std::vector<std::vector<cv::Point3d>> object;
-  std::vector<std::vector<cv::Point2d>> image;
-  std::vector<cv::Point2f> all;
+  std::vector<BoardView> views;
+  std::vector<std::pair<std::string, std::string>> refused;
   for (const std::string& path : paths) {
     requireRegularFile(path);
     const cv::Mat gray = cv::imread(path, cv::IMREAD_GRAYSCALE);
@@ -95,26 +115,41 @@ LensFit calibrateLens(const std::vector<std::string>& paths, const Chessboard& b
       throw Error(path + ": " + std::to_string(gray.cols) + "x" + std::to_string(gray.rows) +
                   ", the first photo is " + std::to_string(size.width) + "x" +
                   std::to_string(size.height) + " (one camera, one size)");
-    std::vector<cv::Point2f> found;
-    if (!cv::findChessboardCornersSB(gray, cv::Size(board.cols, board.rows), found,
-                                     cv::CALIB_CB_EXHAUSTIVE | cv::CALIB_CB_ACCURACY)) {
-      fit.refused.emplace_back(path, "no " + std::to_string(board.cols) + "x" +
-                                         std::to_string(board.rows) + " board found");
-      continue;
-    }
-    // Each corner refined where it is: the sector detector's fit assumes straight lines across
-    // the board, which a fisheye bends.
-    cv::cornerSubPix(gray, found, cv::Size(4, 4), cv::Size(-1, -1),
-                     cv::TermCriteria(cv::TermCriteria::COUNT + cv::TermCriteria::EPS, 50, 1e-4));
-    fit.used.push_back(path);
+    if (auto corners = findBoard(gray.data, gray.cols, gray.rows, gray.step, board, false))
+      views.push_back({path, std::move(*corners)});
+    else
+      refused.emplace_back(path, "no " + std::to_string(board.cols) + "x" +
+                                     std::to_string(board.rows) + " board found");
+  }
+  return fitLens(views, size.width, size.height, board, model, std::move(refused));
+}
+
+LensFit fitLens(const std::vector<BoardView>& views, int width, int height, const Chessboard& board,
+                LensCalibration::Model model,
+                std::vector<std::pair<std::string, std::string>> refused) {
+  checkBoard(board);
+  LensFit fit;
+  fit.refused = std::move(refused);
+  const cv::Size size(width, height);
+  const std::vector<cv::Point3f> corners3 = boardPoints(board);
+  std::vector<std::vector<cv::Point3d>> object;
+  std::vector<std::vector<cv::Point2d>> image;
+  std::vector<cv::Point2f> all;
+  for (const BoardView& v : views) {
+    if (v.corners.size() != corners3.size()) continue;
+    fit.used.push_back(v.name);
     object.emplace_back(corners3.begin(), corners3.end());
-    image.emplace_back(found.begin(), found.end());
-    all.insert(all.end(), found.begin(), found.end());
+    image.emplace_back();
+    for (const auto& c : v.corners) {
+      image.back().emplace_back(c[0], c[1]);
+      all.emplace_back(c[0], c[1]);
+    }
   }
   if (int(fit.used.size()) < kMinCalibrationBoards) {
-    std::string why = std::to_string(fit.used.size()) + " of " + std::to_string(paths.size()) +
-                      " photos show the " + std::to_string(board.cols) + "x" +
-                      std::to_string(board.rows) + " board; a calibration needs at least " +
+    std::string why = std::to_string(fit.used.size()) + " of " +
+                      std::to_string(views.size() + fit.refused.size()) + " photos show the " +
+                      std::to_string(board.cols) + "x" + std::to_string(board.rows) +
+                      " board; a calibration needs at least " +
                       std::to_string(kMinCalibrationBoards);
     for (const auto& [p, r] : fit.refused) why += "; " + p + ": " + r;
     throw Error(why);
@@ -168,6 +203,54 @@ LensFit calibrateLens(const std::vector<std::string>& paths, const Chessboard& b
       fit.partsMissed.emplace_back(kParts[i]);
   }
   return fit;
+}
+
+namespace {
+
+/// Mean distance between two boards' corners, either way round (the detector may start a
+/// board from the opposite corner).
+double boardDistance(const std::vector<std::array<float, 2>>& a,
+                     const std::vector<std::array<float, 2>>& b) {
+  if (a.size() != b.size() || a.empty()) return HUGE_VAL;
+  double same = 0, reversed = 0;
+  for (std::size_t i = 0; i < a.size(); ++i) {
+    const auto& r = b[b.size() - 1 - i];
+    same += std::hypot(a[i][0] - b[i][0], a[i][1] - b[i][1]);
+    reversed += std::hypot(a[i][0] - r[0], a[i][1] - r[1]);
+  }
+  return std::min(same, reversed) / double(a.size());
+}
+
+}  // namespace
+
+BoardCollector::Seen BoardCollector::offer(const Frame& frame) {
+  if (width_ == 0) width_ = frame.width, height_ = frame.height;
+  if (frame.width != width_ || frame.height != height_)
+    throw Error("the camera's frames changed size to " + std::to_string(frame.width) + "x" +
+                std::to_string(frame.height) + " from " + std::to_string(width_) + "x" +
+                std::to_string(height_));
+  cv::Mat grey;
+  if (frame.format == PanoramaFormat::BgrU8) {
+    cv::cvtColor(
+        cv::Mat(frame.height, frame.width, CV_8UC3, const_cast<std::uint8_t*>(frame.bgr8.data())),
+        grey, cv::COLOR_BGR2GRAY);
+  } else {
+    cv::Mat rgb(frame.height, frame.width, CV_32FC3, const_cast<float*>(frame.rgb.data())), y;
+    cv::cvtColor(rgb, y, cv::COLOR_RGB2GRAY);
+    y.convertTo(grey, CV_8U, 255);
+  }
+  auto quick = findBoard(grey.data, grey.cols, grey.rows, grey.step, board_, true);
+  const bool still = quick && last_ && boardDistance(*quick, *last_) < 0.5;
+  last_ = std::move(quick);
+  if (!last_) return Seen::NoBoard;
+  if (!still) return Seen::Moving;
+  const double apart = 0.05 * std::min(width_, height_);
+  for (const BoardView& v : views_)
+    if (boardDistance(*last_, v.corners) < apart) return Seen::AlreadyKept;
+  auto corners = findBoard(grey.data, grey.cols, grey.rows, grey.step, board_, false);
+  if (!corners) return Seen::Moving;
+  views_.push_back({"frame " + std::to_string(frame.sequence), std::move(*corners)});
+  return Seen::Kept;
 }
 
 void writeLensCalibration(const std::string& path, const LensFit& fit) {
