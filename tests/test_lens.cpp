@@ -359,6 +359,116 @@ TEST(Lens, TheSunThroughAFisheyeIsWhereTheMapHasIt) {
   });
 }
 
+// ---- A mirror ball filmed through the lens ---------------------------------------------------
+
+TEST(Lens, AMirrorBallFourRadiiFromTheCameraIsTracedAsItIs) {
+  // The tests' fisheye films a chrome ball on its axis 4 radii away (its silhouette 14.5 degrees
+  // across); around it the room the lens sees directly. Each pixel is the mean of 2x2 rays, each
+  // met with the sphere and reflected here. The world is the mirror ball's: the ray to the ball
+  // +x, the camera's right -y, its up +z. The map (quarry_01) is turned so its sun lies 90
+  // degrees from the camera's line of sight. Truth: the whole map's coefficients, and its sun.
+  const lp::Image source = lp::loadImage(lpt::dataPath("equirect/quarry_01_1k.hdr"));
+  const auto samples = lp::equirectSamples(source.width, source.height);
+  const auto lum = [&](const lp::Image& m, std::size_t i) {
+    return 0.2126 * m.rgb[3 * i] + 0.7152 * m.rgb[3 * i + 1] + 0.0722 * m.rgb[3 * i + 2];
+  };
+  const auto sunOf = [&](const lp::Image& m) {
+    double peak = 0;
+    for (std::size_t i = 0; i < samples.size(); ++i) peak = std::max(peak, lum(m, i));
+    glm::dvec3 sun(0.0);
+    for (std::size_t i = 0; i < samples.size(); ++i)
+      if (lum(m, i) > peak / 2)
+        sun += glm::dvec3(samples[i].dir) * lum(m, i) * double(samples[i].solidAngle);
+    return glm::normalize(sun);
+  };
+  const glm::dvec3 sun0 = sunOf(source);
+  const double yaw = glm::radians(90.0) - std::atan2(sun0.y, sun0.x);
+  const glm::dmat3 turn(glm::dvec3(std::cos(yaw), std::sin(yaw), 0),
+                        glm::dvec3(-std::sin(yaw), std::cos(yaw), 0), glm::dvec3(0, 0, 1));
+  lp::Image map = source;  // the map turned about z: world direction d reads source at turn^T d
+  for (std::size_t i = 0; i < samples.size(); ++i) {
+    const glm::vec3 l = mapAt(source, glm::transpose(turn) * glm::dvec3(samples[i].dir));
+    std::copy(&l[0], &l[0] + 3, &map.rgb[3 * i]);
+  }
+  const glm::dvec3 sun = sunOf(map);
+
+  const KannalaBrandt kb;
+  const double distance = 4.0, alpha = std::asin(1.0 / distance);
+  const auto world = [](const glm::dvec3& c) { return glm::dvec3(c.z, -c.x, -c.y); };
+  lp::Image frame;
+  frame.width = 1280, frame.height = 960;
+  frame.rgb.assign(3 * std::size_t(frame.width) * frame.height, 0.0f);
+  // The ball's pixels each span some 20 of the map's: 6x6 rays there, so the map's sun is not
+  // missed or caught whole by a few rays; 2x2 elsewhere.
+  const double rimPx = (kb.fx + kb.fy) / 2 * kb.thetaD(alpha);
+  for (int y = 0; y < frame.height; ++y)
+    for (int x = 0; x < frame.width; ++x) {
+      const int n = std::hypot(x - kb.cx, y - kb.cy) < rimPx + 2 ? 6 : 2;
+      glm::vec3 sum(0.0f);
+      for (int i = 0; i < n; ++i)
+        for (int j = 0; j < n; ++j) {
+          const auto ray = kb.direction(x - 0.5 + (j + 0.5) / n, y - 0.5 + (i + 0.5) / n);
+          if (!ray) continue;
+          const glm::dvec3 d = *ray, centre(0, 0, distance);
+          const double along = glm::dot(d, centre),
+                       disc = along * along - (distance * distance - 1);
+          const glm::dvec3 n0 = (along - std::sqrt(std::max(disc, 0.0))) * d - centre;
+          // Off the ball: the room around it; on it, the reflection.
+          sum += mapAt(map, world(disc < 0 ? d : d - 2.0 * glm::dot(d, n0) * n0)) / float(n * n);
+        }
+      std::copy(&sum[0], &sum[0] + 3, &frame.rgb[3 * (std::size_t(y) * frame.width + x)]);
+    }
+  lpt::TempDir tmp;
+  const glm::vec3 circle(float(kb.cx + 0.5), float(kb.cy + 0.5), float(rimPx));
+  lp::LayoutSpec traced(lp::Layout::MirrorBall), far(lp::Layout::MirrorBall);
+  traced.circle = far.circle = circle;
+  traced.lens = lp::makeBallModel(
+      lp::readLensCalibration(kb.write((tmp.path / "cam.yaml").string())), circle);
+  const auto view = [&](const lp::LayoutSpec& spec) {
+    return lp::PanoramaView::rgbF32(frame.rgb.data(), frame.width, frame.height, spec);
+  };
+  const lp::Sh9 want =
+      lp::Projector(lp::Layout::Equirect, map.width, map.height)
+          .project(lp::PanoramaView::rgbF32(map.rgb.data(), map.width, map.height));
+  const lp::Projector projector(traced, frame.width, frame.height);
+  // Seen: the sphere but the cone behind the ball and the camera's, 14.5 degrees each (together
+  // 1 - cos(alpha) of the sphere), and the band round the hidden cone that the ball's last ring
+  // of pixels, cut by its rim, would have shown.
+  EXPECT_LT(projector.coverage(), std::cos(alpha));
+  EXPECT_GT(projector.coverage(), 0.9);
+  std::vector<float> peaks;
+  const lp::Sh9 got = projector.project(view(traced), nullptr, &peaks);
+  const lp::Sh9 orthographic = lp::Projector(far, frame.width, frame.height).project(view(far));
+  std::printf("traced: %.2f%% of L00, orthographic: %.2f%%\n", 100 * worstOfL00(got, want),
+              100 * worstOfL00(orthographic, want));
+  EXPECT_LT(worstOfL00(got, want), 0.08);
+  EXPECT_LT(worstOfL00(got, want), worstOfL00(orthographic, want));
+  const lp::LightSplit split = lp::LightExtractor(projector).extract(view(traced), got, peaks, {});
+  ASSERT_EQ(split.lights.size(), 1u);
+  const double off =
+      glm::degrees(std::acos(std::min(1.0, glm::dot(sun, glm::dvec3(split.lights[0].dir)))));
+  std::printf("sun %.2f degrees off\n", off);
+  EXPECT_LT(off, 1.0);
+
+  // The command line: the circle and the camera's calibration.
+  const std::string file = (tmp.path / "ball.exr").string();
+  lp::saveImage(file, frame);
+  char circleText[96];
+  std::snprintf(circleText, sizeof circleText, "%.4f,%.4f,%.4f", circle.x, circle.y, circle.z);
+  const auto r =
+      lpt::runLiveprobe("coeffs " + file + " --layout mirrorball --circle " + circleText +
+                        " --lens " + (tmp.path / "cam.yaml").string() + " --format json");
+  ASSERT_EQ(r.exitCode, 0) << r.output;
+  const auto j = nlohmann::json::parse(r.output.substr(r.output.find('{')));
+  EXPECT_EQ(j["layout"], "mirrorball");
+  EXPECT_NEAR(j["coverage"].get<double>(), projector.coverage(), 1e-4);  // the circle as text
+  lp::Sh9 cli;
+  for (int k = 0; k < 9; ++k)
+    for (int c = 0; c < 3; ++c)
+      cli.c[k][c] = j["coefficients"][std::string(lp::kShNames[k])][c].get<float>();
+  EXPECT_LT(worstOfL00(cli, got), 1e-4) << r.output;
+}
+
 // ---- The command line ---------------------------------------------------------------------
 
 TEST(Lens, CoeffsOfAFisheyeFrameFromTheCommandLine) {
@@ -409,7 +519,7 @@ TEST(Lens, ALensThatDoesNotFitIsOneLine) {
   lpt::expectOneLineError("coeffs " + wide + " --lens " + lens, lens, "another aspect");
   lpt::expectOneLineError("coeffs " + wide + " --layout lens", "--layout lens", "needs --lens");
   lpt::expectOneLineError("coeffs " + wide + " --layout angular --lens " + lens, "--lens",
-                          "--layout lens only");
+                          "--layout lens or mirrorball only");
   lpt::expectOneLineError("coeffs " + wide + " --lens " + wide, wide, "not a lens calibration");
   lpt::expectOneLineError("coeffs " + wide + " --lens " + lens + " --unseen ground=2", "--unseen",
                           "from 0 to 1");

@@ -233,9 +233,13 @@ struct StreamView {
   double use(const ProcessedFrame& f) {
     StageClock clock;
     const Background& b = f.background;
-    if (!haveLighting && !b.empty())  // the first frame: does its shape fit the layout?
-      warnIfLayoutLooksWrong(source, layout, layoutGiven, b.width(), b.height(),
+    if (!haveLighting && !b.empty()) {  // the first frame: does its shape fit the layout?
+      // A mirror ball's background is the frame resampled: not the frame a lens would scale to.
+      LayoutSpec shown = layout;
+      if (shown.layout == Layout::MirrorBall) shown.lens.reset();
+      warnIfLayoutLooksWrong(source, shown, layoutGiven, b.width(), b.height(),
                              b.image ? b.image->rgb.data() : nullptr);
+    }
     if (!haveLighting && autoExposure)
       v->state.shading.exposure = cli::autoExposure(f.radiance, true, f.lights);
     haveLighting = true;

@@ -50,9 +50,11 @@ LayoutSpec layoutSpec(const PanoramaSettings& p, const FrameSource* source) {
     if (spec.layout != Layout::DualFisheye) throw Error("--fov applies to --layout fisheye only");
     spec.fisheyeFovDeg = float(*p.fov);
   }
-  if (p.lens) {
+  if (p.lens && spec.layout == Layout::MirrorBall) {
+    spec.lens = makeBallModel(readLensCalibration(*p.lens), spec.circle);
+  } else if (p.lens) {
     if (p.layout && spec.layout != Layout::Lens)
-      throw Error("--lens applies to --layout lens only");
+      throw Error("--lens applies to --layout lens or mirrorball only");
     if (known && native != Layout::Lens)
       throw Error(source->describe() + ": the frames are a " + std::string(layoutName(native)) +
                   " layout; --lens does not apply");

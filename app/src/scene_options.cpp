@@ -140,7 +140,8 @@ std::vector<OptionSpec> layoutOptions() {
                        LP_FIELD(panorama.fov), g),
           textOption("--lens", "FILE",
                      "lens: the camera's calibration (OpenCV FileStorage YAML/JSON or ROS "
-                     "camera_info; implies --layout lens)",
+                     "camera_info; implies --layout lens); mirrorball: the camera filming the "
+                     "ball, traced as it is",
                      LP_FIELD(panorama.lens), g),
           unseen,
           tripleOption("--env-rotate,--rotate", "YAW,PITCH,ROLL",

@@ -1,9 +1,11 @@
 #include "liveprobe/capture/lens.h"
 
+#include <algorithm>
 #include <cmath>
 #include <opencv2/calib3d.hpp>
 #include <opencv2/core/persistence.hpp>
 #include <opencv2/core/utility.hpp>
+#include <optional>
 
 #include "liveprobe/frame/input_file.h"
 #include "liveprobe/sh/error.h"
@@ -110,12 +112,82 @@ LensCalibration readLensCalibration(const std::string& path) {
 
 namespace {
 
+/// A mirror ball the camera sees (the circle of its silhouette known): each camera ray that
+/// meets the ball reflects off it, traced as it is, at the distance the circle's size implies.
+/// Camera rays are in OpenCV's camera frame; reflected directions in the mirror-ball layout's
+/// world (liveprobe/sh/layout.h): the ray to the ball's centre is +x, the camera's right
+/// (orthogonal to it) -y, its up +z. With the ball's radius 1 its centre is at distance
+/// D = 1 / sin(alpha), alpha the silhouette's angular radius. Unseen: the cone behind the ball
+/// (within alpha of +x) and the camera's own reflection (within alpha of -x: a camera about the
+/// ball's size).
+class Mirror {
+ public:
+  Mirror(const glm::dvec3& towardsCentre, double alpha)
+      : v_(glm::normalize(towardsCentre)), alpha_(alpha), distance_(1.0 / std::sin(alpha)) {
+    const glm::dvec3 right = glm::normalize(glm::dvec3(1, 0, 0) - v_.x * v_);
+    const glm::dvec3 up = glm::cross(right, v_);  // about camera -y, orthogonal to v and right
+    // World from camera: a ray's coordinates along (right, up, v), sent to -y, +z, +x.
+    const glm::dmat3 basis(right, up, v_);
+    const glm::dmat3 local(glm::dvec3(0, -1, 0), glm::dvec3(0, 0, 1), glm::dvec3(1, 0, 0));
+    worldFromCamera_ = local * glm::transpose(basis);
+  }
+
+  /// The world direction camera ray d sees in the ball; none off the ball or in the unseen cones.
+  std::optional<glm::dvec3> reflect(const glm::dvec3& ray) const {
+    const glm::dvec3 d = glm::normalize(ray);
+    const double b = glm::dot(d, v_) * distance_;
+    const double disc = b * b - (distance_ * distance_ - 1.0);
+    if (!(disc >= 0) || b <= 0) return std::nullopt;
+    const glm::dvec3 n = (b - std::sqrt(disc)) * d - distance_ * v_;
+    const glm::dvec3 r = d - 2.0 * glm::dot(d, n) * n;
+    if (!seen(r)) return std::nullopt;
+    return worldFromCamera_ * r;
+  }
+
+  /// The camera ray whose reflection is world direction w; none where the ball shows no such
+  /// reflection. The normal lies in the plane of the ball's axis and w: found by bisection on its
+  /// angle from the axis, along which the reflection's angle from the camera grows monotonically.
+  std::optional<glm::dvec3> source(const glm::dvec3& w) const {
+    const glm::dvec3 r = glm::normalize(glm::transpose(worldFromCamera_) * w);
+    if (!seen(r)) return std::nullopt;
+    const double target = std::acos(std::clamp(-glm::dot(r, v_), -1.0, 1.0));
+    glm::dvec3 side = r - glm::dot(r, v_) * v_;
+    if (glm::length(side) < 1e-12) return std::nullopt;
+    side = glm::normalize(side);
+    const auto ray = [&](double phi) {
+      const glm::dvec3 n = -std::cos(phi) * v_ + std::sin(phi) * side;
+      return glm::normalize(distance_ * v_ + n);
+    };
+    const auto angle = [&](double phi) {
+      const glm::dvec3 n = -std::cos(phi) * v_ + std::sin(phi) * side, d = ray(phi);
+      const glm::dvec3 out = d - 2.0 * glm::dot(d, n) * n;
+      return std::acos(std::clamp(-glm::dot(out, v_), -1.0, 1.0));
+    };
+    double lo = 0, hi = std::acos(1.0 / distance_);
+    for (int i = 0; i < 60; ++i) {
+      const double mid = 0.5 * (lo + hi);
+      (angle(mid) < target ? lo : hi) = mid;
+    }
+    return ray(0.5 * (lo + hi));
+  }
+
+ private:
+  bool seen(const glm::dvec3& r) const {
+    const double c = std::cos(alpha_);
+    return glm::dot(r, v_) < c && -glm::dot(r, v_) < c;
+  }
+  glm::dvec3 v_;
+  double alpha_, distance_;
+  glm::dmat3 worldFromCamera_;
+};
+
 /// A calibration as a LensModel. Points go through OpenCV in normalised coordinates (the camera
 /// matrix applied here, skew included, with OpenCV's pixel centres at whole numbers), so both
 /// models see the same K.
 class OpenCvLens final : public LensModel {
  public:
-  explicit OpenCvLens(LensCalibration c) : c_(std::move(c)), d_(c_.distortion) {}
+  explicit OpenCvLens(LensCalibration c, std::optional<glm::vec3> ball = std::nullopt)
+      : c_(std::move(c)), d_(c_.distortion), ball_(ball) {}
 
   std::string mismatch(int width, int height) const override {
     if (std::int64_t(width) * c_.height == std::int64_t(height) * c_.width) return {};
@@ -132,12 +204,21 @@ class OpenCvLens final : public LensModel {
   }
 
   std::string describe() const override {
-    return std::string(c_.model == LensCalibration::Model::Fisheye ? "fisheye" : "pinhole") +
-           " lens " + c_.source;
+    return std::string(ball_ ? "a mirror ball through the " : "") +
+           (c_.model == LensCalibration::Model::Fisheye ? "fisheye" : "pinhole") + " lens " +
+           c_.source;
   }
 
   std::vector<SphereSample> samples(int width, int height) const override {
     const Intrinsics k = at(width);
+    const std::optional<Mirror> mirror = mirrorAt(k);
+    // A camera ray as what the pixel measures: the ray itself, or its reflection in the ball;
+    // (0, 0, 0) for nothing.
+    const auto outward = [&](const glm::dvec3& d) {
+      if (!valid(d)) return glm::dvec3(0.0);
+      if (!mirror) return d;
+      return mirror->reflect(d).value_or(glm::dvec3(0.0));
+    };
     const std::size_t w = std::size_t(width), h = std::size_t(height);
     // Corner (x, y) of the grid is the top-left corner of pixel (x, y); liveprobe's pixel
     // coordinates put centres at +0.5, so the corner is at x, y there.
@@ -150,8 +231,8 @@ class OpenCvLens final : public LensModel {
         pts.clear();
         for (std::size_t x = 0; x <= w; ++x) pts.push_back(k.normalise(double(x), double(y)));
         directions(pts, k, dirs);
-        std::copy(dirs.begin(), dirs.end(),
-                  corners.begin() + std::ptrdiff_t(std::size_t(y) * (w + 1)));
+        for (std::size_t x = 0; x <= w; ++x)
+          corners[std::size_t(y) * (w + 1) + x] = outward(dirs[x]);
       }
     });
     cv::parallel_for_(cv::Range(0, height), [&](const cv::Range& rows) {
@@ -165,12 +246,13 @@ class OpenCvLens final : public LensModel {
           const glm::dvec3* c = &corners[std::size_t(y) * (w + 1) + x];
           const glm::dvec3 a = c[0], b = c[1], d = c[w + 1], e = c[w + 2];
           SphereSample& s = out[std::size_t(y) * w + x];
-          if (!valid(dirs[x]) || !valid(a) || !valid(b) || !valid(d) || !valid(e)) {
+          const glm::dvec3 centre = outward(dirs[x]);
+          if (!known(centre) || !known(a) || !known(b) || !known(d) || !known(e)) {
             s = {glm::vec3(0, 0, 1), 0.0f};
             continue;
           }
           // The corners in order round the pixel: a b (top), e d (bottom).
-          s = {glm::vec3(dirs[x]), float(triangle(a, b, e) + triangle(a, e, d))};
+          s = {glm::vec3(centre), float(triangle(a, b, e) + triangle(a, e, d))};
         }
       }
     });
@@ -180,11 +262,17 @@ class OpenCvLens final : public LensModel {
   void pixels(int width, int height, const glm::vec3* dirs, std::size_t count,
               glm::vec2* out) const override {
     const Intrinsics k = at(width);
+    const std::optional<Mirror> mirror = mirrorAt(k);
     std::vector<cv::Point3d> ahead;
     std::vector<std::size_t> which;
     for (std::size_t i = 0; i < count; ++i) {
       out[i] = glm::vec2(NAN);
-      const glm::dvec3 d(dirs[i]);
+      glm::dvec3 d(dirs[i]);
+      if (mirror) {
+        const auto ray = mirror->source(d);
+        if (!ray) continue;
+        d = *ray;
+      }
       if (d.z > 1e-9 * glm::length(d))
         ahead.emplace_back(d.x / d.z, d.y / d.z, 1.0), which.push_back(i);
     }
@@ -229,6 +317,28 @@ class OpenCvLens final : public LensModel {
   }
 
   static bool valid(const glm::dvec3& d) { return d.z > 0; }
+  static bool known(const glm::dvec3& d) { return glm::dot(d, d) > 0.5; }
+
+  /// The ball in a frame of these intrinsics: the ray to its circle's centre, and its angular
+  /// radius, the mean over eight points of the circle's rim.
+  std::optional<Mirror> mirrorAt(const Intrinsics& k) const {
+    if (!ball_) return std::nullopt;
+    std::vector<cv::Point2d> pts{k.normalise(ball_->x, ball_->y)};
+    for (int i = 0; i < 8; ++i)
+      pts.push_back(k.normalise(ball_->x + ball_->z * std::cos(i * kHalfPi / 2),
+                                ball_->y + ball_->z * std::sin(i * kHalfPi / 2)));
+    std::vector<glm::dvec3> dirs;
+    directions(pts, k, dirs);
+    double alpha = 0;
+    for (std::size_t i = 0; i < pts.size(); ++i)
+      if (!valid(dirs[i]))
+        throw Error(describe() + ": the mirror ball's circle reaches where the lens sees nothing");
+    for (std::size_t i = 1; i < pts.size(); ++i)
+      alpha += std::acos(std::clamp(glm::dot(dirs[0], dirs[i]), -1.0, 1.0)) / 8;
+    if (!(alpha > 1e-4 && alpha < 1.4))
+      throw Error(describe() + ": the mirror ball's circle is not a ball in front of the camera");
+    return Mirror(dirs[0], alpha);
+  }
 
   /// Undistorted points on the plane z = 1 -> distorted normalised image points.
   std::vector<cv::Point2d> distort(const std::vector<cv::Point3d>& ahead) const {
@@ -312,12 +422,17 @@ class OpenCvLens final : public LensModel {
 
   LensCalibration c_;
   std::vector<double> d_;
+  std::optional<glm::vec3> ball_;  ///< the mirror ball's circle, pixels (centres at +0.5)
 };
 
 }  // namespace
 
 std::shared_ptr<const LensModel> makeLensModel(const LensCalibration& calibration) {
   return std::make_shared<OpenCvLens>(calibration);
+}
+
+std::shared_ptr<const LensModel> makeBallModel(const LensCalibration& camera, glm::vec3 circle) {
+  return std::make_shared<OpenCvLens>(camera, circle);
 }
 
 }  // namespace lp

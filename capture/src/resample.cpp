@@ -11,8 +11,8 @@ namespace lp {
 
 Image resampleToEquirect(const Image& frame, const LayoutSpec& spec, int width, int height) {
   Image out(width, height);
-  // Where each output pixel lands in the frame. A lens asks OpenCV for all at once, and a stream
-  // of one lens and size asks once: the last answer is kept per thread.
+  // Where each output pixel lands in the frame. A lens (or a ball through one) asks OpenCV for
+  // all at once, and a stream of one lens and size asks once: the last answer is kept per thread.
   struct Landing {
     std::weak_ptr<const LensModel> lens;  ///< weak: a new lens at a freed one's address differs
     int frameWidth = 0, frameHeight = 0, width = 0, height = 0;
@@ -20,7 +20,7 @@ Image resampleToEquirect(const Image& frame, const LayoutSpec& spec, int width, 
   };
   thread_local Landing last;
   const Landing key{spec.lens, frame.width, frame.height, width, height, {}};
-  const bool kept = spec.layout == Layout::Lens && spec.lens && last.lens.lock() == spec.lens &&
+  const bool kept = spec.lens && last.lens.lock() == spec.lens &&
                     last.frameWidth == key.frameWidth && last.frameHeight == key.frameHeight &&
                     last.width == width && last.height == height;
   if (!kept) {
@@ -30,7 +30,7 @@ Image resampleToEquirect(const Image& frame, const LayoutSpec& spec, int width, 
     last = key;
     last.at.resize(grid.size());
     layoutPixels(spec, frame.width, frame.height, dirs.data(), dirs.size(), last.at.data());
-    if (spec.layout != Layout::Lens) last.lens.reset();
+    if (!spec.lens) last.lens.reset();
   }
   for (std::size_t i = 0; i < last.at.size(); ++i) {
     const std::optional<glm::vec2> px =

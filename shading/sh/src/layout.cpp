@@ -93,7 +93,7 @@ std::string layoutMismatch(const LayoutSpec& spec, int width, int height) {
       if (c.x - c.z < -0.5f || c.y - c.z < -0.5f || c.x + c.z > width + 0.5f ||
           c.y + c.z > height + 0.5f)
         return "the mirror ball's circle does not fit in the " + size + " frame";
-      return {};
+      return spec.lens ? spec.lens->mismatch(width, height) : std::string();
     }
     case Layout::Cube:
       if ((width * 3 == height * 4 && width % 4 == 0) ||
@@ -362,7 +362,7 @@ std::vector<SphereSample> layoutSamples(const LayoutSpec& spec, int width, int h
     case Layout::Angular:
       return angularSamples(width);
     case Layout::MirrorBall:
-      return mirrorBallSamples(spec, width, height);
+      return spec.lens ? spec.lens->samples(width, height) : mirrorBallSamples(spec, width, height);
     case Layout::Cube:
       return cubeSamples(width, height);
     case Layout::DualFisheye:
@@ -391,6 +391,13 @@ std::optional<glm::vec2> layoutPixel(const LayoutSpec& spec, int width, int heig
     }
     case Layout::Angular:
     case Layout::MirrorBall: {
+      if (spec.layout == Layout::MirrorBall && spec.lens) {
+        glm::vec2 at;
+        const glm::vec3 unit(d);
+        spec.lens->pixels(width, height, &unit, 1, &at);
+        if (!std::isfinite(at.x) || !std::isfinite(at.y)) return std::nullopt;
+        return at;
+      }
       const glm::dvec3 l(-d.y, d.z, -d.x);  // worldToAngular
       const double t = std::acos(std::clamp(l.z, -1.0, 1.0)), p = std::atan2(l.y, l.x);
       if (spec.layout == Layout::Angular)
@@ -430,7 +437,7 @@ std::optional<glm::vec2> layoutPixel(const LayoutSpec& spec, int width, int heig
 
 void layoutPixels(const LayoutSpec& spec, int width, int height, const glm::vec3* dirs,
                   std::size_t count, glm::vec2* out) {
-  if (spec.layout == Layout::Lens && spec.lens) {
+  if ((spec.layout == Layout::Lens || spec.layout == Layout::MirrorBall) && spec.lens) {
     spec.lens->pixels(width, height, dirs, count, out);
     return;
   }

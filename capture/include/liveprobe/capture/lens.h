@@ -42,4 +42,14 @@ LensCalibration readLensCalibration(const std::string& path);
 /// another size is the same lens scaled; another aspect is refused.
 std::shared_ptr<const LensModel> makeLensModel(const LensCalibration& calibration);
 
+/// A mirror ball filmed through the calibrated `camera`, its silhouette the circle (centre x,
+/// centre y, radius, in pixels of the frame, centres at +0.5), traced as it is rather than from
+/// infinitely far: each pixel's ray meets the ball at the distance the circle's angular size
+/// implies and reflects. The world is the mirror-ball layout's (liveprobe/sh/layout.h): the ray to
+/// the ball's centre is +x, the camera's right -y, its up +z, so a ball far away gives the
+/// orthographic mirror ball's directions. Unseen (filled by LayoutSpec::unseen): the cone behind
+/// the ball (within its angular radius alpha of +x) and the camera's own reflection (within alpha
+/// of -x). Each pixel's solid angle is the spherical quadrilateral of its corners' reflections.
+std::shared_ptr<const LensModel> makeBallModel(const LensCalibration& camera, glm::vec3 circle);
+
 }  // namespace lp

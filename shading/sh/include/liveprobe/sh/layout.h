@@ -25,6 +25,10 @@
 //   (LayoutSpec::circle: cx, cy, r). The angular map's frame with t = 2 asin(r) instead of pi r:
 //   the ball's centre reflects the direction back towards the camera, which this frame calls the
 //   front (-x). dw = 4 (pixel area inside the circle) / R^2: uniform, since d(omega) = 4 r dr dp.
+//   That is the ball seen from infinitely far. With LayoutSpec::lens (the camera's calibration,
+//   liveprobe/capture/lens.h's makeBallModel) each pixel's ray is traced to the ball at the
+//   distance its circle implies and reflected, in the same world (the ray to the ball's centre
+//   +x); the cone behind the ball and the camera's own reflection are unseen.
 //
 // cube (OpenGL's face convention; a horizontal 4:3 cross or a vertical 3:4 cross):
 //        [+Y]                     [+Y]
@@ -115,9 +119,10 @@ UnseenRule parseUnseen(std::string_view text);
 struct LayoutSpec {
   Layout layout = Layout::Equirect;
   glm::vec3 circle{0.0f};  ///< mirrorball: centre x, centre y, radius, in pixels (r = 0: unset)
-  float fisheyeFovDeg = 190.0f;           ///< fisheye: field of view of each lens
-  std::shared_ptr<const LensModel> lens;  ///< lens: the camera's lens
-  UnseenRule unseen;                      ///< what fills the directions the frame does not see
+  float fisheyeFovDeg = 190.0f;  ///< fisheye: field of view of each lens
+  /// lens: the camera's lens; mirrorball: the ball traced through the camera's lens
+  std::shared_ptr<const LensModel> lens;
+  UnseenRule unseen;  ///< what fills the directions the frame does not see
 
   LayoutSpec() = default;
   LayoutSpec(Layout l) : layout(l) {}  // NOLINT: a bare layout is a spec with default parameters
