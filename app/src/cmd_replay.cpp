@@ -13,6 +13,7 @@
 #include "liveprobe/capture/open_source.h"
 #include "liveprobe/capture/pipeline.h"
 #include "liveprobe/capture/recorder.h"
+#include "liveprobe/capture/resample.h"
 #include "liveprobe/hdr/bracketed_source.h"
 #include "liveprobe/sh/error.h"
 #include "progress.h"
@@ -234,9 +235,10 @@ struct StreamView {
     StageClock clock;
     const Background& b = f.background;
     if (!haveLighting && !b.empty()) {  // the first frame: does its shape fit the layout?
-      // A mirror ball's background is the frame resampled: not the frame a lens would scale to.
+      // A lens's (or a traced ball's) background is the frame resampled to an equirect: not
+      // the frame whose size the lens would be scaled to.
       LayoutSpec shown = layout;
-      if (shown.layout == Layout::MirrorBall) shown.lens.reset();
+      if (!displayDrawsAsIs(shown)) shown.lens.reset();
       warnIfLayoutLooksWrong(source, shown, layoutGiven, b.width(), b.height(),
                              b.image ? b.image->rgb.data() : nullptr);
     }
