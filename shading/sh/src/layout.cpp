@@ -353,6 +353,14 @@ std::vector<SphereSample> fisheyeSamples(const LayoutSpec& spec, int width, int 
 
 }  // namespace
 
+namespace {
+/// The frame's pixels are the lens's to map: a calibrated camera, or a mirror ball traced
+/// through one.
+bool throughLens(const LayoutSpec& spec) {
+  return spec.lens && (spec.layout == Layout::Lens || spec.layout == Layout::MirrorBall);
+}
+}  // namespace
+
 std::vector<SphereSample> layoutSamples(const LayoutSpec& spec, int width, int height) {
   if (auto why = layoutMismatch(spec, width, height); !why.empty())
     throw Error(std::string(layoutName(spec.layout)) + " layout: " + why);
@@ -362,7 +370,8 @@ std::vector<SphereSample> layoutSamples(const LayoutSpec& spec, int width, int h
     case Layout::Angular:
       return angularSamples(width);
     case Layout::MirrorBall:
-      return spec.lens ? spec.lens->samples(width, height) : mirrorBallSamples(spec, width, height);
+      return throughLens(spec) ? spec.lens->samples(width, height)
+                               : mirrorBallSamples(spec, width, height);
     case Layout::Cube:
       return cubeSamples(width, height);
     case Layout::DualFisheye:
@@ -379,6 +388,13 @@ glm::vec3 cubeFaceDirection(int face, double s, double t) {
 
 std::optional<glm::vec2> layoutPixel(const LayoutSpec& spec, int width, int height, glm::vec3 dir) {
   const glm::dvec3 d = glm::normalize(glm::dvec3(dir));
+  if (throughLens(spec)) {
+    glm::vec2 at;
+    const glm::vec3 unit(d);
+    spec.lens->pixels(width, height, &unit, 1, &at);
+    if (!std::isfinite(at.x) || !std::isfinite(at.y)) return std::nullopt;
+    return at;
+  }
   auto onDisc = [](double cx, double cy, double radius, double r, double p) {
     return glm::vec2(float(cx + radius * r * std::cos(p)), float(cy - radius * r * std::sin(p)));
   };
@@ -391,13 +407,6 @@ std::optional<glm::vec2> layoutPixel(const LayoutSpec& spec, int width, int heig
     }
     case Layout::Angular:
     case Layout::MirrorBall: {
-      if (spec.layout == Layout::MirrorBall && spec.lens) {
-        glm::vec2 at;
-        const glm::vec3 unit(d);
-        spec.lens->pixels(width, height, &unit, 1, &at);
-        if (!std::isfinite(at.x) || !std::isfinite(at.y)) return std::nullopt;
-        return at;
-      }
       const glm::dvec3 l(-d.y, d.z, -d.x);  // worldToAngular
       const double t = std::acos(std::clamp(l.z, -1.0, 1.0)), p = std::atan2(l.y, l.x);
       if (spec.layout == Layout::Angular)
@@ -423,21 +432,15 @@ std::optional<glm::vec2> layoutPixel(const LayoutSpec& spec, int width, int heig
       if (t > halfFov) return std::nullopt;
       return onDisc(front ? width / 4.0 : 3.0 * width / 4.0, height / 2.0, radius, t / halfFov, p);
     }
-    case Layout::Lens: {
-      if (!spec.lens) return std::nullopt;
-      glm::vec2 at;
-      const glm::vec3 unit(d);
-      spec.lens->pixels(width, height, &unit, 1, &at);
-      if (!std::isfinite(at.x) || !std::isfinite(at.y)) return std::nullopt;
-      return at;
-    }
+    case Layout::Lens:
+      return std::nullopt;  // without its lens (with one, above)
   }
   return std::nullopt;
 }
 
 void layoutPixels(const LayoutSpec& spec, int width, int height, const glm::vec3* dirs,
                   std::size_t count, glm::vec2* out) {
-  if ((spec.layout == Layout::Lens || spec.layout == Layout::MirrorBall) && spec.lens) {
+  if (throughLens(spec)) {
     spec.lens->pixels(width, height, dirs, count, out);
     return;
   }

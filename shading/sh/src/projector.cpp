@@ -92,8 +92,9 @@ Sh9 toSh9(const Sums& s, bool bgr) {
   return out;
 }
 
-void addSums(Sums& into, const Sums& part) {
-  for (int q = 0; q < 27; ++q) into[q] += part[q];
+template <std::size_t N>
+void addSums(std::array<double, N>& into, const std::array<double, N>& part) {
+  for (std::size_t q = 0; q < N; ++q) into[q] += part[q];
 }
 
 /// Rows of any format as linear RGB (or BGR) floats: a pointer into the frame for f32, a
@@ -282,7 +283,7 @@ std::array<double, 27> Projector::equirectSums(const PanoramaView& v, Executor* 
     flush();
     return sums;
   };
-  return parallelReduce(ex, std::size_t(height_), Split{32}, Sums{}, band, addSums);
+  return parallelReduce(ex, std::size_t(height_), Split{32}, Sums{}, band, addSums<27>);
 }
 
 // Other layouts: runs of pixels through the products of their streams (the frame's channel
@@ -317,10 +318,7 @@ std::array<double, 27> Projector::sampleSums(const PanoramaView& v, Executor* ex
     return sums;
   };
   const Products p = parallelReduce(ex, samples_.size(), Split{16384}, Products{}, run,
-                                    [](Products& into, const Products& part) {
-                                      for (std::size_t q = 0; q < into.size(); ++q)
-                                        into[q] += part[q];
-                                    });
+                                    addSums<Products{}.size()>);
   Sums out{};
   const double c[9] = {kY00, kY1, kY1, kY1, kY2, kY2, kY20, kY2, kY22};
   for (int j = 0; j < kShCount; ++j)
