@@ -38,7 +38,8 @@
 //                  occlude_frames=K (default 10), occlude_white (white, not dark, frames);
 //                  slow_fps=F (frames come at F a second while the mode says its own rate, as
 //                  a camera's auto exposure does in dim light)
-//   LPEMU_LOG      file to which each call is appended as one line (for assertions)
+//   LPEMU_LOG      file to which each call, and each frame served with the exposure in force,
+//                  is appended as one line (for assertions)
 // What it cannot prove about real drivers: README, "Testing without a camera".
 #include <dlfcn.h>
 #include <fcntl.h>
@@ -851,6 +852,7 @@ int poll(struct pollfd* fds, nfds_t n, int timeout) {
       if (e.fault("gap_every") && (e.sequence + 1) % std::uint32_t(e.faults["gap_every"]) == 0)
         ++e.sequence;
       e.seqOf[i] = e.sequence++;
+      e.say("frame " + std::to_string(e.seqOf[i]) + " exposure " + std::to_string(e.inForce));
       e.fillMeta(e.seqOf[i]);
       const auto& frame = e.frameToServe();
       auto* dst = static_cast<std::uint8_t*>(e.maps[i]);
