@@ -18,6 +18,7 @@
 #include "liveprobe/sh/error.h"
 #include "liveprobe/sh/lights.h"
 #include "liveprobe/sh/projector.h"
+#include "sh_compare.h"
 #include "test_util.h"
 
 namespace {
@@ -224,13 +225,7 @@ lp::Sh9 truth(const lp::Image& map, const glm::dmat3& world, bool ground, double
   return out;
 }
 
-double worstOfL00(const lp::Sh9& got, const lp::Sh9& want) {
-  double worst = 0;
-  for (int k = 0; k < 9; ++k)
-    for (int c = 0; c < 3; ++c)
-      worst = std::max(worst, std::abs(double(got.c[k][c]) - want.c[k][c]) / want.c[0][c]);
-  return worst;
-}
+using lpt::worstOfL00;
 
 glm::dmat3 tilt(double degrees) {  // about the world's x axis
   const double a = glm::radians(degrees);

@@ -6,6 +6,7 @@
 #include <cmath>
 
 #include "commands.h"
+#include "liveprobe/capture/ball.h"
 #include "liveprobe/capture/frame_processor.h"
 #include "liveprobe/capture/lens.h"
 #include "liveprobe/capture/open_source.h"
@@ -27,7 +28,7 @@ glm::mat3 envOrientation(const PanoramaSettings& p) {
   return o;
 }
 
-LayoutSpec layoutSpec(const PanoramaSettings& p, const FrameSource* source) {
+LayoutSpec layoutSpec(const PanoramaSettings& p, const FrameSource* source, bool oneImage) {
   const bool known = source && source->layout();
   const Layout native = known ? *source->layout() : Layout::Equirect;
   LayoutSpec spec(native);
@@ -37,21 +38,27 @@ LayoutSpec layoutSpec(const PanoramaSettings& p, const FrameSource* source) {
       throw Error(source->describe() + ": the frames are a " + std::string(layoutName(native)) +
                   " layout; --layout " + std::string(layoutName(*p.layout)) + " does not apply");
   }
-  if (p.circle) {
+  if (p.circle || p.circleAuto) {
     if (spec.layout != Layout::MirrorBall)
       throw Error("--circle applies to --layout mirrorball only");
-    spec.circle = {float((*p.circle)[0]), float((*p.circle)[1]), float((*p.circle)[2])};
+    if (p.circle)
+      spec.circle = {float((*p.circle)[0]), float((*p.circle)[1]), float((*p.circle)[2])};
+    else if (!oneImage)
+      throw Error(
+          "--circle auto finds the ball in one image (coeffs, irradiance, compare, --env); a "
+          "stream takes the circle it prints: --circle cx,cy,r");
   } else if (spec.layout == Layout::MirrorBall) {
     throw Error(
-        "--layout mirrorball needs --circle cx,cy,r: the mirror ball's centre and radius "
-        "in pixels");
+        "--layout mirrorball needs --circle cx,cy,r (the mirror ball's centre and radius in "
+        "pixels) or --circle auto");
   }
   if (p.fov) {
     if (spec.layout != Layout::DualFisheye) throw Error("--fov applies to --layout fisheye only");
     spec.fisheyeFovDeg = float(*p.fov);
   }
   if (p.lens && spec.layout == Layout::MirrorBall) {
-    spec.lens = makeBallModel(readLensCalibration(*p.lens), spec.circle);
+    const LensCalibration camera = readLensCalibration(*p.lens);  // (its errors before the image's)
+    if (p.circle) spec.lens = makeBallModel(camera, spec.circle);
   } else if (p.lens) {
     if (p.layout && spec.layout != Layout::Lens)
       throw Error("--lens applies to --layout lens or mirrorball only");
@@ -69,9 +76,27 @@ LayoutSpec layoutSpec(const PanoramaSettings& p, const FrameSource* source) {
   return spec;
 }
 
+void ballCircle(LayoutSpec& spec, const PanoramaSettings& p, const Frame& frame,
+                const std::string& source) {
+  const std::optional<BallCircle> ball = findBall(frame);
+  if (!ball)
+    throw Error(source +
+                ": --circle auto found no mirror ball (a circle from a tenth to a half of the "
+                "frame's shorter side whose rim holds); give --circle cx,cy,r");
+  spec.circle = {float(ball->x), float(ball->y), float(ball->radius)};
+  if (p.lens) spec.lens = makeBallModel(readLensCalibration(*p.lens), spec.circle);
+  char line[256];
+  std::snprintf(line, sizeof line,
+                "liveprobe: %s: mirror ball found: --circle %.2f,%.2f,%.2f (the rim's fit %.2f px "
+                "RMS over %d of 32 sectors)\n",
+                source.c_str(), ball->x, ball->y, ball->radius, ball->rimResidual,
+                ball->rimSectors);
+  std::fputs(line, stderr);
+}
+
 Environment loadEnvironment(const std::string& source, const PanoramaSettings& p,
                             const LightOptions& lights, bool background) {
-  layoutSpec(p);  // option errors before the file is read
+  layoutSpec(p, nullptr, true);  // option errors before the file is read
   auto src = openSource(source);
   // One map: a sequence or a video is replayed, not read as its first frame.
   if (const std::int64_t n = src->frameCount(); n > 1)
@@ -80,7 +105,8 @@ Environment loadEnvironment(const std::string& source, const PanoramaSettings& p
   auto frame = std::make_shared<Frame>();
   if (!src->next(*frame)) throw Error(source + ": no frame to read");
   Environment env;
-  env.layout = layoutSpec(p, src.get());
+  env.layout = layoutSpec(p, src.get(), true);
+  if (p.circleAuto) ballCircle(env.layout, p, *frame, source);
   env.orientation = envOrientation(p);
   FrameProcessor processor({env.layout, Photometry{}, env.orientation, 1, lights});
   FrameResult r;

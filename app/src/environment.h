@@ -22,8 +22,14 @@ namespace lp::cli {
 glm::mat3 envOrientation(const PanoramaSettings& p);
 /// The layout options as a spec (option errors are reported before any file is read). A source
 /// that knows its own layout (six cube faces) gives the default, and a --layout that contradicts
-/// it is refused.
-LayoutSpec layoutSpec(const PanoramaSettings& p, const FrameSource* source = nullptr);
+/// it is refused. `oneImage`: the spec is for one image, whose ball --circle auto finds
+/// (ballCircle); a stream's refuses it. The circle (and the traced ball's lens) is then unset.
+LayoutSpec layoutSpec(const PanoramaSettings& p, const FrameSource* source = nullptr,
+                      bool oneImage = false);
+/// --circle auto: `spec` with the circle of the ball found in `frame` (and the traced ball's lens
+/// for it, with --lens), said in one line. Throws lp::Error naming `source` when there is none.
+void ballCircle(LayoutSpec& spec, const PanoramaSettings& p, const Frame& frame,
+                const std::string& source);
 
 /// A still environment in any layout: FILE is an image, or a folder of six cube faces.
 struct Environment {

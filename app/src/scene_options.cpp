@@ -122,11 +122,17 @@ std::vector<OptionSpec> layoutOptions() {
       "--layout", "equirect|angular|mirrorball|cube|fisheye|lens",
       "panorama layout (default equirect; lens with --lens)", g,
       [](const std::string& v) { return parseLayout(v); }, LP_FIELD(panorama.layout));
-  OptionSpec circle = tripleOption("--circle", "CX,CY,R", "mirrorball: the ball's circle in pixels",
-                                   "cx,cy,r with r > 0", LP_FIELD(panorama.circle), g);
+  OptionSpec circle = tripleOption(
+      "--circle", "CX,CY,R|auto",
+      "mirrorball: the ball's circle in pixels, or auto: found in the image (one image: a stream "
+      "takes the circle it prints)",
+      "cx,cy,r with r > 0, or auto", LP_FIELD(panorama.circle), g);
   circle.set = [](Settings& s, const std::string& v) {
-    const Triple c = parseTriple("--circle", v, "cx,cy,r with r > 0");
-    if (!(c[2] > 0)) throw Error("--circle " + v + ": expected cx,cy,r with r > 0");
+    s.panorama.circleAuto = v == "auto";
+    s.panorama.circle.reset();
+    if (s.panorama.circleAuto) return;
+    const Triple c = parseTriple("--circle", v, "cx,cy,r with r > 0, or auto");
+    if (!(c[2] > 0)) throw Error("--circle " + v + ": expected cx,cy,r with r > 0, or auto");
     s.panorama.circle = c;
   };
   OptionSpec unseen = parsedOption(

@@ -28,6 +28,7 @@ using Triple = std::array<double, 3>;
 struct PanoramaSettings {
   std::optional<Layout> layout;
   std::optional<Triple> circle;      ///< cx, cy, r in pixels
+  bool circleAuto = false;           ///< --circle auto: found in the image (capture/ball.h)
   std::optional<double> fov;         ///< degrees
   std::optional<std::string> lens;   ///< --lens FILE: a lens calibration
   std::optional<UnseenRule> unseen;  ///< --unseen RULE
