@@ -288,6 +288,91 @@ TEST(Lens, AFisheyeSkyIsTheMapsSeenHemispherePlusTheDeclaredFill) {
   });
 }
 
+// A webcam's lens (cv::calibrateCamera's plumb_bob: 70 degrees across, barrel distortion):
+// the frame made with OpenCV's undistortPoints (checked against its forward projectPoints), the
+// truth the map's pixels whose directions projectPoints lands inside the frame, nothing else
+// (--unseen black): within 0.5% of the seen part's L00, tilted or not.
+TEST(Lens, APinholeFrameIsTheMapsPixelsItSees) {
+  const lp::Image map = lp::loadImage(lpt::dataPath("equirect/pedestrian_overpass_1k.hdr"));
+  const cv::Matx33d K(900.5, 0, 641.3, 0, 899.0, 478.6, 0, 0, 1);
+  const std::vector<double> dist = {-0.28, 0.08, 0.0005, -0.0003, -0.01};
+  constexpr int kW = 1280, kH = 960;
+  lpt::TempDir tmp;
+  const std::string file = tmp / "webcam.yaml";
+  {
+    cv::FileStorage fs(file, cv::FileStorage::WRITE);
+    fs << "image_width" << kW << "image_height" << kH << "camera_matrix" << cv::Mat(K);
+    fs << "distortion_coefficients" << cv::Mat(dist).t() << "distortion_model"
+       << "plumb_bob";
+  }
+  lp::LayoutSpec spec(lp::Layout::Lens);
+  spec.lens = lp::makeLensModel(lp::readLensCalibration(file));
+  spec.unseen.fill = lp::UnseenRule::Fill::Black;
+  // Each pixel's 2x2 sub-pixel rays (OpenCV coordinates: pixel centres whole), undistorted.
+  std::vector<cv::Point2d> at, normal;
+  for (int y = 0; y < kH; ++y)
+    for (int x = 0; x < kW; ++x)
+      for (const double b : {-0.25, 0.25})
+        for (const double a : {-0.25, 0.25}) at.emplace_back(x + a, y + b);
+  cv::undistortPoints(
+      at, normal, K, dist, cv::noArray(), cv::noArray(),
+      cv::TermCriteria(cv::TermCriteria::COUNT | cv::TermCriteria::EPS, 100, 1e-14));
+  {  // the rays land where they came from
+    std::vector<cv::Point3d> rays;
+    std::vector<cv::Point2d> back;
+    for (std::size_t i = 0; i < at.size(); i += 9973)
+      rays.emplace_back(normal[i].x, normal[i].y, 1);
+    cv::projectPoints(rays, cv::Vec3d(0, 0, 0), cv::Vec3d(0, 0, 0), K, dist, back);
+    for (std::size_t i = 0, j = 0; i < at.size(); i += 9973, ++j)
+      ASSERT_LT(cv::norm(back[j] - at[i]), 1e-3) << at[i];
+  }
+  for (const double degrees : {0.0, 35.0}) {
+    const glm::dmat3 world = tilt(degrees);
+    lp::Image frame(kW, kH);
+    for (std::size_t p = 0; p < std::size_t(kW) * kH; ++p) {
+      glm::vec3 sum(0.0f);
+      for (std::size_t s = 4 * p; s < 4 * p + 4; ++s)
+        sum += mapAt(map, world * glm::normalize(glm::dvec3(normal[s].x, normal[s].y, 1.0))) / 4.0f;
+      std::copy(&sum[0], &sum[0] + 3, &frame.rgb[3 * p]);
+    }
+    // The truth: the map's own pixels whose centres the lens images inside the frame. (Past the
+    // radius where the radial distortion turns back, r (1 + k1 r^2 + k2 r^4 + k3 r^6) falls again
+    // and projectPoints folds directions the lens does not see back into the frame.)
+    const auto samples = lp::equirectSamples(map.width, map.height);
+    double turn = 0;
+    while (1 + 3 * dist[0] * turn * turn + 5 * dist[1] * std::pow(turn, 4) +
+               7 * dist[4] * std::pow(turn, 6) >
+           0)
+      turn += 1e-3;
+    std::vector<cv::Point3d> dirs;
+    std::vector<std::size_t> index;
+    for (std::size_t i = 0; i < samples.size(); ++i) {
+      const glm::dvec3 d = glm::transpose(world) * glm::dvec3(samples[i].dir);
+      if (d.z > 0 && std::hypot(d.x, d.y) < turn * d.z)
+        dirs.emplace_back(d.x, d.y, d.z), index.push_back(i);
+    }
+    std::vector<cv::Point2d> px;
+    cv::projectPoints(dirs, cv::Vec3d(0, 0, 0), cv::Vec3d(0, 0, 0), K, dist, px);
+    std::array<glm::dvec3, 9> seen{};
+    for (std::size_t j = 0; j < dirs.size(); ++j) {
+      if (!(px[j].x >= -0.5 && px[j].x < kW - 0.5 && px[j].y >= -0.5 && px[j].y < kH - 0.5))
+        continue;
+      const std::size_t i = index[j];
+      const glm::dvec3 l(map.rgb[3 * i], map.rgb[3 * i + 1], map.rgb[3 * i + 2]);
+      const auto y =
+          lp::shBasis(glm::vec3(glm::normalize(glm::dvec3(dirs[j].x, dirs[j].y, dirs[j].z))));
+      for (int k = 0; k < 9; ++k) seen[k] += l * double(y[k]) * double(samples[i].solidAngle);
+    }
+    lp::Sh9 want;
+    for (int k = 0; k < 9; ++k) want.c[k] = glm::vec3(seen[k]);
+    const lp::Projector projector(spec, kW, kH);
+    const lp::Sh9 got = projector.project(lp::PanoramaView::rgbF32(frame.rgb.data(), kW, kH, spec));
+    std::printf("pinhole, %.0f degrees: %.3f%% of the seen part's L00, coverage %.4f\n", degrees,
+                100 * worstOfL00(got, want), projector.coverage());
+    EXPECT_LT(worstOfL00(got, want), 0.005) << degrees;
+  }
+}
+
 TEST(Lens, TheProjectionCountsEachPixelWithTheWeightsAGpuUploads) {
   // The CPU projects a lens frame from each pixel's direction and solid angle, plus one sum for
   // the ground and extra weights on the edge; Projector::blockedWeights() holds every pixel's
