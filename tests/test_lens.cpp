@@ -373,6 +373,41 @@ TEST(Lens, APinholeFrameIsTheMapsPixelsItSees) {
   }
 }
 
+// --unseen mean against a map whose edge is known: radiance a + b z + c x in the camera's frame
+// (per channel), so the seen hemisphere's rim (z = 0) averages a whatever the tilt; the truth is
+// the map's pixels where the lens sees plus a over the rest.
+TEST(Lens, TheMeanFillIsTheMeanRadianceOfTheSeenEdge) {
+  FisheyeCamera camera;
+  camera.spec.unseen.fill = lp::UnseenRule::Fill::Mean;
+  const glm::dvec3 a(1.0, 0.8, 0.5), b(0.6, 0.5, 0.4), c(0.3, -0.2, 0.1);
+  for (const double degrees : {0.0, 35.0}) {
+    const glm::dmat3 world = tilt(degrees);
+    lp::Image map(1024, 512);
+    const auto samples = lp::equirectSamples(map.width, map.height);
+    for (std::size_t i = 0; i < samples.size(); ++i) {
+      const glm::dvec3 d = glm::transpose(world) * glm::dvec3(samples[i].dir);
+      const glm::dvec3 l = a + b * d.z + c * d.x;
+      for (int ch = 0; ch < 3; ++ch) map.rgb[3 * i + std::size_t(ch)] = float(l[ch]);
+    }
+    std::array<glm::dvec3, 9> sum{};
+    for (std::size_t i = 0; i < samples.size(); ++i) {
+      const glm::dvec3 d = glm::transpose(world) * glm::dvec3(samples[i].dir);
+      const glm::dvec3 l =
+          d.z > 0 ? glm::dvec3(map.rgb[3 * i], map.rgb[3 * i + 1], map.rgb[3 * i + 2]) : a;
+      const auto y = lp::shBasis(glm::vec3(d));
+      for (int k = 0; k < 9; ++k) sum[k] += l * double(y[k]) * double(samples[i].solidAngle);
+    }
+    lp::Sh9 want;
+    for (int k = 0; k < 9; ++k) want.c[k] = glm::vec3(sum[k]);
+    const lp::Image frame = fisheyeFrame(map, camera.kb, world);
+    const lp::Projector projector(camera.spec, frame.width, frame.height);
+    const lp::Sh9 got = projector.project(
+        lp::PanoramaView::rgbF32(frame.rgb.data(), frame.width, frame.height, camera.spec));
+    std::printf("mean fill, %.0f degrees: %.3f%% of L00\n", degrees, 100 * worstOfL00(got, want));
+    EXPECT_LT(worstOfL00(got, want), 0.005) << degrees;
+  }
+}
+
 TEST(Lens, TheProjectionCountsEachPixelWithTheWeightsAGpuUploads) {
   // The CPU projects a lens frame from each pixel's direction and solid angle, plus one sum for
   // the ground and extra weights on the edge; Projector::blockedWeights() holds every pixel's
