@@ -6,6 +6,8 @@
 #include <fstream>
 #include <nlohmann/json.hpp>
 #include <numbers>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
 #include <opencv2/videoio.hpp>
 #include <random>
 #include <regex>
@@ -313,6 +315,27 @@ TEST(ReplayCli, CubeFaceFolderIsReadAsACube) {
   EXPECT_NEAR(lines[0]["coefficients"]["L00"][0].get<double>(), truth.c[0][0],
               1e-4 * truth.c[0][0]);
   expectOneLineError("coeffs " + dir + " --layout equirect", dir, "cube");
+}
+
+// A stream of a lens's frames is the lens as calibrated at its own size, said to be the lens
+// scaled at twice it (the same aspect), whatever backdrop the display draws.
+TEST(ReplayCli, AStreamOfAScaledLensSaysSo) {
+  const std::string dir = std::string(LIVEPROBE_SOURCE_DIR) + "/recordings/fisheye/";
+  const auto own =
+      runLiveprobe("replay " + dir + "sky.exr --lens " + dir + "lens.yaml --headless --frames 2");
+  EXPECT_EQ(own.exitCode, 0) << own.output;
+  EXPECT_EQ(own.output.find("scaled"), std::string::npos) << own.output;
+  lpt::TempDir tmp;
+  cv::Mat frame = cv::imread(dir + "sky.exr", cv::IMREAD_UNCHANGED), twice;
+  ASSERT_FALSE(frame.empty());
+  cv::resize(frame, twice, cv::Size(), 2.0, 2.0, cv::INTER_LINEAR);
+  ASSERT_TRUE(cv::imwrite(tmp / "twice.exr", twice));
+  for (const std::string more : {"", " --no-background"}) {
+    const auto r = runLiveprobe("replay " + tmp / "twice.exr" + " --lens " + dir +
+                                "lens.yaml --headless --frames 2" + more);
+    EXPECT_EQ(r.exitCode, 0) << r.output;
+    EXPECT_NE(r.output.find("scaled to this 1280x960 frame"), std::string::npos) << r.output;
+  }
 }
 
 TEST(ReplayCli, EveryLayoutOption) {

@@ -234,12 +234,13 @@ struct StreamView {
   double use(const ProcessedFrame& f) {
     StageClock clock;
     const Background& b = f.background;
-    if (!haveLighting && !b.empty()) {  // the first frame: does its shape fit the layout?
-      // A lens's (or a traced ball's) background is the frame resampled to an equirect: not
-      // the frame whose size the lens would be scaled to.
-      LayoutSpec shown = layout;
-      if (!displayDrawsAsIs(shown)) shown.lens.reset();
-      warnIfLayoutLooksWrong(source, shown, layoutGiven, b.width(), b.height(),
+    if (!haveLighting && layout.lens) {  // the first frame: is it the lens scaled?
+      // (A lens's, or a traced ball's, background is the frame resampled to an equirect: the
+      // lens is asked about the frame itself.)
+      const std::string scaled = layout.lens->scaling(f.width, f.height);
+      if (!scaled.empty()) warn(source + ": " + scaled);
+    } else if (!haveLighting && !b.empty()) {  // does the frame's shape fit the layout?
+      warnIfLayoutLooksWrong(source, layout, layoutGiven, b.width(), b.height(),
                              b.image ? b.image->rgb.data() : nullptr);
     }
     if (!haveLighting && autoExposure)

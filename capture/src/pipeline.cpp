@@ -281,6 +281,7 @@ void CapturePipeline::run() {
       ProcessedFrame out;
       out.index = s.index++;
       out.sequence = s.frame->sequence;
+      out.width = s.frame->width, out.height = s.frame->height;
       out.timestamp = s.lastTimestamp;
       if (s.merger) {
         merge(s, out);
