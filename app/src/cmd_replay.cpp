@@ -13,7 +13,6 @@
 #include "liveprobe/capture/open_source.h"
 #include "liveprobe/capture/pipeline.h"
 #include "liveprobe/capture/recorder.h"
-#include "liveprobe/capture/resample.h"
 #include "liveprobe/hdr/bracketed_source.h"
 #include "liveprobe/sh/error.h"
 #include "progress.h"
