@@ -5,19 +5,24 @@
 // the source tree, under Xvfb (so the window path is taken, as on a desktop), and for `live` and
 // `calibrate` against the emulated camera (tests/v4l2emu) standing in for the device it names
 // (bracketing and calibration with its metadata node, a control delay of two frames, and the
-// synthetic sky's HDR frames). It must exit 0, or with the status a trailing "# exits N" gives;
-// one marked "# runs until Esc or Ctrl-C" must still be running after a few seconds, and then stop
-// cleanly on SIGINT (exit 130).
+// synthetic sky's HDR frames); `live` of a network camera against a server on 127.0.0.1 standing
+// in for the one its URL names (http: the motion-JPEG camera of tests/scripts serving the
+// mirror-ball JPEG of recordings/ball; rtsp: GStreamer's RTSP server streaming the 360 video
+// data/video/pano.mp4), the URL's host and port made that server's. It must exit 0, or with the
+// status a trailing "# exits N" gives; one marked "# runs until Esc or Ctrl-C" must still be
+// running after a few seconds, and then stop cleanly on SIGINT (exit 130).
 #include <gtest/gtest.h>
 
 #include <algorithm>
 #include <cmath>
 #include <fstream>
+#include <memory>
 #include <opencv2/imgcodecs.hpp>
 #include <regex>
 #include <set>
 #include <sstream>
 
+#include "server_process.h"
 #include "sky_frames.h"
 #include "test_util.h"
 
@@ -156,10 +161,28 @@ TEST_P(ReadmeExample, RunsAsWritten) {
                 : std::string()) +
            "; ";
   }
-  const std::string run = e.endless ? env + e.command +
+  // A network camera: a server on 127.0.0.1 stands in for the one the URL names.
+  std::string command = e.command;
+  std::unique_ptr<lpt::ServerProcess> server;
+  if (std::regex_search(
+          command, m, std::regex(R"(^liveprobe live (http|rtsp)://([^@/ ]*@)?[^/ ]+(/[^ ?]*))"))) {
+    const std::string scripts = std::string(LIVEPROBE_SOURCE_DIR) + "/tests/scripts/";
+    server = std::make_unique<lpt::ServerProcess>(
+        m[1] == "http" ? std::vector<std::string>{"python3", scripts + "mjpeg_camera.py",
+                                                  std::string(LIVEPROBE_SOURCE_DIR) +
+                                                      "/recordings/ball/ball.jpg"}
+                       : std::vector<std::string>{
+                             "/usr/bin/python3", scripts + "rtsp_server.py",
+                             std::string(LIVEPROBE_DATA_DIR) + "/video/pano.mp4", m[3].str()});
+    const std::string port = server->firstLine();
+    ASSERT_FALSE(port.empty()) << "no server for " << e.command;
+    command = "liveprobe live " + m[1].str() + "://" + m[2].str() + "127.0.0.1:" + port +
+              command.substr(std::size_t(m.position(3)));
+  }
+  const std::string run = e.endless ? env + command +
                                           " & pid=$!; sleep 6; kill -0 $pid 2>/dev/null && echo "
                                           "still-running; kill -INT $pid; wait $pid; echo rc=$?"
-                                    : env + e.command + "\necho rc=$?";
+                                    : env + command + "\necho rc=$?";
   const std::string cmd = "cd " + lpt::shellQuote(work.string()) + " && timeout -k 10 400 " +
                           lpt::xvfbRun("1600x1000x24") + "bash -c " + lpt::shellQuote(run);
   const std::string out = lpt::runCommand(cmd).output;

@@ -13,6 +13,7 @@
 #include "environment.h"
 #include "liveprobe/backends.h"
 #include "liveprobe/capture/atomic_file.h"
+#include "liveprobe/capture/network.h"
 #include "liveprobe/capture/recorder.h"
 #include "liveprobe/capture/v4l2.h"
 #include "liveprobe/hdr/bracketing.h"
@@ -150,11 +151,11 @@ std::unique_ptr<FrameSource> startBracket(std::unique_ptr<V4l2Source> camera,
 
 const CommandSpec kLiveSpec{
     "live",
-    "DEVICE",
+    "DEVICE|URL",
     "A live light probe: streams a V4L2 camera (a 360 camera over UVC, or a webcam looking at a\n"
-    "chrome ball with --layout mirrorball --circle cx,cy,r), re-projects the nine coefficients "
-    "every\n"
-    "frame and lights the model with them. Capture runs on its own thread and is never held back\n"
+    "chrome ball with --layout mirrorball --circle cx,cy,r) or a camera on the network (rtsp://,\n"
+    "http://, srt://, udp://), re-projects the nine coefficients every frame and lights the model\n"
+    "with them. Capture runs on its own thread and is never held back\n"
     "by drawing. --record saves the stream as it runs, for replay. --bracket makes HDR from an\n"
     "8-bit camera (docs/hdr.md).",
     [] {
@@ -173,9 +174,21 @@ const CommandSpec kLiveSpec{
                          false,
                          g};
       bracket.set = [](Settings& s, const std::string& v) { s.live.bracket = bracketStops(v); };
+      OptionSpec reconnect = declared(
+          "--reconnect", "SECONDS",
+          withRange("a network stream that ends or stalls past --timeout is opened again, "
+                    "waiting 0.25 s, then twice as long each try, up to SECONDS between tries "
+                    "(0: the run ends instead)",
+                    rangeText({0, 3600}), "10"),
+          g);
+      reconnect.set = [](Settings& s, const std::string& v) {
+        s.live.reconnect = parseNumberIn("--reconnect", v, {0, 3600});
+      };
       o.insert(
           o.end(),
-          {bracket,
+          {bracket, reconnect,
+           choiceOption("--rtsp-transport", "how an rtsp:// stream is carried", {"tcp", "udp"},
+                        "tcp", LP_FIELD(live.rtspTransport), g),
            fileOption("--record", "FILE",
                       "save the camera stream while it runs: .mkv (FFV1), .avi (MJPEG), "
                       ".mp4 (H.264), or frames: %04d.png (the codes), %04d.exr (radiance); "
@@ -189,7 +202,8 @@ const CommandSpec kLiveSpec{
     }(),
     1,
     1,
-    "a V4L2 video-capture node, e.g. /dev/video0",
+    "a V4L2 video-capture node, e.g. /dev/video0, or a network stream's URL (rtsp://, "
+    "http(s)://, srt://, udp://, rtp://, tcp://)",
     [](const Settings& s) {
       checkStreamOptions(s);
       if (s.live.metadata && s.live.bracket.empty()) throw Error("--metadata goes with --bracket");
@@ -200,10 +214,62 @@ const CommandSpec kLiveSpec{
         }
     }};
 
-#if LIVEPROBE_WITH_V4L2
+namespace {
+int runCameraLive(const Args& a);
+
+#if LIVEPROBE_WITH_NETWORK
+/// live URL: a camera on the network, read through FFmpeg, reconnecting.
+int runNetworkLive(const Args& a, const std::string& url) {
+  const Settings& s = a.settings();
+  // What only a V4L2 camera is asked: a network camera sends what it was set up to send.
+  auto refuse = [&](bool given, const char* option, const char* what) {
+    if (given)
+      throw Error(std::string(option) + " " + what + ", which " + redactUrl(url) +
+                  " (a network stream) has not: set its camera up on the camera itself");
+  };
+  refuse(!s.live.bracket.empty(), "--bracket", "needs a V4L2 camera's exposure control");
+  refuse(s.live.lockExposure.has_value(), "--lock-exposure",
+         "needs a V4L2 camera's exposure control");
+  refuse(s.live.metadata.has_value(), "--metadata", "needs a V4L2 camera's metadata node");
+  refuse(s.camera.format != CameraFormat::Auto, "--pixel-format", "asks a V4L2 camera");
+  refuse(s.output.size.has_value(), "--size", "asks a V4L2 camera");
+  refuse(s.stream.fps.has_value(), "--fps", "asks a V4L2 camera");
+  NetworkSettings n;
+  n.url = url;
+  n.timeoutMs = s.camera.timeoutMs;
+  n.reconnectSeconds = s.live.reconnect;
+  n.rtspUdp = s.live.rtspTransport == "udp";
+  n.mjpegReduce = s.camera.mjpegReduce;
+  n.say = [](const std::string& line) {
+    std::fprintf(stderr, "liveprobe live: %s\n", line.c_str());
+  };
+  n.interrupted = stopRequested;
+  installStopHandlers();  // a Ctrl-C while connecting ends the wait
+  auto source = openNetwork(std::move(n));
+  std::fprintf(stderr, "liveprobe live: %s%s\n", source->describe().c_str(),
+               s.output.frames || s.output.duration ? "" : "; running until Ctrl-C");
+  return runStreamForLive(a, std::move(source));
+}
+#endif
+}  // namespace
+
 int runLive(const Args& a) {
   const Settings& s = a.settings();
   layoutSpec(s.panorama);
+  const std::string& name = a.positional()[0];
+  if (isNetworkUrl(name)) {
+    requireBackend(OptionalBackend::Network, redactUrl(name));
+#if LIVEPROBE_WITH_NETWORK
+    return runNetworkLive(a, name);
+#endif
+  }
+  return runCameraLive(a);
+}
+
+namespace {
+#if LIVEPROBE_WITH_V4L2
+int runCameraLive(const Args& a) {
+  const Settings& s = a.settings();
   CameraSettings cs = cameraSettingsFrom(a.positional()[0], s);
   const std::vector<double>& stops = s.live.bracket;
   if (!stops.empty()) cs.metadataDevice = s.live.metadata.value_or(siblingMetadataNode(cs.device));
@@ -220,11 +286,12 @@ int runLive(const Args& a) {
   return runStreamForLive(a, std::move(camera));
 }
 #else
-int runLive(const Args&) {
+int runCameraLive(const Args&) {
   requireBackend(OptionalBackend::V4l2, "");
   return 1;
 }
 #endif
+}  // namespace
 
 namespace {
 /// --stops LO,HI: whole stops from the locked exposure, -20 <= LO < HI <= 20.

@@ -99,7 +99,7 @@ const std::vector<Command>& commands() {
       {kViewSpec, runView, "an interactive window (orbit, zoom)"},
       {kReplaySpec, runReplay, "a stream re-projected every frame, lighting a model"},
       {kRecordSpec, runRecord, "save a source for replay (FFV1 or MJPEG, with timestamps)"},
-      {kLiveSpec, runLive, "a live light probe from a V4L2 camera"},
+      {kLiveSpec, runLive, "a live light probe from a V4L2 or network camera"},
       {kDevicesSpec, runDevices, "list cameras: formats, sizes, frame rates, controls"},
       {kCalibrateSpec, runCalibrate, "a camera's response curve, for --response"},
       {kCalibrateLensSpec, runCalibrateLens,
@@ -127,6 +127,9 @@ BackendInfo backendInfo(OptionalBackend b) {
               "LIVEPROBE_WITH_STREAM"};
     case OptionalBackend::Mqtt:
       return {LIVEPROBE_WITH_MQTT, "MQTT", "MQTT", "LIVEPROBE_WITH_MQTT"};
+    case OptionalBackend::Network:
+      return {LIVEPROBE_WITH_NETWORK, "network streams", "network streams (FFmpeg)",
+              "LIVEPROBE_WITH_NETWORK"};
   }
   return {false, "?", "?", "?"};
 }
@@ -144,7 +147,7 @@ void requireBackend(OptionalBackend b, const std::string& what, const std::strin
 std::string backendsLine() {
   std::string with, without;
   for (OptionalBackend b : {OptionalBackend::Window, OptionalBackend::V4l2, OptionalBackend::Stream,
-                            OptionalBackend::Mqtt}) {
+                            OptionalBackend::Mqtt, OptionalBackend::Network}) {
     const BackendInfo info = backendInfo(b);
     std::string& list = info.built ? with : without;
     list += std::string(list.empty() ? "" : ", ") + info.label;

@@ -24,7 +24,7 @@ struct Command {
 const std::vector<Command>& commands();
 
 /// The optional parts of a build (CMake's LIVEPROBE_WITH_*, liveprobe/backends.h).
-enum class OptionalBackend : std::uint8_t { Window, V4l2, Stream, Mqtt };
+enum class OptionalBackend : std::uint8_t { Window, V4l2, Stream, Mqtt, Network };
 /// Whether this build has it.
 bool builtIn(OptionalBackend b);
 /// The GL contexts this build can open, for --version: "window (GLFW), EGL headless (devices:

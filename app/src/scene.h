@@ -16,7 +16,8 @@
 /// What a stream command's SOURCE may be, for the commands' help.
 #define LP_SOURCE_KINDS                                                                        \
   "a video, an image sequence (a folder, or a frame-number pattern like frames/%04d.png), an " \
-  "image, a folder of six cube faces, or synthetic[:WxH[@FPS]]"
+  "image, a folder of six cube faces, synthetic[:WxH[@FPS]], or a URL (http(s)://, rtsp://, "  \
+  "srt://, ...: a file or a stream on a server)"
 
 namespace lp::cli {
 

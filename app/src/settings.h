@@ -105,6 +105,8 @@ struct LiveSettings {
   std::optional<double> lockExposure;   ///< seconds to settle, when --lock-exposure is given
   std::optional<std::string> metadata;  ///< --metadata (none: the node after the device's)
   std::vector<double> bracket;          ///< stops, when given
+  double reconnect = 10;                ///< --reconnect: the longest wait between tries, s
+  std::string rtspTransport = "tcp";    ///< --rtsp-transport
   std::array<double, 2> stops = {-6, 3};
   int settle = 8;
 };

@@ -72,7 +72,7 @@ void printSummary(const std::string& description, const PipelineStats& st, const
   std::fprintf(
       stderr,
       "liveprobe: %s: %zu frames captured, %zu drawn, %zu dropped (stale), %zu skipped "
-      "(corrupt)%s%s%s%s\n"
+      "(corrupt)%s%s%s%s%s\n"
       "  median ms: %s; saturated values %.1f per frame\n",
       description.c_str(), st.captured, t.drawn, st.dropped, st.skipped,
       st.unidentified == 0
@@ -80,6 +80,12 @@ void printSummary(const std::string& description, const PipelineStats& st, const
           : (", " + std::to_string(st.unidentified) + " left out of the bracket (" +
              (st.unidentifiedReport.empty() ? "exposure not told" : st.unidentifiedReport) + ")")
                 .c_str(),
+      ((st.stale == 0 ? std::string()
+                      : ", " + std::to_string(st.stale) + " replaced at the source (stale)") +
+       (st.reconnects == 0 ? std::string()
+                           : ", " + std::to_string(st.reconnects) +
+                                 (st.reconnects == 1 ? " reconnect" : " reconnects")))
+          .c_str(),
       st.endReason.empty() ? "" : "; ", st.endReason.c_str(),
       interrupted ? "; stopped by a signal" : "", stageMedians(t).c_str(),
       t.frames() == 0 ? 0.0 : double(t.saturated) / double(t.frames()));

@@ -281,6 +281,7 @@ void CapturePipeline::run() {
       ProcessedFrame out;
       out.index = s.index++;
       out.sequence = s.frame->sequence;
+      out.reconnects = source_->reconnects();
       out.width = s.frame->width, out.height = s.frame->height;
       out.timestamp = s.lastTimestamp;
       if (s.merger) {
@@ -310,6 +311,8 @@ void CapturePipeline::run() {
       stats_.unidentifiedReport = b->unidentifiedReport();
     }
     stats_.endReason = source_->endReason();
+    stats_.reconnects = source_->reconnects();
+    stats_.stale = source_->staleFrames();
     finished_ = true;
   }
   cv_.notify_all();

@@ -10,7 +10,9 @@
 #include <opencv2/videoio.hpp>
 #include <optional>
 
+#include "liveprobe/backends.h"
 #include "liveprobe/capture/image.h"
+#include "liveprobe/capture/network.h"
 #include "liveprobe/capture/open_source.h"
 #include "liveprobe/capture/recorder.h"
 #include "liveprobe/frame/input_file.h"
@@ -374,6 +376,18 @@ std::unique_ptr<FrameSource> openSource(const std::string& spec, const SourceOpt
     if (spec.size() > 9 && !parseSyntheticSpec(spec.substr(9), w, h, fps))
       throw Error(spec + ": expected synthetic[:WxH[@FPS]], W 4-16384, H 2-16384, FPS up to 1000");
     return openSynthetic(w, h, fps);
+  }
+  if (isNetworkUrl(spec)) {
+#if LIVEPROBE_WITH_NETWORK
+    NetworkSettings n;
+    n.url = spec;
+    n.mode = NetworkSettings::Mode::Every;
+    n.timeoutMs = options.timeoutMs;
+    return openNetwork(std::move(n));
+#else
+    throw Error(redactUrl(spec) +
+                ": this liveprobe was built without network streams (LIVEPROBE_WITH_NETWORK)");
+#endif
   }
   std::error_code ec;
   if (fs::is_directory(spec, ec)) {

@@ -446,6 +446,7 @@ std::string frameRecord(const ProcessedFrame& f, const CoeffFormat& format, Reco
   l["coefficients"] = f.coefficientsLatencyMs;
   if (t.shownLatencyMs >= 0) l["shown"] = t.shownLatencyMs;
   j["latency_ms"] = l;
+  if (f.reconnects > 0) j["reconnects"] = f.reconnects;
   return j.dump();
 }
 

@@ -10,7 +10,8 @@
 namespace lp {
 
 struct SourceOptions {
-  double fps = 30.0;  ///< for image sequences and stills, which carry no timing
+  double fps = 30.0;      ///< for image sequences and stills, which carry no timing
+  int timeoutMs = 10000;  ///< a URL: connecting, and the longest wait for a frame
 };
 
 /// Opens SOURCE:
@@ -20,6 +21,8 @@ struct SourceOptions {
 ///   PATTERN with %d or %0Nd     an image sequence by frame number (frame_%04d.png; the one
 ///                               pattern is parsed here, never used as a printf format)
 ///   *.mp4|webm|mkv|avi|mov|m4v  a video file, decoded by FFmpeg through OpenCV
+///   rtsp|http(s)|srt|udp|...:// a stream or a file on a server, read frame by frame through
+///                               FFmpeg (liveprobe/capture/network.h)
 ///   anything else               a still image
 /// Throws lp::Error naming the source on failure.
 std::unique_ptr<FrameSource> openSource(const std::string& spec, const SourceOptions& options = {});

@@ -84,8 +84,10 @@ struct PipelineStats {
   /// contradicted the others), and of them those that disagreed on most of the power they kept
   /// (FrameConfidence::agreement under 0.5): a response other than the camera's does so.
   std::size_t mergesTelling = 0, mergesDisagreeing = 0;
-  std::string endReason;  ///< why the source ended early, if it did
-  std::string error;      ///< the fatal error that stopped capture, if any
+  std::string endReason;       ///< why the source ended early, if it did
+  std::size_t reconnects = 0;  ///< times the source reopened its stream (a network camera)
+  std::size_t stale = 0;       ///< frames the source replaced before capture took them
+  std::string error;           ///< the fatal error that stopped capture, if any
 };
 
 /// Exponential moving average of coefficients: alpha = 1 - exp(-dt / tau). Exact on SH because

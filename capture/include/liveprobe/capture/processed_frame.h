@@ -38,6 +38,7 @@ struct Background {
 struct ProcessedFrame {
   std::uint64_t index = 0;     ///< position in this pipeline's output, from 0
   std::uint64_t sequence = 0;  ///< the source's frame number
+  std::size_t reconnects = 0;  ///< times the source had reopened its stream when it sent this
   int width = 0, height = 0;   ///< the source frame's size (a merged bracket's: its frames')
   double timestamp = 0;        ///< the source's timestamp, seconds
   Sh9 radiance;    ///< after orientation and smoothing (with lights: the residual, the sky)

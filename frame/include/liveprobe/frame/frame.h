@@ -2,6 +2,7 @@
 // Frames and the one small interface of the sources that produce them (still images, image
 // sequences, cube-face sets, video files, a synthetic sky, V4L2 cameras: liveprobe::capture,
 // whose factory is openSource() in liveprobe/capture/open_source.h).
+#include <cstddef>
 #include <cstdint>
 #include <glm/glm.hpp>
 #include <memory>
@@ -65,6 +66,14 @@ class FrameSource {
   /// Frames from the first to the end, where the source knows it (a file: a video's own count,
   /// a sequence's files); -1 for an endless source (synthetic, a camera) or an unknown length.
   virtual std::int64_t frameCount() const { return -1; }
+  /// Times the source lost its stream and opened it again (a network camera); 0 for the rest.
+  virtual std::size_t reconnects() const { return 0; }
+  /// Frames the source itself replaced by newer ones before next() took them (a network
+  /// camera's reader keeps only the newest); 0 for the rest.
+  virtual std::size_t staleFrames() const { return 0; }
+  /// Ends a next() that waits (a network stream between reconnection tries): it returns false.
+  /// Thread-safe; called by whoever stops the thread that reads the source.
+  virtual void interrupt() {}
 };
 
 }  // namespace lp

@@ -1,0 +1,510 @@
+// Network streams through FFmpeg (liveprobe/capture/network.h).
+#include <algorithm>
+#include <atomic>
+#include <cctype>
+#include <chrono>
+#include <condition_variable>
+#include <cstdarg>
+#include <cstdio>
+#include <deque>
+#include <mutex>
+#include <opencv2/imgcodecs.hpp>
+#include <optional>
+#include <thread>
+#include <utility>
+
+#include "liveprobe/capture/network.h"
+#include "liveprobe/sh/error.h"
+
+extern "C" {
+#include <libavcodec/avcodec.h>
+#include <libavformat/avformat.h>
+#include <libavutil/imgutils.h>
+#include <libswscale/swscale.h>
+}
+
+namespace lp {
+
+namespace {
+
+std::string lower(std::string s) {
+  for (char& c : s) c = char(std::tolower(static_cast<unsigned char>(c)));
+  return s;
+}
+
+/// Every URL in free text (FFmpeg's own messages) redacted.
+std::string scrubUrls(std::string text) {
+  for (std::size_t at = text.find("://"); at != std::string::npos; at = text.find("://", at + 3)) {
+    std::size_t begin = at;
+    while (begin > 0 && std::isalpha(static_cast<unsigned char>(text[begin - 1]))) --begin;
+    std::size_t end = at + 3;
+    while (end < text.size() && !std::isspace(static_cast<unsigned char>(text[end])) &&
+           text[end] != '\'' && text[end] != '"')
+      ++end;
+    const std::string clean = redactUrl(text.substr(begin, end - begin));
+    text.replace(begin, end - begin, clean);
+    at = begin + clean.size() - 3;
+  }
+  return text;
+}
+
+// FFmpeg's messages: the last error on this thread, kept to explain a failure in one line (FFmpeg
+// says "Failed to resolve hostname" where its return code says only "I/O error"); nothing is
+// printed.
+thread_local std::string tLastMessage;
+void keepLastError(void*, int level, const char* format, va_list args) {
+  if (level > AV_LOG_ERROR) return;
+  char line[512];
+  std::vsnprintf(line, sizeof line, format, args);
+  std::string s = line;
+  while (!s.empty() && (s.back() == '\n' || s.back() == ' ')) s.pop_back();
+  if (!s.empty()) tLastMessage = s;
+}
+
+std::string avError(int err) {
+  char b[AV_ERROR_MAX_STRING_SIZE] = {};
+  av_strerror(err, b, sizeof b);
+  return b;
+}
+
+/// What a failed open or read means, for a person.
+std::string whyFailed(int err, double timeoutSeconds) {
+  if (err == AVERROR_EXIT || err == AVERROR(ETIMEDOUT))
+    return "timed out (nothing within " + formatNumber(timeoutSeconds) + " s)";
+  if (err == AVERROR(ECONNREFUSED)) return "connection refused";
+  if (err == AVERROR_HTTP_NOT_FOUND || err == AVERROR(ENOENT)) return "not found";
+  if (err == AVERROR_HTTP_UNAUTHORIZED || err == AVERROR_HTTP_FORBIDDEN)
+    return "unauthorized (wrong or missing credentials)";
+  if (err == AVERROR(EHOSTUNREACH) || err == AVERROR(ENETUNREACH)) return "host unreachable";
+  if (err == AVERROR_EOF) return "the stream ended";
+  std::string why = avError(err);
+  if (!tLastMessage.empty()) why += " (" + scrubUrls(tLastMessage) + ")";
+  return why;
+}
+
+struct FormatClose {
+  void operator()(AVFormatContext* f) const { avformat_close_input(&f); }
+};
+struct CodecFree {
+  void operator()(AVCodecContext* c) const { avcodec_free_context(&c); }
+};
+struct PacketFree {
+  void operator()(AVPacket* p) const { av_packet_free(&p); }
+};
+struct FrameFree {
+  void operator()(AVFrame* f) const { av_frame_free(&f); }
+};
+struct SwsFree {
+  void operator()(SwsContext* s) const { sws_freeContext(s); }
+};
+
+/// A failure of the connection (as opposed to one frame's damage): `code` is FFmpeg's.
+struct StreamError {
+  int code;
+  std::string why;
+};
+
+/// One connection: opened, read packet by packet, decoded to BGR8 frames. Every wait inside
+/// FFmpeg ends at `deadline` (or when `stop` is set) through the interrupt callback.
+class Connection {
+ public:
+  Connection(const NetworkSettings& s, const std::atomic<bool>& stop) : s_(s), stop_(stop) {
+    static std::once_flag network;
+    std::call_once(network, [] { avformat_network_init(); });  // TLS's global state, once
+    tLastMessage.clear();
+    av_log_set_callback(keepLastError);
+    AVFormatContext* raw = avformat_alloc_context();
+    if (!raw) throw StreamError{AVERROR(ENOMEM), "out of memory"};
+    raw->interrupt_callback = {&Connection::interrupted, this};
+    AVDictionary* options = nullptr;
+    const std::string scheme = lower(s.url.substr(0, s.url.find("://")));
+    if (s.mode == NetworkSettings::Mode::Latest) {
+      // Low latency: a second of analysis at most before the first frame, and no reordering
+      // delay. (FFmpeg's "nobuffer" would also drop what the analysis read: an SRT stream then
+      // fails at its first frame.)
+      av_dict_set(&options, "flags", "low_delay", 0);
+      av_dict_set(&options, "analyzeduration", "1000000", 0);
+    }
+    if (scheme == "rtsp" || scheme == "rtsps")
+      av_dict_set(&options, "rtsp_transport", s.rtspUdp ? "udp" : "tcp", 0);
+    if (scheme == "udp") av_dict_set(&options, "overrun_nonfatal", "1", 0);
+    armDeadline();
+    int err = avformat_open_input(&raw, s.url.c_str(), nullptr, &options);
+    av_dict_free(&options);
+    if (err < 0) throw StreamError{err, why(err)};  // raw is freed
+    format_.reset(raw);
+    armDeadline();
+    if ((err = avformat_find_stream_info(raw, nullptr)) < 0) throw StreamError{err, why(err)};
+    const AVCodec* codec = nullptr;
+    stream_ = av_find_best_stream(raw, AVMEDIA_TYPE_VIDEO, -1, -1, &codec, 0);
+    if (stream_ < 0 || !codec)
+      throw StreamError{AVERROR_STREAM_NOT_FOUND, stream_ == AVERROR_DECODER_NOT_FOUND
+                                                      ? "a video FFmpeg has no decoder for"
+                                                      : "not a video (no video stream in it)"};
+    const AVStream* st = raw->streams[stream_];
+    mjpeg_ = st->codecpar->codec_id == AV_CODEC_ID_MJPEG;
+    codecName_ = codec->name;
+    // The stream's own rate; a motion-JPEG multipart stream has none (FFmpeg's 25 is a guess).
+    const bool guessed = std::string(raw->iformat->name) == "mpjpeg";
+    const AVRational rate = st->avg_frame_rate.num > 0 ? st->avg_frame_rate
+                            : guessed                  ? AVRational{0, 1}
+                                                       : st->r_frame_rate;
+    fps_ = rate.num > 0 && rate.den > 0 ? av_q2d(rate) : 0.0;
+    if (fps_ > 1000) fps_ = 0;  // a stream's timebase, not a frame rate
+    frames_ = st->nb_frames > 0 ? std::int64_t(st->nb_frames) : -1;
+    timeBase_ = av_q2d(st->time_base);
+    if (!mjpeg_) {
+      decoder_.reset(avcodec_alloc_context3(codec));
+      if (!decoder_ || avcodec_parameters_to_context(decoder_.get(), st->codecpar) < 0)
+        throw StreamError{AVERROR(ENOMEM), "cannot set up the " + codecName_ + " decoder"};
+      if (s.mode == NetworkSettings::Mode::Latest) {
+        // A frame-threaded decoder holds a frame per thread back: slices only. A stream without
+        // B-frames is decoded without any delay; one with them keeps the reordering it needs
+        // (forced out at once, its frames would come in decoding order), and each frame's
+        // latency counts from its own packet's arrival, so the delay shows in the latency.
+        if (st->codecpar->video_delay == 0) decoder_->flags |= AV_CODEC_FLAG_LOW_DELAY;
+        decoder_->thread_type = FF_THREAD_SLICE;
+      }
+      decoder_->thread_count = 2;
+      if ((err = avcodec_open2(decoder_.get(), codec, nullptr)) < 0)
+        throw StreamError{err, "cannot open the " + codecName_ + " decoder: " + avError(err)};
+      frame_.reset(av_frame_alloc());
+    }
+    packet_.reset(av_packet_alloc());
+    if (!packet_ || (!mjpeg_ && !frame_)) throw StreamError{AVERROR(ENOMEM), "out of memory"};
+    width_ = st->codecpar->width;
+    height_ = st->codecpar->height;
+  }
+
+  /// The next decoded frame (bgr8, sequence and timestamp left to the caller); false at the end
+  /// of the stream. A frame that does not decode is counted in `corrupt` and read past.
+  bool read(Frame& f, std::atomic<std::size_t>& corrupt) {
+    for (;;) {
+      if (!mjpeg_ && receive(f, corrupt)) return true;
+      if (ended_) return false;
+      armDeadline();
+      const int err = av_read_frame(format_.get(), packet_.get());
+      if (err == AVERROR_EOF) {
+        ended_ = true;
+        if (!mjpeg_) avcodec_send_packet(decoder_.get(), nullptr);  // drain what it holds
+        continue;
+      }
+      if (err < 0) throw StreamError{err, why(err)};
+      arrival_ = monotonicSeconds();
+      const bool ours = packet_->stream_index == stream_;
+      if (ours && mjpeg_) {
+        const bool ok = decodeJpeg(f);
+        pts(f);
+        av_packet_unref(packet_.get());
+        if (ok) return true;
+        ++corrupt;
+        continue;
+      }
+      if (ours) {
+        arrivals_.emplace_back(packet_->pts, arrival_);
+        if (arrivals_.size() > 64) arrivals_.pop_front();  // a frame the decoder never gave
+        if (avcodec_send_packet(decoder_.get(), packet_.get()) == AVERROR_INVALIDDATA) ++corrupt;
+      }
+      av_packet_unref(packet_.get());
+    }
+  }
+
+  std::string describe() const {
+    return redactUrl(s_.url) + " (" + (mjpeg_ ? std::string("motion JPEG") : codecName_) + " " +
+           std::to_string(width_) + "x" + std::to_string(height_) +
+           (fps_ > 0 ? " at " + formatFps(fps_) : "") + ")";
+  }
+  double fps() const { return fps_; }
+  std::int64_t frameCount() const { return frames_; }
+  double arrival() const { return arrival_; }
+
+ private:
+  static int interrupted(void* self) {
+    auto* c = static_cast<Connection*>(self);
+    return c->stop_.load() || monotonicSeconds() > c->deadline_ ? 1 : 0;
+  }
+  void armDeadline() { deadline_ = monotonicSeconds() + timeoutSeconds(); }
+  /// A failure past the deadline is the timeout, whatever code a protocol made of it (RTSP
+  /// says "invalid data" for a reply that never came).
+  std::string why(int err) const {
+    return whyFailed(!stop_ && monotonicSeconds() > deadline_ ? AVERROR_EXIT : err,
+                     timeoutSeconds());
+  }
+  double timeoutSeconds() const { return s_.timeoutMs / 1000.0; }
+
+  bool decodeJpeg(Frame& f) {
+    const int reduce = s_.mjpegReduce;
+    const int flags = reduce >= 8   ? cv::IMREAD_REDUCED_COLOR_8
+                      : reduce >= 4 ? cv::IMREAD_REDUCED_COLOR_4
+                      : reduce >= 2 ? cv::IMREAD_REDUCED_COLOR_2
+                                    : cv::IMREAD_COLOR;
+    cv::Mat bgr;
+    try {
+      if (packet_->size >= 2 && packet_->data[0] == 0xFF && packet_->data[1] == 0xD8)
+        bgr = cv::imdecode(cv::Mat(1, packet_->size, CV_8UC1, packet_->data), flags);
+    } catch (const cv::Exception&) {
+      bgr.release();
+    }
+    if (bgr.empty() || bgr.type() != CV_8UC3) return false;
+    store(f, bgr.cols, bgr.rows);
+    for (int y = 0; y < bgr.rows; ++y)
+      std::copy_n(bgr.ptr<std::uint8_t>(y), std::size_t(bgr.cols) * 3,
+                  f.bgr8.data() + std::size_t(y) * std::size_t(bgr.cols) * 3);
+    width_ = bgr.cols * std::max(reduce, 1);
+    height_ = bgr.rows * std::max(reduce, 1);
+    return true;
+  }
+
+  /// A frame the decoder has ready, converted to BGR8 as OpenCV's FFmpeg reader converts a
+  /// file's frames (swscale, bicubic, its default colour matrix): a stream and its file agree.
+  bool receive(Frame& f, std::atomic<std::size_t>& corrupt) {
+    for (;;) {
+      const int err = avcodec_receive_frame(decoder_.get(), frame_.get());
+      if (err == AVERROR(EAGAIN) || err == AVERROR_EOF) return false;
+      if (err < 0) throw StreamError{err, "the " + codecName_ + " decoder failed: " + avError(err)};
+      const AVFrame* in = frame_.get();
+      if (in->decode_error_flags || (in->flags & AV_FRAME_FLAG_CORRUPT) || in->width <= 0 ||
+          in->height <= 0) {
+        ++corrupt;
+        av_frame_unref(frame_.get());
+        continue;
+      }
+      sws_.reset(sws_getCachedContext(sws_.release(), in->width, in->height,
+                                      AVPixelFormat(in->format), in->width, in->height,
+                                      AV_PIX_FMT_BGR24, SWS_BICUBIC, nullptr, nullptr, nullptr));
+      if (!sws_) throw StreamError{AVERROR(EINVAL), "cannot convert the decoder's pixel format"};
+      store(f, in->width, in->height);
+      std::uint8_t* dst[4] = {f.bgr8.data(), nullptr, nullptr, nullptr};
+      const int dstStride[4] = {in->width * 3, 0, 0, 0};
+      sws_scale(sws_.get(), in->data, in->linesize, 0, in->height, dst, dstStride);
+      width_ = in->width;
+      height_ = in->height;
+      const std::int64_t t = in->best_effort_timestamp;
+      f.timestamp = t == AV_NOPTS_VALUE ? -1.0 : double(t) * timeBase_;
+      // The frame's own packet's arrival: a decoder that reorders gives it packets later.
+      const auto own = std::find_if(arrivals_.begin(), arrivals_.end(),
+                                    [&](const auto& a) { return a.first == in->pts; });
+      if (in->pts != AV_NOPTS_VALUE && own != arrivals_.end()) {
+        arrival_ = own->second;
+        arrivals_.erase(own);
+      }
+      av_frame_unref(frame_.get());
+      return true;
+    }
+  }
+
+  void pts(Frame& f) const {
+    const std::int64_t t = packet_->pts != AV_NOPTS_VALUE ? packet_->pts : packet_->dts;
+    f.timestamp = t == AV_NOPTS_VALUE ? -1.0 : double(t) * timeBase_;
+  }
+
+  static void store(Frame& f, int w, int h) {
+    f.width = w;
+    f.height = h;
+    f.format = PanoramaFormat::BgrU8;
+    f.rgb.clear();
+    f.bgr8.resize(std::size_t(w) * std::size_t(h) * 3);
+    f.radianceScale = 1.0;
+  }
+
+  const NetworkSettings& s_;
+  const std::atomic<bool>& stop_;
+  double deadline_ = 0;
+  std::unique_ptr<AVFormatContext, FormatClose> format_;
+  std::unique_ptr<AVCodecContext, CodecFree> decoder_;
+  std::unique_ptr<AVPacket, PacketFree> packet_;
+  std::unique_ptr<AVFrame, FrameFree> frame_;
+  std::unique_ptr<SwsContext, SwsFree> sws_;
+  int stream_ = -1;
+  bool mjpeg_ = false, ended_ = false;
+  std::string codecName_;
+  double fps_ = 0, timeBase_ = 0, arrival_ = -1;
+  std::deque<std::pair<std::int64_t, double>> arrivals_;  ///< packets sent: pts, arrival
+  std::int64_t frames_ = -1;
+  int width_ = 0, height_ = 0;
+};
+
+/// The shared part of both modes: the connection, the frame numbering and the lines said.
+class NetworkSource final : public FrameSource {
+ public:
+  explicit NetworkSource(NetworkSettings s) : s_(std::move(s)), shown_(redactUrl(s_.url)) {
+    connection_ = connect();  // the first failure is the caller's error
+    describe_ = connection_->describe();
+    fps_ = connection_->fps();
+    frames_ = connection_->frameCount();
+    if (s_.mode == NetworkSettings::Mode::Latest) reader_ = std::thread([this] { readLoop(); });
+  }
+  ~NetworkSource() override {
+    interrupt();
+    if (reader_.joinable()) reader_.join();
+  }
+
+  bool next(Frame& f) override {
+    if (s_.mode == NetworkSettings::Mode::Every) return readEvery(f);
+    std::unique_lock lock(mutex_);
+    for (;;) {
+      if (slot_) {
+        f = std::move(*slot_);
+        slot_.reset();
+        return true;
+      }
+      if (!fatal_.empty()) throw Error(fatal_);
+      if (ended_ || stop_) return false;
+      if (s_.interrupted && s_.interrupted()) {
+        endReason_ = "stopped while waiting for " + shown_;
+        return false;
+      }
+      cv_.wait_for(lock, std::chrono::milliseconds(50));
+    }
+  }
+  bool rewind() override { return false; }
+  std::string describe() const override { return describe_; }
+  double fps() const override { return fps_; }
+  std::size_t skippedFrames() const override { return corrupt_; }
+  std::size_t staleFrames() const override { return dropped_; }
+  std::string endReason() const override {
+    std::lock_guard lock(mutex_);
+    return endReason_;
+  }
+  std::int64_t frameCount() const override {
+    return s_.mode == NetworkSettings::Mode::Every ? frames_ : -1;
+  }
+  std::size_t reconnects() const override { return reconnects_; }
+  void interrupt() override {
+    {
+      std::lock_guard lock(mutex_);
+      stop_ = true;
+    }
+    cv_.notify_all();
+  }
+
+ private:
+  std::unique_ptr<Connection> connect() {
+    try {
+      return std::make_unique<Connection>(s_, stop_);
+    } catch (const StreamError& e) {
+      throw Error(shown_ + ": " + e.why);
+    }
+  }
+
+  void number(Frame& f) {
+    f.sequence = sequence_++;
+    f.captureTime = connection_->arrival();
+    if (first_ < 0) first_ = f.captureTime;
+    f.exposure100us.reset();
+    f.gain.reset();
+    f.exposureReported = false;
+  }
+
+  bool readEvery(Frame& f) {
+    try {
+      if (!connection_->read(f, corrupt_)) return false;
+    } catch (const StreamError& e) {
+      endReason_ = "ended: " + e.why;
+      return false;
+    }
+    const double pts = f.timestamp;
+    number(f);
+    if (pts >= 0 && firstPts_ < 0) firstPts_ = pts;
+    f.timestamp = pts >= 0 ? pts - firstPts_ : f.captureTime - first_;
+    return true;
+  }
+
+  // Latest: the reader thread. Decodes every frame (a codec's frames depend on each other) and
+  // keeps the newest; a lost stream is reopened with a backoff, or ends the stream.
+  void readLoop() {
+    for (;;) {
+      Frame f;
+      std::string lost;
+      try {
+        if (connection_->read(f, corrupt_)) {
+          number(f);
+          f.timestamp = f.captureTime - first_;
+          {
+            std::lock_guard lock(mutex_);
+            if (slot_) ++dropped_;
+            slot_ = std::move(f);
+          }
+          cv_.notify_all();
+          continue;
+        }
+        lost = "the stream ended";
+      } catch (const StreamError& e) {
+        lost = e.code == AVERROR_EXIT || e.why.rfind("timed out", 0) == 0
+                   ? "no frame for " + formatNumber(s_.timeoutMs / 1000.0) + " s"
+                   : "the connection dropped (" + e.why + ")";
+      }
+      if (stop_) return;
+      if (!reconnect(lost)) return;
+    }
+  }
+
+  /// Reopens the stream after `why`, waiting 0.25 s, then twice as long each try up to
+  /// reconnectSeconds. False when the stream ends instead (reconnecting off, or a stop).
+  bool reconnect(const std::string& why) {
+    connection_.reset();
+    if (s_.reconnectSeconds <= 0) {
+      std::lock_guard lock(mutex_);
+      if (why == "the stream ended") {
+        ended_ = true;
+        endReason_ = why;
+      } else {
+        fatal_ = shown_ + ": " + why;
+      }
+      cv_.notify_all();
+      return false;
+    }
+    say(shown_ + ": " + why + "; reconnecting (waiting up to " + formatNumber(s_.reconnectSeconds) +
+        " s between tries)");
+    const double lostAt = monotonicSeconds();
+    lastTry_.clear();
+    double wait = 0.25;
+    for (int tries = 1;; ++tries) {
+      {
+        std::unique_lock lock(mutex_);
+        if (cv_.wait_for(lock, std::chrono::duration<double>(wait), [&] { return stop_.load(); }))
+          return false;
+      }
+      try {
+        connection_ = std::make_unique<Connection>(s_, stop_);
+        ++reconnects_;
+        say(shown_ + ": reconnected after " + formatNumber(monotonicSeconds() - lostAt, 3) +
+            " s (" + std::to_string(tries) + (tries == 1 ? " try" : " tries") + ")");
+        return true;
+      } catch (const StreamError& e) {
+        if (stop_) return false;
+        // Said again only when the reason changes: an hour's outage is not an hour of lines.
+        if (e.why != lastTry_) say(shown_ + ": not back yet: " + e.why);
+        lastTry_ = e.why;
+      }
+      wait = std::min(wait * 2, s_.reconnectSeconds);
+    }
+  }
+
+  void say(const std::string& line) const {
+    if (s_.say) s_.say(line);
+  }
+
+  NetworkSettings s_;
+  std::string shown_, describe_;
+  std::atomic<bool> stop_{false};
+  std::unique_ptr<Connection> connection_;
+  std::thread reader_;
+  mutable std::mutex mutex_;
+  std::condition_variable cv_;
+  std::optional<Frame> slot_;
+  bool ended_ = false;
+  std::string fatal_, endReason_, lastTry_;
+  std::uint64_t sequence_ = 0;
+  double first_ = -1, firstPts_ = -1, fps_ = 0;
+  std::int64_t frames_ = -1;
+  std::atomic<std::size_t> corrupt_{0}, dropped_{0}, reconnects_{0};
+};
+
+}  // namespace
+
+std::unique_ptr<FrameSource> openNetwork(NetworkSettings settings) {
+  return std::make_unique<NetworkSource>(std::move(settings));
+}
+
+}  // namespace lp
