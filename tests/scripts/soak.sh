@@ -4,8 +4,9 @@
 # samples) and before shutdown (the last sample may catch the process joining its threads and
 # closing its files), the rest is split into two halves of equal time, A then B:
 # - memory: a leak grows through the run, so B's peak resident memory exceeds A's by what B
-#   leaked; the allocator's arenas (glibc's per-thread heaps, more of them when threads contend
-#   on a busy machine) grow in steps while the threads first meet and then hold, so they move
+#   leaked; the allocator's arenas (glibc's per-thread heaps, capped at two here: their number
+#   otherwise follows how often threads contend, and a load that comes late in the run stepped
+#   B's peak up by 12 MB in CI) grow while the threads first meet and then hold, so they move
 #   A's peak, not B's over A's. B's peak may exceed A's by at most 4 MB plus FRAME_KB, one
 #   decoded frame (a pipeline that meets a busier machine late in the run may hold one more
 #   frame in flight: 6 MB for a 1080p video, seen in CI); 2,000 frames of a 1080p video: a leak
@@ -31,8 +32,11 @@ if [[ $source == /dev/* ]]; then
 else
   run=("$liveprobe" replay "$source" --loop --size 64x36)
 fi
-"${run[@]}" --headless --frames "$frames" --msaa 1 --hud --quiet --coeffs-out "$work/c.jsonl" \
-  > "$work/out.txt" 2>&1 &
+# glibc's malloc arenas capped at two: their number otherwise follows how often threads meet on a
+# busy machine (each new arena steps the resident memory up by megabytes, late in the run under a
+# load that comes late), and a leak, not the machine's load, is what this run judges.
+MALLOC_ARENA_MAX=2 "${run[@]}" --headless --frames "$frames" --msaa 1 --hud --quiet \
+  --coeffs-out "$work/c.jsonl" > "$work/out.txt" 2>&1 &
 pid=$!
 samples=()
 while kill -0 "$pid" 2>/dev/null; do
