@@ -433,6 +433,11 @@ class NetworkSource final : public FrameSource {
         lost = e.code == AVERROR_EXIT || e.why.rfind("timed out", 0) == 0
                    ? "no frame for " + formatNumber(s_.timeoutMs / 1000.0) + " s"
                    : "the connection dropped (" + e.why + ")";
+      } catch (const std::exception& e) {  // out of memory, say: the run's error, not a crash
+        std::lock_guard lock(mutex_);
+        fatal_ = shown_ + ": " + e.what();
+        cv_.notify_all();
+        return;
       }
       if (stop_) return;
       if (!reconnect(lost)) return;
