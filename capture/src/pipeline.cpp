@@ -78,7 +78,10 @@ void CapturePipeline::stop() {
     stop_ = true;
   }
   cv_.notify_all();
-  if (thread_.joinable()) thread_.join();
+  if (thread_.joinable()) {
+    source_->interrupt();  // a source that waits (a network camera reconnecting) ends its next()
+    thread_.join();
+  }
   // A frame handed over that the consumer never took before the stop: dropped, so that the
   // frames captured are those drawn plus those dropped.
   std::lock_guard lock(mutex_);
