@@ -10,9 +10,11 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
+#include "camera_jpeg.h"
 #include "liveprobe/capture/atomic_file.h"
 #include "liveprobe/frame/frame.h"
 #include "liveprobe/frame/input_file.h"
@@ -314,6 +316,33 @@ void saveImage8(const std::string& path, int width, int height, int channels,
                 const std::uint8_t* data) {
   cv::Mat m(height, width, channels == 4 ? CV_8UC4 : CV_8UC3, const_cast<std::uint8_t*>(data));
   writeAtomically(path, m);
+}
+
+cv::Mat decodeCameraJpeg(const std::uint8_t* data, std::size_t bytes, int reduce) {
+  if (bytes < 2 || data[0] != 0xFF || data[1] != 0xD8 ||
+      bytes > std::size_t(std::numeric_limits<int>::max()))
+    return {};
+  const int flags = reduce >= 8   ? cv::IMREAD_REDUCED_COLOR_8
+                    : reduce >= 4 ? cv::IMREAD_REDUCED_COLOR_4
+                    : reduce >= 2 ? cv::IMREAD_REDUCED_COLOR_2
+                                  : cv::IMREAD_COLOR;
+  try {  // cv::Mat wraps the bytes, never writes them
+    cv::Mat bgr =
+        cv::imdecode(cv::Mat(1, int(bytes), CV_8UC1, const_cast<std::uint8_t*>(data)), flags);
+    return bgr.type() == CV_8UC3 ? bgr : cv::Mat();
+  } catch (const cv::Exception&) {
+    return {};
+  }
+}
+
+void storeBgrFrame(const cv::Mat& bgr, Frame& f) {
+  f.format = PanoramaFormat::BgrU8;
+  f.rgb.clear();
+  f.width = bgr.cols, f.height = bgr.rows;
+  f.bgr8.resize(std::size_t(bgr.cols) * std::size_t(bgr.rows) * 3);
+  for (int y = 0; y < bgr.rows; ++y)
+    std::memcpy(f.bgr8.data() + std::size_t(y) * std::size_t(bgr.cols) * 3, bgr.ptr(y),
+                std::size_t(bgr.cols) * 3);
 }
 
 }  // namespace lp

@@ -8,11 +8,11 @@
 #include <cstdio>
 #include <deque>
 #include <mutex>
-#include <opencv2/imgcodecs.hpp>
 #include <optional>
 #include <thread>
 #include <utility>
 
+#include "camera_jpeg.h"
 #include "liveprobe/capture/network.h"
 #include "liveprobe/sh/error.h"
 
@@ -234,22 +234,10 @@ class Connection {
 
   bool decodeJpeg(Frame& f) {
     const int reduce = s_.mjpegReduce;
-    const int flags = reduce >= 8   ? cv::IMREAD_REDUCED_COLOR_8
-                      : reduce >= 4 ? cv::IMREAD_REDUCED_COLOR_4
-                      : reduce >= 2 ? cv::IMREAD_REDUCED_COLOR_2
-                                    : cv::IMREAD_COLOR;
-    cv::Mat bgr;
-    try {
-      if (packet_->size >= 2 && packet_->data[0] == 0xFF && packet_->data[1] == 0xD8)
-        bgr = cv::imdecode(cv::Mat(1, packet_->size, CV_8UC1, packet_->data), flags);
-    } catch (const cv::Exception&) {
-      bgr.release();
-    }
-    if (bgr.empty() || bgr.type() != CV_8UC3) return false;
-    store(f, bgr.cols, bgr.rows);
-    for (int y = 0; y < bgr.rows; ++y)
-      std::copy_n(bgr.ptr<std::uint8_t>(y), std::size_t(bgr.cols) * 3,
-                  f.bgr8.data() + std::size_t(y) * std::size_t(bgr.cols) * 3);
+    const cv::Mat bgr = decodeCameraJpeg(packet_->data, std::size_t(packet_->size), reduce);
+    if (bgr.empty()) return false;
+    storeBgrFrame(bgr, f);
+    f.radianceScale = 1.0;
     width_ = bgr.cols * std::max(reduce, 1);
     height_ = bgr.rows * std::max(reduce, 1);
     return true;

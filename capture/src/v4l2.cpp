@@ -15,6 +15,7 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
+#include "camera_jpeg.h"
 #include "liveprobe/sh/error.h"
 #include "uvc_metadata.h"
 #include "v4l2_device.h"
@@ -662,16 +663,11 @@ void decodeCameraFrame(const CameraBuffer& in, int mjpegReduce, Frame& f) {
       case V4L2_PIX_FMT_MJPEG:
       case V4L2_PIX_FMT_JPEG: {
         const int reduce = mjpegReduce >= 8 ? 8 : mjpegReduce >= 4 ? 4 : mjpegReduce >= 2 ? 2 : 1;
-        const int flags = reduce == 8   ? cv::IMREAD_REDUCED_COLOR_8
-                          : reduce == 4 ? cv::IMREAD_REDUCED_COLOR_4
-                          : reduce == 2 ? cv::IMREAD_REDUCED_COLOR_2
-                                        : cv::IMREAD_COLOR;
         // Only a JPEG (it starts with the SOI marker) of the negotiated size goes to the decoder.
         if (in.bytes < 2 || in.data[0] != 0xFF || in.data[1] != 0xD8 ||
-            in.bytes > std::size_t(std::numeric_limits<int>::max()) ||
             jpegFrameSize(in.data, in.bytes) != std::pair<int, int>{in.width, in.height})
           break;
-        bgr = cv::imdecode(cv::Mat(1, int(in.bytes), CV_8UC1, data), flags);
+        bgr = decodeCameraJpeg(in.data, in.bytes, reduce);
         // libjpeg's DCT scaling rounds up. A frame of any other size is not this stream's.
         if (!bgr.empty() && (bgr.cols != (in.width + reduce - 1) / reduce ||
                              bgr.rows != (in.height + reduce - 1) / reduce))
@@ -700,18 +696,7 @@ void decodeCameraFrame(const CameraBuffer& in, int mjpegReduce, Frame& f) {
   } catch (const cv::Exception&) {  // odd sizes the conversion refuses (NV12 needs even ones)
     bgr.release();
   }
-  f.format = PanoramaFormat::BgrU8;
-  f.rgb.clear();
-  if (bgr.empty()) {
-    f.width = f.height = 0;
-    f.bgr8.clear();
-    return;
-  }
-  f.width = bgr.cols, f.height = bgr.rows;
-  f.bgr8.resize(std::size_t(bgr.cols) * bgr.rows * 3);
-  for (int y = 0; y < bgr.rows; ++y)
-    std::memcpy(f.bgr8.data() + std::size_t(y) * bgr.cols * 3, bgr.ptr(y),
-                std::size_t(bgr.cols) * 3);
+  storeBgrFrame(bgr, f);  // empty: an empty frame, counted as dropped
 }
 
 }  // namespace lp

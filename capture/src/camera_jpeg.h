@@ -1,0 +1,19 @@
+#pragma once
+// What a V4L2 camera's MJPEG and a network camera's motion JPEG share (private to capture): the
+// JPEG decoded at a reduced scale, and a decoded BGR image stored as an 8-bit frame.
+#include <cstddef>
+#include <cstdint>
+#include <opencv2/core.hpp>
+
+#include "liveprobe/frame/frame.h"
+
+namespace lp {
+
+/// The JPEG in `data` decoded to BGR8 at 1/`reduce` scale (1, 2, 4 or 8: libjpeg's DCT scaling,
+/// which rounds up); empty when it does not start with the SOI marker or does not decode.
+cv::Mat decodeCameraJpeg(const std::uint8_t* data, std::size_t bytes, int reduce);
+
+/// `bgr` (CV_8UC3) as an 8-bit frame; an empty image leaves an empty frame (width 0).
+void storeBgrFrame(const cv::Mat& bgr, Frame& f);
+
+}  // namespace lp
