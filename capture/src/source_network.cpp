@@ -15,12 +15,11 @@
 #include "camera_jpeg.h"
 #include "liveprobe/capture/network.h"
 #include "liveprobe/sh/error.h"
+#include "video_decoder.h"
 
 extern "C" {
 #include <libavcodec/avcodec.h>
 #include <libavformat/avformat.h>
-#include <libavutil/imgutils.h>
-#include <libswscale/swscale.h>
 }
 
 namespace lp {
@@ -48,25 +47,6 @@ std::string scrubUrls(std::string text) {
   return text;
 }
 
-// FFmpeg's messages: the last error on this thread, kept to explain a failure in one line (FFmpeg
-// says "Failed to resolve hostname" where its return code says only "I/O error"); nothing is
-// printed.
-thread_local std::string tLastMessage;
-void keepLastError(void*, int level, const char* format, va_list args) {
-  if (level > AV_LOG_ERROR) return;
-  char line[512];
-  std::vsnprintf(line, sizeof line, format, args);
-  std::string s = line;
-  while (!s.empty() && (s.back() == '\n' || s.back() == ' ')) s.pop_back();
-  if (!s.empty()) tLastMessage = s;
-}
-
-std::string avError(int err) {
-  char b[AV_ERROR_MAX_STRING_SIZE] = {};
-  av_strerror(err, b, sizeof b);
-  return b;
-}
-
 /// What a failed open or read means, for a person.
 std::string whyFailed(int err, double timeoutSeconds) {
   if (err == AVERROR_EXIT || err == AVERROR(ETIMEDOUT))
@@ -77,25 +57,16 @@ std::string whyFailed(int err, double timeoutSeconds) {
     return "unauthorized (wrong or missing credentials)";
   if (err == AVERROR(EHOSTUNREACH) || err == AVERROR(ENETUNREACH)) return "host unreachable";
   if (err == AVERROR_EOF) return "the stream ended";
-  std::string why = avError(err);
-  if (!tLastMessage.empty()) why += " (" + scrubUrls(tLastMessage) + ")";
+  std::string why = ffmpegErrorText(err);
+  if (!lastFfmpegError().empty()) why += " (" + scrubUrls(lastFfmpegError()) + ")";
   return why;
 }
 
 struct FormatClose {
   void operator()(AVFormatContext* f) const { avformat_close_input(&f); }
 };
-struct CodecFree {
-  void operator()(AVCodecContext* c) const { avcodec_free_context(&c); }
-};
 struct PacketFree {
   void operator()(AVPacket* p) const { av_packet_free(&p); }
-};
-struct FrameFree {
-  void operator()(AVFrame* f) const { av_frame_free(&f); }
-};
-struct SwsFree {
-  void operator()(SwsContext* s) const { sws_freeContext(s); }
 };
 
 /// A failure of the connection (as opposed to one frame's damage): `code` is FFmpeg's.
@@ -111,8 +82,8 @@ class Connection {
   Connection(const NetworkSettings& s, const std::atomic<bool>& stop) : s_(s), stop_(stop) {
     static std::once_flag network;
     std::call_once(network, [] { avformat_network_init(); });  // TLS's global state, once
-    tLastMessage.clear();
-    av_log_set_callback(keepLastError);
+    keepFfmpegErrors();
+    clearFfmpegError();
     AVFormatContext* raw = avformat_alloc_context();
     if (!raw) throw StreamError{AVERROR(ENOMEM), "out of memory"};
     raw->interrupt_callback = {&Connection::interrupted, this};
@@ -154,24 +125,15 @@ class Connection {
     frames_ = st->nb_frames > 0 ? std::int64_t(st->nb_frames) : -1;
     timeBase_ = av_q2d(st->time_base);
     if (!mjpeg_) {
-      decoder_.reset(avcodec_alloc_context3(codec));
-      if (!decoder_ || avcodec_parameters_to_context(decoder_.get(), st->codecpar) < 0)
-        throw StreamError{AVERROR(ENOMEM), "cannot set up the " + codecName_ + " decoder"};
-      if (s.mode == NetworkSettings::Mode::Latest) {
-        // A frame-threaded decoder holds a frame per thread back: slices only. A stream without
-        // B-frames is decoded without any delay; one with them keeps the reordering it needs
-        // (forced out at once, its frames would come in decoding order), and each frame's
-        // latency counts from its own packet's arrival, so the delay shows in the latency.
-        if (st->codecpar->video_delay == 0) decoder_->flags |= AV_CODEC_FLAG_LOW_DELAY;
-        decoder_->thread_type = FF_THREAD_SLICE;
+      try {
+        decoder_ =
+            std::make_unique<VideoDecoder>(*st->codecpar, s.mode == NetworkSettings::Mode::Latest);
+      } catch (const Error& e) {
+        throw StreamError{AVERROR(EINVAL), e.what()};
       }
-      decoder_->thread_count = 2;
-      if ((err = avcodec_open2(decoder_.get(), codec, nullptr)) < 0)
-        throw StreamError{err, "cannot open the " + codecName_ + " decoder: " + avError(err)};
-      frame_.reset(av_frame_alloc());
     }
     packet_.reset(av_packet_alloc());
-    if (!packet_ || (!mjpeg_ && !frame_)) throw StreamError{AVERROR(ENOMEM), "out of memory"};
+    if (!packet_) throw StreamError{AVERROR(ENOMEM), "out of memory"};
     width_ = st->codecpar->width;
     height_ = st->codecpar->height;
   }
@@ -186,7 +148,7 @@ class Connection {
       const int err = av_read_frame(format_.get(), packet_.get());
       if (err == AVERROR_EOF) {
         ended_ = true;
-        if (!mjpeg_) avcodec_send_packet(decoder_.get(), nullptr);  // drain what it holds
+        if (!mjpeg_) decoder_->drain();  // what it holds comes out
         continue;
       }
       if (err < 0) throw StreamError{err, why(err)};
@@ -200,11 +162,7 @@ class Connection {
         ++corrupt;
         continue;
       }
-      if (ours) {
-        arrivals_.emplace_back(packet_->pts, arrival_);
-        if (arrivals_.size() > 64) arrivals_.pop_front();  // a frame the decoder never gave
-        if (avcodec_send_packet(decoder_.get(), packet_.get()) == AVERROR_INVALIDDATA) ++corrupt;
-      }
+      if (ours && !decoder_->send(*packet_, arrival_)) ++corrupt;
       av_packet_unref(packet_.get());
     }
   }
@@ -243,42 +201,23 @@ class Connection {
     return true;
   }
 
-  /// A frame the decoder has ready, converted to BGR8 as OpenCV's FFmpeg reader converts a
-  /// file's frames (swscale, bicubic, its default colour matrix): a stream and its file agree.
+  /// A frame the decoder has ready; its latency counts from its own packet's arrival.
   bool receive(Frame& f, std::atomic<std::size_t>& corrupt) {
-    for (;;) {
-      const int err = avcodec_receive_frame(decoder_.get(), frame_.get());
-      if (err == AVERROR(EAGAIN) || err == AVERROR_EOF) return false;
-      if (err < 0) throw StreamError{err, "the " + codecName_ + " decoder failed: " + avError(err)};
-      const AVFrame* in = frame_.get();
-      if (in->decode_error_flags || (in->flags & AV_FRAME_FLAG_CORRUPT) || in->width <= 0 ||
-          in->height <= 0) {
-        ++corrupt;
-        av_frame_unref(frame_.get());
-        continue;
-      }
-      sws_.reset(sws_getCachedContext(sws_.release(), in->width, in->height,
-                                      AVPixelFormat(in->format), in->width, in->height,
-                                      AV_PIX_FMT_BGR24, SWS_BICUBIC, nullptr, nullptr, nullptr));
-      if (!sws_) throw StreamError{AVERROR(EINVAL), "cannot convert the decoder's pixel format"};
-      store(f, in->width, in->height);
-      std::uint8_t* dst[4] = {f.bgr8.data(), nullptr, nullptr, nullptr};
-      const int dstStride[4] = {in->width * 3, 0, 0, 0};
-      sws_scale(sws_.get(), in->data, in->linesize, 0, in->height, dst, dstStride);
-      width_ = in->width;
-      height_ = in->height;
-      const std::int64_t t = in->best_effort_timestamp;
-      f.timestamp = t == AV_NOPTS_VALUE ? -1.0 : double(t) * timeBase_;
-      // The frame's own packet's arrival: a decoder that reorders gives it packets later.
-      const auto own = std::find_if(arrivals_.begin(), arrivals_.end(),
-                                    [&](const auto& a) { return a.first == in->pts; });
-      if (in->pts != AV_NOPTS_VALUE && own != arrivals_.end()) {
-        arrival_ = own->second;
-        arrivals_.erase(own);
-      }
-      av_frame_unref(frame_.get());
-      return true;
+    VideoDecoder::Decoded info;
+    std::size_t damaged = 0;
+    bool got = false;
+    try {
+      got = decoder_->receive(f, info, damaged);
+    } catch (const Error& e) {
+      throw StreamError{AVERROR_INVALIDDATA, e.what()};
     }
+    corrupt += damaged;
+    if (!got) return false;
+    width_ = f.width;
+    height_ = f.height;
+    f.timestamp = info.pts == INT64_MIN ? -1.0 : double(info.pts) * timeBase_;
+    if (info.arrival >= 0) arrival_ = info.arrival;
+    return true;
   }
 
   void pts(Frame& f) const {
@@ -286,28 +225,16 @@ class Connection {
     f.timestamp = t == AV_NOPTS_VALUE ? -1.0 : double(t) * timeBase_;
   }
 
-  static void store(Frame& f, int w, int h) {
-    f.width = w;
-    f.height = h;
-    f.format = PanoramaFormat::BgrU8;
-    f.rgb.clear();
-    f.bgr8.resize(std::size_t(w) * std::size_t(h) * 3);
-    f.radianceScale = 1.0;
-  }
-
   const NetworkSettings& s_;
   const std::atomic<bool>& stop_;
   double deadline_ = 0;
   std::unique_ptr<AVFormatContext, FormatClose> format_;
-  std::unique_ptr<AVCodecContext, CodecFree> decoder_;
+  std::unique_ptr<VideoDecoder> decoder_;
   std::unique_ptr<AVPacket, PacketFree> packet_;
-  std::unique_ptr<AVFrame, FrameFree> frame_;
-  std::unique_ptr<SwsContext, SwsFree> sws_;
   int stream_ = -1;
   bool mjpeg_ = false, ended_ = false;
   std::string codecName_;
   double fps_ = 0, timeBase_ = 0, arrival_ = -1;
-  std::deque<std::pair<std::int64_t, double>> arrivals_;  ///< packets sent: pts, arrival
   std::int64_t frames_ = -1;
   int width_ = 0, height_ = 0;
 };
