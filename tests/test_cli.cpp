@@ -284,10 +284,11 @@ TEST(Backends, VersionListsThemAndAMissingOneIsOneLine) {
       {LIVEPROBE_WITH_MQTT, "MQTT",
        "replay synthetic:64x32 --headless --frames 1 --publish mqtt://127.0.0.1:1/t", "--publish",
        "LIVEPROBE_WITH_MQTT"},
-      {LIVEPROBE_WITH_NETWORK, "network streams (FFmpeg)", "live rtsp://127.0.0.1:1/x",
-       "rtsp://127.0.0.1:1/x", "LIVEPROBE_WITH_NETWORK"},
-      {LIVEPROBE_WITH_NETWORK, "network streams (FFmpeg)", "replay http://127.0.0.1:1/pano.mp4",
-       "http://127.0.0.1:1/pano.mp4", "LIVEPROBE_WITH_NETWORK"},
+      {LIVEPROBE_WITH_NETWORK, "network streams, H.264 and HEVC cameras (FFmpeg)",
+       "live rtsp://127.0.0.1:1/x", "rtsp://127.0.0.1:1/x", "LIVEPROBE_WITH_NETWORK"},
+      {LIVEPROBE_WITH_NETWORK, "network streams, H.264 and HEVC cameras (FFmpeg)",
+       "replay http://127.0.0.1:1/pano.mp4", "http://127.0.0.1:1/pano.mp4",
+       "LIVEPROBE_WITH_NETWORK"},
   };
   const std::size_t without = line.find("built without");
   for (const Case& c : cases) {

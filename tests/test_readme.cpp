@@ -100,15 +100,19 @@ void PrintTo(const Example& e, std::ostream* os) {
 
 class ReadmeExample : public ::testing::TestWithParam<Example> {};
 
-// The emulated camera's modes: an MJPEG equirect sky at the sizes the README's live examples ask.
+// The emulated camera's modes: an MJPEG equirect sky at the sizes the README's live examples ask,
+// and the largest also as H.264 (the emulator encodes the PNGs).
 void makeCameraModes(const fs::path& dir) {
-  for (const auto& [w, h] : {std::pair{1920, 960}, std::pair{1280, 720}, std::pair{640, 480}}) {
-    const fs::path m = dir / ("MJPG_" + std::to_string(w) + "x" + std::to_string(h));
-    fs::create_directories(m);
-    for (int i = 0; i < 4; ++i)
-      ASSERT_TRUE(
-          cv::imwrite((m / (std::to_string(i) + ".jpg")).string(), lpt::skyFrame8(w, h, i * 0.3)));
-  }
+  for (const auto& [w, h] : {std::pair{1920, 960}, std::pair{1280, 720}, std::pair{640, 480}})
+    for (const std::string format : {"MJPG", "H264"}) {
+      if (format == "H264" && w != 1920) continue;
+      const fs::path m = dir / (format + "_" + std::to_string(w) + "x" + std::to_string(h));
+      fs::create_directories(m);
+      for (int i = 0; i < 4; ++i)
+        ASSERT_TRUE(
+            cv::imwrite((m / (std::to_string(i) + (format == "MJPG" ? ".jpg" : ".png"))).string(),
+                        lpt::skyFrame8(w, h, i * 0.3)));
+    }
 }
 
 // For bracketing and calibration: the synthetic sky's HDR frames (the camera renders them as an

@@ -43,9 +43,11 @@ std::vector<OptionSpec> cameraOptions() {
   lock.set = [](Settings& s, const std::string& v) {
     s.live.lockExposure = v.empty() ? 2.0 : parseNumberIn("--lock-exposure", v, {0, 3600});
   };
-  return {choiceOption("--pixel-format", "pixel format (auto: MJPEG first)",
-                       {"mjpeg", "yuyv", "nv12", "rgb24", "auto"}, "auto", LP_FIELD(camera.format),
-                       g, [](const std::string& v) { return parseCameraFormat(v); }),
+  return {choiceOption("--pixel-format",
+                       "pixel format (auto: MJPEG first, H.264 and HEVC only when nothing else)",
+                       {"mjpeg", "yuyv", "nv12", "rgb24", "h264", "hevc", "auto"}, "auto",
+                       LP_FIELD(camera.format), g,
+                       [](const std::string& v) { return parseCameraFormat(v); }),
           opt::size("capture size asked of the camera", 16384, "its largest", g),
           opt::fps("frame rate asked of the camera", {0, 1000}, "0: its own", g),
           lock,

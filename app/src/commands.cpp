@@ -128,8 +128,8 @@ BackendInfo backendInfo(OptionalBackend b) {
     case OptionalBackend::Mqtt:
       return {LIVEPROBE_WITH_MQTT, "MQTT", "MQTT", "LIVEPROBE_WITH_MQTT"};
     case OptionalBackend::Network:
-      return {LIVEPROBE_WITH_NETWORK, "network streams", "network streams (FFmpeg)",
-              "LIVEPROBE_WITH_NETWORK"};
+      return {LIVEPROBE_WITH_NETWORK, "network streams",
+              "network streams, H.264 and HEVC cameras (FFmpeg)", "LIVEPROBE_WITH_NETWORK"};
   }
   return {false, "?", "?", "?"};
 }

@@ -16,9 +16,13 @@
 #include <opencv2/imgproc.hpp>
 
 #include "camera_jpeg.h"
+#include "liveprobe/backends.h"
 #include "liveprobe/sh/error.h"
 #include "uvc_metadata.h"
 #include "v4l2_device.h"
+#if LIVEPROBE_WITH_NETWORK
+#include "video_decoder.h"
+#endif
 
 namespace lp {
 
@@ -40,10 +44,25 @@ std::uint32_t fourccOf(CameraFormat f) {
       return V4L2_PIX_FMT_NV12;
     case CameraFormat::Rgb24:
       return V4L2_PIX_FMT_RGB24;
+    case CameraFormat::H264:
+      return V4L2_PIX_FMT_H264;
+    case CameraFormat::Hevc:
+      return V4L2_PIX_FMT_HEVC;
     case CameraFormat::Auto:
       return 0;
   }
   return 0;
+}
+
+/// A stream of frames that depend on each other (decoded by V4l2Source's VideoDecoder).
+bool isVideoCodec(std::uint32_t fourcc) {
+  return fourcc == V4L2_PIX_FMT_H264 || fourcc == V4L2_PIX_FMT_HEVC;
+}
+
+/// An H.264 or HEVC buffer as UVC sends it: an Annex B byte stream, starting with a start code.
+bool startsAnnexB(const std::uint8_t* p, std::size_t n) {
+  return (n >= 4 && p[0] == 0 && p[1] == 0 && p[2] == 1) ||
+         (n >= 5 && p[0] == 0 && p[1] == 0 && p[2] == 0 && p[3] == 1);
 }
 
 }  // namespace
@@ -195,6 +214,9 @@ void V4l2Source::streamOn() {
     fail("VIDIOC_STREAMON", e);
   }
   lastSequence_.reset();  // a restart's sequence gap is not lost frames
+#if LIVEPROBE_WITH_NETWORK
+  if (decoder_) decoder_->lost();  // a new stream: its first key frame starts the pictures
+#endif
   state_ = State::Streaming;
 }
 
@@ -216,11 +238,17 @@ std::uint32_t V4l2Source::chooseFourcc() {
     if (!offers(want))
       throw Error(settings_.device + ": VIDIOC_ENUM_FMT: does not offer " + fourccText(want) +
                   " (it offers " + list + ")");
+    if (isVideoCodec(want) && !LIVEPROBE_WITH_NETWORK)
+      throw Error(settings_.device + ": --pixel-format " +
+                  std::string(cameraFormatName(settings_.format)) +
+                  ": this liveprobe was built without FFmpeg's libavcodec (the network backend), "
+                  "which decodes it");
     return want;
   }
-  for (CameraFormat f :
-       {CameraFormat::Mjpeg, CameraFormat::Yuyv, CameraFormat::Nv12, CameraFormat::Rgb24})
-    if (offers(fourccOf(f))) return fourccOf(f);
+  for (CameraFormat f : {CameraFormat::Mjpeg, CameraFormat::Yuyv, CameraFormat::Nv12,
+                         CameraFormat::Rgb24, CameraFormat::H264, CameraFormat::Hevc})
+    if (offers(fourccOf(f)) && (LIVEPROBE_WITH_NETWORK || !isVideoCodec(fourccOf(f))))
+      return fourccOf(f);
   throw Error(settings_.device +
               ": VIDIOC_ENUM_FMT: offers no format liveprobe converts (it offers " + list + ")");
 }
@@ -280,6 +308,14 @@ void V4l2Source::setFormat() {
   sizeImage_ = fmt.fmt.pix.sizeimage;
   if (width_ <= 0 || height_ <= 0)
     throw Error(settings_.device + ": VIDIOC_S_FMT: the driver set an empty frame size");
+#if LIVEPROBE_WITH_NETWORK
+  if (isVideoCodec(fourcc_)) try {
+      decoder_ = {new VideoDecoder(fourcc_ == V4L2_PIX_FMT_H264 ? "h264" : "hevc"),
+                  [](VideoDecoder* d) { delete d; }};
+    } catch (const Error& e) {
+      throw Error(settings_.device + ": " + e.what());
+    }
+#endif
   setRate();
   state_ = State::Configured;
 }
@@ -348,6 +384,7 @@ void V4l2Source::streamOff() {
 
 void V4l2Source::close() {
   metadata_.reset();
+  decoder_.reset();
   streamOff();
   if (state_ == State::Ready) releaseBuffers();
   fd_.reset();
@@ -357,6 +394,7 @@ void V4l2Source::close() {
 bool V4l2Source::next(Frame& frame) {
   require(State::Streaming, "next");
   for (;;) {
+    if (decoder_ && takeDecoded(frame)) return true;  // a frame the decoder held
     pollfd p{fd_.get(), POLLIN, 0};
     const int r = ::poll(&p, 1, settings_.timeoutMs);
     if (r < 0) {
@@ -381,50 +419,89 @@ bool V4l2Source::next(Frame& frame) {
     if (b.index >= buffers_.size())
       throw Error(settings_.device + ": driver returned buffer " + std::to_string(b.index));
     // Gaps in the driver's sequence numbers are frames lost before we saw them.
-    if (lastSequence_ && b.sequence > *lastSequence_ + 1)
-      dropped_ += b.sequence - *lastSequence_ - 1;
+    const bool gap = lastSequence_ && b.sequence > *lastSequence_ + 1;
+    if (gap) dropped_ += b.sequence - *lastSequence_ - 1;
     lastSequence_ = b.sequence;
     // What the driver says about this frame, read before QBUF hands the buffer back (the
     // driver rewrites the struct then).
     const bool corrupt = b.flags & V4L2_BUF_FLAG_ERROR;
     const double t = double(b.timestamp.tv_sec) + double(b.timestamp.tv_usec) * 1e-6;
     // The timestamp is CLOCK_MONOTONIC when the driver says so (the kernel's default for UVC).
-    const bool monotonic =
-        (b.flags & V4L2_BUF_FLAG_TIMESTAMP_MASK) == V4L2_BUF_FLAG_TIMESTAMP_MONOTONIC;
+    monotonic_ = (b.flags & V4L2_BUF_FLAG_TIMESTAMP_MASK) == V4L2_BUF_FLAG_TIMESTAMP_MONOTONIC;
     const std::uint32_t sequence = b.sequence;
-    if (!corrupt) {
-      const Buffer& buf = *buffers_[b.index];
-      decodeCameraFrame({fourcc_, width_, height_, bytesPerLine_, buf.data(),
-                         std::min<std::size_t>(b.bytesused, buf.length())},
+    const Buffer& buf = *buffers_[b.index];
+    const std::size_t used = std::min<std::size_t>(b.bytesused, buf.length());
+    if (decoder_)
+      sendToDecoder(buf.data(), used, corrupt, gap, sequence, t);  // copied: before QBUF
+    else if (!corrupt)
+      decodeCameraFrame({fourcc_, width_, height_, bytesPerLine_, buf.data(), used},
                         settings_.mjpegReduce, frame);
-    }
     if (xioctl(VIDIOC_QBUF, &b) < 0) {
       const int e = errno;
       if (e == ENODEV)
         throw Error(settings_.device + ": the camera was unplugged mid-stream (ENODEV)");
       fail("VIDIOC_QBUF", e);
     }
+    if (decoder_) continue;  // its frames come out of takeDecoded()
     if (corrupt || frame.width == 0) {
       ++dropped_;
       continue;
     }
-    if (firstTimestamp_ < 0) firstTimestamp_ = t;
-    frame.sequence = sequence;
-    frame.timestamp = t - firstTimestamp_;
-    frame.captureTime = monotonic ? t : -1.0;
-    // The exposure and gain in force: read per frame while the automatic modes may change them.
-    frame.exposure100us = locked_ ? lockedExposure_ : getControl(V4L2_CID_EXPOSURE_ABSOLUTE);
-    frame.gain = locked_ ? lockedGain_ : getControl(V4L2_CID_GAIN);
-    // 1 / exposure time in seconds: radiance in "per second" units, comparable between frames
-    // and runs with different exposures.
-    frame.radianceScale =
-        frame.exposure100us && *frame.exposure100us > 0 ? 1.0 / (*frame.exposure100us * 1e-4) : 1.0;
-    // What the camera says this frame was taken with, where it says it (the metadata node).
-    frame.exposureReported = false;
-    readFrameExposure(frame, sequence);
+    finishFrame(frame, sequence, t);
     return true;
   }
 }
+
+void V4l2Source::finishFrame(Frame& frame, std::uint32_t sequence, double t) {
+  if (firstTimestamp_ < 0) firstTimestamp_ = t;
+  frame.sequence = sequence;
+  frame.timestamp = t - firstTimestamp_;
+  frame.captureTime = monotonic_ ? t : -1.0;
+  // The exposure and gain in force: read per frame while the automatic modes may change them.
+  frame.exposure100us = locked_ ? lockedExposure_ : getControl(V4L2_CID_EXPOSURE_ABSOLUTE);
+  frame.gain = locked_ ? lockedGain_ : getControl(V4L2_CID_GAIN);
+  // 1 / exposure time in seconds: radiance in "per second" units, comparable between frames
+  // and runs with different exposures.
+  frame.radianceScale =
+      frame.exposure100us && *frame.exposure100us > 0 ? 1.0 / (*frame.exposure100us * 1e-4) : 1.0;
+  // What the camera says this frame was taken with, where it says it (the metadata node).
+  frame.exposureReported = false;
+  readFrameExposure(frame, sequence);
+}
+
+#if LIVEPROBE_WITH_NETWORK
+void V4l2Source::sendToDecoder(const std::uint8_t* data, std::size_t bytes, bool damaged, bool gap,
+                               std::uint32_t sequence, double t) {
+  // A frame lost before us leaves the ones that refer to it without their reference.
+  if (gap) decoder_->lost();
+  // A buffer the driver flagged, one that is not a byte stream, or one the decoder refuses is a
+  // frame lost here.
+  if (damaged || !startsAnnexB(data, bytes) || !decoder_->send(data, bytes, sequence, t)) {
+    decoder_->lost();
+    ++dropped_;
+  }
+}
+
+bool V4l2Source::takeDecoded(Frame& frame) {
+  VideoDecoder::Decoded info;
+  std::size_t withheld = 0;
+  bool got = false;
+  try {
+    got = decoder_->receive(frame, info, withheld);
+  } catch (const Error& e) {
+    throw Error(settings_.device + ": " + e.what());
+  }
+  dropped_ += withheld;
+  if (!got) return false;
+  // Its own buffer's number and time: the decoder's delay counts in the latency.
+  finishFrame(frame, std::uint32_t(info.pts), info.arrival);
+  return true;
+}
+#else  // never reached: a build without FFmpeg makes no decoder (chooseFourcc)
+void V4l2Source::sendToDecoder(const std::uint8_t*, std::size_t, bool, bool, std::uint32_t,
+                               double) {}
+bool V4l2Source::takeDecoded(Frame&) { return false; }
+#endif
 
 void V4l2Source::readFrameExposure(Frame& frame, std::uint32_t sequence) {
   if (!metadata_) return;

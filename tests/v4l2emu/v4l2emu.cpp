@@ -11,10 +11,14 @@
 //   LPEMU_DEVICE   the path it answers (default /dev/video7)
 //   LPEMU_SOURCE   a folder of modes: subfolders FOURCC_WxH (MJPG_640x320, YUYV_320x160, ...)
 //                  holding the frames in name order (.jpg served verbatim for MJPG; other images
-//                  converted to the mode's format). Float frames (.exr, .hdr) are radiance: each
-//                  is rendered as an 8-bit sensor would see it, radiance x exposure time in force
-//                  x gain / 64 x LPEMU_SENSITIVITY, through the response, clipped at 255; auto
-//                  exposure then puts the frame's median luminance at mid-grey (0.18).
+//                  converted to the mode's format; H264_ and HEVC_ modes encode them as a
+//                  camera's encoder does, a key frame with its parameter sets every LPEMU_GOP
+//                  frames (default 15), no B-frames, one access unit per buffer, and a frame the
+//                  faults lose is lost from the stream: encoded, then not delivered). Float frames
+//                  (.exr, .hdr) are radiance: each is rendered as an 8-bit sensor would see it,
+//                  radiance x exposure time in force x gain / 64 x LPEMU_SENSITIVITY, through the
+//                  response, clipped at 255; auto exposure then puts the frame's median luminance
+//                  at mid-grey (0.18).
 //   LPEMU_RESPONSE srgb (default) or gamma=G: the sensor's response for float sources
 //   LPEMU_SENSITIVITY  float sources: sensor units per radiance x second (default 1)
 //   LPEMU_META_DEVICE  a second path that answers as the camera's UVC metadata node: it streams
@@ -22,6 +26,7 @@
 //                  V4L2_META_FMT_UVC_MSXU_1_5 (the whole header, with Microsoft's capture
 //                  statistics: the exposure time each frame was actually taken with)
 //   LPEMU_FPS      frame rate (default 30)
+//   LPEMU_GOP      H264_ and HEVC_ modes: frames from one key frame to the next (default 15)
 //   LPEMU_FAULTS   comma list: busy_open, denied_open (EACCES), busy_reqbufs, grant=N, einval_fmt,
 //   stop_after=N,
 //                  eintr, unplug_after=N, exposure_walk (auto exposure changes every frame),
@@ -72,6 +77,13 @@
 
 #include "../yuyv.h"
 
+#if LPEMU_WITH_FFMPEG
+extern "C" {
+#include <libavcodec/avcodec.h>
+#include <libavutil/opt.h>
+}
+#endif
+
 namespace fs = std::filesystem;
 
 #ifndef V4L2_META_FMT_UVC_MSXU_1_5
@@ -115,6 +127,70 @@ struct MetaNode {
   static constexpr std::uint32_t kBufferSize = 10240;  // UVC_METADATA_BUF_SIZE
 };
 
+bool isVideoCodec(std::uint32_t fourcc) {
+  return fourcc == V4L2_PIX_FMT_H264 || fourcc == V4L2_PIX_FMT_HEVC;
+}
+
+#if LPEMU_WITH_FFMPEG
+// A camera's H.264 or HEVC encoder (libx264, libx265 through libavcodec): real time, no B-frames,
+// parameter sets repeated with every key frame, Annex B output.
+class Encoder {
+ public:
+  Encoder(std::uint32_t fourcc, int w, int h, double fps, int gop) {
+    const bool h264 = fourcc == V4L2_PIX_FMT_H264;
+    const AVCodec* codec = avcodec_find_encoder_by_name(h264 ? "libx264" : "libx265");
+    if (!codec) return;
+    av_log_set_level(AV_LOG_ERROR);  // the encoders' banners (FFmpeg's own printer only)
+    ctx_ = avcodec_alloc_context3(codec);
+    ctx_->width = w, ctx_->height = h;
+    ctx_->pix_fmt = AV_PIX_FMT_YUV420P;
+    ctx_->time_base = {1000, int(std::lround(fps * 1000))};
+    ctx_->framerate = {int(std::lround(fps * 1000)), 1000};
+    ctx_->gop_size = gop;
+    ctx_->max_b_frames = 0;
+    av_opt_set(ctx_->priv_data, "preset", "veryfast", 0);
+    av_opt_set(ctx_->priv_data, "tune", "zerolatency", 0);
+    av_opt_set(ctx_->priv_data, "crf", "18", 0);
+    if (!h264) av_opt_set(ctx_->priv_data, "x265-params", "log-level=error:repeat-headers=1", 0);
+    if (avcodec_open2(ctx_, codec, nullptr) < 0) avcodec_free_context(&ctx_);
+    frame_ = av_frame_alloc();
+    packet_ = av_packet_alloc();
+  }
+  ~Encoder() {
+    avcodec_free_context(&ctx_);
+    av_frame_free(&frame_);
+    av_packet_free(&packet_);
+  }
+  bool ok() const { return ctx_ != nullptr; }
+  // One frame in, its access unit out (zerolatency: nothing is held back). The sensor's BGR to
+  // 4:2:0 as OpenCV converts it (BT.601, limited range).
+  std::vector<std::uint8_t> encode(const cv::Mat& bgr) {
+    std::vector<std::uint8_t> out;
+    cv::Mat i420;
+    cv::cvtColor(bgr, i420, cv::COLOR_BGR2YUV_I420);
+    frame_->format = AV_PIX_FMT_YUV420P;
+    frame_->width = ctx_->width, frame_->height = ctx_->height;
+    const int w = ctx_->width, h = ctx_->height;
+    std::uint8_t* planes[3] = {i420.data, i420.data + w * h, i420.data + w * h + w * h / 4};
+    const int strides[3] = {w, w / 2, w / 2};
+    for (int i = 0; i < 3; ++i) frame_->data[i] = planes[i], frame_->linesize[i] = strides[i];
+    frame_->pts = pts_++;
+    if (avcodec_send_frame(ctx_, frame_) < 0) return out;
+    while (avcodec_receive_packet(ctx_, packet_) == 0) {
+      out.insert(out.end(), packet_->data, packet_->data + packet_->size);
+      av_packet_unref(packet_);
+    }
+    return out;
+  }
+
+ private:
+  AVCodecContext* ctx_ = nullptr;
+  AVFrame* frame_ = nullptr;
+  AVPacket* packet_ = nullptr;
+  std::int64_t pts_ = 0;
+};
+#endif
+
 struct Emu {
   std::mutex m;
   int fd = -1;
@@ -152,6 +228,9 @@ struct Emu {
   float responseGamma = 0;  // 0: sRGB
   double sensitivity = 1;
   std::string lastFile;
+#if LPEMU_WITH_FFMPEG
+  std::unique_ptr<Encoder> encoder;  // H264_ and HEVC_ modes: made at STREAMON (a new stream)
+#endif
 
   Emu() {
     setenv("OPENCV_IO_ENABLE_OPENEXR", "1", 0);
@@ -223,6 +302,11 @@ struct Emu {
       return rendered = encode(md, flat);
     }
     if (isRadiance(file)) return rendered = encode(md, sensor(md, file));
+    if (isVideoCodec(md.fourcc)) {  // each frame depends on the ones before: encoded as served
+      cv::Mat& bgr = madeImages[file];
+      if (bgr.empty()) bgr = imageOf(md, file);
+      return rendered = encode(md, bgr);
+    }
     auto& made = madeFrames[{mode, file}];
     if (made.empty()) made = makeFrame(md, file);
     return made;
@@ -269,19 +353,28 @@ struct Emu {
     const double t = 0.18 / (median * gainFactor() * sensitivity);
     return int(std::clamp(std::lround(t / 1e-4), 1L, 10000L));
   }
+  std::map<std::string, cv::Mat> madeImages;
+  static cv::Mat imageOf(const Mode& md, const std::string& file) {
+    cv::Mat bgr = cv::imread(file, cv::IMREAD_COLOR);
+    if (bgr.cols != md.w || bgr.rows != md.h)
+      cv::resize(bgr, bgr, {md.w, md.h}, 0, 0, cv::INTER_AREA);
+    return bgr;
+  }
   std::vector<std::uint8_t> makeFrame(const Mode& md, const std::string& file) {
     if (md.fourcc == V4L2_PIX_FMT_MJPEG && (file.ends_with(".jpg") || file.ends_with(".jpeg"))) {
       std::ifstream in(file, std::ios::binary);
       return std::vector<std::uint8_t>((std::istreambuf_iterator<char>(in)), {});
     }
-    cv::Mat bgr = cv::imread(file, cv::IMREAD_COLOR);
-    if (bgr.cols != md.w || bgr.rows != md.h)
-      cv::resize(bgr, bgr, {md.w, md.h}, 0, 0, cv::INTER_AREA);
-    return encode(md, bgr);
+    return encode(md, imageOf(md, file));
   }
   std::vector<std::uint8_t> encode(const Mode& md, const cv::Mat& bgr) {
     std::vector<std::uint8_t> out;
-    if (md.fourcc == V4L2_PIX_FMT_MJPEG) {
+    if (isVideoCodec(md.fourcc)) {
+#if LPEMU_WITH_FFMPEG
+      if (!encoder) startEncoder();
+      if (encoder->ok()) out = encoder->encode(bgr);
+#endif
+    } else if (md.fourcc == V4L2_PIX_FMT_MJPEG) {
       cv::imencode(".jpg", bgr, out, {cv::IMWRITE_JPEG_QUALITY, 95});
     } else if (md.fourcc == V4L2_PIX_FMT_RGB24) {
       cv::Mat rgb;
@@ -317,6 +410,20 @@ struct Emu {
     return 0;
   }
 
+#if LPEMU_WITH_FFMPEG
+  void startEncoder() {
+    const Mode& md = modes[std::size_t(mode)];
+    const long gop = std::atol(env("LPEMU_GOP", "15").c_str());
+    encoder = std::make_unique<Encoder>(md.fourcc, md.w, md.h, fps, int(std::max(gop, 1L)));
+  }
+#endif
+  // A frame the faults lose before the reader: a compressed stream loses its access unit.
+  void loseFrame() {
+#if LPEMU_WITH_FFMPEG
+    if (isVideoCodec(modes[std::size_t(mode)].fourcc)) (void)frameToServe();
+#endif
+  }
+
   int handle(unsigned long req, void* arg);
   int handleMeta(unsigned long req, void* arg);
   void fillMeta(std::uint32_t seq);
@@ -342,7 +449,9 @@ int Emu::handle(unsigned long req, void* arg) {
         if (std::find(fcc.begin(), fcc.end(), md.fourcc) == fcc.end()) fcc.push_back(md.fourcc);
       if (d->type != V4L2_BUF_TYPE_VIDEO_CAPTURE || d->index >= fcc.size()) return fail(EINVAL);
       d->pixelformat = fcc[d->index];
-      d->flags = d->pixelformat == V4L2_PIX_FMT_MJPEG ? V4L2_FMT_FLAG_COMPRESSED : 0;
+      d->flags = d->pixelformat == V4L2_PIX_FMT_MJPEG || isVideoCodec(d->pixelformat)
+                     ? V4L2_FMT_FLAG_COMPRESSED
+                     : 0;
       std::snprintf(reinterpret_cast<char*>(d->description), sizeof d->description, "%.4s",
                     reinterpret_cast<char*>(&d->pixelformat));
       return 0;
@@ -482,6 +591,9 @@ int Emu::handle(unsigned long req, void* arg) {
       if (store.empty()) return fail(EINVAL);
       streaming = true;
       nextFrame = std::chrono::steady_clock::now();
+#if LPEMU_WITH_FFMPEG
+      encoder.reset();  // a camera's new stream starts with a key frame
+#endif
       say("STREAMON");
       return 0;
     case VIDIOC_STREAMOFF:
@@ -850,7 +962,7 @@ int poll(struct pollfd* fds, nfds_t n, int timeout) {
         e.pendingExposure.pop_front();
       }
       if (e.fault("gap_every") && (e.sequence + 1) % std::uint32_t(e.faults["gap_every"]) == 0)
-        ++e.sequence;
+        ++e.sequence, e.loseFrame();
       e.seqOf[i] = e.sequence++;
       e.say("frame " + std::to_string(e.seqOf[i]) + " exposure " + std::to_string(e.inForce));
       e.fillMeta(e.seqOf[i]);

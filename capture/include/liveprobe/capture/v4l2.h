@@ -49,8 +49,9 @@ class UniqueFd {
   int fd_ = -1;
 };
 
-/// The pixel formats liveprobe converts, as V4L2 fourcc codes.
-enum class CameraFormat : std::uint8_t { Auto, Mjpeg, Yuyv, Nv12, Rgb24 };
+/// The pixel formats liveprobe converts, as V4L2 fourcc codes. H.264 and HEVC are decoded with
+/// FFmpeg's libavcodec (a build with the network backend).
+enum class CameraFormat : std::uint8_t { Auto, Mjpeg, Yuyv, Nv12, Rgb24, H264, Hevc };
 inline std::string_view cameraFormatName(CameraFormat f) {
   switch (f) {
     case CameraFormat::Auto:
@@ -63,18 +64,23 @@ inline std::string_view cameraFormatName(CameraFormat f) {
       return "nv12";
     case CameraFormat::Rgb24:
       return "rgb24";
+    case CameraFormat::H264:
+      return "h264";
+    case CameraFormat::Hevc:
+      return "hevc";
   }
   return "?";
 }
 
-/// "mjpeg", "yuyv", "nv12", "rgb24" or "auto"; throws lp::Error. (Inline: the command line
-/// reads it in every build, with V4L2 or without.)
+/// "mjpeg", "yuyv", "nv12", "rgb24", "h264", "hevc" or "auto"; throws lp::Error. (Inline: the
+/// command line reads it in every build, with V4L2 or without.)
 inline CameraFormat parseCameraFormat(std::string_view name) {
-  for (CameraFormat f : {CameraFormat::Auto, CameraFormat::Mjpeg, CameraFormat::Yuyv,
-                         CameraFormat::Nv12, CameraFormat::Rgb24})
+  for (CameraFormat f :
+       {CameraFormat::Auto, CameraFormat::Mjpeg, CameraFormat::Yuyv, CameraFormat::Nv12,
+        CameraFormat::Rgb24, CameraFormat::H264, CameraFormat::Hevc})
     if (cameraFormatName(f) == name) return f;
   throw Error("unknown camera format " + std::string(name) +
-              " (expected mjpeg, yuyv, nv12, rgb24 or auto)");
+              " (expected mjpeg, yuyv, nv12, rgb24, h264, hevc or auto)");
 }
 
 /// One buffer as a camera filled it, in the format negotiated with VIDIOC_S_FMT.
@@ -86,19 +92,22 @@ struct CameraBuffer {
   std::size_t bytes = 0;  ///< bytes used (never more than the buffer holds)
 };
 
-/// Decodes a camera buffer into a BGR8 frame; MJPEG at 1/`mjpegReduce` scale (1, 2, 4, 8). A
+/// Decodes a camera buffer into a BGR8 frame; MJPEG at 1/`mjpegReduce` scale (1, 2, 4, 8). (H.264
+/// and HEVC frames depend on the frames before them: V4l2Source decodes them with its own
+/// decoder; here they give an empty frame.) A
 /// corrupt or short buffer, a stride shorter than a row, or a compressed frame whose size is not
 /// the negotiated one leaves an empty frame (width 0), which the caller counts as dropped.
 void decodeCameraFrame(const CameraBuffer& buffer, int mjpegReduce, Frame& frame);
 
 struct CameraSettings {
-  std::string device;                        ///< /dev/videoN
-  CameraFormat format = CameraFormat::Auto;  ///< Auto: MJPEG, then YUYV, NV12, RGB24
-  int width = 0, height = 0;                 ///< 0: the largest the format offers
-  double fps = 0;                            ///< 0: the driver's default
-  int buffers = 4;                           ///< asked for; at least 3 must be granted
-  int timeoutMs = 2000;                      ///< no frame for this long: the camera stopped sending
-  int mjpegReduce = 1;  ///< decode MJPEG at 1/2, 1/4 or 1/8 scale (libjpeg's DCT scaling)
+  std::string device;  ///< /dev/videoN
+  /// Auto: MJPEG, then YUYV, NV12, RGB24, then H.264 and HEVC (a camera that offers nothing else)
+  CameraFormat format = CameraFormat::Auto;
+  int width = 0, height = 0;  ///< 0: the largest the format offers
+  double fps = 0;             ///< 0: the driver's default
+  int buffers = 4;            ///< asked for; at least 3 must be granted
+  int timeoutMs = 2000;       ///< no frame for this long: the camera stopped sending
+  int mjpegReduce = 1;        ///< decode MJPEG at 1/2, 1/4 or 1/8 scale (libjpeg's DCT scaling)
   /// The camera's UVC metadata node, streamed beside the video for each frame's exposure time
   /// (empty: none). Frames then carry the exposure the camera reports, not the one asked for.
   std::string metadataDevice;
@@ -121,6 +130,7 @@ std::unique_ptr<V4l2Source> startCamera(CameraSettings settings, bool metadataRe
 std::string siblingMetadataNode(const std::string& videoNode);
 
 class UvcMetadata;
+class VideoDecoder;
 
 struct CameraControl {
   std::uint32_t id = 0;
@@ -230,6 +240,13 @@ class V4l2Source final : public FrameSource, public ExposureControl {
   void setRate();
   /// The exposure this frame was taken with, from the metadata node, where it reports one.
   void readFrameExposure(Frame& frame, std::uint32_t sequence);
+  /// A frame's numbering, times and exposure, once its pixels are in `frame`.
+  void finishFrame(Frame& frame, std::uint32_t sequence, double timestamp);
+  /// H.264 or HEVC: one buffer to the decoder (a damaged one, or a sequence gap, makes it wait
+  /// for the next key frame), and a frame it has ready.
+  void sendToDecoder(const std::uint8_t* data, std::size_t bytes, bool damaged, bool gap,
+                     std::uint32_t sequence, double timestamp);
+  bool takeDecoded(Frame& frame);
   std::optional<std::int32_t> getControl(std::uint32_t id);
   /// Writes a control and reads it back. Returns false when the camera has no such control
   /// (VIDIOC_QUERYCTRL: EINVAL); a refused write, or a value that does not read back, is an
@@ -254,6 +271,9 @@ class V4l2Source final : public FrameSource, public ExposureControl {
   bool locked_ = false;
   std::string card_, bus_;
   std::unique_ptr<UvcMetadata> metadata_;
+  /// H.264 or HEVC (its deleter is set where it is made: a build without FFmpeg has none).
+  std::unique_ptr<VideoDecoder, void (*)(VideoDecoder*)> decoder_{nullptr, nullptr};
+  bool monotonic_ = true;  ///< the driver's timestamps are CLOCK_MONOTONIC
 };
 
 }  // namespace lp
