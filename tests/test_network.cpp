@@ -8,13 +8,16 @@
 #include <sys/socket.h>
 #include <unistd.h>
 
+#include <atomic>
 #include <chrono>
 #include <cmath>
 #include <fstream>
 #include <nlohmann/json.hpp>
 #include <string>
+#include <thread>
 #include <vector>
 
+#include "liveprobe/capture/network.h"
 #include "server_process.h"
 #include "test_util.h"
 
@@ -128,6 +131,33 @@ TEST(Network, ACameraThatDropsCostsNoRunAndNoFrameCount) {
       << ended.output;
   EXPECT_NE(ended.exitCode, 0) << ended.output;
   EXPECT_EQ(ended.output.find("reconnecting"), std::string::npos) << ended.output;
+}
+
+// While the stream is gone, the source says so to whoever asks (the HUD shows it, the lighting
+// held), from another thread than the one waiting for its next frame; once back, nothing.
+TEST(Network, WhileReconnectingTheSourceSaysWhatItWaits) {
+  Camera camera({"--fps", "20", "--drop-after", "5", "--down", "1"});
+  lp::NetworkSettings s;
+  s.url = camera.url;
+  s.timeoutMs = 1000;
+  s.reconnectSeconds = 0.25;
+  auto source = lp::openNetwork(s);
+  std::atomic<bool> done{false};
+  std::thread reader([&] {
+    lp::Frame f;
+    for (int i = 0; i < 9; ++i) EXPECT_TRUE(source->next(f)) << "frame " << i;
+    done = true;
+  });
+  std::string said;
+  while (!done) {
+    if (const std::string w = source->waitingFor(); !w.empty()) said = w;
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  }
+  reader.join();
+  EXPECT_EQ(said.rfind("reconnecting for ", 0), 0u) << said;
+  EXPECT_NE(said.find(": connection refused"), std::string::npos) << said;  // its port is closed
+  EXPECT_EQ(source->waitingFor(), "");
+  EXPECT_EQ(source->reconnects(), 1u);
 }
 
 TEST(Network, AStalledCameraIsReopened) {

@@ -306,6 +306,7 @@ void runInteractive(CapturePipeline& pipeline, StreamView& view, StreamTally& ta
   };
   loop.drawn = [&](double ms) {
     st = pipeline.stats();  // once a frame, for the HUD, progress and title
+    if (v.hud) v.hud->setSourceWaiting(pipeline.source().waitingFor());
     if (f) {
       ++tally.drawn;
       const double latency = 1000.0 * (monotonicSeconds() - f->captureTime);

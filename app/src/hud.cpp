@@ -314,6 +314,8 @@ void Hud::drawStatus(ViewState& state, double frameMs, const HudLayout& layout, 
                        100.0 * c.clippedShare, c.exposures > 1 ? "  bracket" : "",
                        h.held ? "  HELD" : "");
   }
+  if (!waiting_.empty())
+    ImGui::TextColored({1.0f, 0.7f, 0.3f, 1.0f}, "lighting HELD, %s", waiting_.c_str());
   const float line = ImGui::GetTextLineHeightWithSpacing();
   const int counterLines = still_ ? 0 : 2 + int(counters_.sinks.size());
   // What must stay: the counters and the exposure; the stage times go first when short of room.

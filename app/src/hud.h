@@ -108,6 +108,9 @@ class Hud {
   void setCounters(const HudCounters& c) { counters_ = c; }
   /// A line under the rate (dynamic resolution's state); empty for none.
   void setNote(std::string note) { note_ = std::move(note); }
+  /// What the source waits for while it has no stream (FrameSource::waitingFor): said under the
+  /// confidence, the lighting held meanwhile; empty when it has its stream.
+  void setSourceWaiting(std::string waiting) { waiting_ = std::move(waiting); }
   /// Turns on the coefficient editor (view): sliders edit `*radiance`; Save writes `savePath`.
   void enableEditor(Sh9* radiance, std::string savePath);
   /// Writes the edited coefficients as `liveprobe coeffs` JSON (atomically); returns what it did.
@@ -141,7 +144,7 @@ class Hud {
   void drawHelp(ViewState& state);
 
   bool window_ = false;
-  std::string source_, layout_, note_;
+  std::string source_, layout_, note_, waiting_;
   bool smoothing_ = false, still_ = false;
   std::deque<HudSample> history_;
   HudCounters counters_;

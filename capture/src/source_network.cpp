@@ -285,6 +285,12 @@ class NetworkSource final : public FrameSource {
     return s_.mode == NetworkSettings::Mode::Every ? frames_ : -1;
   }
   std::size_t reconnects() const override { return reconnects_; }
+  std::string waitingFor() const override {
+    std::lock_guard lock(mutex_);
+    if (lostAt_ < 0) return {};
+    return "reconnecting for " + formatNumber(monotonicSeconds() - lostAt_, 2) +
+           " s: " + (lastTry_.empty() ? lostWhy_ : lastTry_);
+  }
   void interrupt() override {
     {
       std::lock_guard lock(mutex_);
@@ -377,7 +383,19 @@ class NetworkSource final : public FrameSource {
     say(shown_ + ": " + why + "; reconnecting (waiting up to " + formatNumber(s_.reconnectSeconds) +
         " s between tries)");
     const double lostAt = monotonicSeconds();
-    lastTry_.clear();
+    {
+      std::lock_guard lock(mutex_);
+      lostAt_ = lostAt;
+      lostWhy_ = why;
+      lastTry_.clear();
+    }
+    struct Back {  // waitingFor() says nothing once this try ends, whichever way
+      NetworkSource& s;
+      ~Back() {
+        std::lock_guard lock(s.mutex_);
+        s.lostAt_ = -1;
+      }
+    } back{*this};
     double wait = 0.25;
     for (int tries = 1;; ++tries) {
       {
@@ -395,6 +413,7 @@ class NetworkSource final : public FrameSource {
         if (stop_) return false;
         // Said again only when the reason changes: an hour's outage is not an hour of lines.
         if (e.why != lastTry_) say(shown_ + ": not back yet: " + e.why);
+        std::lock_guard lock(mutex_);
         lastTry_ = e.why;
       }
       wait = std::min(wait * 2, s_.reconnectSeconds);
@@ -414,7 +433,9 @@ class NetworkSource final : public FrameSource {
   std::condition_variable cv_;
   std::optional<Frame> slot_;
   bool ended_ = false;
-  std::string fatal_, endReason_, lastTry_;
+  std::string fatal_, endReason_;
+  std::string lastTry_, lostWhy_;  ///< while reconnecting: the last try's failure, the loss
+  double lostAt_ = -1;             ///< while reconnecting: when the stream was lost
   std::uint64_t sequence_ = 0;
   double first_ = -1, firstPts_ = -1, fps_ = 0;
   std::int64_t frames_ = -1;

@@ -71,6 +71,10 @@ class FrameSource {
   /// Frames the source itself replaced by newer ones before next() took them (a network
   /// camera's reader keeps only the newest); 0 for the rest.
   virtual std::size_t staleFrames() const { return 0; }
+  /// While the source is without its stream (a network camera reconnecting), what it waits for
+  /// in a few words ("reconnecting for 3.2 s: connection refused"); empty otherwise.
+  /// Thread-safe: asked while another thread waits in next().
+  virtual std::string waitingFor() const { return {}; }
   /// Ends a next() that waits (a network stream between reconnection tries): it returns false.
   /// Thread-safe; called by whoever stops the thread that reads the source.
   virtual void interrupt() {}
