@@ -248,6 +248,37 @@ std::vector<nlohmann::json> liveRecords(const std::string& url, const std::strin
   return records;
 }
 
+// An RTSP camera that asks for a password (RTSP Basic authentication, GStreamer's RTSPAuth): the
+// URL's credentials play it, none or wrong ones are one line naming it unauthorized, and the
+// password is shown nowhere.
+TEST(Network, AnRtspCameraWithAPasswordTakesItAndNeverShowsIt) {
+  const std::string secret = "rtsp-secret-7";
+  ServerProcess rtsp({"/usr/bin/python3",
+                      std::string(LIVEPROBE_SOURCE_DIR) + "/tests/scripts/rtsp_server.py",
+                      lpt::dataPath("video/pano.mp4"), "/cam", "--auth", "viewer:" + secret});
+  const std::string port = rtsp.firstLine();
+  ASSERT_FALSE(port.empty()) << "the RTSP server did not start";
+  lpt::TempDir tmp;
+  const std::string at = "127.0.0.1:" + port + "/cam";
+  const auto r = live("rtsp://viewer:" + secret + "@" + at,
+                      "--frames 3 --timeout 3 --reconnect 0 --view-size 64x32", tmp / "ok.jsonl");
+  EXPECT_EQ(r.exitCode, 0) << r.output;
+  EXPECT_NE(r.output.find("rtsp://viewer:***@" + at), std::string::npos) << r.output;
+  EXPECT_EQ(readJsonl(tmp / "ok.jsonl").size(), 3u);
+  for (const std::string credentials : {"", "viewer:wrong@"}) {
+    const auto refused =
+        live("rtsp://" + credentials + at, "--frames 3 --timeout 3", tmp / "refused.jsonl");
+    EXPECT_EQ(refused.exitCode, 1) << refused.output;
+    EXPECT_EQ(lpt::lineCount(refused.output), 1) << refused.output;
+    EXPECT_NE(refused.output.find("unauthorized"), std::string::npos) << refused.output;
+    EXPECT_FALSE(std::filesystem::exists(tmp / "refused.jsonl"));
+  }
+  std::ifstream records(tmp / "ok.jsonl");
+  const std::string written((std::istreambuf_iterator<char>(records)), {});
+  for (const std::string* out : {&r.output, &written})
+    EXPECT_EQ(out->find(secret), std::string::npos) << *out;
+}
+
 TEST(Network, HttpRtspAndSrtGiveTheFilesFramesCoefficients) {
   // The H.264 file as it is (no re-encoding), at its own rate: GStreamer's RTSP server (Debian's
   // python3-gi, hence /usr/bin/python3), and FFmpeg's SRT listener.
