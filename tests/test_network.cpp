@@ -94,6 +94,32 @@ TEST(Network, AMotionJpegCameraGivesTheJpegsCoefficientsAndNeverItsPassword) {
   EXPECT_FALSE(std::filesystem::exists(tmp / "none.jsonl"));
 }
 
+// The same camera over HTTPS (TLS with a self-signed certificate, as a camera's own is): the
+// JPEG's coefficients, and its password shown nowhere.
+TEST(Network, AnHttpsCameraIsReadOverTls) {
+  lpt::TempDir tmp;
+  const std::string cert = tmp / "cert.pem", key = tmp / "key.pem";
+  const auto made = lpt::runCommand(
+      "openssl req -x509 -newkey rsa:2048 -nodes -days 1 -subj /CN=127.0.0.1 -keyout " + key +
+      " -out " + cert + " 2>&1");
+  ASSERT_EQ(made.exitCode, 0) << made.output;
+  const std::string secret = "tls-secret-3";
+  Camera camera({"--tls", cert + "," + key, "--auth", "user:" + secret}, "user:" + secret);
+  const std::string https = "https" + camera.url.substr(4);  // http://user:... -> https://
+  const auto r = live(https, "--frames 5", tmp / "net.jsonl");
+  ASSERT_EQ(r.exitCode, 0) << r.output;
+  EXPECT_EQ(r.output.find(secret), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("https://user:***@127.0.0.1"), std::string::npos) << r.output;
+  const auto records = readJsonl(tmp / "net.jsonl");
+  ASSERT_EQ(records.size(), 5u);
+  const double truth = fileL00();
+  for (const auto& j : records) EXPECT_NEAR(l00(j), truth, 1e-4 * truth) << j.dump();
+  // Plain HTTP to it is no camera: one line, exit 1.
+  const auto plain = live(camera.url, "--frames 2 --timeout 2", tmp / "plain.jsonl");
+  EXPECT_EQ(plain.exitCode, 1) << plain.output;
+  EXPECT_EQ(lpt::lineCount(plain.output), 1) << plain.output;
+}
+
 TEST(Network, ACameraThatDropsCostsNoRunAndNoFrameCount) {
   // The camera sends 10 frames, goes away (its port closed) for 1.5 s, and comes back; twice.
   Camera camera({"--fps", "20", "--drop-after", "10", "--down", "1.5"});

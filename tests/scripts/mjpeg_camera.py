@@ -3,16 +3,18 @@
 multipart/x-mixed-replace, one JPEG per part, at a steady rate. For the network tests.
 
   mjpeg_camera.py JPEG [--fps 30] [--drop-after N] [--down SECONDS] [--auth USER:PASS]
-                  [--silent-after N]
+                  [--silent-after N] [--tls CERT.pem,KEY.pem]
 
 Prints the port it listens on, then serves every client the JPEG over and over. --drop-after N
 closes a connection after N frames and refuses new ones (the port closed) for --down seconds,
 as a camera on a Wi-Fi link that goes away; --silent-after N keeps the connection open but sends
-nothing more after N frames (a stall). --auth asks for HTTP Basic credentials.
+nothing more after N frames (a stall). --auth asks for HTTP Basic credentials. --tls serves
+HTTPS with that certificate and key.
 """
 import argparse
 import base64
 import socket
+import ssl
 import sys
 import threading
 import time
@@ -28,7 +30,12 @@ def main():
     ap.add_argument("--down", type=float, default=0)
     ap.add_argument("--silent-after", type=int, default=0)
     ap.add_argument("--auth", default="")
+    ap.add_argument("--tls", default="")
     a = ap.parse_args()
+    tls = None
+    if a.tls:
+        tls = ssl.SSLContext(ssl.PROTOCOL_TLS_SERVER)
+        tls.load_cert_chain(*a.tls.split(","))
     with open(a.jpeg, "rb") as f:
         jpeg = f.read()
     listener = socket.socket(socket.AF_INET, socket.SOCK_STREAM)
@@ -42,6 +49,8 @@ def main():
 
     def serve(conn):
         try:
+            if tls:
+                conn = tls.wrap_socket(conn, server_side=True)
             request = b""
             while b"\r\n\r\n" not in request:
                 chunk = conn.recv(4096)
