@@ -9,6 +9,7 @@
 
 #include "liveprobe/capture/image.h"
 #include "liveprobe/gl/context.h"
+#include "liveprobe/gl/gl.h"
 #include "liveprobe/gl/mesh.h"
 #include "liveprobe/gl/renderer.h"
 #include "liveprobe/sh/axes.h"
@@ -101,6 +102,23 @@ double worstAgainstCpu(const lp::gl::Camera& cam, const std::vector<float>& px, 
 
 // GL against CPU: at every covered pixel of a unit sphere, E from the float framebuffer equals
 // the CPU evaluation at the analytic normal of that pixel, within 1e-3 relative.
+// A GL failure is liveprobe's one error type (lp::Error): wherever it happens, a command says it
+// in one line and exits 1, never as an internal error. A background wider than the driver's
+// largest texture makes GL_INVALID_VALUE.
+TEST_F(GlTest, AGlFailureIsLiveprobesError) {
+  int most = 0;
+  glGetIntegerv(GL_MAX_TEXTURE_SIZE, &most);
+  ASSERT_GT(most, 0);
+  lp::gl::Renderer r;
+  std::vector<std::uint8_t> bgr(std::size_t(most + 1) * 2 * 3, 128);
+  try {
+    r.setBackgroundSrgb8(bgr.data(), most + 1, 2, lp::gl::BackgroundMapping::Equirect, 1.0f);
+    ADD_FAILURE() << "a " << most + 1 << "-pixel-wide texture was taken";
+  } catch (const lp::Error& e) {
+    EXPECT_NE(std::string(e.what()).find(": GL error 0x0501"), std::string::npos) << e.what();
+  }
+}
+
 TEST_F(GlTest, IrradianceMatchesCpuPerPixel) {
   lp::gl::Renderer r;
   r.setMesh(lp::makeUvSphere(512, 256));

@@ -12,12 +12,16 @@
 #include <string_view>
 #include <vector>
 
+#include "liveprobe/sh/error.h"
+
 struct GLFWwindow;  // GLFW's window type; only the window backend and the app's input include GLFW
 
 namespace lp::gl {
 
-struct ContextError : std::runtime_error {
-  using std::runtime_error::runtime_error;
+/// A GL failure (no context, a driver's error, a shader that does not compile): liveprobe's one
+/// error type, so that wherever it happens the command says it in one line and exits 1.
+struct ContextError : Error {
+  using Error::Error;
 };
 
 /// Which context createGlContext() opens.
