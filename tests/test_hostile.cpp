@@ -269,6 +269,28 @@ TEST(Hostile, PixelLimitIsCheckedFromTheHeader) {
   EXPECT_EQ(r.exitCode, 1) << r.output;
   EXPECT_EQ(lpt::lineCount(r.output), 1) << r.output;
   EXPECT_NE(r.output.find("small.png: 64x32"), std::string::npos) << r.output;
+  // A JPEG's SOF segment and an OpenEXR header's dataWindow, patched to declare 20000x20000 in a
+  // file of a few hundred bytes: refused from the header, before OpenCV decodes anything.
+  auto patched = [&](const std::string& name, const cv::Mat& image, const std::string& marker,
+                     std::size_t offset, const std::vector<std::uint8_t>& bytes) {
+    std::vector<std::uint8_t> file;
+    EXPECT_TRUE(cv::imencode(fs::path(name).extension().string(), image, file));
+    const std::string text(file.begin(), file.end());
+    const std::size_t at = text.find(marker);
+    EXPECT_NE(at, std::string::npos) << name;
+    if (at == std::string::npos) return;
+    std::copy(bytes.begin(), bytes.end(), file.begin() + std::ptrdiff_t(at + offset));
+    std::ofstream(tmp / name, std::ios::binary)
+        .write(reinterpret_cast<const char*>(file.data()), std::streamsize(file.size()));
+  };
+  // SOF0: FF C0, length (2), precision (1), height (2), width (2).
+  patched("big.jpg", cv::Mat(32, 64, CV_8UC3, cv::Scalar(9, 9, 9)), "\xFF\xC0", 5,
+          {0x4E, 0x20, 0x4E, 0x20});
+  expectRefused(tmp, "coeffs big.jpg", "big.jpg", "20000x20000 is 400 M pixels, above the limit");
+  // dataWindow box2i: size (4), xMin, yMin, xMax, yMax (little-endian int32).
+  patched("big.exr", cv::Mat(32, 64, CV_32FC3, cv::Scalar(1, 1, 1)),
+          std::string("dataWindow\0box2i\0", 17), 17 + 4 + 8, {0x1F, 0x4E, 0, 0, 0x1F, 0x4E, 0, 0});
+  expectRefused(tmp, "coeffs big.exr", "big.exr", "20000x20000 is 400 M pixels, above the limit");
 }
 
 // Pixels near float's maximum sum to infinity: an error, never a null in the JSON.

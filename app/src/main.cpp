@@ -76,7 +76,6 @@ int main(int argc, char** argv) {
     }
     lp::setMaxImagePixels(std::int64_t(n));
   }
-  ::setenv("OPENCV_IO_MAX_IMAGE_PIXELS", std::to_string(lp::maxImagePixels()).c_str(), 1);
   std::vector<std::string> args(argv + 1, argv + argc);
   // "help COMMAND" is "COMMAND --help".
   if (args.size() == 2 && args[0] == "help") args = {args[1], "--help"};

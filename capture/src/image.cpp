@@ -40,6 +40,58 @@ void checkPixelCount(const std::string& path, std::int64_t width, std::int64_t h
               std::to_string(gMaxPixels / 1000000) + " M (LIVEPROBE_MAX_PIXELS raises it)");
 }
 
+// The frame size an OpenEXR file's header declares (its first part's dataWindow attribute, a
+// box2i: xMin, yMin, xMax, yMax), read before any decoding; none where the header does not say
+// it within `n` bytes. Layout per the OpenEXR file format: magic, version, then attributes (name,
+// type, int32 size, value) up to an empty name.
+std::optional<std::pair<std::int64_t, std::int64_t>> exrDataWindow(const std::uint8_t* p,
+                                                                   std::size_t n) {
+  auto int32At = [&](std::size_t at) {
+    return std::int32_t(std::uint32_t(p[at]) | std::uint32_t(p[at + 1]) << 8 |
+                        std::uint32_t(p[at + 2]) << 16 | std::uint32_t(p[at + 3]) << 24);
+  };
+  std::size_t i = 8;
+  auto text = [&](std::string& out) {
+    const auto* end = static_cast<const std::uint8_t*>(std::memchr(p + i, 0, n - std::min(i, n)));
+    if (i >= n || !end) return false;
+    out.assign(reinterpret_cast<const char*>(p + i), std::size_t(end - (p + i)));
+    i = std::size_t(end - p) + 1;
+    return true;
+  };
+  for (std::string name, type; text(name) && !name.empty() && text(type);) {
+    if (i + 4 > n) return std::nullopt;
+    const std::int32_t size = int32At(i);
+    i += 4;
+    if (size < 0 || std::size_t(size) > n - i) return std::nullopt;
+    if (name == "dataWindow" && type == "box2i" && size == 16)
+      return std::pair<std::int64_t, std::int64_t>{
+          std::int64_t(int32At(i + 8)) - int32At(i) + 1,
+          std::int64_t(int32At(i + 12)) - int32At(i + 4) + 1};
+    i += std::size_t(size);
+  }
+  return std::nullopt;
+}
+
+// A JPEG's or an OpenEXR file's frame size, from its header, held to the pixel limit before
+// OpenCV decodes it. (OpenCV's own limit, OPENCV_IO_MAX_IMAGE_PIXELS, is read when its library
+// loads, before liveprobe can set it: a few hundred bytes could otherwise ask for gigabytes.)
+void checkHeaderSize(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::vector<std::uint8_t> head(std::size_t(1) << 20);  // a JPEG's APP segments come first
+  in.read(reinterpret_cast<char*>(head.data()), std::streamsize(head.size()));
+  const std::size_t n = std::size_t(in.gcount());
+  const std::uint8_t* p = head.data();
+  if (n >= 4 && p[0] == 0xFF && p[1] == 0xD8) {
+    if (const auto size = jpegFrameSize(p, n)) checkPixelCount(path, size->first, size->second);
+  } else if (n >= 8 && p[0] == 0x76 && p[1] == 0x2F && p[2] == 0x31 && p[3] == 0x01) {
+    if (const auto size = exrDataWindow(p, n)) {
+      if (size->first <= 0 || size->second <= 0)
+        throw Error(path + ": OpenEXR header declares an empty data window");
+      checkPixelCount(path, size->first, size->second);
+    }
+  }
+}
+
 // OpenCV's Radiance reader accepts a file whose RLE scanlines stop early and returns the image
 // with the missing rows left black. A complete file holds at least one RLE (>= 4-byte header per
 // scanline) or flat (4 bytes per pixel) record per row, so we check the header's size line against
@@ -158,6 +210,7 @@ void readImageFrame(const std::string& path, Frame& frame) {
   const std::string ext = lower(fs::path(path).extension().string());
   if (isPng(path)) return readPng(path, frame);
   if (ext == ".hdr" || ext == ".pic") checkRadianceComplete(path);
+  checkHeaderSize(path);
   cv::Mat m;
   try {
     m = cv::imread(path, cv::IMREAD_UNCHANGED | cv::IMREAD_ANYDEPTH | cv::IMREAD_ANYCOLOR);
@@ -316,6 +369,32 @@ void saveImage8(const std::string& path, int width, int height, int channels,
                 const std::uint8_t* data) {
   cv::Mat m(height, width, channels == 4 ? CV_8UC4 : CV_8UC3, const_cast<std::uint8_t*>(data));
   writeAtomically(path, m);
+}
+
+std::optional<std::pair<int, int>> jpegFrameSize(const std::uint8_t* p, std::size_t n) {
+  std::size_t i = 2;  // after SOI
+  while (i + 4 <= n) {
+    if (p[i] != 0xFF) return std::nullopt;
+    const std::uint8_t m = p[i + 1];
+    if (m == 0xFF) {  // fill byte
+      ++i;
+      continue;
+    }
+    if (m == 0x01 || (m >= 0xD0 && m <= 0xD7)) {  // TEM, RSTn: no length
+      i += 2;
+      continue;
+    }
+    if (m == 0xDA || m == 0xD9) return std::nullopt;  // SOS or EOI before any SOF
+    const std::size_t len = std::size_t(p[i + 2]) << 8 | p[i + 3];
+    if (len < 2) return std::nullopt;
+    const bool sof = m >= 0xC0 && m <= 0xCF && m != 0xC4 && m != 0xC8 && m != 0xCC;
+    if (sof) {
+      if (len < 7 || i + 9 > n) return std::nullopt;
+      return std::pair<int, int>{int(p[i + 7]) << 8 | p[i + 8], int(p[i + 5]) << 8 | p[i + 6]};
+    }
+    i += 2 + len;
+  }
+  return std::nullopt;
 }
 
 cv::Mat decodeCameraJpeg(const std::uint8_t* data, std::size_t bytes, int reduce) {

@@ -694,38 +694,6 @@ CameraInfo queryCamera(const std::string& path) {
   return info;
 }
 
-namespace {
-
-// The frame size a JPEG's SOF segment declares, read before any decoding: a corrupt header could
-// otherwise make the decoder allocate for a frame of any size. Markers per ITU T.81, B.1.1.
-std::optional<std::pair<int, int>> jpegFrameSize(const std::uint8_t* p, std::size_t n) {
-  std::size_t i = 2;  // after SOI
-  while (i + 4 <= n) {
-    if (p[i] != 0xFF) return std::nullopt;
-    const std::uint8_t m = p[i + 1];
-    if (m == 0xFF) {  // fill byte
-      ++i;
-      continue;
-    }
-    if (m == 0x01 || (m >= 0xD0 && m <= 0xD7)) {  // TEM, RSTn: no length
-      i += 2;
-      continue;
-    }
-    if (m == 0xDA || m == 0xD9) return std::nullopt;  // SOS or EOI before any SOF
-    const std::size_t len = std::size_t(p[i + 2]) << 8 | p[i + 3];
-    if (len < 2) return std::nullopt;
-    const bool sof = m >= 0xC0 && m <= 0xCF && m != 0xC4 && m != 0xC8 && m != 0xCC;
-    if (sof) {
-      if (len < 7 || i + 9 > n) return std::nullopt;
-      return std::pair<int, int>{int(p[i + 7]) << 8 | p[i + 8], int(p[i + 5]) << 8 | p[i + 6]};
-    }
-    i += 2 + len;
-  }
-  return std::nullopt;
-}
-
-}  // namespace
-
 void decodeCameraFrame(const CameraBuffer& in, int mjpegReduce, Frame& f) {
   cv::Mat bgr;
   auto* data = const_cast<std::uint8_t*>(in.data);  // cv::Mat wraps, never writes

@@ -18,7 +18,6 @@ constexpr std::int64_t kLimit = std::int64_t(1) << 20;
 
 extern "C" int LLVMFuzzerInitialize(int*, char***) {
   lp::setMaxImagePixels(kLimit);
-  ::setenv("OPENCV_IO_MAX_IMAGE_PIXELS", std::to_string(kLimit).c_str(), 1);
   return 0;
 }
 

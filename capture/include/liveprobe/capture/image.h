@@ -11,8 +11,9 @@
 namespace lp {
 
 /// The most pixels an image file may declare: checked from its header before anything is
-/// decoded (PNG, Radiance here; OpenCV's other decoders by OPENCV_IO_MAX_IMAGE_PIXELS, which
-/// main() sets to the same). Default 268,435,456 (2^28, OpenCV's own default).
+/// decoded (PNG, Radiance, JPEG and OpenEXR here; other formats by OpenCV's own limit, 2^30
+/// unless OPENCV_IO_MAX_IMAGE_PIXELS is in the environment when the program starts). Default
+/// 268,435,456 (2^28).
 inline constexpr std::int64_t kDefaultMaxImagePixels = std::int64_t(1) << 28;
 std::int64_t maxImagePixels();
 void setMaxImagePixels(std::int64_t pixels);
