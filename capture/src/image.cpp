@@ -74,21 +74,42 @@ std::optional<std::pair<std::int64_t, std::int64_t>> exrDataWindow(const std::ui
 
 // A JPEG's or an OpenEXR file's frame size, from its header, held to the pixel limit before
 // OpenCV decodes it. (OpenCV's own limit, OPENCV_IO_MAX_IMAGE_PIXELS, is read when its library
-// loads, before liveprobe can set it: a few hundred bytes could otherwise ask for gigabytes.)
+// loads, before liveprobe can set it: a few hundred bytes could otherwise ask for gigabytes.) A
+// header that does not say its size where the format puts it is refused as corrupt: libjpeg
+// would skip stray bytes to find a frame header the strict reading does not see. The header is
+// read in growing pieces (metadata segments come first), up to 64 MB.
 void checkHeaderSize(const std::string& path) {
   std::ifstream in(path, std::ios::binary);
-  std::vector<std::uint8_t> head(std::size_t(1) << 20);  // a JPEG's APP segments come first
-  in.read(reinterpret_cast<char*>(head.data()), std::streamsize(head.size()));
-  const std::size_t n = std::size_t(in.gcount());
-  const std::uint8_t* p = head.data();
-  if (n >= 4 && p[0] == 0xFF && p[1] == 0xD8) {
-    if (const auto size = jpegFrameSize(p, n)) checkPixelCount(path, size->first, size->second);
-  } else if (n >= 8 && p[0] == 0x76 && p[1] == 0x2F && p[2] == 0x31 && p[3] == 0x01) {
-    if (const auto size = exrDataWindow(p, n)) {
-      if (size->first <= 0 || size->second <= 0)
-        throw Error(path + ": OpenEXR header declares an empty data window");
-      checkPixelCount(path, size->first, size->second);
+  std::vector<std::uint8_t> head;
+  enum class Kind { Other, Jpeg, Exr } kind = Kind::Other;
+  for (std::size_t want = 1 << 16;; want *= 4) {
+    const std::size_t had = head.size();
+    head.resize(want);
+    in.read(reinterpret_cast<char*>(head.data() + had), std::streamsize(want - had));
+    head.resize(had + std::size_t(in.gcount()));
+    const std::uint8_t* p = head.data();
+    const std::size_t n = head.size();
+    if (had == 0)
+      kind = n >= 4 && p[0] == 0xFF && p[1] == 0xD8                                   ? Kind::Jpeg
+             : n >= 8 && p[0] == 0x76 && p[1] == 0x2F && p[2] == 0x31 && p[3] == 0x01 ? Kind::Exr
+                                                                                      : Kind::Other;
+    if (kind == Kind::Other) return;
+    std::optional<std::pair<std::int64_t, std::int64_t>> size;
+    if (kind == Kind::Jpeg) {
+      if (const auto s = jpegFrameSize(p, n)) size = {s->first, s->second};
+    } else {
+      size = exrDataWindow(p, n);
     }
+    if (size) {
+      if (size->first <= 0 || size->second <= 0)
+        throw Error(path + ": the header declares an empty image (" + std::to_string(size->first) +
+                    "x" + std::to_string(size->second) + ")");
+      return checkPixelCount(path, size->first, size->second);
+    }
+    if (!in || n >= (std::size_t(64) << 20))
+      throw Error(path + (kind == Kind::Jpeg
+                              ? ": corrupt JPEG: no frame header (SOF) where its markers lead"
+                              : ": corrupt OpenEXR file: no dataWindow in its header"));
   }
 }
 
