@@ -287,6 +287,15 @@ TEST(Hostile, PixelLimitIsCheckedFromTheHeader) {
   patched("big.jpg", cv::Mat(32, 64, CV_8UC3, cv::Scalar(9, 9, 9)), "\xFF\xC0", 5,
           {0x4E, 0x20, 0x4E, 0x20});
   expectRefused(tmp, "coeffs big.jpg", "big.jpg", "20000x20000 is 400 M pixels, above the limit");
+  // A stray byte before the SOF: libjpeg skips it and would decode the 20000x20000; the strict
+  // reading of the markers finds no frame header, and says the file is corrupt.
+  {
+    std::ifstream in(tmp / "big.jpg", std::ios::binary);
+    std::string bytes((std::istreambuf_iterator<char>(in)), {});
+    bytes.insert(bytes.find("\xFF\xC0"), 1, '\x7E');
+    std::ofstream(tmp / "stray.jpg", std::ios::binary) << bytes;
+  }
+  expectRefused(tmp, "coeffs stray.jpg", "stray.jpg", "corrupt JPEG: no frame header (SOF)");
   // dataWindow box2i: size (4), xMin, yMin, xMax, yMax (little-endian int32).
   patched("big.exr", cv::Mat(32, 64, CV_32FC3, cv::Scalar(1, 1, 1)),
           std::string("dataWindow\0box2i\0", 17), 17 + 4 + 8, {0x1F, 0x4E, 0, 0, 0x1F, 0x4E, 0, 0});
