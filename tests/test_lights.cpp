@@ -13,6 +13,7 @@
 #include <random>
 
 #include "layout_dirs.h"
+#include "liveprobe/capture/frame_processor.h"
 #include "liveprobe/capture/image.h"
 #include "liveprobe/capture/open_source.h"
 #include "liveprobe/capture/pipeline.h"
@@ -211,6 +212,46 @@ TEST(Lights, SeveralLights) {
     EXPECT_LT(angleDeg(dvec3(split.lights[k].dir), dirs[k]), 0.25) << k;
     EXPECT_NEAR(split.lights[k].power.y, powers[k], 0.01 * powers[k]) << k;
   }
+}
+
+// A stream's hysteresis (LightOptions::held): a sun at 4% of the map's luminance power, under the
+// 5% a light needs, is no light alone, and is one where the frame before had a light within 5
+// degrees of it (held down to half the share); a light elsewhere holds nothing. A FrameProcessor
+// carries it from frame to frame: a sun at 6% and then at 4% is a light in both frames, and the
+// 4% frame alone in a fresh processor is none.
+TEST(Lights, ALightTheFrameBeforeHadIsHeldAtHalfTheShare) {
+  const int w = 512, h = 256;
+  const dvec3 sunDir = glm::normalize(dvec3(0.3, -0.5, 0.6));
+  const double skyPower = 0.6004 * 4 * kPi;  // SunSky::sky's mean luminance is 0.6004
+  auto frameAt = [&](double share) {
+    SunSky s{sunDir, glm::radians(1.0), dvec3(0)};
+    s.sunRadiance = dvec3(share * skyPower / (1 - share) / s.omega());
+    return render(s, w, h, lpt::equirectDirs(w, h), true);
+  };
+  const lp::Image faint = frameAt(0.04), clear = frameAt(0.06);
+  const auto view = lp::PanoramaView::rgbF32(faint.rgb.data(), w, h);
+  lp::LightOptions o;
+  EXPECT_TRUE(lp::projectWithLights(view, o).lights.empty());
+  o.held = {glm::vec3(glm::normalize(sunDir + dvec3(0.03, 0, 0)))};  // 2 degrees off
+  const auto held = lp::projectWithLights(view, o);
+  ASSERT_EQ(held.lights.size(), 1u);
+  EXPECT_NEAR(held.lights[0].share, 0.04, 0.004);
+  EXPECT_LT(angleDeg(dvec3(held.lights[0].dir), sunDir), 0.25);
+  o.held = {glm::vec3(-sunDir)};
+  EXPECT_TRUE(lp::projectWithLights(view, o).lights.empty());
+
+  auto frameOf = [&](const lp::Image& img) {
+    auto f = std::make_shared<lp::Frame>();
+    f->format = lp::PanoramaFormat::RgbF32;
+    f->width = img.width, f->height = img.height;
+    f->rgb = img.rgb;
+    return f;
+  };
+  lp::FrameProcessor stream({lp::LayoutSpec(), lp::Photometry{}, std::nullopt, 1, {}});
+  EXPECT_EQ(stream.run(frameOf(clear)).lighting.lights.size(), 1u);
+  EXPECT_EQ(stream.run(frameOf(faint)).lighting.lights.size(), 1u);
+  lp::FrameProcessor fresh({lp::LayoutSpec(), lp::Photometry{}, std::nullopt, 1, {}});
+  EXPECT_TRUE(fresh.run(frameOf(faint)).lighting.lights.empty());
 }
 
 // The synthetic source's sun moves (a full turn in 20 s, bobbing in elevation): the extracted

@@ -167,9 +167,12 @@ FrameLighting FrameProcessor::process(const Frame& frame, Executor* executor, co
   std::vector<float> peaks;
   const Sh9 whole = projector_->project(v.view, executor, extractor_ ? &peaks : nullptr);
   LightSplit split;
-  if (extractor_)
+  if (extractor_) {
     split = extractor_->extract(v.view, whole, peaks, opt_.lights);
-  else
+    // The next frame's hysteresis: where this one's lights are, in the frame's orientation.
+    opt_.lights.held.clear();
+    for (const Light& l : split.lights) opt_.lights.held.push_back(l.dir);
+  } else
     split.residual = whole;
   return finish(whole, std::move(split), v.scale);
 }

@@ -377,6 +377,14 @@ struct LightExtractor::Search {
     Scales sc{};
     sc.clipped = peak.value >= clipLevel;
     sc.minShare = sc.clipped ? opt.minClippedShare : opt.minShare;
+    // A light the frame before had, here again: held down to a fraction of the share.
+    const glm::vec3 dir = samples[peak.pixel].dir;
+    const float nearHeld = std::cos(glm::radians(opt.heldDeg));
+    for (const glm::vec3& h : opt.held)
+      if (glm::dot(dir, h) >= nearHeld) {
+        sc.minShare *= opt.heldFraction;
+        break;
+      }
     sc.pixelDw = samples[peak.pixel].solidAngle;
     sc.pixelRadius = std::sqrt(sc.pixelDw / float(kPi));
     sc.glare = std::max(glm::radians(opt.glareDeg), 2.0f * sc.pixelRadius);

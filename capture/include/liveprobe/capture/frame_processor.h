@@ -91,7 +91,8 @@ class FrameProcessor {
   /// The lighting of `frame` alone. `linear`, when the caller has it, is the frame already
   /// converted by linearizer() (a reduction reads it instead of converting again). Throws lp::Error
   /// (without a source name: the caller adds it) when the frame does not fit the layout or the
-  /// reduction, or when its coefficients are not finite.
+  /// reduction, or when its coefficients are not finite. A processor is one stream's: the lights
+  /// a frame gives hold the next frame's at the threshold (LightOptions::held).
   FrameLighting process(const Frame& frame, Executor* executor = nullptr,
                         const Image* linear = nullptr);
 

@@ -73,6 +73,13 @@ struct LightOptions {
   float coreFraction = 0.3f;  ///< core: pixels at or above this fraction of the peak's luminance
   float glareDeg = 3.0f;      ///< taken around the core with it
   float ringDeg = 1.5f;       ///< width of the ring whose median fills the source
+  /// A stream's hysteresis: the directions (in the frame's own orientation) of the lights the
+  /// frame before gave. A peak within heldDeg of one of them is a light down to heldFraction of
+  /// the share it needs otherwise, so a source at the threshold does not come and go from frame
+  /// to frame. Empty (one frame, or a stream's first): no hysteresis.
+  std::vector<glm::vec3> held;
+  float heldFraction = 0.5f;
+  float heldDeg = 5.0f;
 };
 
 /// What a frame splits into: the sky's coefficients and the lights.
