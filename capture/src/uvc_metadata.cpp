@@ -4,8 +4,6 @@
 #include <linux/uvcvideo.h>
 #include <linux/videodev2.h>
 #include <poll.h>
-#include <sys/ioctl.h>
-#include <sys/mman.h>
 
 #include <cerrno>
 #include <cstring>
@@ -94,49 +92,18 @@ UvcMetadata::UvcMetadata(const std::string& path, const std::string& bus) : path
   f.fmt.meta.dataformat = chosen;
   if (v4l2Ioctl(fd_.get(), VIDIOC_S_FMT, &f) < 0 || f.fmt.meta.dataformat != chosen)
     throw Error(path + ": VIDIOC_S_FMT of the metadata format failed");
-  v4l2_requestbuffers req{};
-  req.count = 8;
-  req.type = V4L2_BUF_TYPE_META_CAPTURE;
-  req.memory = V4L2_MEMORY_MMAP;
-  if (v4l2Ioctl(fd_.get(), VIDIOC_REQBUFS, &req) < 0 || req.count == 0)
-    throw Error(path + ": VIDIOC_REQBUFS: " + std::strerror(errno));
-  for (std::uint32_t i = 0; i < req.count; ++i) {
-    v4l2_buffer b{};
-    b.type = V4L2_BUF_TYPE_META_CAPTURE;
-    b.memory = V4L2_MEMORY_MMAP;
-    b.index = i;
-    if (v4l2Ioctl(fd_.get(), VIDIOC_QUERYBUF, &b) < 0)
-      throw Error(path + ": VIDIOC_QUERYBUF: " + std::strerror(errno));
-    maps_.emplace_back(fd_.get(), b);
-    if (!maps_.back().valid()) throw Error(path + ": mmap: " + std::strerror(errno));
-    if (v4l2Ioctl(fd_.get(), VIDIOC_QBUF, &b) < 0)
-      throw Error(path + ": VIDIOC_QBUF: " + std::strerror(errno));
-  }
-  int type = V4L2_BUF_TYPE_META_CAPTURE;
-  if (v4l2Ioctl(fd_.get(), VIDIOC_STREAMON, &type) < 0)
-    throw Error(path + ": VIDIOC_STREAMON: " + std::strerror(errno));
+  queue_ = std::make_unique<V4l2Queue>(fd_.get(), V4L2_BUF_TYPE_META_CAPTURE, 8, 1, path);
+  queue_->streamOn();
 }
 
-UvcMetadata::~UvcMetadata() {
-  int type = V4L2_BUF_TYPE_META_CAPTURE;
-  v4l2Ioctl(fd_.get(), VIDIOC_STREAMOFF, &type);
-  maps_.clear();  // unmaps
-  v4l2_requestbuffers req{};
-  req.type = V4L2_BUF_TYPE_META_CAPTURE;
-  req.memory = V4L2_MEMORY_MMAP;
-  v4l2Ioctl(fd_.get(), VIDIOC_REQBUFS, &req);
-}
+UvcMetadata::~UvcMetadata() = default;  // the queue stops the stream and frees its buffers
 
 void UvcMetadata::drain() {
-  for (;;) {
-    v4l2_buffer b{};
-    b.type = V4L2_BUF_TYPE_META_CAPTURE;
-    b.memory = V4L2_MEMORY_MMAP;
-    if (v4l2Ioctl(fd_.get(), VIDIOC_DQBUF, &b) < 0) return;  // EAGAIN: nothing more for now
-    if (b.index < maps_.size() && !(b.flags & V4L2_BUF_FLAG_ERROR))
-      seen_[b.sequence] = parseUvcExposure(
-          maps_[b.index].data(), std::min<std::size_t>(b.bytesused, maps_[b.index].length()));
-    v4l2Ioctl(fd_.get(), VIDIOC_QBUF, &b);
+  v4l2_buffer b;
+  while (queue_->dequeue(b)) {  // until EAGAIN: nothing more for now
+    if (!(b.flags & V4L2_BUF_FLAG_ERROR))
+      seen_[b.sequence] = parseUvcExposure(queue_->data(b), queue_->bytes(b));
+    queue_->requeue(b);
     while (seen_.size() > 64) seen_.erase(seen_.begin());
   }
 }

@@ -37,7 +37,7 @@ class UvcMetadata {
   void drain();
   std::string path_;
   UniqueFd fd_;
-  std::vector<MappedBuffer> maps_;
+  std::unique_ptr<V4l2Queue> queue_;                     ///< destroyed before fd_
   std::map<std::uint32_t, std::optional<double>> seen_;  ///< by sequence, the newest few
 };
 

@@ -1,11 +1,7 @@
 #include "liveprobe/capture/v4l2.h"
 
-#include <fcntl.h>
 #include <linux/videodev2.h>
 #include <poll.h>
-#include <sys/ioctl.h>
-#include <sys/mman.h>
-#include <unistd.h>
 
 #include <algorithm>
 #include <cerrno>
@@ -67,19 +63,12 @@ bool startsAnnexB(const std::uint8_t* p, std::size_t n) {
 
 }  // namespace
 
-// One memory-mapped buffer; unmapped when destroyed.
-struct V4l2Source::Buffer : MappedBuffer {
-  using MappedBuffer::MappedBuffer;
-};
-
 V4l2Source::V4l2Source(CameraSettings settings) noexcept : settings_(std::move(settings)) {}
 
 V4l2Source::~V4l2Source() { close(); }
 
 void V4l2Source::fail(const std::string& what, int err) const {
-  std::string why = std::strerror(err);
-  if (err == ENODEV) why = "the camera was unplugged or has gone (ENODEV)";
-  throw Error(settings_.device + ": " + what + ": " + why);
+  throwV4l2(settings_.device, what, err);
 }
 
 int V4l2Source::xioctl(unsigned long request, void* arg) {
@@ -153,23 +142,7 @@ void V4l2Source::open() {
 
 void V4l2Source::streamOn() {
   require(State::Ready, "streamOn");
-  for (std::size_t i = 0; i < buffers_.size(); ++i) {
-    v4l2_buffer b{};
-    b.type = V4L2_BUF_TYPE_VIDEO_CAPTURE;
-    b.memory = V4L2_MEMORY_MMAP;
-    b.index = std::uint32_t(i);
-    if (xioctl(VIDIOC_QBUF, &b) < 0) {
-      const int e = errno;
-      streamOffIoctl();
-      fail("VIDIOC_QBUF", e);
-    }
-  }
-  int type = V4L2_BUF_TYPE_VIDEO_CAPTURE;
-  if (xioctl(VIDIOC_STREAMON, &type) < 0) {
-    const int e = errno;
-    streamOffIoctl();
-    fail("VIDIOC_STREAMON", e);
-  }
+  queue_->streamOn();
   lastSequence_.reset();  // a restart's sequence gap is not lost frames
 #if LIVEPROBE_WITH_NETWORK
   if (decoder_) decoder_->lost();  // a new stream: its first key frame starts the pictures
@@ -280,70 +253,22 @@ void V4l2Source::setFormat() {
 void V4l2Source::allocateBuffers() {
   require(State::Configured, "allocateBuffers");
   constexpr std::uint32_t kMinBuffers = 3;
-  v4l2_requestbuffers req{};
-  req.count = std::uint32_t(std::max(settings_.buffers, int(kMinBuffers)));
-  req.type = V4L2_BUF_TYPE_VIDEO_CAPTURE;
-  req.memory = V4L2_MEMORY_MMAP;
-  if (xioctl(VIDIOC_REQBUFS, &req) < 0) {
-    const int e = errno;
-    if (e == EBUSY)
-      throw Error(settings_.device + ": device busy (VIDIOC_REQBUFS: another program is using it)");
-    fail("VIDIOC_REQBUFS", e);
-  }
-  if (req.count < kMinBuffers) {
-    const std::uint32_t granted = req.count;
-    releaseBuffers();  // roll back: give back what was granted
-    throw Error(settings_.device + ": VIDIOC_REQBUFS granted " + std::to_string(granted) +
-                " buffers, need at least " + std::to_string(kMinBuffers));
-  }
-  buffers_.clear();
-  for (std::uint32_t i = 0; i < req.count; ++i) {
-    v4l2_buffer b{};
-    b.type = V4L2_BUF_TYPE_VIDEO_CAPTURE;
-    b.memory = V4L2_MEMORY_MMAP;
-    b.index = i;
-    if (xioctl(VIDIOC_QUERYBUF, &b) < 0) {
-      const int e = errno;
-      releaseBuffers();
-      fail("VIDIOC_QUERYBUF", e);
-    }
-    auto buf = std::make_unique<Buffer>(fd_.get(), b);
-    if (!buf->valid()) {
-      const int e = errno;
-      releaseBuffers();
-      fail("mmap", e);
-    }
-    buffers_.push_back(std::move(buf));
-  }
+  queue_ = std::make_unique<V4l2Queue>(fd_.get(), V4L2_BUF_TYPE_VIDEO_CAPTURE,
+                                       std::uint32_t(std::max(settings_.buffers, 0)), kMinBuffers,
+                                       settings_.device);
   state_ = State::Ready;
-}
-
-void V4l2Source::releaseBuffers() {
-  buffers_.clear();  // unmaps
-  if (!fd_.isValid()) return;
-  v4l2_requestbuffers req{};
-  req.count = 0;
-  req.type = V4L2_BUF_TYPE_VIDEO_CAPTURE;
-  req.memory = V4L2_MEMORY_MMAP;
-  xioctl(VIDIOC_REQBUFS, &req);  // frees the driver's buffers; fails harmlessly on ENODEV
-}
-
-void V4l2Source::streamOffIoctl() {
-  int type = V4L2_BUF_TYPE_VIDEO_CAPTURE;
-  xioctl(VIDIOC_STREAMOFF, &type);  // returns every queued buffer; harmless when not streaming
 }
 
 void V4l2Source::streamOff() {
   if (state_ != State::Streaming) return;
-  streamOffIoctl();
+  queue_->streamOff();
   state_ = State::Ready;
 }
 
 void V4l2Source::close() {
   metadata_.reset();
   decoder_.reset();
-  streamOff();
-  if (state_ == State::Ready) releaseBuffers();
+  queue_.reset();  // stops the stream, gives the buffers back
   fd_.reset();
   state_ = State::Closed;
 }
@@ -362,19 +287,8 @@ bool V4l2Source::next(Frame& frame) {
       throw Error(settings_.device + ": no frame for " +
                   std::to_string(settings_.timeoutMs / 1000.0).substr(0, 4) +
                   " s: the camera stopped sending");
-    v4l2_buffer b{};
-    b.type = V4L2_BUF_TYPE_VIDEO_CAPTURE;
-    b.memory = V4L2_MEMORY_MMAP;
-    if (xioctl(VIDIOC_DQBUF, &b) < 0) {
-      const int e = errno;
-      if (e == EAGAIN) continue;  // woken without a frame
-      if (e == ENODEV || e == EIO)
-        throw Error(settings_.device + ": the camera was unplugged mid-stream (" +
-                    std::strerror(e) + ")");
-      fail("VIDIOC_DQBUF", e);
-    }
-    if (b.index >= buffers_.size())
-      throw Error(settings_.device + ": driver returned buffer " + std::to_string(b.index));
+    v4l2_buffer b;
+    if (!queue_->dequeue(b)) continue;  // woken without a frame
     // Gaps in the driver's sequence numbers are frames lost before we saw them.
     const bool gap = lastSequence_ && b.sequence > *lastSequence_ + 1;
     if (gap) dropped_ += b.sequence - *lastSequence_ - 1;
@@ -386,19 +300,14 @@ bool V4l2Source::next(Frame& frame) {
     // The timestamp is CLOCK_MONOTONIC when the driver says so (the kernel's default for UVC).
     monotonic_ = (b.flags & V4L2_BUF_FLAG_TIMESTAMP_MASK) == V4L2_BUF_FLAG_TIMESTAMP_MONOTONIC;
     const std::uint32_t sequence = b.sequence;
-    const Buffer& buf = *buffers_[b.index];
-    const std::size_t used = std::min<std::size_t>(b.bytesused, buf.length());
+    const std::uint8_t* data = queue_->data(b);
+    const std::size_t used = queue_->bytes(b);
     if (decoder_)
-      sendToDecoder(buf.data(), used, corrupt, gap, sequence, t);  // copied: before QBUF
+      sendToDecoder(data, used, corrupt, gap, sequence, t);  // copied: before QBUF
     else if (!corrupt)
-      decodeCameraFrame({fourcc_, width_, height_, bytesPerLine_, buf.data(), used},
+      decodeCameraFrame({fourcc_, width_, height_, bytesPerLine_, data, used},
                         settings_.mjpegReduce, frame);
-    if (xioctl(VIDIOC_QBUF, &b) < 0) {
-      const int e = errno;
-      if (e == ENODEV)
-        throw Error(settings_.device + ": the camera was unplugged mid-stream (ENODEV)");
-      fail("VIDIOC_QBUF", e);
-    }
+    queue_->requeue(b);
     if (decoder_) continue;  // its frames come out of takeDecoded()
     if (corrupt || frame.width == 0) {
       ++dropped_;

@@ -130,6 +130,7 @@ std::unique_ptr<V4l2Source> startCamera(CameraSettings settings, bool metadataRe
 std::string siblingMetadataNode(const std::string& videoNode);
 
 class UvcMetadata;
+class V4l2Queue;
 class VideoDecoder;
 
 struct CameraControl {
@@ -227,12 +228,9 @@ class V4l2Source final : public FrameSource, public ExposureControl {
   int height() const { return height_; }
 
  private:
-  struct Buffer;
   [[noreturn]] void fail(const std::string& what, int err) const;
   void require(State needed, const char* verb) const;
   int xioctl(unsigned long request, void* arg);
-  void releaseBuffers();
-  void streamOffIoctl();
   // setFormat()'s steps: the format (asked for, or the first liveprobe converts), the largest
   // size it offers (when none was asked for), and the frame rate.
   std::uint32_t chooseFourcc();
@@ -258,7 +256,7 @@ class V4l2Source final : public FrameSource, public ExposureControl {
   CameraSettings settings_;
   UniqueFd fd_;
   State state_ = State::Closed;
-  std::vector<std::unique_ptr<Buffer>> buffers_;
+  std::unique_ptr<V4l2Queue> queue_;  ///< the buffers, from allocateBuffers() to close()
   std::uint32_t fourcc_ = 0;
   int width_ = 0, height_ = 0;
   std::size_t bytesPerLine_ = 0, sizeImage_ = 0;
