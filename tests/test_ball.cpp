@@ -6,9 +6,11 @@
 #include <chrono>
 #include <cmath>
 #include <cstdlib>
+#include <fstream>
 #include <nlohmann/json.hpp>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
+#include <optional>
 
 #include "liveprobe/capture/ball.h"
 #include "liveprobe/capture/image.h"
@@ -156,7 +158,8 @@ TEST(Ball, FoundInAnEightBitFrameAndNotWhereThereIsNone) {
 }
 
 // The command line: `coeffs --layout mirrorball --circle auto` says the circle it found and gives
-// the true circle's coefficients within 0.5% of L00; no ball, and a stream, are one line each.
+// the true circle's coefficients within 0.5% of L00; no ball, and bench (which times one circle),
+// are one line each.
 TEST(Ball, CircleAutoFromTheCommandLine) {
   const lp::Image map = lp::loadImage(lpt::dataPath("equirect/quarry_01_1k.hdr"));
   const glm::vec3 truth{512.6f, 401.2f, 181.7f};
@@ -183,7 +186,93 @@ TEST(Ball, CircleAutoFromTheCommandLine) {
   lp::saveImage(flat, grey);
   lpt::expectOneLineError("coeffs " + flat + " --layout mirrorball --circle auto", flat,
                           "found no mirror ball");
-  lpt::expectOneLineError("replay " + file + " --layout mirrorball --circle auto --headless",
-                          "--circle auto", "a stream takes the circle it prints");
+  lpt::expectOneLineError("bench " + file + " --layout mirrorball --circle auto --frames 1",
+                          "--circle auto", "bench times one circle throughout");
   lpt::expectOneLineError("coeffs " + file + " --circle auto", "--circle", "mirrorball only");
+}
+
+// A stream (replay of an image sequence, --circle auto): no ball in the first frames (skipped, not
+// counted), then the ball still, moving 2.5 px a frame, covered for two frames (said lost, the
+// last circle kept at confidence 0), and uncovered where it moved to (found again). Each record's
+// circle is the true one within 0.3 px, and its coefficients are those of the frame through the
+// true circle within 0.5% of L00; the still frames keep one circle.
+TEST(Ball, FollowedThroughAStream) {
+  const lp::Image map = lp::loadImage(lpt::dataPath("equirect/quarry_01_1k.hdr"));
+  constexpr int kW = 960, kH = 540;
+  struct Shot {
+    glm::vec3 circle;  ///< radius 0: no ball
+    bool covered = false;
+  };
+  const glm::vec3 a{400.3f, 280.6f, 150.2f};
+  std::vector<Shot> shots = {{{0, 0, 0}}, {{0, 0, 0}}, {a}, {a}, {a}};
+  glm::vec3 c = a;
+  for (int i = 0; i < 4; ++i) c += glm::vec3(2.5f, -1.0f, 0.3f), shots.push_back({c});
+  shots.push_back({c, true}), shots.push_back({c, true});
+  c += glm::vec3(1.5f, 0.5f, 0.0f);
+  shots.push_back({c}), shots.push_back({c});
+  lpt::TempDir tmp;
+  std::vector<lp::Frame> frames;
+  for (std::size_t i = 0; i < shots.size(); ++i) {
+    const Shot& s = shots[i];
+    // No ball: the scene alone (a circle far off the frame).
+    lp::Frame f = ballFrame(map, kW, kH, s.circle.z > 0 ? s.circle : glm::vec3(-1e4f, -1e4f, 1));
+    if (s.covered)  // a dark hand over the ball and around it
+      for (int y = 0; y < kH; ++y)
+        for (int x = 0; x < kW; ++x)
+          if (std::hypot(x + 0.5f - s.circle.x, y + 0.5f - s.circle.y) < 1.3f * s.circle.z)
+            std::fill_n(&f.rgb[3 * (std::size_t(y) * kW + x)], 3, 0.02f);
+    lp::Image image(kW, kH);
+    image.rgb = f.rgb;
+    char name[32];
+    std::snprintf(name, sizeof name, "f_%03zu.exr", i);
+    lp::saveImage(tmp / name, image);
+    frames.push_back(std::move(f));
+  }
+  const std::string out = tmp / "c.jsonl";
+  const auto r = lpt::runLiveprobe(
+      "replay " + lpt::shellQuote(tmp / "f_%03d.exr") +
+      " --layout mirrorball --circle auto --headless --size 32x18 --coeffs-out " + out);
+  ASSERT_EQ(r.exitCode, 0) << r.output;
+  EXPECT_NE(r.output.find("mirror ball found at frame 3: --circle 400."), std::string::npos)
+      << r.output;
+  EXPECT_NE(r.output.find("mirror ball lost at frame 10: keeping --circle 410."), std::string::npos)
+      << r.output;
+  EXPECT_NE(r.output.find("mirror ball found again at frame 12: --circle 411."), std::string::npos)
+      << r.output;
+  EXPECT_NE(r.output.find("mirror ball (--circle auto): found after 2 frames"), std::string::npos)
+      << r.output;
+  std::ifstream lines(out);
+  std::string line;
+  std::size_t n = 0;
+  std::optional<glm::vec3> stillCircle;
+  for (std::size_t i = 2; std::getline(lines, line); ++i, ++n) {
+    ASSERT_LT(i, shots.size());
+    SCOPED_TRACE("frame " + std::to_string(i + 1));
+    const auto j = nlohmann::json::parse(line);
+    const Shot& s = shots[i];
+    ASSERT_TRUE(j.contains("ball")) << line;
+    const glm::vec3 got(j["ball"]["circle"][0].get<float>(), j["ball"]["circle"][1].get<float>(),
+                        j["ball"]["circle"][2].get<float>());
+    EXPECT_EQ(j["ball"]["lost"].get<bool>(), s.covered);
+    EXPECT_NEAR(got.x, s.circle.x, 0.3);
+    EXPECT_NEAR(got.y, s.circle.y, 0.3);
+    EXPECT_NEAR(got.z, s.circle.z, 0.3);
+    if (i <= 4) {  // the still ball: one circle
+      if (!stillCircle) stillCircle = got;
+      EXPECT_EQ(got, *stillCircle);
+    }
+    if (s.covered) {
+      EXPECT_EQ(j["confidence"]["value"].get<double>(), 0.0);
+      continue;
+    }
+    lp::Sh9 rec;
+    for (int k = 0; k < 9; ++k)
+      for (int ch = 0; ch < 3; ++ch)
+        rec.c[k][ch] = j["coefficients"][std::string(lp::kShNames[k])][ch].get<float>();
+    const double worst = lpt::worstOfL00(rec, through(frames[i], s.circle));
+    std::printf("frame %zu: circle off %.3f %.3f %.3f, worst %.3f%% of L00\n", i + 1,
+                got.x - s.circle.x, got.y - s.circle.y, got.z - s.circle.z, 100 * worst);
+    EXPECT_LT(worst, 0.005);
+  }
+  EXPECT_EQ(n, shots.size() - 2);
 }

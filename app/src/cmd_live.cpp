@@ -257,7 +257,7 @@ int runNetworkLive(const Args& a, const std::string& url) {
 
 int runLive(const Args& a) {
   const Settings& s = a.settings();
-  layoutSpec(s.panorama);
+  layoutSpec(s.panorama, nullptr, true);
   const std::string& name = a.positional()[0];
   if (isNetworkUrl(name)) {
     requireBackend(OptionalBackend::Network, redactUrl(name));

@@ -10,6 +10,7 @@
 #include "dynamic_resolution.h"
 #include "environment.h"
 #include "hud.h"
+#include "liveprobe/capture/lens.h"
 #include "liveprobe/capture/open_source.h"
 #include "liveprobe/capture/pipeline.h"
 #include "liveprobe/capture/recorder.h"
@@ -193,7 +194,21 @@ namespace {
 PipelineOptions pipelineOptionsFrom(const Settings& s, const FrameSource& source) {
   const StreamSettings& st = s.stream;
   PipelineOptions opt;
-  opt.layout = layoutSpec(s.panorama, &source);
+  opt.layout = layoutSpec(s.panorama, &source, true);
+  if (s.panorama.circleAuto) {  // the ball followed from frame to frame
+    std::optional<LensCalibration> camera;
+    if (s.panorama.lens) camera = readLensCalibration(*s.panorama.lens);
+    opt.followBall = PipelineOptions::FollowBall{
+        [base = opt.layout, camera](glm::vec3 circle) {
+          LayoutSpec l = base;
+          l.circle = circle;
+          if (camera) l.lens = makeBallModel(*camera, circle);
+          return l;
+        },
+        [name = source.describe()](const std::string& line) {
+          std::fprintf(stderr, "liveprobe: %s: %s\n", name.c_str(), line.c_str());
+        }};
+  }
   opt.photometry = photometryFrom(st);
   if (s.panorama.rotate || s.panorama.flip) opt.rotation = envOrientation(s.panorama);
   opt.smoothSeconds = st.smooth;
@@ -454,6 +469,11 @@ int finishStream(const StreamPlan& p, const PipelineStats& st, const StreamTally
   }
   if (out.coeffs && keep) out.coeffs->commit();
   if (!st.error.empty()) throw Error(st.error);
+  if (p.opt.followBall && st.captured == 0 && st.beforeBall > 0)
+    throw Error(p.description + ": --circle auto found no mirror ball in " +
+                std::to_string(st.beforeBall) +
+                " frames (a circle from a tenth to a half of the frame's shorter side whose rim "
+                "holds); give --circle cx,cy,r");
   if (out.video) out.video->finish();
   if (out.frames) out.frames->keep();
   printSummary(p.description, st, tally, p.opt.smoothSeconds, stopRequested(), sinks);
@@ -518,7 +538,7 @@ int runReplay(const Args& a) {
   const Settings& s = a.settings();
   SourceOptions so;
   so.fps = s.stream.fps.value_or(30.0);
-  layoutSpec(s.panorama);  // option errors before the file is opened
+  layoutSpec(s.panorama, nullptr, true);  // option errors before the file is opened
   return runStream(a, openSource(sourceName, so), false);
 }
 

@@ -28,7 +28,7 @@ glm::mat3 envOrientation(const PanoramaSettings& p) {
   return o;
 }
 
-LayoutSpec layoutSpec(const PanoramaSettings& p, const FrameSource* source, bool oneImage) {
+LayoutSpec layoutSpec(const PanoramaSettings& p, const FrameSource* source, bool findsBall) {
   const bool known = source && source->layout();
   const Layout native = known ? *source->layout() : Layout::Equirect;
   LayoutSpec spec(native);
@@ -43,10 +43,10 @@ LayoutSpec layoutSpec(const PanoramaSettings& p, const FrameSource* source, bool
       throw Error("--circle applies to --layout mirrorball only");
     if (p.circle)
       spec.circle = {float((*p.circle)[0]), float((*p.circle)[1]), float((*p.circle)[2])};
-    else if (!oneImage)
+    else if (!findsBall)
       throw Error(
-          "--circle auto finds the ball in one image (coeffs, irradiance, compare, --env); a "
-          "stream takes the circle it prints: --circle cx,cy,r");
+          "--circle auto: bench times one circle throughout: give it as --circle cx,cy,r "
+          "(`liveprobe coeffs FRAME --layout mirrorball --circle auto` prints it)");
   } else if (spec.layout == Layout::MirrorBall) {
     throw Error(
         "--layout mirrorball needs --circle cx,cy,r (the mirror ball's centre and radius in "

@@ -22,10 +22,11 @@ namespace lp::cli {
 glm::mat3 envOrientation(const PanoramaSettings& p);
 /// The layout options as a spec (option errors are reported before any file is read). A source
 /// that knows its own layout (six cube faces) gives the default, and a --layout that contradicts
-/// it is refused. `oneImage`: the spec is for one image, whose ball --circle auto finds
-/// (ballCircle); a stream's refuses it. The circle (and the traced ball's lens) is then unset.
+/// it is refused. `findsBall`: the caller finds the ball of --circle auto (one image: ballCircle;
+/// a stream: PipelineOptions::followBall), and the circle (and the traced ball's lens) is left
+/// unset; otherwise --circle auto is refused.
 LayoutSpec layoutSpec(const PanoramaSettings& p, const FrameSource* source = nullptr,
-                      bool oneImage = false);
+                      bool findsBall = false);
 /// --circle auto: `spec` with the circle of the ball found in `frame` (and the traced ball's lens
 /// for it, with --lens), said in one line. Throws lp::Error naming `source` when there is none.
 void ballCircle(LayoutSpec& spec, const PanoramaSettings& p, const Frame& frame,

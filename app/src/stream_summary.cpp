@@ -99,6 +99,11 @@ void printSummary(const std::string& description, const PipelineStats& st, const
                                        std::to_string(t.clippedLight))
                                           .c_str()
                                     : "");
+  if (st.captured > 0 && (st.beforeBall > 0 || st.ballMoves > 0 || st.ballLost > 0))
+    std::fprintf(stderr,
+                 "  mirror ball (--circle auto): found after %zu frames, moved %zu times, lost in "
+                 "%zu frames\n",
+                 st.beforeBall, st.ballMoves, st.ballLost);
   for (const auto& sink : sinks.all)
     if (const std::string line = sink->summary(); !line.empty())
       std::fprintf(stderr, "  %s\n", line.c_str());

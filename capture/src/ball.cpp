@@ -333,6 +333,63 @@ std::optional<BallCircle> fitRim(const cv::Mat& lin, cv::Vec3d c) {
                     int(kept.size())};
 }
 
+/// The part of `frame` from (x0, y0), w x h (within it).
+Frame cropOf(const Frame& f, int x0, int y0, int w, int h) {
+  Frame c;
+  c.width = w, c.height = h, c.format = f.format;
+  const bool bytes = f.format == PanoramaFormat::BgrU8;
+  (bytes ? c.bgr8.resize(3 * std::size_t(w) * std::size_t(h))
+         : c.rgb.resize(3 * std::size_t(w) * std::size_t(h)));
+  for (int y = 0; y < h; ++y) {
+    const std::size_t from = 3 * (std::size_t(y0 + y) * std::size_t(f.width) + std::size_t(x0));
+    const std::size_t to = 3 * std::size_t(y) * std::size_t(w), n = 3 * std::size_t(w);
+    if (bytes)
+      std::copy_n(f.bgr8.data() + from, n, c.bgr8.data() + to);
+    else
+      std::copy_n(f.rgb.data() + from, n, c.rgb.data() + to);
+  }
+  return c;
+}
+
+/// The window about a circle (liveprobe's pixel coordinates) reaching `margin` pixels past its
+/// rim, within the frame: x0, y0, w, h.
+std::array<int, 4> windowAbout(const Frame& f, double x, double y, double radius, double margin) {
+  const double reach = radius + margin;
+  const int x0 = std::max(0, int(std::floor(x - reach))),
+            y0 = std::max(0, int(std::floor(y - reach)));
+  const int x1 = std::min(f.width, int(std::ceil(x + reach))),
+            y1 = std::min(f.height, int(std::ceil(y + reach)));
+  return {x0, y0, std::max(0, x1 - x0), std::max(0, y1 - y0)};
+}
+
+/// A ball's rim read cheaply about `near` (liveprobe's pixel coordinates): the circle through its
+/// strongest radial edge within a band of the radius, on at least half the rays; none when the
+/// rim is not there. In liveprobe's pixel coordinates.
+std::optional<cv::Vec3d> rimReading(const Frame& frame, const BallCircle& near, double band) {
+  const auto [x0, y0, w, h] = windowAbout(frame, near.x, near.y, near.radius, band + 8);
+  if (w < 16 || h < 16) return std::nullopt;
+  const cv::Mat grey = greyOf(cropOf(frame, x0, y0, w, h));
+  // (OpenCV's pixel centres are whole numbers; liveprobe's are at +0.5.)
+  const cv::Vec3d rough(near.x - 0.5 - x0, near.y - 0.5 - y0, near.radius);
+  const auto c = edgeCircle(grey, rough, band, 180);
+  if (!c || std::hypot((*c)[0] - rough[0], (*c)[1] - rough[1]) > band ||
+      std::abs((*c)[2] - rough[2]) > band)
+    return std::nullopt;
+  return cv::Vec3d((*c)[0] + 0.5 + x0, (*c)[1] + 0.5 + y0, (*c)[2]);
+}
+
+/// The rim's model fitted from a rim reading (within the model's reach of the rim), in a window.
+std::optional<BallCircle> fitNear(const Frame& frame, const cv::Vec3d& reading) {
+  const auto [x0, y0, w, h] =
+      windowAbout(frame, reading[0], reading[1], reading[2], kReach + kSearch + 4);
+  const auto fit = fitRim(linearOf(cropOf(frame, x0, y0, w, h)),
+                          cv::Vec3d(reading[0] - 0.5 - x0, reading[1] - 0.5 - y0, reading[2]));
+  if (!fit || fit->rimResidual >= kMaxRimResidual) return std::nullopt;
+  BallCircle c = *fit;
+  c.x += x0, c.y += y0;
+  return c;
+}
+
 }  // namespace
 
 std::optional<BallCircle> findBall(const Frame& frame) {
@@ -360,6 +417,48 @@ std::optional<BallCircle> findBall(const Frame& frame) {
           if (fit->rimResidual < kMaxRimResidual && (!best || fit->rimResidual < best->rimResidual))
             best = fit;
   return best;
+}
+
+}  // namespace lp
+
+namespace lp {
+
+BallFollower::Step BallFollower::follow(const Frame& frame) {
+  // The band the rim is read in: a ball that moves a few pixels a frame stays in it.
+  const auto band = [](const BallCircle& c) { return std::max(6.0, 0.04 * c.radius); };
+  Step step;
+  if (!circle_ || (lost_ && ++lostFrames_ % kSearchEvery == 0)) {  // the whole frame
+    if (auto c = findBall(frame))
+      if (auto reading = rimReading(frame, *c, band(*c))) {
+        step.event = !circle_ ? Event::Found : Event::FoundAgain;
+        circle_ = *c, reading_ = {(*reading)[0], (*reading)[1], (*reading)[2]};
+        lost_ = false, lostFrames_ = 0;
+      }
+    if (step.event != Event::None || !circle_) {
+      step.circle = circle_;
+      return step;
+    }
+  }
+  const std::optional<cv::Vec3d> reading = rimReading(frame, *circle_, band(*circle_));
+  std::optional<BallCircle> fit = circle_;
+  if (reading && std::max({std::hypot((*reading)[0] - reading_[0], (*reading)[1] - reading_[1]),
+                           std::abs((*reading)[2] - reading_[2])}) > kMovedPixels) {
+    // The reading is biased (the strongest edge lies just inside the rim): the model, from it.
+    fit = fitNear(frame, *reading);
+    if (fit) {
+      circle_ = *fit, reading_ = {(*reading)[0], (*reading)[1], (*reading)[2]};
+      step.event = Event::Moved;
+    }
+  }
+  step.circle = circle_;
+  if (!reading || !fit) {
+    step.lost = true;
+    if (!lost_) step.event = Event::Lost;
+    lost_ = true;
+  } else if (lost_) {
+    step.event = Event::FoundAgain, lost_ = false, lostFrames_ = 0;
+  }
+  return step;
 }
 
 }  // namespace lp

@@ -17,8 +17,15 @@ bool displayTakesFrameAsIs(const Frame& frame, const Photometry& photometry,
 
 FrameProcessor::FrameProcessor(FrameProcessorOptions options)
     : opt_(std::move(options)), linearizer_(opt_.photometry) {
+  setLayout(std::move(opt_.layout));
+}
+
+void FrameProcessor::setLayout(LayoutSpec layout) {
+  opt_.layout = std::move(layout);
   // The ground of the unseen fill lies below the world's horizon, whatever the turn.
   if (opt_.rotation) opt_.layout.unseen.up = glm::transpose(*opt_.rotation) * glm::vec3(0, 0, 1);
+  extractor_.reset();
+  projector_.reset();
 }
 FrameProcessor::~FrameProcessor() = default;
 FrameProcessor::FrameProcessor(FrameProcessor&&) noexcept = default;

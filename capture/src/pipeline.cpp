@@ -6,6 +6,7 @@
 #include <cstdio>
 #include <utility>
 
+#include "liveprobe/capture/ball.h"
 #include "liveprobe/capture/resample.h"
 #include "liveprobe/hdr/bracketed_source.h"
 #include "liveprobe/sh/error.h"
@@ -110,10 +111,12 @@ struct CapturePipeline::Loop {
         wallStart(Clock::now()) {
     if (o.threads > 1) pool = std::make_unique<ThreadPool>(o.threads);
     if (o.bracket) merger.emplace(*o.bracket);
+    if (o.followBall) ball.emplace();
   }
   FrameProcessor processor;  ///< the frame's lighting (liveprobe/capture/frame_processor.h)
   std::optional<BracketMerger> merger;
-  Frame merged;  ///< the merger's output, swapped into `frame`
+  std::optional<BallFollower> ball;  ///< PipelineOptions::followBall
+  Frame merged;                      ///< the merger's output, swapped into `frame`
   /// Equirect frames without a light search are projected as they merge (their coefficients
   /// here), and the float frame is written only where the display draws it.
   MergeProjection projection;
@@ -193,6 +196,37 @@ bool CapturePipeline::hold(Loop& s, ProcessedFrame& out) {
   return true;
 }
 
+bool CapturePipeline::followBall(Loop& s, ProcessedFrame& out) {
+  const BallFollower::Step step = s.ball->follow(*s.frame);
+  if (!step.circle) {
+    std::lock_guard lock(mutex_);
+    ++stats_.beforeBall;
+    return false;
+  }
+  const glm::vec3 circle(float(step.circle->x), float(step.circle->y), float(step.circle->radius));
+  if (circle != s.processor.options().layout.circle)
+    s.processor.setLayout(opt_.followBall->layoutFor(circle));
+  out.ball = circle, out.ballLost = step.lost;
+  {
+    std::lock_guard lock(mutex_);
+    stats_.ballLost += step.lost;
+    stats_.ballMoves += step.event == BallFollower::Event::Moved;
+  }
+  const auto& say = opt_.followBall->say;
+  if (!say || step.event == BallFollower::Event::None || step.event == BallFollower::Event::Moved)
+    return true;
+  char text[200];
+  const char* what = step.event == BallFollower::Event::Lost
+                         ? "mirror ball lost at frame %llu: keeping --circle %.2f,%.2f,%.2f"
+                     : step.event == BallFollower::Event::Found
+                         ? "mirror ball found at frame %llu: --circle %.2f,%.2f,%.2f"
+                         : "mirror ball found again at frame %llu: --circle %.2f,%.2f,%.2f";
+  std::snprintf(text, sizeof text, what, static_cast<unsigned long long>(out.sequence + 1),
+                step.circle->x, step.circle->y, step.circle->radius);
+  say(text);
+  return true;
+}
+
 void CapturePipeline::project(Loop& s, ProcessedFrame& out) {
   FrameResult r;
   try {
@@ -226,6 +260,7 @@ void CapturePipeline::project(Loop& s, ProcessedFrame& out) {
     }
   }
   if (const Projector* p = s.processor.projector()) out.confidence.coverage = p->coverage();
+  if (out.ballLost) out.confidence.agreement = 0, out.confidence.complete = false;
   // Below --hold-below the last good lighting stands, and the smoothing does not see the frame.
   if (hold(s, out)) return;
   out.unsmoothed = lit.radiance;
@@ -290,6 +325,10 @@ void CapturePipeline::run() {
       if (s.merger) {
         merge(s, out);
         clock.lap(Stage::Merge);
+      }
+      if (s.ball && !followBall(s, out)) {
+        --s.index;  // not projected: the frames counted are the ball's
+        continue;
       }
       out.times = clock.times;
       project(s, out);  // convert, project and resample: FrameProcessor::run's times

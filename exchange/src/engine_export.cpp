@@ -447,6 +447,9 @@ std::string frameRecord(const ProcessedFrame& f, const CoeffFormat& format, Reco
   if (t.shownLatencyMs >= 0) l["shown"] = t.shownLatencyMs;
   j["latency_ms"] = l;
   if (f.reconnects > 0) j["reconnects"] = f.reconnects;
+  // --circle auto in a stream: the followed mirror ball's circle this frame was projected with.
+  if (f.ball)
+    j["ball"] = {{"circle", {(*f.ball)[0], (*f.ball)[1], (*f.ball)[2]}}, {"lost", f.ballLost}};
   return j.dump();
 }
 

@@ -3,6 +3,7 @@
 // where it is, its rim's edge along rays out of the centre for a circle to a pixel or so, then
 // the rim's own model fitted to a tenth of a pixel (what the orthographic ball's rim asks: a
 // fifth of a pixel of radius moves its coefficients by about 0.4% of L00).
+#include <array>
 #include <optional>
 
 #include "liveprobe/frame/frame.h"
@@ -20,5 +21,33 @@ struct BallCircle {
 /// The ball in `frame` (8-bit or float): the circle of a radius from a tenth to a half of the
 /// frame's shorter side whose rim holds (the rim's edges within 0.5 px RMS of it), or none.
 std::optional<BallCircle> findBall(const Frame& frame);
+
+/// The ball followed through a stream (--circle auto on replay, live and view). The first frame
+/// that holds it is searched whole (findBall); after that each frame's rim is read about the
+/// circle in use, cheaply (its strongest radial edge, within a band of the radius, in a window
+/// around the ball), and compared with the reading the circle was fitted with: the circle is
+/// fitted again (the rim's model, as findBall's) only when the rim has moved by more than
+/// kMovedPixels, so a still ball keeps one circle (no jitter in the coefficients) and a ball that
+/// moves costs a fit per frame it moves. A frame whose rim does not read as a circle near the last
+/// one (a hand in front, the ball knocked away) is lost: the last circle is kept and said lost,
+/// the ball is sought near it each frame and in the whole frame every kSearchEvery frames.
+class BallFollower {
+ public:
+  static constexpr double kMovedPixels = 0.2;  ///< about 0.4% of L00 in the circle's radius
+  static constexpr int kSearchEvery = 15;
+  enum class Event { None, Found, Moved, Lost, FoundAgain };
+  struct Step {
+    std::optional<BallCircle> circle;  ///< to project with; none before the ball is first found
+    bool lost = false;                 ///< not seen in this frame: `circle` is the last one
+    Event event = Event::None;         ///< what this frame changed
+  };
+  Step follow(const Frame& frame);
+
+ private:
+  std::optional<BallCircle> circle_;
+  std::array<double, 3> reading_{};  ///< the rim's edge reading the circle was fitted with
+  bool lost_ = false;
+  int lostFrames_ = 0;
+};
 
 }  // namespace lp

@@ -107,6 +107,10 @@ class FrameProcessor {
   /// as process() does for a frame that does not fit.
   void fit(const Frame& frame);
 
+  /// Projects the next frames through `layout` (a followed ball's new circle): the projector is
+  /// made again at the next frame; the stream's state (the lights held) is kept.
+  void setLayout(LayoutSpec layout);
+
   /// The projector of the last frame's size (nullptr before the first frame).
   const Projector* projector() const;
   const Linearizer& linearizer() const { return linearizer_; }

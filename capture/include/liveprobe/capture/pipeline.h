@@ -65,6 +65,17 @@ struct PipelineOptions {
   /// seconds (and beyond ten frame intervals) is not waited out; the frame comes one frame interval
   /// after the previous one (counted in PipelineStats::gapsShortened).
   double maxGapSeconds = 10.0;
+  /// --circle auto in a stream: the mirror ball followed from frame to frame (BallFollower,
+  /// liveprobe/capture/ball.h), the layout fitted again whenever its circle moves. `layoutFor`
+  /// makes the layout of a circle (a calibrated camera's traced ball); `say` is told, once each,
+  /// when the ball is found, lost and found again. Frames before the first find are not projected
+  /// and not counted against maxFrames (PipelineStats::beforeBall); a frame the ball is lost in is
+  /// projected through the last circle at confidence 0 (kept by holdBelow).
+  struct FollowBall {
+    std::function<LayoutSpec(glm::vec3 circle)> layoutFor;
+    std::function<void(const std::string&)> say;
+  };
+  std::optional<FollowBall> followBall;
 };
 
 /// How often a waiting capture thread polls PipelineOptions::interrupted.
@@ -88,6 +99,9 @@ struct PipelineStats {
   std::size_t reconnects = 0;  ///< times the source reopened its stream (a network camera)
   std::size_t stale = 0;       ///< frames the source replaced before capture took them
   std::string error;           ///< the fatal error that stopped capture, if any
+  std::size_t beforeBall = 0;  ///< frames before the followed ball was found (FollowBall)
+  std::size_t ballLost = 0;    ///< frames the followed ball was lost in
+  std::size_t ballMoves = 0;   ///< times its circle moved (the layout fitted again)
 };
 
 /// Exponential moving average of coefficients: alpha = 1 - exp(-dt / tau). Exact on SH because
@@ -158,6 +172,9 @@ class CapturePipeline {
   /// The frame through its FrameProcessor (lighting, background, stage times), judged, held or
   /// smoothed.
   void project(Loop& s, ProcessedFrame& out);
+  /// The followed ball's circle for the frame in hand (the layout refitted where it moved); false
+  /// before the ball is first found.
+  bool followBall(Loop& s, ProcessedFrame& out);
   void pace(Loop& s, double timestamp);  ///< paced runs: waits for the frame's time
   /// Waits on cv_ until ready(), stop, `until`, or PipelineOptions::interrupted (polled).
   template <class Ready>

@@ -5,6 +5,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <memory>
+#include <optional>
 #include <vector>
 
 #include "liveprobe/capture/image.h"
@@ -58,6 +59,10 @@ struct ProcessedFrame {
   double captureTime = 0;
   /// Capture to coefficients ready, ms.
   double coefficientsLatencyMs = 0;
+  /// A followed mirror ball (PipelineOptions::followBall): the circle (centre x, y, radius in
+  /// pixels) this frame was projected with, and whether the ball was lost in it (the last circle).
+  std::optional<glm::vec3> ball;
+  bool ballLost = false;
 };
 
 }  // namespace lp
