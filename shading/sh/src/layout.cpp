@@ -222,16 +222,24 @@ std::vector<SphereSample> cubeSamples(int width, int height) {
 // dir(x, y): world direction at continuous pixel coordinates, or nullopt outside the layout;
 // density(x, y): steradians per unit pixel area there. Each pixel's solid angle is the mean of
 // the density over sub-samples (8x8 where the layout's edge crosses the pixel, 2x2 inside);
-// the total is then scaled to exactly 4 pi.
+// the total is then scaled to exactly 4 pi. offLayout(x, y), where given: true where the pixel
+// centred at (x, y) lies wholly off the layout (a disc's frame around it), which then takes no
+// sub-samples.
 using DirFn = std::function<std::optional<glm::dvec3>(double, double)>;
 using DensityFn = std::function<double(double, double)>;
+using OffLayoutFn = std::function<bool(double, double)>;
 
 std::vector<SphereSample> integratedSamples(int width, int height, const DirFn& dir,
-                                            const DensityFn& density) {
+                                            const DensityFn& density,
+                                            const OffLayoutFn& offLayout = nullptr) {
   std::vector<SphereSample> out(std::size_t(width) * height);
   double total = 0.0;
   for (int i = 0; i < height; ++i)
     for (int j = 0; j < width; ++j) {
+      if (offLayout && offLayout(j + 0.5, i + 0.5)) {
+        out[std::size_t(i) * width + j] = {glm::vec3(0.0f), 0.0f};
+        continue;
+      }
       // Pixels wholly inside the layout have a smooth density: 2x2 sub-samples are plenty. Pixels
       // the layout's edge crosses get 8x8.
       const bool inside = density(j, i) > 0 && density(j + 1, i) > 0 && density(j, i + 1) > 0 &&
@@ -277,6 +285,14 @@ struct Disc {
     const double u = (x - cx) / r, v = (cy - y) / r;
     return {std::sqrt(u * u + v * v), std::atan2(v, u)};
   }
+  // The normalised radius alone (a density asks it of 64 points of each pixel on the disc's edge
+  // and off it: no azimuth).
+  double radius(double x, double y) const {
+    const double u = (x - cx) / r, v = (cy - y) / r;
+    return std::sqrt(u * u + v * v);
+  }
+  // Whether the pixel centred at (x, y) lies wholly off the disc (its corners are within 0.71 px).
+  bool off(double x, double y) const { return std::hypot(x - cx, y - cy) > r + 0.75; }
 };
 
 std::vector<SphereSample> angularSamples(int w) {
@@ -288,12 +304,12 @@ std::vector<SphereSample> angularSamples(int w) {
     return glm::dvec3(-l.z, -l.x, l.y);  // angularToWorld
   };
   auto density = [&](double x, double y) {
-    const double r = disc.polar(x, y).first;
+    const double r = disc.radius(x, y);
     if (r >= 1.0) return 0.0;
     const double scale = 1.0 / (disc.r * disc.r);  // (du dv) per pixel area
     return scale * (r < 1e-12 ? kPi * kPi : kPi * std::sin(kPi * r) / r);
   };
-  return integratedSamples(w, w, dir, density);
+  return integratedSamples(w, w, dir, density, [&](double x, double y) { return disc.off(x, y); });
 }
 
 std::vector<SphereSample> mirrorBallSamples(const LayoutSpec& spec, int width, int height) {
@@ -305,9 +321,10 @@ std::vector<SphereSample> mirrorBallSamples(const LayoutSpec& spec, int width, i
     return glm::dvec3(-l.z, -l.x, l.y);
   };
   auto density = [&](double x, double y) {
-    return disc.polar(x, y).first < 1.0 ? 4.0 / (disc.r * disc.r) : 0.0;
+    return disc.radius(x, y) < 1.0 ? 4.0 / (disc.r * disc.r) : 0.0;
   };
-  return integratedSamples(width, height, dir, density);
+  return integratedSamples(width, height, dir, density,
+                           [&](double x, double y) { return disc.off(x, y); });
 }
 
 struct Fisheye {
