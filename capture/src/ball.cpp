@@ -90,10 +90,12 @@ std::optional<cv::Vec3d> edgeCircle(const cv::Mat& grey, cv::Vec3d rough, double
   cv::GaussianBlur(grey, smooth, cv::Size(0, 0), 1.2);
   cv::Sobel(smooth, gx, CV_32F, 1, 0, 3);
   cv::Sobel(smooth, gy, CV_32F, 0, 1, 3);
-  const auto at = [&](const cv::Mat& m, double x, double y) {
-    cv::Mat patch;
-    cv::getRectSubPix(m, cv::Size(1, 1), cv::Point2f(float(x), float(y)), patch);
-    return double(patch.at<float>(0, 0));
+  const auto at = [](const cv::Mat& m, double x, double y) {  // bilinear, (x, y) inside
+    const int x0 = int(x), y0 = int(y);
+    const double fx = x - x0, fy = y - y0;
+    const float* r0 = m.ptr<float>(y0) + x0;
+    const float* r1 = m.ptr<float>(y0 + 1) + x0;
+    return (1 - fy) * ((1 - fx) * r0[0] + fx * r0[1]) + fy * ((1 - fx) * r1[0] + fx * r1[1]);
   };
   std::vector<cv::Point2d> pts;
   constexpr double kStep = 0.25;
