@@ -255,7 +255,9 @@ double rimEdge(const RimBasis& basis, const std::vector<double>& at, const std::
 /// (rimEdge), the blur the one that fits all sectors best, and the circle fitted to the 32 edges,
 /// the sectors that disagree (a stand, a highlight) dropped; three times, the profiles taken
 /// about the new centre.
-std::optional<BallCircle> fitRim(const cv::Mat& lin, cv::Vec3d c) {
+/// `blur`, where given: the blur a fit of the same camera's rim found (BallCircle::rimBlur), the
+/// only one tried.
+std::optional<BallCircle> fitRim(const cv::Mat& lin, cv::Vec3d c, double blur = 0) {
   constexpr int kSectors = 32, kRays = 16;
   constexpr double kStep = 0.25;
   static const std::vector<RimBasis> bases = [] {
@@ -264,6 +266,7 @@ std::optional<BallCircle> fitRim(const cv::Mat& lin, cv::Vec3d c) {
     return b;
   }();
   std::vector<cv::Point2d> kept;
+  double sigma = 0;
   for (int round = 0; round < 3; ++round) {
     std::vector<double> at;
     for (double r = c[2] - kReach; r <= c[2] + kReach + 1e-9; r += kStep) at.push_back(r);
@@ -291,7 +294,9 @@ std::optional<BallCircle> fitRim(const cv::Mat& lin, cv::Vec3d c) {
     }
     double bestTotal = HUGE_VAL;
     std::vector<cv::Point2d> edges;
-    for (const RimBasis& basis : bases) {
+    for (std::size_t b = 0; b < bases.size(); ++b) {
+      if (blur > 0 && kSigmas[b] != blur) continue;
+      const RimBasis& basis = bases[b];
       double total = 0;
       std::vector<cv::Point2d> pts;
       for (int k = 0; k < kSectors; ++k) {
@@ -303,7 +308,7 @@ std::optional<BallCircle> fitRim(const cv::Mat& lin, cv::Vec3d c) {
         const double a = 2 * CV_PI * (k + 0.5) / kSectors;
         pts.emplace_back(c[0] + e * std::cos(a), c[1] + e * std::sin(a));
       }
-      if (total < bestTotal) bestTotal = total, edges = std::move(pts);
+      if (total < bestTotal) bestTotal = total, edges = std::move(pts), sigma = kSigmas[b];
     }
     if (edges.size() < kSectors / 2) return std::nullopt;
     auto fit = fitCircle(edges);
@@ -331,8 +336,8 @@ std::optional<BallCircle> fitRim(const cv::Mat& lin, cv::Vec3d c) {
     sum += d * d;
   }
   // OpenCV's pixel centres are whole numbers; liveprobe's are at +0.5.
-  return BallCircle{c[0] + 0.5, c[1] + 0.5, c[2], std::sqrt(sum / double(kept.size())),
-                    int(kept.size())};
+  return BallCircle{c[0] + 0.5,       c[1] + 0.5, c[2], std::sqrt(sum / double(kept.size())),
+                    int(kept.size()), sigma};
 }
 
 /// The part of `frame` from (x0, y0), w x h (within it).
@@ -380,12 +385,14 @@ std::optional<cv::Vec3d> rimReading(const Frame& frame, const BallCircle& near, 
   return cv::Vec3d((*c)[0] + 0.5 + x0, (*c)[1] + 0.5 + y0, (*c)[2]);
 }
 
-/// The rim's model fitted from a rim reading (within the model's reach of the rim), in a window.
-std::optional<BallCircle> fitNear(const Frame& frame, const cv::Vec3d& reading) {
+/// The rim's model fitted from a rim reading (within the model's reach of the rim), in a window,
+/// at the camera's blur as found before.
+std::optional<BallCircle> fitNear(const Frame& frame, const cv::Vec3d& reading, double blur) {
   const auto [x0, y0, w, h] =
       windowAbout(frame, reading[0], reading[1], reading[2], kReach + kSearch + 4);
-  const auto fit = fitRim(linearOf(cropOf(frame, x0, y0, w, h)),
-                          cv::Vec3d(reading[0] - 0.5 - x0, reading[1] - 0.5 - y0, reading[2]));
+  const auto fit =
+      fitRim(linearOf(cropOf(frame, x0, y0, w, h)),
+             cv::Vec3d(reading[0] - 0.5 - x0, reading[1] - 0.5 - y0, reading[2]), blur);
   if (!fit || fit->rimResidual >= kMaxRimResidual) return std::nullopt;
   BallCircle c = *fit;
   c.x += x0, c.y += y0;
@@ -446,7 +453,7 @@ BallFollower::Step BallFollower::follow(const Frame& frame) {
   if (reading && std::max({std::hypot((*reading)[0] - reading_[0], (*reading)[1] - reading_[1]),
                            std::abs((*reading)[2] - reading_[2])}) > kMovedPixels) {
     // The reading is biased (the strongest edge lies just inside the rim): the model, from it.
-    fit = fitNear(frame, *reading);
+    fit = fitNear(frame, *reading, circle_->rimBlur);
     if (fit) {
       circle_ = *fit, reading_ = {(*reading)[0], (*reading)[1], (*reading)[2]};
       step.event = Event::Moved;

@@ -16,6 +16,7 @@ struct BallCircle {
   double x = 0, y = 0, radius = 0;
   double rimResidual = 0;  ///< RMS distance of the sectors' rim edges from the circle, pixels
   int rimSectors = 0;      ///< sectors (of 32) whose edge the circle kept
+  double rimBlur = 0;      ///< the camera's blur the rim's model fitted best (Gaussian sigma, px)
 };
 
 /// The ball in `frame` (8-bit or float): the circle of a radius from a tenth to a half of the
