@@ -1,9 +1,9 @@
 // The GPU path on EGL (Mesa's llvmpipe here, a GPU where there is one): the EGL context renders
 // what OSMesa renders; the compute projection gives the CPU projector's coefficients for every
-// layout and pixel type; frames through the pixel-buffer objects equal frames uploaded directly;
-// coefficients come back one frame late without waiting; the timer says when there is no GPU
-// timer. One process, one context type: glad's pointers belong to the context that loaded them,
-// so the OSMesa comparison runs the program twice.
+// layout (a calibrated lens and a ball traced through one too) and pixel type; frames through the
+// pixel-buffer objects equal frames uploaded directly; coefficients come back one frame late
+// without waiting; the timer says when there is no GPU timer. One process, one context type: glad's
+// pointers belong to the context that loaded them, so the OSMesa comparison runs the program twice.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -15,6 +15,7 @@
 #include <string>
 #include <vector>
 
+#include "liveprobe/capture/lens.h"
 #include "liveprobe/gl/context.h"
 #include "liveprobe/gl/gpu_projector.h"
 #include "liveprobe/gl/gpu_timer.h"
@@ -87,10 +88,23 @@ std::vector<LayoutCase> layoutCases() {
   ball.circle = {70, 60, 50};
   lp::LayoutSpec fisheye(lp::Layout::DualFisheye);
   fisheye.fisheyeFovDeg = 200;
-  return {
-      {"equirect", lp::Layout::Equirect, 128, 64}, {"equirect odd", lp::Layout::Equirect, 301, 149},
-      {"angular", lp::Layout::Angular, 96, 96},    {"mirrorball", ball, 150, 120},
-      {"cube", lp::Layout::Cube, 128, 96},         {"fisheye", fisheye, 160, 80}};
+  // A calibrated fisheye (the project's 640x480 Kannala-Brandt lens, at half its size) with the
+  // unseen ground filled, and a chrome ball traced through it.
+  const lp::LensCalibration camera =
+      lp::readLensCalibration(std::string(LIVEPROBE_SOURCE_DIR) + "/recordings/fisheye/lens.yaml");
+  lp::LayoutSpec lens(lp::Layout::Lens);
+  lens.lens = lp::makeLensModel(camera);
+  lp::LayoutSpec traced(lp::Layout::MirrorBall);
+  traced.circle = {330, 230, 120};
+  traced.lens = lp::makeBallModel(camera, traced.circle);
+  return {{"equirect", lp::Layout::Equirect, 128, 64},
+          {"equirect odd", lp::Layout::Equirect, 301, 149},
+          {"angular", lp::Layout::Angular, 96, 96},
+          {"mirrorball", ball, 150, 120},
+          {"cube", lp::Layout::Cube, 128, 96},
+          {"fisheye", fisheye, 160, 80},
+          {"lens", lens, 320, 240},
+          {"traced ball", traced, 640, 480}};
 }
 
 TEST(GpuProjection, MatchesTheCpuForEveryLayoutAndPixelType) {
