@@ -193,7 +193,8 @@ TEST(Ball, CircleAutoFromTheCommandLine) {
 
 // A stream (replay of an image sequence, --circle auto): no ball in the first frames (skipped, not
 // counted), then the ball still, moving 2.5 px a frame, covered for two frames (said lost, the
-// last circle kept at confidence 0), and uncovered where it moved to (found again). Each record's
+// last circle kept at confidence 0, the last good lighting held), and uncovered where it moved
+// to (found again). Each record's
 // circle is the true one within 0.3 px, and its coefficients are those of the frame through the
 // true circle within 0.5% of L00; the still frames keep one circle.
 TEST(Ball, FollowedThroughAStream) {
@@ -245,6 +246,7 @@ TEST(Ball, FollowedThroughAStream) {
   std::string line;
   std::size_t n = 0;
   std::optional<glm::vec3> stillCircle;
+  lp::Sh9 lastGood;
   for (std::size_t i = 2; std::getline(lines, line); ++i, ++n) {
     ASSERT_LT(i, shots.size());
     SCOPED_TRACE("frame " + std::to_string(i + 1));
@@ -261,14 +263,17 @@ TEST(Ball, FollowedThroughAStream) {
       if (!stillCircle) stillCircle = got;
       EXPECT_EQ(got, *stillCircle);
     }
-    if (s.covered) {
-      EXPECT_EQ(j["confidence"]["value"].get<double>(), 0.0);
-      continue;
-    }
     lp::Sh9 rec;
     for (int k = 0; k < 9; ++k)
       for (int ch = 0; ch < 3; ++ch)
         rec.c[k][ch] = j["coefficients"][std::string(lp::kShNames[k])][ch].get<float>();
+    EXPECT_EQ(j["confidence"]["held"].get<bool>(), s.covered);
+    if (s.covered) {  // the last good lighting, held
+      EXPECT_EQ(j["confidence"]["value"].get<double>(), 0.0);
+      EXPECT_EQ(lpt::worstOfL00(rec, lastGood), 0.0);
+      continue;
+    }
+    lastGood = rec;
     const double worst = lpt::worstOfL00(rec, through(frames[i], s.circle));
     std::printf("frame %zu: circle off %.3f %.3f %.3f, worst %.3f%% of L00\n", i + 1,
                 got.x - s.circle.x, got.y - s.circle.y, got.z - s.circle.z, 100 * worst);

@@ -180,9 +180,10 @@ void CapturePipeline::merge(Loop& s, ProcessedFrame& out) const {
 bool CapturePipeline::hold(Loop& s, ProcessedFrame& out) {
   // Nothing good yet: the frame as it is. Once held, only a complete bracket that agrees again
   // lets go (a window still holding a frame of the occluder, or missing one, does not).
-  if (opt_.holdBelow <= 0 || !s.lastGood) return false;
+  // A followed ball lost in the frame holds too, --hold-below or not: nothing of it was measured.
+  if ((opt_.holdBelow <= 0 && !s.ball) || !s.lastGood) return false;
   const FrameConfidence& c = out.confidence;
-  const bool good = c.measured() >= opt_.holdBelow;
+  const bool good = !out.ballLost && c.measured() >= opt_.holdBelow;
   // Agreeing again: whole, and measuring the brightest source where the last good frame did.
   const bool agrees = c.complete && (c.brightestMeasured || !s.lastGood->brightestMeasured);
   s.holding = s.holding ? !(good && agrees) : !good;
@@ -266,7 +267,8 @@ void CapturePipeline::project(Loop& s, ProcessedFrame& out) {
   out.unsmoothed = lit.radiance;
   out.lights = s.lightSmoother.update(lit.lights, out.timestamp);
   out.radiance = s.smoother.update(lit.radiance, out.timestamp);
-  if (opt_.holdBelow > 0 && out.confidence.measured() >= opt_.holdBelow && out.confidence.complete)
+  if ((opt_.holdBelow > 0 || s.ball) && !out.ballLost &&
+      out.confidence.measured() >= opt_.holdBelow && out.confidence.complete)
     s.lastGood =
         Loop::Lit{out.radiance, out.unsmoothed, out.lights, out.confidence.brightestMeasured};
 }

@@ -70,7 +70,8 @@ struct PipelineOptions {
   /// makes the layout of a circle (a calibrated camera's traced ball); `say` is told, once each,
   /// when the ball is found, lost and found again. Frames before the first find are not projected
   /// and not counted against maxFrames (PipelineStats::beforeBall); a frame the ball is lost in is
-  /// projected through the last circle at confidence 0 (kept by holdBelow).
+  /// projected through the last circle at confidence 0 and keeps the last good lighting (held,
+  /// whatever holdBelow says).
   struct FollowBall {
     std::function<LayoutSpec(glm::vec3 circle)> layoutFor;
     std::function<void(const std::string&)> say;
