@@ -101,13 +101,20 @@ void PrintTo(const Example& e, std::ostream* os) {
 class ReadmeExample : public ::testing::TestWithParam<Example> {};
 
 // The emulated camera's modes: an MJPEG equirect sky at the sizes the README's live examples ask,
-// and the largest also as H.264 (the emulator encodes the PNGs).
-void makeCameraModes(const fs::path& dir) {
+// and the largest also as H.264 (the emulator encodes the PNGs); for a mirror ball, the 1280x720
+// frames are the camera JPEG of a chrome ball in recordings/ball.
+void makeCameraModes(const fs::path& dir, bool ball) {
   for (const auto& [w, h] : {std::pair{1920, 960}, std::pair{1280, 720}, std::pair{640, 480}})
     for (const std::string format : {"MJPG", "H264"}) {
       if (format == "H264" && w != 1920) continue;
       const fs::path m = dir / (format + "_" + std::to_string(w) + "x" + std::to_string(h));
       fs::create_directories(m);
+      if (ball && w == 1280) {
+        for (int i = 0; i < 4; ++i)
+          fs::copy_file(fs::path(LIVEPROBE_SOURCE_DIR) / "recordings/ball/ball.jpg",
+                        m / (std::to_string(i) + ".jpg"));
+        continue;
+      }
       for (int i = 0; i < 4; ++i)
         ASSERT_TRUE(
             cv::imwrite((m / (std::to_string(i) + (format == "MJPG" ? ".jpg" : ".png"))).string(),
@@ -157,7 +164,8 @@ TEST_P(ReadmeExample, RunsAsWritten) {
     if (hdr)
       makeHdrModes(tmp.path / "modes", m[1] == "calibrate");
     else
-      makeCameraModes(tmp.path / "modes");
+      makeCameraModes(tmp.path / "modes",
+                      e.command.find("--layout mirrorball") != std::string::npos);
     env += "export LD_PRELOAD=" + std::string(LIVEPROBE_EMU) + " LPEMU_DEVICE=/dev/video" +
            m[2].str() + " LPEMU_SOURCE=" + (tmp.path / "modes").string() +
            (hdr ? " LPEMU_META_DEVICE=/dev/video" + std::to_string(std::stoi(m[2]) + 1) +

@@ -124,8 +124,8 @@ std::vector<OptionSpec> layoutOptions() {
       [](const std::string& v) { return parseLayout(v); }, LP_FIELD(panorama.layout));
   OptionSpec circle = tripleOption(
       "--circle", "CX,CY,R|auto",
-      "mirrorball: the ball's circle in pixels, or auto: found in the image (one image: a stream "
-      "takes the circle it prints)",
+      "mirrorball: the ball's circle in pixels, or auto: found in the image (a stream: followed "
+      "from frame to frame)",
       "cx,cy,r with r > 0, or auto", LP_FIELD(panorama.circle), g);
   circle.set = [](Settings& s, const std::string& v) {
     s.panorama.circleAuto = v == "auto";
