@@ -207,6 +207,9 @@ PipelineOptions pipelineOptionsFrom(const Settings& s, const FrameSource& source
         },
         [name = source.describe()](const std::string& line) {
           std::fprintf(stderr, "liveprobe: %s: %s\n", name.c_str(), line.c_str());
+        },
+        [camera](int w, int h) {
+          return camera ? ballSearchWindow(*camera, w, h) : std::optional<FrameWindow>();
         }};
   }
   opt.photometry = photometryFrom(st);

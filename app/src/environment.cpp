@@ -76,9 +76,25 @@ LayoutSpec layoutSpec(const PanoramaSettings& p, const FrameSource* source, bool
   return spec;
 }
 
+std::optional<FrameWindow> ballSearchWindow(const LensCalibration& camera, int width, int height) {
+  // (A frame the lens does not fit is refused where it is projected.)
+  if (!makeLensModel(camera)->mismatch(width, height).empty()) return std::nullopt;
+  const double r = seenRadius(camera, width, height);
+  if (r <= 0) return std::nullopt;
+  const double cx = camera.K[2] * width / camera.width + 0.5,
+               cy = camera.K[5] * height / camera.height + 0.5, half = r / std::sqrt(2.0);
+  const int x0 = std::max(0, int(std::ceil(cx - half))),
+            y0 = std::max(0, int(std::ceil(cy - half)));
+  return FrameWindow{x0, y0, std::min(width, int(cx + half)) - x0,
+                     std::min(height, int(cy + half)) - y0};
+}
+
 void ballCircle(LayoutSpec& spec, const PanoramaSettings& p, const Frame& frame,
                 const std::string& source) {
-  const std::optional<BallCircle> ball = findBall(frame);
+  const std::optional<FrameWindow> within =
+      p.lens ? ballSearchWindow(readLensCalibration(*p.lens), frame.width, frame.height)
+             : std::nullopt;
+  const std::optional<BallCircle> ball = within ? findBallWithin(frame, *within) : findBall(frame);
   if (!ball)
     throw Error(source +
                 ": --circle auto found no mirror ball (a circle from a tenth to a half of the "

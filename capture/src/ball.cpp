@@ -432,12 +432,22 @@ std::optional<BallCircle> findBall(const Frame& frame) {
 
 namespace lp {
 
+std::optional<BallCircle> findBallWithin(const Frame& frame, const FrameWindow& window) {
+  const int x0 = std::clamp(window.x, 0, frame.width), y0 = std::clamp(window.y, 0, frame.height);
+  const int w = std::min(window.width, frame.width - x0),
+            h = std::min(window.height, frame.height - y0);
+  if (w < 16 || h < 16) return std::nullopt;
+  auto found = findBall(cropOf(frame, x0, y0, w, h));
+  if (found) found->x += x0, found->y += y0;
+  return found;
+}
+
 BallFollower::Step BallFollower::follow(const Frame& frame) {
   // The band the rim is read in: a ball that moves a few pixels a frame stays in it.
   const auto band = [](const BallCircle& c) { return std::max(6.0, 0.04 * c.radius); };
   Step step;
   if (!circle_ || (lost_ && ++lostFrames_ % kSearchEvery == 0)) {  // the whole frame
-    if (auto c = findBall(frame))
+    if (auto c = searchWithin_ ? findBallWithin(frame, *searchWithin_) : findBall(frame))
       if (auto reading = rimReading(frame, *c, band(*c))) {
         step.event = !circle_ ? Event::Found : Event::FoundAgain;
         circle_ = *c, reading_ = {(*reading)[0], (*reading)[1], (*reading)[2]};

@@ -435,4 +435,17 @@ std::shared_ptr<const LensModel> makeBallModel(const LensCalibration& camera, gl
   return std::make_shared<OpenCvLens>(camera, circle);
 }
 
+double seenRadius(const LensCalibration& calibration, int width, int height) {
+  const std::vector<SphereSample> samples = makeLensModel(calibration)->samples(width, height);
+  // The principal point in this frame's pixels (OpenCV's centres are whole numbers; ours +0.5).
+  const double cx = calibration.K[2] * width / calibration.width + 0.5,
+               cy = calibration.K[5] * height / calibration.height + 0.5;
+  double nearest = HUGE_VAL;
+  for (int y = 0; y < height; ++y)
+    for (int x = 0; x < width; ++x)
+      if (samples[std::size_t(y) * std::size_t(width) + std::size_t(x)].solidAngle == 0.0f)
+        nearest = std::min(nearest, std::hypot(x + 0.5 - cx, y + 0.5 - cy));
+  return nearest == HUGE_VAL ? 0.0 : nearest;
+}
+
 }  // namespace lp

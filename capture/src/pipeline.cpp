@@ -111,7 +111,6 @@ struct CapturePipeline::Loop {
         wallStart(Clock::now()) {
     if (o.threads > 1) pool = std::make_unique<ThreadPool>(o.threads);
     if (o.bracket) merger.emplace(*o.bracket);
-    if (o.followBall) ball.emplace();
   }
   FrameProcessor processor;  ///< the frame's lighting (liveprobe/capture/frame_processor.h)
   std::optional<BracketMerger> merger;
@@ -198,6 +197,8 @@ bool CapturePipeline::hold(Loop& s, ProcessedFrame& out) {
 }
 
 bool CapturePipeline::followBall(Loop& s, ProcessedFrame& out) {
+  const auto& within = opt_.followBall->searchWithin;
+  if (!s.ball) s.ball.emplace(within ? within(s.frame->width, s.frame->height) : std::nullopt);
   const BallFollower::Step step = s.ball->follow(*s.frame);
   if (!step.circle) {
     std::lock_guard lock(mutex_);
@@ -328,7 +329,7 @@ void CapturePipeline::run() {
         merge(s, out);
         clock.lap(Stage::Merge);
       }
-      if (s.ball && !followBall(s, out)) {
+      if (opt_.followBall && !followBall(s, out)) {
         --s.index;  // not projected: the frames counted are the ball's
         continue;
       }

@@ -23,6 +23,15 @@ struct BallCircle {
 /// frame's shorter side whose rim holds (the rim's edges within 0.5 px RMS of it), or none.
 std::optional<BallCircle> findBall(const Frame& frame);
 
+/// A rectangle of a frame, in pixels.
+struct FrameWindow {
+  int x = 0, y = 0, width = 0, height = 0;
+};
+/// findBall in `window` of the frame (the circle in the whole frame's coordinates): where only
+/// part of the frame holds the scene (a fisheye's image circle, black around it, whose edge is a
+/// stronger circle than the ball's; a ball on the lens's axis shares its centre).
+std::optional<BallCircle> findBallWithin(const Frame& frame, const FrameWindow& window);
+
 /// The ball followed through a stream (--circle auto on replay, live and view). The first frame
 /// that holds it is searched whole (findBall); after that each frame's rim is read about the
 /// circle in use, cheaply (its strongest radial edge, within a band of the radius, in a window
@@ -37,6 +46,9 @@ class BallFollower {
   static constexpr double kMovedPixels = 0.2;  ///< about 0.4% of L00 in the circle's radius
   static constexpr int kSearchEvery = 15;
   enum class Event { None, Found, Moved, Lost, FoundAgain };
+  /// `searchWithin`: where the whole-frame searches look (findBallWithin); none: the frame.
+  explicit BallFollower(std::optional<FrameWindow> searchWithin = std::nullopt)
+      : searchWithin_(searchWithin) {}
   struct Step {
     std::optional<BallCircle> circle;  ///< to project with; none before the ball is first found
     bool lost = false;                 ///< not seen in this frame: `circle` is the last one
@@ -45,6 +57,7 @@ class BallFollower {
   Step follow(const Frame& frame);
 
  private:
+  std::optional<FrameWindow> searchWithin_;
   std::optional<BallCircle> circle_;
   std::array<double, 3> reading_{};  ///< the rim's edge reading the circle was fitted with
   bool lost_ = false;

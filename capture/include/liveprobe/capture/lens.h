@@ -52,4 +52,9 @@ std::shared_ptr<const LensModel> makeLensModel(const LensCalibration& calibratio
 /// of -x). Each pixel's solid angle is the spherical quadrilateral of its corners' reflections.
 std::shared_ptr<const LensModel> makeBallModel(const LensCalibration& camera, glm::vec3 circle);
 
+/// The radius, in pixels of a W x H frame (of the calibration's aspect), of the disc about the
+/// principal point within which the lens sees every pixel (a fisheye's image circle, black beyond
+/// it); 0 where it sees the whole frame.
+double seenRadius(const LensCalibration& calibration, int width, int height);
+
 }  // namespace lp

@@ -14,6 +14,7 @@
 #include <string>
 #include <thread>
 
+#include "liveprobe/capture/ball.h"
 #include "liveprobe/capture/frame_processor.h"
 #include "liveprobe/capture/image.h"
 #include "liveprobe/capture/photometry.h"
@@ -75,6 +76,9 @@ struct PipelineOptions {
   struct FollowBall {
     std::function<LayoutSpec(glm::vec3 circle)> layoutFor;
     std::function<void(const std::string&)> say;
+    /// Where in a W x H frame the ball is searched for (BallFollower's searchWithin); none: the
+    /// whole frame.
+    std::function<std::optional<FrameWindow>(int width, int height)> searchWithin;
   };
   std::optional<FollowBall> followBall;
 };
