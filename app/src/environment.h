@@ -29,12 +29,12 @@ glm::mat3 envOrientation(const PanoramaSettings& p);
 /// unset; otherwise --circle auto is refused.
 LayoutSpec layoutSpec(const PanoramaSettings& p, const FrameSource* source = nullptr,
                       bool findsBall = false);
-/// --circle auto: `spec` with the circle of the ball found in `frame` (and the traced ball's lens
-/// for it, with --lens), said in one line. Throws lp::Error naming `source` when there is none.
 /// Where --circle auto searches a W x H frame of the calibrated `camera`: the square inside its
 /// image circle (a fisheye's, black around it, a stronger circle than any ball); none where the
 /// lens sees the whole frame.
 std::optional<FrameWindow> ballSearchWindow(const LensCalibration& camera, int width, int height);
+/// --circle auto: `spec` with the circle of the ball found in `frame` (and the traced ball's lens
+/// for it, with --lens), said in one line. Throws lp::Error naming `source` when there is none.
 void ballCircle(LayoutSpec& spec, const PanoramaSettings& p, const Frame& frame,
                 const std::string& source);
 
