@@ -340,8 +340,9 @@ std::optional<BallCircle> fitRim(const cv::Mat& lin, cv::Vec3d c, double blur = 
                     int(kept.size()), sigma};
 }
 
-/// The part of `frame` from (x0, y0), w x h (within it).
-Frame cropOf(const Frame& f, int x0, int y0, int w, int h) {
+/// The part of `frame` in `window` (within it).
+Frame cropOf(const Frame& f, const FrameWindow& window) {
+  const auto [x0, y0, w, h] = window;
   Frame c;
   c.width = w, c.height = h, c.format = f.format;
   const bool bytes = f.format == PanoramaFormat::BgrU8;
@@ -359,8 +360,8 @@ Frame cropOf(const Frame& f, int x0, int y0, int w, int h) {
 }
 
 /// The window about a circle (liveprobe's pixel coordinates) reaching `margin` pixels past its
-/// rim, within the frame: x0, y0, w, h.
-std::array<int, 4> windowAbout(const Frame& f, double x, double y, double radius, double margin) {
+/// rim, within the frame.
+FrameWindow windowAbout(const Frame& f, double x, double y, double radius, double margin) {
   const double reach = radius + margin;
   const int x0 = std::max(0, int(std::floor(x - reach))),
             y0 = std::max(0, int(std::floor(y - reach)));
@@ -373,9 +374,10 @@ std::array<int, 4> windowAbout(const Frame& f, double x, double y, double radius
 /// strongest radial edge within a band of the radius, on at least half the rays; none when the
 /// rim is not there. In liveprobe's pixel coordinates.
 std::optional<cv::Vec3d> rimReading(const Frame& frame, const BallCircle& near, double band) {
-  const auto [x0, y0, w, h] = windowAbout(frame, near.x, near.y, near.radius, band + 8);
+  const FrameWindow window = windowAbout(frame, near.x, near.y, near.radius, band + 8);
+  const auto [x0, y0, w, h] = window;
   if (w < 16 || h < 16) return std::nullopt;
-  const cv::Mat grey = greyOf(cropOf(frame, x0, y0, w, h));
+  const cv::Mat grey = greyOf(cropOf(frame, window));
   // (OpenCV's pixel centres are whole numbers; liveprobe's are at +0.5.)
   const cv::Vec3d rough(near.x - 0.5 - x0, near.y - 0.5 - y0, near.radius);
   const auto c = edgeCircle(grey, rough, band, 180);
@@ -388,10 +390,11 @@ std::optional<cv::Vec3d> rimReading(const Frame& frame, const BallCircle& near, 
 /// The rim's model fitted from a rim reading (within the model's reach of the rim), in a window,
 /// at the camera's blur as found before.
 std::optional<BallCircle> fitNear(const Frame& frame, const cv::Vec3d& reading, double blur) {
-  const auto [x0, y0, w, h] =
+  const FrameWindow window =
       windowAbout(frame, reading[0], reading[1], reading[2], kReach + kSearch + 4);
+  const int x0 = window.x, y0 = window.y;
   const auto fit =
-      fitRim(linearOf(cropOf(frame, x0, y0, w, h)),
+      fitRim(linearOf(cropOf(frame, window)),
              cv::Vec3d(reading[0] - 0.5 - x0, reading[1] - 0.5 - y0, reading[2]), blur);
   if (!fit || fit->rimResidual >= kMaxRimResidual) return std::nullopt;
   BallCircle c = *fit;
@@ -428,16 +431,12 @@ std::optional<BallCircle> findBall(const Frame& frame) {
   return best;
 }
 
-}  // namespace lp
-
-namespace lp {
-
 std::optional<BallCircle> findBallWithin(const Frame& frame, const FrameWindow& window) {
   const int x0 = std::clamp(window.x, 0, frame.width), y0 = std::clamp(window.y, 0, frame.height);
   const int w = std::min(window.width, frame.width - x0),
             h = std::min(window.height, frame.height - y0);
   if (w < 16 || h < 16) return std::nullopt;
-  auto found = findBall(cropOf(frame, x0, y0, w, h));
+  auto found = findBall(cropOf(frame, {x0, y0, w, h}));
   if (found) found->x += x0, found->y += y0;
   return found;
 }
