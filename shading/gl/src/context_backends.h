@@ -24,6 +24,11 @@ std::unique_ptr<GlContext> openWindow(const ContextSpec& spec, std::string& whyN
 /// throws ContextError when the one chosen fails.
 std::unique_ptr<GlContext> openEgl(const ContextSpec& spec, bool hardwareOnly, std::string& whyNot);
 
+/// Makes no window's context (releaseWindowContext) or EGL context (releaseEglContext) current
+/// on this thread; nothing where the build has none.
+void releaseWindowContext();
+void releaseEglContext();
+
 /// An offscreen context of spec.width x spec.height (Mesa llvmpipe), or nullptr with the reason
 /// in `whyNot` where the build has no OSMesa.
 std::unique_ptr<GlContext> openOffscreen(const ContextSpec& spec, std::string& whyNot);

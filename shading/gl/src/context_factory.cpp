@@ -43,13 +43,20 @@ const char* backendName(Backend backend) {
   return "?";
 }
 
+void releaseCurrentContext() {
+  releaseWindowContext();
+  releaseEglContext();
+}
+
 #if !LIVEPROBE_WITH_GLFW
 std::unique_ptr<GlContext> openWindow(const ContextSpec&, std::string& whyNot) {
   whyNot = "this liveprobe was built without the GLFW window (LIVEPROBE_WITH_GLFW)";
   return nullptr;
 }
+void releaseWindowContext() {}
 #endif
 #if !LIVEPROBE_WITH_EGL
+void releaseEglContext() {}
 std::vector<std::string> eglDevices() { return {}; }
 std::unique_ptr<GlContext> openEgl(const ContextSpec&, bool, std::string& whyNot) {
   whyNot = "this liveprobe was built without EGL (LIVEPROBE_WITH_EGL)";

@@ -13,6 +13,8 @@
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <map>
+#include <mutex>
 #include <vector>
 
 #include "context_backends.h"
@@ -108,29 +110,70 @@ std::vector<Device> listDevices() {
   return out;
 }
 
+/// A device's display is one EGLDisplay for the whole process, however many contexts it has
+/// (a drawing context and the capture thread's): initialised by the first, terminated when the
+/// last goes, as EGL_KHR_display_reference would count it. Never destroyed: a context held in a
+/// static is destroyed after any function's static.
+std::mutex& displayMutex() {
+  static auto* m = new std::mutex;
+  return *m;
+}
+std::map<EGLDisplay, int>& displayUsers() {
+  static auto* users = new std::map<EGLDisplay, int>;
+  return *users;
+}
+bool initialiseDisplay(EGLDisplay display) {
+  std::lock_guard lock(displayMutex());
+  int& users = displayUsers()[display];
+  EGLint major = 0, minor = 0;
+  if (users == 0 && !eglInitialize(display, &major, &minor)) {
+    displayUsers().erase(display);
+    return false;
+  }
+  ++users;
+  return true;
+}
+void terminateDisplay(EGLDisplay display) {
+  std::lock_guard lock(displayMutex());
+  if (--displayUsers()[display] > 0) return;
+  displayUsers().erase(display);
+  eglTerminate(display);
+}
+
 class EglContext final : public GlContext {
  public:
-  EglContext(EGLDisplay display, std::string platform, const ContextSpec& spec)
+  EglContext(EGLDisplay display, std::string platform, const ContextSpec& spec, int device)
       : display_(display),
         platform_(std::move(platform)),
         width_(spec.width),
         height_(spec.height) {
-    EGLint major = 0, minor = 0;
-    if (!eglInitialize(display_, &major, &minor)) throw eglFailure("cannot initialise the display");
+    if (!initialiseDisplay(display_)) throw eglFailure("cannot initialise the display");
     try {
       open();
       description_ = "EGL " + platform_ + " (" + rendererString() + ")";
+      backend_ = Backend::Egl, device_ = device;
     } catch (...) {
-      eglTerminate(display_);
+      terminateDisplay(display_);
       throw;
     }
   }
   ~EglContext() override {
-    fbo_ = {}, colour_ = {}, depth_ = {};  // deleted while the context is current
+    // Its objects are deleted in it: made current here where another thread released it, and
+    // the context current here before (another of this process's) made current again after.
+    const EGLContext before = eglGetCurrentContext();
+    const bool mine = before == context_;
+    const EGLDisplay beforeDisplay = eglGetCurrentDisplay();
+    const EGLSurface draw = eglGetCurrentSurface(EGL_DRAW), read = eglGetCurrentSurface(EGL_READ);
+    if (mine || eglMakeCurrent(display_, EGL_NO_SURFACE, EGL_NO_SURFACE, context_))
+      fbo_ = {}, colour_ = {}, depth_ = {};
+    else
+      (void)fbo_.release(), (void)colour_.release(), (void)depth_.release();
     eglMakeCurrent(display_, EGL_NO_SURFACE, EGL_NO_SURFACE, EGL_NO_CONTEXT);
     eglDestroyContext(display_, context_);
-    eglTerminate(display_);
-    eglReleaseThread();  // the thread's EGL state (its current API, its last error) too
+    if (!mine && before != EGL_NO_CONTEXT) eglMakeCurrent(beforeDisplay, draw, read, before);
+    terminateDisplay(display_);
+    if (mine || before == EGL_NO_CONTEXT)
+      eglReleaseThread();  // the thread's EGL state (its current API, its last error) too
   }
   void makeCurrent() override {
     if (!eglMakeCurrent(display_, EGL_NO_SURFACE, EGL_NO_SURFACE, context_))
@@ -212,6 +255,12 @@ class EglContext final : public GlContext {
 
 }  // namespace
 
+void releaseEglContext() {
+  if (eglGetCurrentContext() == EGL_NO_CONTEXT) return;
+  eglMakeCurrent(eglGetCurrentDisplay(), EGL_NO_SURFACE, EGL_NO_SURFACE, EGL_NO_CONTEXT);
+  eglReleaseThread();
+}
+
 std::vector<std::string> eglDevices() {
   std::vector<std::string> out;
   for (const Device& d : listDevices())
@@ -242,7 +291,7 @@ std::unique_ptr<GlContext> openEgl(const ContextSpec& spec, bool hardwareOnly,
     EGLDisplay dpy = getDisplay(EGL_PLATFORM_DEVICE_EXT, d.handle, nullptr);
     if (dpy == EGL_NO_DISPLAY) throw eglFailure("no display on device " + std::to_string(spec.gpu));
     return std::make_unique<EglContext>(dpy, "device " + std::to_string(spec.gpu) + ", " + d.name,
-                                        spec);
+                                        spec, spec.gpu);
   }
   // The first device that opens: a GPU, then (unless only hardware will do) a software one.
   const auto firstDevice = [&](bool software) -> std::unique_ptr<GlContext> {
@@ -251,7 +300,7 @@ std::unique_ptr<GlContext> openEgl(const ContextSpec& spec, bool hardwareOnly,
       EGLDisplay dpy = getDisplay(EGL_PLATFORM_DEVICE_EXT, devices[i].handle, nullptr);
       if (dpy != EGL_NO_DISPLAY)
         return std::make_unique<EglContext>(
-            dpy, "device " + std::to_string(i) + ", " + devices[i].name, spec);
+            dpy, "device " + std::to_string(i) + ", " + devices[i].name, spec, int(i));
     }
     return nullptr;
   };
@@ -263,7 +312,7 @@ std::unique_ptr<GlContext> openEgl(const ContextSpec& spec, bool hardwareOnly,
   if (auto software = firstDevice(true)) return software;
   if (hasExtension(client, "EGL_MESA_platform_surfaceless")) {
     EGLDisplay dpy = getDisplay(EGL_PLATFORM_SURFACELESS_MESA, EGL_DEFAULT_DISPLAY, nullptr);
-    if (dpy != EGL_NO_DISPLAY) return std::make_unique<EglContext>(dpy, "surfaceless", spec);
+    if (dpy != EGL_NO_DISPLAY) return std::make_unique<EglContext>(dpy, "surfaceless", spec, -1);
   }
   whyNot = "EGL offers neither a device nor the surfaceless platform";
   return nullptr;

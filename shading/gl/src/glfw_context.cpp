@@ -38,6 +38,7 @@ class GlfwContext final : public GlContext {
     }
     glfwSwapInterval(spec.vsync ? 1 : 0);
     description_ = "GLFW window (" + rendererString() + ")";
+    backend_ = Backend::Window;
   }
   ~GlfwContext() override {
     glfwDestroyWindow(window_);
@@ -55,6 +56,11 @@ class GlfwContext final : public GlContext {
 };
 
 }  // namespace
+
+void releaseWindowContext() {
+  // (Before glfwInit, or after glfwTerminate, GLFW has no context to let go.)
+  if (glfwGetCurrentContext()) glfwMakeContextCurrent(nullptr);
+}
 
 std::unique_ptr<GlContext> openWindow(const ContextSpec& spec, std::string& whyNot) {
   glfwSetErrorCallback([](int, const char* msg) { glfwLastError() = msg ? msg : "?"; });

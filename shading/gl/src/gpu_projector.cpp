@@ -156,6 +156,37 @@ void main() {
 }
 )";
 
+// Each row's largest channel value: workgroup i reads row i (256 invocations across it), decodes
+// 8-bit codes, and halves a shared array down to the maximum.
+const char* const kPeaksCs = R"(#version 430
+layout(local_size_x = 256) in;
+layout(binding = 0) uniform sampler2D frame;
+layout(std430, binding = 3) readonly buffer Decode { float decodeT[]; };
+layout(std430, binding = 6) writeonly buffer Peaks { float peaks[]; };
+uniform int width, codes;
+shared float red[256];
+void main() {
+  const uint lid = gl_LocalInvocationID.x;
+  const int i = int(gl_WorkGroupID.x);
+  float m = 0.0;
+  for (int j = int(lid); j < width; j += 256) {
+    vec3 v = texelFetch(frame, ivec2(j, i), 0).rgb;
+    if (codes != 0) {
+      const uvec3 c = uvec3(v * 255.0 + 0.5);
+      v = vec3(decodeT[c.r], decodeT[c.g], decodeT[c.b]);
+    }
+    m = max(m, max(v.r, max(v.g, v.b)));
+  }
+  red[lid] = m;
+  barrier();
+  for (uint stride = 128u; stride > 0u; stride >>= 1) {
+    if (lid < stride) red[lid] = max(red[lid], red[lid + stride]);
+    barrier();
+  }
+  if (lid == 0u) peaks[i] = red[0];
+}
+)";
+
 struct TexFormat {
   GLenum internal, format, type;
 };
@@ -311,14 +342,18 @@ void FrameTexture::upload(const PanoramaView& frame) {
 // ---- GpuProjector ---------------------------------------------------------------------------
 
 GpuProjector::GpuProjector(const LayoutSpec& spec, int width, int height, int rowsPerGroup)
-    : spec_(spec), width_(width), height_(height) {
+    : GpuProjector(Projector(spec, width, height), rowsPerGroup) {}
+
+GpuProjector::GpuProjector(const Projector& cpu, int rowsPerGroup)
+    : spec_(cpu.spec()), width_(cpu.width()), height_(cpu.height()) {
   if (!hasCompute()) throw ContextError("the GPU projection needs compute shaders (GL 4.3)");
-  const Projector cpu(spec, width, height);  // the same tables as the CPU's projection
+  const int width = width_, height = height_;
   const EquirectIntegrals* t = cpu.equirectIntegrals();
   const std::string reduce =
       std::string("#version 430\n#define EQUIRECT ") + (t ? "1" : "0") + "\n" + kReduceCs;
   reduce_ = linkCompute(reduce.c_str(), "the projection's reduction");
   finish_ = linkCompute(kFinishCs, "the projection's final sum");
+  peaks_ = linkCompute(kPeaksCs, "the row peaks");
   groupsX_ = (width + kGroupSize - 1) / kGroupSize;
   rowsPerGroup_ = std::min(rowsPerGroup > 0 ? std::min(rowsPerGroup, kMaxRowsPerGroup)
                                             : defaultRowsPerGroup(width, height),
@@ -341,6 +376,7 @@ GpuProjector::GpuProjector(const LayoutSpec& spec, int width, int height, int ro
   decode_ = storageBuffer(nullptr, 256 * sizeof(float));
   partial_ = storageBuffer(nullptr, std::size_t(groups()) * 27 * sizeof(float));
   for (auto& s : slots_) s.result = storageBuffer(nullptr, 27 * sizeof(float));
+  rowPeaks_ = storageBuffer(nullptr, std::size_t(height) * sizeof(float));
   const GLuint p = reduce_.get();
   glUseProgram(p);
   glUniform1i(glGetUniformLocation(p, "frame"), 0);
@@ -351,6 +387,9 @@ GpuProjector::GpuProjector(const LayoutSpec& spec, int width, int height, int ro
   glUniform1i(glGetUniformLocation(p, "rowsPerGroup"), rowsPerGroup_);
   glUseProgram(finish_.get());
   glUniform1i(glGetUniformLocation(finish_.get(), "groups"), groups());
+  glUseProgram(peaks_.get());
+  glUniform1i(glGetUniformLocation(peaks_.get(), "frame"), 0);
+  glUniform1i(glGetUniformLocation(peaks_.get(), "width"), width);
   glUseProgram(0);
   checkGl("GpuProjector()");
 }
@@ -360,21 +399,31 @@ GpuProjector::~GpuProjector() {
     if (s.fence) glDeleteSync(s.fence);
 }
 
-void GpuProjector::dispatch(const FrameTexture& frame, const float* decode, bool bgr) {
+namespace {
+bool isCodes(const FrameTexture& frame) {
+  return frame.format() == PanoramaFormat::BgrU8 || frame.format() == PanoramaFormat::RgbU8;
+}
+}  // namespace
+
+void GpuProjector::setDecode(const FrameTexture& frame, const float* decode) {
   if (frame.width() != width_ || frame.height() != height_)
     throw Error("GPU projection: a " + std::to_string(frame.width()) + "x" +
                 std::to_string(frame.height()) + " frame given to a projector for " +
                 std::to_string(width_) + "x" + std::to_string(height_));
-  const bool codes =
-      frame.format() == PanoramaFormat::BgrU8 || frame.format() == PanoramaFormat::RgbU8;
+  const bool codes = isCodes(frame);
   if (codes && !decode) throw Error("GPU projection: an 8-bit frame needs its decode table");
-  if (pending_ == int(slots_.size())) read(true);  // both slots in flight: take the oldest
   if (codes && (!decodeSet_ || std::memcmp(lastDecode_.data(), decode, sizeof lastDecode_) != 0)) {
     std::memcpy(lastDecode_.data(), decode, sizeof lastDecode_);
     decodeSet_ = true;
     glBindBuffer(GL_SHADER_STORAGE_BUFFER, decode_.get());
     glBufferSubData(GL_SHADER_STORAGE_BUFFER, 0, sizeof lastDecode_, lastDecode_.data());
   }
+}
+
+void GpuProjector::dispatch(const FrameTexture& frame, const float* decode, bool bgr) {
+  if (pending_ == int(slots_.size())) read(true);  // both slots in flight: take the oldest
+  setDecode(frame, decode);
+  const bool codes = isCodes(frame);
   Slot& slot = slots_[std::size_t((head_ + pending_) % int(slots_.size()))];
   slot.bgr = bgr;
   glActiveTexture(GL_TEXTURE0);
@@ -422,6 +471,38 @@ Sh9 GpuProjector::project(const FrameTexture& frame, const float* decode, bool b
   while (pending_ > 0) read(true);
   dispatch(frame, decode, bgr);
   return *read(true);
+}
+
+std::vector<float> GpuProjector::rowPeaks(const FrameTexture& frame, const float* decode) {
+  setDecode(frame, decode);
+  glActiveTexture(GL_TEXTURE0);
+  glBindTexture(GL_TEXTURE_2D, frame.texture());
+  glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 3, decode_.get());
+  glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 6, rowPeaks_.get());
+  glUseProgram(peaks_.get());
+  glUniform1i(glGetUniformLocation(peaks_.get(), "codes"), isCodes(frame) ? 1 : 0);
+  glDispatchCompute(GLuint(height_), 1, 1);
+  glMemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT);
+  glUseProgram(0);
+  std::vector<float> peaks(static_cast<std::size_t>(height_));
+  glBindBuffer(GL_SHADER_STORAGE_BUFFER, rowPeaks_.get());
+  glGetBufferSubData(GL_SHADER_STORAGE_BUFFER, 0, GLsizeiptr(peaks.size() * sizeof(float)),
+                     peaks.data());
+  return peaks;
+}
+
+// ---- GpuFrameProjection ---------------------------------------------------------------------
+
+Sh9 GpuFrameProjection::operator()(const ProjectionJob& job) {
+  const PanoramaView& v = job.view;
+  if (!projector_ || job.tablesId != tablesId_) {
+    projector_ = std::make_unique<GpuProjector>(job.tables);
+    tablesId_ = job.tablesId;
+  }
+  frame_.upload(v);
+  const Sh9 whole = projector_->project(frame_, v.decode, v.format == PanoramaFormat::BgrU8);
+  if (job.rowPeaks) *job.rowPeaks = projector_->rowPeaks(frame_, v.decode);
+  return whole;
 }
 
 }  // namespace lp::gl

@@ -40,6 +40,7 @@ class OsMesaContext final : public GlContext {
       throw ContextError("OSMesa: cannot load GL 3.3 core functions");
     }
     description_ = "OSMesa offscreen (" + rendererString() + ")";
+    backend_ = Backend::OsMesa;
   }
   ~OsMesaContext() override { OSMesaDestroyContext(ctx_); }
   void makeCurrent() override {

@@ -71,6 +71,10 @@ class GlContext {
   /// "GLFW window", "EGL device 0, /dev/dri/renderD128" or "OSMesa offscreen", plus
   /// GL_RENDERER and GL_VERSION.
   const std::string& describe() const { return description_; }
+  /// Which backend opened it (Window, Egl or OsMesa), and for EGL the device's index in
+  /// eglDevices() (-1: Mesa's surfaceless platform).
+  Backend backend() const { return backend_; }
+  int device() const { return device_; }
 
  protected:
   GlContext() = default;
@@ -78,6 +82,8 @@ class GlContext {
   GlContext& operator=(const GlContext&) = delete;
   GLFWwindow* window_ = nullptr;  ///< set by the window backend
   std::string description_;       ///< set by each backend once GL is loaded
+  Backend backend_ = Backend::Auto;
+  int device_ = -1;
 };
 
 /// Whether a GL_RENDERER string (or a describe() holding one) names a software rasterizer
@@ -86,5 +92,10 @@ bool isSoftwareRenderer(std::string_view renderer);
 
 /// Creates a context and loads GL into it. Throws ContextError with the cause.
 std::unique_ptr<GlContext> createGlContext(const ContextSpec& spec);
+
+/// Makes no context current on this thread (a GLFW window's, an EGL one's), so that another
+/// thread can make it current, or so that one of the other API can be made current here (GLX
+/// and EGL contexts are not current on one thread together). makeCurrent() takes it up again.
+void releaseCurrentContext();
 
 }  // namespace lp::gl

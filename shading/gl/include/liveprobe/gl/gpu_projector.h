@@ -9,7 +9,9 @@
 #include <array>
 #include <cstddef>
 #include <cstdint>
+#include <memory>
 #include <optional>
+#include <vector>
 
 #include "liveprobe/gl/handles.h"
 #include "liveprobe/sh/projector.h"
@@ -64,6 +66,8 @@ class GpuProjector {
   /// size does not fit the layout. `rowsPerGroup`: the rows each invocation of the first pass
   /// sums (0 picks: about 768 groups, 16 to 256 rows; liveprobe-gpu-bench measures the choice).
   GpuProjector(const LayoutSpec& spec, int width, int height, int rowsPerGroup = 0);
+  /// The same, from the CPU's projector of the layout and size (its tables, not made again).
+  explicit GpuProjector(const Projector& tables, int rowsPerGroup = 0);
   ~GpuProjector();
 
   /// Queues the projection of `frame` (this projector's size). `decode`: the 256-entry table of
@@ -75,6 +79,10 @@ class GpuProjector {
   std::optional<Sh9> read(bool wait);
   /// dispatch() and read(true): one frame, waited for.
   Sh9 project(const FrameTexture& frame, const float* decode = nullptr, bool bgr = false);
+  /// Each row's largest linear channel value (8-bit codes through `decode`), as
+  /// lp::Projector::project's rowPeaks: what the light search starts from. A pass of one
+  /// workgroup a row, read back at once (height floats).
+  std::vector<float> rowPeaks(const FrameTexture& frame, const float* decode = nullptr);
   /// Frames dispatched and not read.
   int pending() const { return pending_; }
   /// Workgroups of the first pass (each writes 27 partial sums).
@@ -83,6 +91,7 @@ class GpuProjector {
   int rowsPerGroup() const { return rowsPerGroup_; }
 
  private:
+  void setDecode(const FrameTexture& frame, const float* decode);
   struct Slot {
     Buffer result;
     GLsync fence = nullptr;
@@ -90,13 +99,27 @@ class GpuProjector {
   };
   LayoutSpec spec_;
   int width_, height_;
-  Program reduce_, finish_;
-  Buffer rows_, cols_, weights_, decode_, partial_;
+  Program reduce_, finish_, peaks_;
+  Buffer rows_, cols_, weights_, decode_, partial_, rowPeaks_;
   std::array<Slot, 2> slots_;
   int groupsX_ = 0, groupsY_ = 0, rowsPerGroup_ = 0;
   int head_ = 0, pending_ = 0;
   std::array<float, 256> lastDecode_{};
   bool decodeSet_ = false;
+};
+
+/// A frame path's frames projected on the GPU, in the context current where it is called: each
+/// frame uploaded as the projection reads it, projected and read back (with the row peaks where
+/// lights are searched); the passes made again whenever the job's tables are. What
+/// lp::FrameRequest::projectWith calls.
+class GpuFrameProjection {
+ public:
+  Sh9 operator()(const ProjectionJob& job);
+
+ private:
+  FrameTexture frame_;
+  std::unique_ptr<GpuProjector> projector_;
+  std::uint64_t tablesId_ = 0;
 };
 
 }  // namespace lp::gl

@@ -5,6 +5,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <memory>
+#include <optional>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -147,5 +148,23 @@ void readPixels(const PanoramaView& frame, std::size_t row, std::size_t col, std
 
 /// One-off projection: Projector(frame.layout, frame.width, frame.height).project(frame).
 Sh9 project(const PanoramaView& frame, Executor* executor = nullptr);
+
+/// A frame for a projection elsewhere (the GPU's, liveprobe/gl/gpu_projector.h), as the frame path
+/// hands it over (lp::FrameRequest::projectWith).
+struct ProjectionJob {
+  /// The frame as the projection reads it: an 8-bit frame with the lookup table that carries the
+  /// photometry, a float frame as it is, a reduction's average.
+  PanoramaView view;
+  /// The CPU's projector of its layout and size: the weights to project with.
+  const Projector& tables;
+  /// Changes whenever the caller makes its tables again (another size, another layout).
+  std::uint64_t tablesId = 0;
+  /// Where lights are searched: to be filled with each row's largest value, as
+  /// Projector::project's rowPeaks; nullptr otherwise.
+  std::vector<float>* rowPeaks = nullptr;
+  /// Where the projection says its own GPU time (ms, by timer queries read a few frames late:
+  /// an earlier frame's), left empty where there is no GPU timer; nullptr: not asked.
+  std::optional<double>* gpuMs = nullptr;
+};
 
 }  // namespace lp
