@@ -15,6 +15,8 @@
 #include <string>
 #include <vector>
 
+#include "layout_dirs.h"
+#include "liveprobe/capture/frame_processor.h"
 #include "liveprobe/capture/lens.h"
 #include "liveprobe/gl/context.h"
 #include "liveprobe/gl/gpu_projector.h"
@@ -137,6 +139,103 @@ TEST(GpuProjection, MatchesTheCpuForEveryLayoutAndPixelType) {
       EXPECT_GT(std::abs(want.c[1].x), 1e-3f * want.c[0].x) << lc.name;
     }
   }
+}
+
+/// The test frames as the frame path takes them: 8-bit (BGR) or float.
+std::shared_ptr<lp::Frame> pathFrame(const Frames& f, bool u8) {
+  auto frame = std::make_shared<lp::Frame>();
+  frame->width = f.w, frame->height = f.h;
+  frame->format = u8 ? lp::PanoramaFormat::BgrU8 : lp::PanoramaFormat::RgbF32;
+  if (u8)
+    frame->bgr8 = f.u8;
+  else
+    frame->rgb = f.f32;
+  return frame;
+}
+
+// The frame path with the GPU's projection (what --projection gpu gives every command): every
+// layout, 8-bit and float frames, and a reduction, give the CPU path's coefficients; and a light
+// search from the GPU's row peaks finds the CPU path's lights.
+TEST(GpuProjection, TheFramePathOnTheGpuEqualsTheCpuPath) {
+  eglContext();
+  for (const LayoutCase& lc : layoutCases())
+    for (const bool u8 : {true, false})
+      for (const int reduce : {1, 2}) {
+        if (reduce > 1 && (lc.spec.layout != lp::Layout::Equirect || lc.w % 2 || lc.h % 2))
+          continue;
+        const Frames f = makeFrames(lc.w, lc.h);
+        const auto frame = pathFrame(f, u8);
+        const lp::FrameProcessorOptions o{
+            lc.spec, lp::Photometry{}, std::nullopt, reduce, {.maxLights = 0}};
+        lp::FrameProcessor cpu(o), gpu(o);
+        lp::gl::GpuFrameProjection onGpu;
+        const lp::FrameResult want = cpu.run(frame);
+        const lp::FrameResult got = gpu.run(frame, {.projectWith = std::ref(onGpu)});
+        const std::string what =
+            std::string(lc.name) + (u8 ? " u8" : " f32") + (reduce > 1 ? " reduced" : "");
+        EXPECT_EQ(want.projectedOn, lp::ProjectedOn::Cpu) << what;
+        EXPECT_EQ(got.projectedOn, lp::ProjectedOn::Gpu) << what;
+        EXPECT_LT(ofL00(got.lighting.whole, want.lighting.whole), 1e-5) << what;
+        EXPECT_GT(std::abs(want.lighting.whole.c[1].x), 1e-3f * want.lighting.whole.c[0].x) << what;
+      }
+  // The sun: the row peaks equal the CPU's, and so the lights (an equirect frame, whose peaks the
+  // CPU takes inside its projection, and a mirror ball, whose peaks it reads apart). A sun of 4
+  // degrees' radius over a sky; 8-bit: clipped at 255.
+  lp::LayoutSpec ball(lp::Layout::MirrorBall);
+  ball.circle = {100, 100, 95};
+  const LayoutCase suns[] = {{"equirect", lp::Layout::Equirect, 256, 128},
+                             {"mirrorball", ball, 200, 200}};
+  const lpt::DirAt dirs[] = {lpt::equirectDirs(256, 128), lpt::mirrorBallDirs(100, 100, 95)};
+  for (int c = 0; c < 2; ++c)
+    for (const bool u8 : {true, false}) {
+      const LayoutCase& lc = suns[c];
+      const glm::dvec3 sun =
+          glm::normalize(*dirs[c](c == 0 ? 256 / 3.0 : 120.0, c == 0 ? 32.0 : 80.0));
+      Frames f{lc.w, lc.h, {}, {}, {}, {}};
+      for (int i = 0; i < lc.h; ++i)
+        for (int j = 0; j < lc.w; ++j) {
+          const auto d = dirs[c](j + 0.5, i + 0.5);
+          const bool inSun = d && glm::dot(glm::normalize(*d), sun) > std::cos(glm::radians(4.0));
+          const double sky = d ? 0.5 + 0.3 * glm::normalize(*d).z : 0.0;
+          for (int k = 0; k < 3; ++k) {
+            f.f32.push_back(inSun ? 3000.0f : float(sky * (0.8 + 0.1 * k)));
+            f.u8.push_back(inSun ? 255 : std::uint8_t(d ? 20 + 20 * sky + 5 * k : 0));
+          }
+        }
+      const auto frame = pathFrame(f, u8);
+      const std::string what = std::string(lc.name) + (u8 ? " u8" : " f32");
+      const lp::FrameProcessorOptions o{
+          lc.spec, lp::Photometry{}, std::nullopt, 1, {.maxLights = 2}};
+      lp::FrameProcessor cpu(o), gpu(o);
+      lp::gl::GpuFrameProjection onGpu;
+      std::vector<float> gpuPeaks;
+      const lp::FrameLighting want = cpu.run(frame).lighting;
+      const lp::FrameLighting got = gpu.run(frame, {.projectWith =
+                                                        [&](const lp::ProjectionJob& job) {
+                                                          const lp::Sh9 whole = onGpu(job);
+                                                          if (job.rowPeaks)
+                                                            gpuPeaks = *job.rowPeaks;
+                                                          return whole;
+                                                        }})
+                                        .lighting;
+      std::vector<float> cpuPeaks;
+      const lp::FrameProcessor& p = cpu;
+      (void)p.projector()->project(
+          u8 ? lp::PanoramaView::bgrU8(frame->bgr8.data(), lc.w, lc.h,
+                                       cpu.linearizer().table().data(), lc.spec)
+             : lp::PanoramaView::rgbF32(frame->rgb.data(), lc.w, lc.h, lc.spec),
+          nullptr, &cpuPeaks);
+      EXPECT_EQ(gpuPeaks, cpuPeaks) << what;
+      ASSERT_FALSE(want.lights.empty()) << what;
+      ASSERT_EQ(got.lights.size(), want.lights.size()) << what;
+      for (std::size_t k = 0; k < want.lights.size(); ++k) {
+        const double deg = glm::degrees(std::acos(
+            std::clamp(double(glm::dot(got.lights[k].dir, want.lights[k].dir)), -1.0, 1.0)));
+        EXPECT_LT(deg, 0.05) << what;
+        EXPECT_NEAR(got.lights[k].share, want.lights[k].share, 0.01 * want.lights[k].share) << what;
+      }
+      EXPECT_LT(ofL00(got.radiance, want.radiance), 1e-5) << what;
+    }
 }
 
 // Several rows per invocation, and row counts that leave a remainder, give the same sums.
@@ -356,6 +455,104 @@ TEST(BenchOnEgl, GpuAndCpuProjectionsGiveTheSameCoefficients) {
     EXPECT_NE(gpuOut.find("no GPU timer"), std::string::npos) << gpuOut;
     EXPECT_EQ(gpuOut.find("gpu_render"), std::string::npos) << "no 0 ms where there is no timer";
   }
+}
+
+/// A headless replay's records (--coeffs-out), one JSON object a frame.
+std::vector<nlohmann::json> replayRecords(const std::string& args, std::string& output) {
+  const std::string file = std::string(LIVEPROBE_TEST_OUTPUT) + "/gpu/replay.jsonl";
+  std::filesystem::create_directories(std::filesystem::path(file).parent_path());
+  const auto r = lpt::runLiveprobe("replay --headless --gl egl --frames 4 --size 64x36 --quiet " +
+                                   args + " --coeffs-out " + file);
+  output = r.output;
+  EXPECT_EQ(r.exitCode, 0) << args << "\n" << r.output;
+  std::vector<nlohmann::json> out;
+  std::ifstream in(file);
+  for (std::string line; std::getline(in, line);) out.push_back(nlohmann::json::parse(line));
+  return out;
+}
+
+// A stream projected on the GPU (the capture thread's own EGL context): the CPU's coefficients
+// and lights frame by frame, with a reduction too; the summary says where frames were projected,
+// and auto keeps llvmpipe's projection on the CPU; llvmpipe's GPU time is "no GPU timer".
+TEST(ReplayOnEgl, ProjectsOnTheGpuWhereAsked) {
+  for (const std::string extra : {"--sun", "--reduce 2"}) {
+    std::string gpuOut, cpuOut, autoOut;
+    const auto gpu = replayRecords("--projection gpu " + extra, gpuOut);
+    const auto cpu = replayRecords("--projection cpu " + extra, cpuOut);
+    const auto autoRun = replayRecords(extra, autoOut);
+    EXPECT_NE(gpuOut.find("projected on the GPU, EGL"), std::string::npos) << gpuOut;
+    EXPECT_NE(gpuOut.find(": 4 of 4 frames"), std::string::npos) << gpuOut;
+    EXPECT_NE(cpuOut.find("projected on the CPU"), std::string::npos) << cpuOut;
+    if (lp::gl::isSoftwareRenderer(gpuOut)) {
+      EXPECT_NE(autoOut.find("projected on the CPU"), std::string::npos) << autoOut;
+      // No GPU timer on a software rasterizer: said, and no GPU time in any record (never 0 ms).
+      EXPECT_NE(gpuOut.find("GPU time: no GPU timer (EGL"), std::string::npos) << gpuOut;
+      for (const auto& r : gpu)
+        for (const char* key : {"gpu_upload", "gpu_project", "gpu_merge", "gpu_render"})
+          EXPECT_FALSE(r["timings_ms"].contains(key)) << key << " " << r["timings_ms"];
+    }
+    ASSERT_EQ(gpu.size(), 4u) << extra;
+    ASSERT_EQ(cpu.size(), 4u) << extra;
+    for (std::size_t i = 0; i < gpu.size(); ++i) {
+      const auto& a = gpu[i]["coefficients"];
+      const auto& b = cpu[i]["coefficients"];
+      const double l00 = b["L00"][1].get<double>();
+      ASSERT_GT(l00, 0.0);
+      for (const auto& [name, value] : b.items())
+        for (int c = 0; c < 3; ++c)
+          EXPECT_NEAR(a[name][c].get<double>(), value[c].get<double>(), 1e-5 * l00)
+              << extra << " frame " << i << " " << name;
+      if (extra == "--sun") {
+        ASSERT_EQ(gpu[i]["lights"].size(), cpu[i]["lights"].size()) << i;
+        ASSERT_FALSE(cpu[i]["lights"].empty()) << "the recording's sun";
+        const auto& la = gpu[i]["lights"][0];
+        const auto& lb = cpu[i]["lights"][0];
+        double dot = 0;
+        for (int c = 0; c < 3; ++c)
+          dot += la["direction"][c].get<double>() * lb["direction"][c].get<double>();
+        EXPECT_LT(glm::degrees(std::acos(std::min(1.0, dot))), 0.05) << i;
+        EXPECT_NEAR(la["share"].get<double>(), lb["share"].get<double>(),
+                    0.01 * lb["share"].get<double>())
+            << i;
+      }
+    }
+  }
+}
+
+// --projection gpu where the context cannot: one line, exit 1, for every command that projects.
+TEST(ReplayOnEgl, GpuProjectionWithoutAGpuContextIsOneLine) {
+  const std::string env = std::string(LIVEPROBE_SOURCE_DIR) + "/recordings/sky-hdr/0000.exr";
+  const std::string noCompute = "env MESA_GL_VERSION_OVERRIDE=3.3 MESA_GLSL_VERSION_OVERRIDE=330 ";
+  struct Case {
+    std::string command, says;
+  };
+  const Case cases[] = {
+      {noCompute + LIVEPROBE_BIN + " replay --headless --gl egl --frames 2 --projection gpu",
+       "no compute shaders (GL 4.3)"},
+      {noCompute + LIVEPROBE_BIN + " render --gl egl --projection gpu --size 32x32 --env " + env +
+           " --out " + LIVEPROBE_TEST_OUTPUT + "/gpu/refused.png",
+       "no compute shaders (GL 4.3)"},
+      {std::string(LIVEPROBE_BIN) + " replay --headless --gl osmesa --frames 2 --projection gpu",
+       "headless EGL context"},
+  };
+  for (const Case& c : cases) {
+    const auto r = lpt::runCommand(c.command);
+    EXPECT_EQ(r.exitCode, 1) << c.command << "\n" << r.output;
+    EXPECT_EQ(lpt::lineCount(r.output), 1) << c.command << "\n" << r.output;
+    EXPECT_NE(r.output.find("--projection gpu"), std::string::npos) << r.output;
+    EXPECT_NE(r.output.find(c.says), std::string::npos) << r.output;
+  }
+  EXPECT_FALSE(std::filesystem::exists(std::string(LIVEPROBE_TEST_OUTPUT) + "/gpu/refused.png"));
+}
+
+// render on the GPU: the map projected there, said so.
+TEST(ReplayOnEgl, RenderProjectsItsMapOnTheGpuWhereAsked) {
+  const std::string env = std::string(LIVEPROBE_SOURCE_DIR) + "/recordings/sky-hdr/0000.exr";
+  const std::string out = std::string(LIVEPROBE_TEST_OUTPUT) + "/gpu/render.png";
+  const auto r = lpt::runLiveprobe("render --gl egl --projection gpu --size 64x64 --env " + env +
+                                   " --out " + out);
+  EXPECT_EQ(r.exitCode, 0) << r.output;
+  EXPECT_NE(r.output.find("--env projected on the GPU"), std::string::npos) << r.output;
 }
 
 }  // namespace

@@ -93,11 +93,13 @@ TEST(FrameProcessor, OneExposureOneProjectionEveryFormat) {
     const auto shared = std::make_shared<lp::Frame>(*frame);
     int calls = 0;
     const lp::FrameResult elsewhere =
-        turned.run(shared, {.projectWith = [&](const lp::PanoramaView& v) {
+        turned.run(shared, {.projectWith = [&](const lp::ProjectionJob& job) {
                      ++calls;
-                     return lp::project(v);
+                     EXPECT_EQ(job.rowPeaks, nullptr) << "no lights asked for";
+                     return job.tables.project(job.view);
                    }});
     EXPECT_EQ(calls, 1);
+    EXPECT_EQ(elsewhere.projectedOn, lp::ProjectedOn::Gpu);
     // (An 8-bit frame's own pixels are read through its table, which carries the exposure 2.)
     lp::Sh9 own = truth;
     own *= frame == &hdr ? 1.0f / 6.0f : 1.0f / 3.0f;
@@ -108,11 +110,23 @@ TEST(FrameProcessor, OneExposureOneProjectionEveryFormat) {
       EXPECT_NEAR(merged.lighting.radiance.c[k][1], want.c[k][1], 2e-5 * truth.c[0][1] + 1e-6)
           << "projected as it was made " << k;
     }
-    // Lights are searched in the frame's pixels: not with coefficients from elsewhere.
+    // Lights are searched in the frame's pixels: not with a merge's coefficients alone, and
+    // with a projection of the caller's from the row peaks it gives (here the CPU's own, so
+    // the lights are the CPU path's exactly).
     lp::FrameProcessor withSun({lp::LayoutSpec(), photometry, std::nullopt, 1, {.maxLights = 1}});
     EXPECT_THROW(withSun.run(shared, {.projected = own}), lp::Error);
+    lp::FrameProcessor withSunElsewhere(
+        {lp::LayoutSpec(), photometry, std::nullopt, 1, {.maxLights = 1}});
+    const lp::FrameResult sunElsewhere =
+        withSunElsewhere.run(shared, {.projectWith = [&](const lp::ProjectionJob& job) {
+                               EXPECT_NE(job.rowPeaks, nullptr);
+                               return job.tables.project(job.view, nullptr, job.rowPeaks);
+                             }});
     const lp::FrameLighting s = withSun.process(*frame);
     ASSERT_EQ(s.lights.size(), 1u);
+    ASSERT_EQ(sunElsewhere.lighting.lights.size(), 1u);
+    EXPECT_EQ(sunElsewhere.lighting.lights[0].dir, s.lights[0].dir);
+    EXPECT_EQ(sunElsewhere.lighting.lights[0].power, s.lights[0].power);
     const lp::Sh9 sum = s.radiance + lp::lightsToSh(s.lights);
     for (int c = 0; c < 3; ++c) EXPECT_NEAR(sum.c[0][c], truth.c[0][c], 1e-4 * truth.c[0][c]);
   }
@@ -277,6 +291,55 @@ TEST(Handoff, EveryFrameWhenAsked) {
   }
   EXPECT_EQ(expect, 20u);
   EXPECT_EQ(pipe.stats().dropped, 0u);
+}
+
+// A projection of the caller's (the GPU's way in, PipelineOptions::projectOnGpu): made once on
+// the capture thread, used and destroyed there, every frame projected by it (said per frame and
+// counted), the coefficients those of the CPU's projection (here the job's own tables).
+TEST(Handoff, AProjectionOfTheCallersIsMadeUsedAndDroppedOnTheCaptureThread) {
+  lp::PipelineOptions opt;
+  opt.handoff = lp::Handoff::Every;
+  opt.maxFrames = 5;
+  std::vector<std::thread::id> madeOn, usedOn, droppedOn;
+  struct Dropped {
+    std::vector<std::thread::id>* on = nullptr;
+    ~Dropped() {
+      if (on) on->push_back(std::this_thread::get_id());
+    }
+  };
+  opt.projectOnGpu = [&] {
+    madeOn.push_back(std::this_thread::get_id());
+    auto dropped = std::make_shared<Dropped>();
+    dropped->on = &droppedOn;
+    return [&, dropped](const lp::ProjectionJob& job) {
+      usedOn.push_back(std::this_thread::get_id());
+      return job.tables.project(job.view);
+    };
+  };
+  lp::PipelineOptions cpuOpt = opt;
+  cpuOpt.projectOnGpu = nullptr;
+  lp::CapturePipeline pipe(lp::openSource("synthetic:64x32@30"), opt);
+  lp::CapturePipeline cpu(lp::openSource("synthetic:64x32@30"), cpuOpt);
+  pipe.start();
+  cpu.start();
+  while (auto f = pipe.waitNext()) {
+    const auto c = cpu.waitNext();
+    ASSERT_TRUE(c);
+    EXPECT_EQ(f->projectedOn, lp::ProjectedOn::Gpu);
+    EXPECT_EQ(c->projectedOn, lp::ProjectedOn::Cpu);
+    for (int k = 0; k < lp::kShCount; ++k)
+      EXPECT_NEAR(f->radiance.c[k][1], c->radiance.c[k][1], 1e-6f * c->radiance.c[0][1]) << k;
+  }
+  pipe.stop();
+  cpu.stop();
+  EXPECT_EQ(pipe.stats().projectedOnGpu, 5u);
+  EXPECT_EQ(cpu.stats().projectedOnGpu, 0u);
+  ASSERT_EQ(madeOn.size(), 1u);
+  ASSERT_EQ(usedOn.size(), 5u);
+  ASSERT_EQ(droppedOn.size(), 1u);
+  EXPECT_NE(madeOn[0], std::this_thread::get_id());
+  for (const auto& id : usedOn) EXPECT_EQ(id, madeOn[0]);
+  EXPECT_EQ(droppedOn[0], madeOn[0]);
 }
 
 TEST(Handoff, LayoutMismatchStopsWithAClearError) {

@@ -150,6 +150,39 @@ TEST(Window, ReplaySaysWhenTheWindowCloses) {
   EXPECT_NE(run.output.find("--loop plays on"), std::string::npos) << run.output;
 }
 
+// A stream in a window projected on the GPU: the capture thread's headless EGL context beside
+// the window's GLX one (one process, GL's functions loaded once for both), the CPU's
+// coefficients frame by frame, said in the summary.
+TEST(Window, ReplayProjectsOnTheGpuBesideTheWindow) {
+  const std::string xvfb = lpt::xvfbRun("640x480x24");
+  const std::string seq = std::string(LIVEPROBE_SOURCE_DIR) + "/recordings/sky-hdr";
+  std::vector<std::vector<nlohmann::json>> records;
+  for (const std::string on : {"gpu", "cpu"}) {
+    const std::string file = std::string(LIVEPROBE_TEST_OUTPUT) + "/window-" + on + ".jsonl";
+    const auto run = lpt::runCommand(xvfb + LIVEPROBE_BIN + " replay " + seq +
+                                     " --size 160x90 --msaa 1 --no-hud --frames 5 --projection " +
+                                     on + " --coeffs-out " + file);
+    ASSERT_EQ(run.exitCode, 0) << run.output;
+    EXPECT_NE(run.output.find(on == "gpu" ? "projected on the GPU, EGL" : "projected on the CPU"),
+              std::string::npos)
+        << run.output;
+    std::ifstream in(file);
+    records.emplace_back();
+    for (std::string line; std::getline(in, line);)
+      records.back().push_back(nlohmann::json::parse(line));
+  }
+  ASSERT_EQ(records[0].size(), 5u);
+  ASSERT_EQ(records[1].size(), 5u);
+  for (std::size_t i = 0; i < 5; ++i) {
+    const auto& a = records[0][i]["coefficients"];
+    const auto& b = records[1][i]["coefficients"];
+    const double l00 = b["L00"][1].get<double>();
+    for (const auto& [name, value] : b.items())
+      for (int c = 0; c < 3; ++c)
+        EXPECT_NEAR(a[name][c].get<double>(), value[c].get<double>(), 1e-5 * l00) << i << name;
+  }
+}
+
 // The coefficient editor saves with Ctrl+S (in a real window) what `render --coeffs` reads.
 TEST(Window, ViewSavesTheCoefficientsForRender) {
   lpt::TempDir tmp;

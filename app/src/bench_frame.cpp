@@ -26,20 +26,6 @@ void onGpuTimer(BenchScene& scene, gl::GpuTimer::Stage stage, F work) {
   scene.timer->end();
 }
 
-/// The projection on the GPU: the frame as the projection reads it uploaded (8-bit codes as they
-/// are), the two compute passes, the coefficients read back (the frame path scales and turns
-/// them as the CPU's).
-Sh9 projectOnGpu(BenchScene& scene, RunState& run, const PanoramaView& v) {
-  Sh9 whole;
-  onGpuTimer(scene, gl::GpuTimer::Project, [&] {
-    if (!run.gpu || run.gpuFrame.width() != v.width || run.gpuFrame.height() != v.height)
-      run.gpu = std::make_unique<gl::GpuProjector>(scene.layout, v.width, v.height);
-    run.gpuFrame.upload(v);
-    whole = run.gpu->project(run.gpuFrame, v.decode, v.format == PanoramaFormat::BgrU8);
-  });
-  return whole;
-}
-
 }  // namespace
 
 BenchTimes timeFrame(BenchScene& scene, RunState& run, FrameSource& source,
@@ -65,7 +51,11 @@ BenchTimes timeFrame(BenchScene& scene, RunState& run, FrameSource& source,
   try {
     FrameRequest request{.background = true, .linearInto = run.linear};
     if (scene.gpuProjection)
-      request.projectWith = [&](const PanoramaView& v) { return projectOnGpu(scene, run, v); };
+      request.projectWith = [&](const ProjectionJob& job) {
+        Sh9 whole;  // the upload, the passes and the read-back, on the GPU's timer
+        onGpuTimer(scene, gl::GpuTimer::Project, [&] { whole = run.gpu(job); });
+        return whole;
+      };
     r = run.processor.run(run.frame, request, &pool);
     clock.skip();  // (timed by run() itself)
     clock.times += r.times;

@@ -9,10 +9,10 @@
 #include <string>
 #include <vector>
 
+#include "gpu_projection.h"
 #include "liveprobe/capture/frame_processor.h"
 #include "liveprobe/capture/photometry.h"
 #include "liveprobe/capture/stages.h"
-#include "liveprobe/gl/gpu_projector.h"
 #include "liveprobe/gl/gpu_timer.h"
 #include "liveprobe/sh/executor.h"
 #include "viewer.h"
@@ -50,12 +50,10 @@ struct RunState {
       : processor({scene.layout, scene.photometry, scene.orientation, 1, {.maxLights = 0}}) {}
   std::shared_ptr<Frame> frame = std::make_shared<Frame>();   ///< the background shares it
   std::shared_ptr<Image> linear = std::make_shared<Image>();  ///< its linear copy, reused
-  FrameProcessor processor;  ///< the frame path every command shares
-  float exposure = 1.0f;     ///< from the first frame's irradiance
-  Sh9 last;                  ///< the last frame's coefficients (in the report)
-  // The projection on the GPU: the frame as the projection reads it, uploaded, and the passes.
-  gl::FrameTexture gpuFrame;
-  std::unique_ptr<gl::GpuProjector> gpu;
+  FrameProcessor processor;    ///< the frame path every command shares
+  float exposure = 1.0f;       ///< from the first frame's irradiance
+  Sh9 last;                    ///< the last frame's coefficients (in the report)
+  gl::GpuFrameProjection gpu;  ///< the projection on the GPU (where the scene projects there)
 };
 
 /// One frame through the pipeline, stage by stage, as the replay pipeline does it: grab, then

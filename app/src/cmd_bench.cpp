@@ -87,18 +87,8 @@ const CommandSpec kBenchSpec{
                         "times as much as the baseline's did; above, a slower stage is "
                         "inconclusive (exit 2)",
                         {1, 1000}, "1.5", LP_FIELD(bench.maxContention), g),
-           injectDelayOption(g), opt::size("render size", 16384, "640x360", g),
-           choiceOption("--projection",
-                        "where the frame is projected: on the GPU (the frame uploaded, a compute "
-                        "pass), on the CPU, or auto: the GPU where the context is a GPU with "
-                        "compute shaders",
-                        {"auto", "cpu", "gpu"}, "auto", LP_FIELD(bench.projection), g,
-                        [](const std::string& v) {
-                          return v == "cpu"   ? ProjectOn::Cpu
-                                 : v == "gpu" ? ProjectOn::Gpu
-                                              : ProjectOn::Auto;
-                        }),
-           threadsOption(g), sceneOptions()[0], quietOption(g)});
+           injectDelayOption(g), opt::size("render size", 16384, "640x360", g), threadsOption(g),
+           sceneOptions()[0], quietOption(g)});
       const auto gl = glOptions(g);
       o.insert(o.end(), gl.begin(), gl.end());
       return o;
@@ -141,11 +131,7 @@ int runBench(const Args& a) {
   scene.viewer.renderer->setEnvOrientation(scene.orientation);
   scene.timer = std::make_unique<gl::GpuTimer>();
   const std::string glName = scene.viewer.ctx->describe();
-  const bool gpuContext = !gl::isSoftwareRenderer(glName) && gl::hasCompute();
-  scene.gpuProjection =
-      s.bench.projection == ProjectOn::Gpu || (s.bench.projection == ProjectOn::Auto && gpuContext);
-  if (scene.gpuProjection && !gl::hasCompute())
-    throw Error("--projection gpu: " + glName + " has no compute shaders (GL 4.3)");
+  scene.gpuProjection = projectsOnGpu(s.scene.projection, *scene.viewer.ctx);
   ThreadPool pool(threads);
 
   {

@@ -7,6 +7,7 @@
 #include "commands.h"
 #include "dynamic_resolution.h"
 #include "environment.h"
+#include "gpu_projection.h"
 #include "hud.h"
 #include "liveprobe/sh/error.h"
 #include "progress.h"
@@ -42,11 +43,22 @@ const CommandSpec kRenderSpec{
 
 namespace {
 
-/// The lighting every drawing command needs, or an error that names the three ways to give it.
-Lighting requireLighting(const Settings& s) {
-  auto l = lightingFrom(s);
-  if (!l) throw Error("give the lighting: --env FILE, --coeffs FILE.json or --coeff NAME=VALUE");
-  return std::move(*l);
+/// Whether the lighting is given at all: the error that names the three ways to give it, before
+/// any context opens.
+void lightingGiven(const Settings& s) {
+  const LightingSettings& l = s.lighting;
+  if (!l.env && !l.coeffs && l.coeff.empty())
+    throw Error("give the lighting: --env FILE, --coeffs FILE.json or --coeff NAME=VALUE");
+}
+
+/// The lighting every drawing command needs, an --env map projected where --projection says in
+/// the viewer's context (current).
+Lighting requireLighting(const Settings& s, const gl::GlContext& ctx) {
+  gl::GpuFrameProjection gpu;
+  std::function<Sh9(const ProjectionJob&)> projectWith;
+  if (s.lighting.env && projectsOnGpu(s.scene.projection, ctx))
+    projectWith = [&gpu](const ProjectionJob& job) { return gpu(job); };
+  return std::move(*lightingFrom(s, projectWith));
 }
 
 /// A HUD that shows a still's lighting (one sample, no stage times).
@@ -66,7 +78,7 @@ int runRender(const Args& a) {
   const Settings& s = a.settings();
   const auto size = s.output.size.value_or(Size{1280, 720});
   const std::string out = s.output.out.value_or("render.png");
-  const Lighting lighting = requireLighting(s);
+  lightingGiven(s);
   const gl::Camera camera = cameraFrom(s.scene);
   const Mesh mesh = meshFrom(s.scene);
   // The viewer's own frame, as view and replay draw theirs: the model framed beside the HUD
@@ -76,6 +88,7 @@ int runRender(const Args& a) {
     Viewer v(
         {glBackend(s.scene), size, size, s.output.hud, !s.output.hud, true, false, s.scene.gpu},
         mesh);
+    const Lighting lighting = requireLighting(s, *v.ctx);
     v.state.camera = camera;
     v.state.shading =
         shadingFrom(s.scene, lighting.radiance, !lighting.background.empty(), lighting.lights);
@@ -86,6 +99,9 @@ int runRender(const Args& a) {
     const auto px = gl::Renderer::readRgb8(fb);
     saveRgb8(out, fb.x, fb.y, px.data());
     described = v.ctx->describe();
+    if (s.lighting.env)
+      described += lighting.projectedOn == ProjectedOn::Gpu ? "; --env projected on the GPU"
+                                                            : "; --env projected on the CPU";
   } catch (const gl::ContextError& e) {
     throw Error(std::string("GL: ") + e.what());
   }
@@ -142,10 +158,8 @@ void saveScreenshot(const std::string& path, const gl::GlContext& ctx, std::vect
 int runView(const Args& a) {
   installStopHandlers();
   const Settings& s = a.settings();
-  Lighting lighting = requireLighting(s);
+  lightingGiven(s);
   const gl::Camera camera = cameraFrom(s.scene);
-  const gl::ShadingSettings shading =
-      shadingFrom(s.scene, lighting.radiance, !lighting.background.empty(), lighting.lights);
   const Mesh mesh = meshFrom(s.scene);
   const bool screenshot = s.output.screenshot.has_value();
   const std::int64_t frames = s.output.frames.value_or(1);
@@ -164,8 +178,10 @@ int runView(const Args& a) {
       requireBackend(OptionalBackend::Window, "", "use --screenshot, or liveprobe render");
       throw Error("no display to open a window on (use --screenshot, or liveprobe render)");
     }
+    Lighting lighting = requireLighting(s, *v.ctx);
     v.state.camera = v.state.initialCamera = camera;
-    v.state.shading = shading;
+    v.state.shading =
+        shadingFrom(s.scene, lighting.radiance, !lighting.background.empty(), lighting.lights);
     loadLighting(*v.renderer, lighting);
     if (v.hud) {
       showStill(*v.hud, s.lighting, lighting);

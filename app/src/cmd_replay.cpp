@@ -9,6 +9,7 @@
 #include "commands.h"
 #include "dynamic_resolution.h"
 #include "environment.h"
+#include "gpu_projection.h"
 #include "hud.h"
 #include "liveprobe/capture/lens.h"
 #include "liveprobe/capture/open_source.h"
@@ -265,12 +266,19 @@ struct StreamView {
     haveLighting = true;
     gl::Renderer& r = *v->renderer;
     r.setLighting(f.radiance, f.lights);
+    if (v->gpuTimer) v->gpuTimer->begin(gl::GpuTimer::Upload);
     setBackground(r, b);
+    if (v->gpuTimer) v->gpuTimer->end();
     // The time to hand the data to GL, not waiting for it (no glFinish stalling every frame);
     // `liveprobe bench` times the upload to completion.
     return clock.lap(Stage::Upload);
   }
 };
+
+/// A drawn frame's GPU times: capture's projection, the viewer's upload and render.
+GpuTimes shownGpu(const Viewer& v, const ProcessedFrame& f) {
+  return {v.gpuMs(gl::GpuTimer::Upload), f.gpu.project, v.gpuMs(gl::GpuTimer::Render)};
+}
 
 /// Headless replay: every frame drawn, in order, and written.
 void runOffline(CapturePipeline& pipeline, StreamView& view, const StreamOutputs& out,
@@ -290,8 +298,9 @@ void runOffline(CapturePipeline& pipeline, StreamView& view, const StreamOutputs
     const auto px = gl::Renderer::readRgb8(fb);
     const double latency = 1000.0 * (monotonicSeconds() - f->captureTime);
     ++tally.drawn;
-    recordSample(tally, *f, uploadMs, ms, latency, v.hud.get(), pipeline.stats(), sinks);
-    sinks.shown(*f, {ms, latency});
+    const GpuTimes gpu = shownGpu(v, *f);
+    recordSample(tally, *f, uploadMs, ms, latency, v.hud.get(), pipeline.stats(), sinks, gpu);
+    sinks.shown(*f, {ms, latency, gpu});
     out.writeFrame(*f, fb, px);
     progress.update(std::int64_t(tally.drawn));
     return true;
@@ -328,8 +337,9 @@ void runInteractive(CapturePipeline& pipeline, StreamView& view, StreamTally& ta
     if (f) {
       ++tally.drawn;
       const double latency = 1000.0 * (monotonicSeconds() - f->captureTime);
-      recordSample(tally, *f, uploadMs, ms, latency, v.hud.get(), st, sinks);
-      sinks.shown(*f, {ms, latency});
+      const GpuTimes gpu = shownGpu(v, *f);
+      recordSample(tally, *f, uploadMs, ms, latency, v.hud.get(), st, sinks, gpu);
+      sinks.shown(*f, {ms, latency, gpu});
       progress.update(std::int64_t(st.captured));
     }
     return true;
@@ -352,6 +362,7 @@ struct StreamPlan {
   std::pair<int, int> size, headlessSize;  ///< the view's, in a window and headless
   double fps = 0;
   std::string description;
+  std::string projection = "the CPU";  ///< where frames are projected (streamProjection)
   gl::Camera camera;  ///< the model and the camera, read before any output is opened
   Mesh mesh;
 };
@@ -480,6 +491,14 @@ int finishStream(const StreamPlan& p, const PipelineStats& st, const StreamTally
   if (out.video) out.video->finish();
   if (out.frames) out.frames->keep();
   printSummary(p.description, st, tally, p.opt.smoothSeconds, stopRequested(), sinks);
+  if (p.opt.projectOnGpu)
+    std::fprintf(stderr, "  projected on %s: %zu of %zu frames\n", p.projection.c_str(),
+                 st.projectedOnGpu, st.captured);
+  else
+    std::fprintf(stderr, "  projected on the CPU\n");
+  // The GPU's own time, where a GPU takes part (a software rasterizer's is said to be none).
+  if (p.opt.projectOnGpu || view.v->gpuTimer)
+    std::fprintf(stderr, "  %s\n", gpuTimeLine(tally, view.v->ctx->describe()).c_str());
   if (p.live && !p.quiet) printCameraHints(tally, st, p.opt.bracket.has_value(), p.fps);
   // Headless with nowhere to put what it made (no display, and no output asked for): said, so
   // that a run which only measures is one by choice.
@@ -510,6 +529,11 @@ int runStream(const Args& a, std::unique_ptr<FrameSource> source, bool live) {
   RecordSinks sinks = openSinks(s.stream);
   StreamView view = openStreamView(s, plan);
   setHeadless(s.stream, plan, !view.v->window());
+  try {
+    plan.opt.projectOnGpu = streamProjection(s.scene.projection, *view.v->ctx, plan.projection);
+  } catch (const gl::ContextError& e) {
+    throw Error(std::string("GL: ") + e.what());
+  }
   wireCaptureOutputs(plan, out, sinks, *source);
   Progress progress = announceRun(plan, *source, !plan.headless, s.output.quiet);
 

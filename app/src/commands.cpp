@@ -157,6 +157,7 @@ std::string backendsLine() {
 
 std::string glLine() {
   std::string line = LIVEPROBE_WITH_GLFW ? "window (GLFW)" : "";
+  std::string projection;
   if (LIVEPROBE_WITH_EGL) {
     std::string devices;
     const auto list = gl::eglDevices();
@@ -164,10 +165,19 @@ std::string glLine() {
       devices += (i ? ", " : "") + std::to_string(i) + " " + list[i];
     line += std::string(line.empty() ? "" : ", ") +
             "EGL headless (devices: " + (devices.empty() ? "none" : devices) + ")";
+    // --projection auto's choice where it draws headless: the first GPU (eglDevices() marks a
+    // software rasterizer's device so).
+    std::string gpu;
+    for (std::size_t i = 0; i < list.size() && gpu.empty(); ++i)
+      if (list[i] != "software" && list[i].find("(software)") == std::string::npos)
+        gpu = "EGL device " + std::to_string(i);
+    projection = "; --projection auto: " +
+                 (gpu.empty() ? std::string("the CPU (no GPU among the EGL devices)")
+                              : "the GPU headless (" + gpu + ")");
   }
   if (LIVEPROBE_WITH_OSMESA)
     line += std::string(line.empty() ? "" : ", ") + "OSMesa headless (CPU)";
-  return line.empty() ? "none" : line;
+  return (line.empty() ? "none" : line) + projection;
 }
 
 }  // namespace lp::cli

@@ -111,7 +111,8 @@ void ballCircle(LayoutSpec& spec, const PanoramaSettings& p, const Frame& frame,
 }
 
 Environment loadEnvironment(const std::string& source, const PanoramaSettings& p,
-                            const LightOptions& lights, bool background) {
+                            const LightOptions& lights, bool background,
+                            const std::function<Sh9(const ProjectionJob&)>& projectWith) {
   layoutSpec(p, nullptr, true);  // option errors before the file is read
   auto src = openSource(source);
   // One map: a sequence or a video is replayed, not read as its first frame.
@@ -128,11 +129,13 @@ Environment loadEnvironment(const std::string& source, const PanoramaSettings& p
   FrameResult r;
   try {
     processor.fit(*frame);  // the tables, before the projection is timed
-    r = processor.run(frame, {.background = background, .linear = true});
+    r = processor.run(frame,
+                      {.background = background, .linear = true, .projectWith = projectWith});
   } catch (const Error& e) {
     throw Error(source + ": " + e.what());
   }
   env.projectMs = r.times[Stage::Project];
+  env.projectedOn = r.projectedOn;
   env.coverage = processor.projector()->coverage();
   env.radiance = r.lighting.radiance;
   env.lights = std::move(r.lighting.lights);
@@ -202,7 +205,8 @@ CoeffAssignment parseCoeffAssignment(const std::string& text) {
   return {k, {v[0], v[1], v[2]}};
 }
 
-std::optional<Lighting> lightingFrom(const Settings& st) {
+std::optional<Lighting> lightingFrom(const Settings& st,
+                                     const std::function<Sh9(const ProjectionJob&)>& projectWith) {
   const LightingSettings& ls = st.lighting;
   const int kinds = int(ls.env.has_value()) + int(ls.coeffs.has_value()) + int(!ls.coeff.empty());
   if (kinds > 1) throw Error("give only one of --env, --coeffs and --coeff");
@@ -214,12 +218,13 @@ std::optional<Lighting> lightingFrom(const Settings& st) {
         "its own)");
   Lighting l;
   if (ls.env) {
-    Environment env = loadEnvironment(*ls.env, st.panorama, lights, true);
+    Environment env = loadEnvironment(*ls.env, st.panorama, lights, true, projectWith);
     l.lights = env.lights;
     l.layout = env.layout;
     l.orientation = env.orientation;
     l.radiance = env.radiance;
     l.background = std::move(env.background);
+    l.projectedOn = env.projectedOn;
   } else {
     if (ls.coeffs) {
       l.radiance = loadCoefficients(*ls.coeffs, &l.lights);

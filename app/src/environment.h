@@ -2,11 +2,13 @@
 // The lighting a still command draws with: an environment map in any layout, oriented by
 // --env-rotate and --env-flip, taken through the frame path; or coefficients from --coeffs or
 // --coeff.
+#include <functional>
 #include <optional>
 #include <string>
 #include <vector>
 
 #include "liveprobe/capture/ball.h"
+#include "liveprobe/capture/frame_processor.h"
 #include "liveprobe/capture/image.h"
 #include "liveprobe/capture/lens.h"
 #include "liveprobe/capture/processed_frame.h"
@@ -51,13 +53,16 @@ struct Environment {
   Sh9 whole;                    ///< the whole map's coefficients, lights included
   double projectMs = 0;         ///< the frame path's time for it (its tables made beforehand)
   double coverage = 1;          ///< the share of the sphere the frame measures (Projector)
+  ProjectedOn projectedOn = ProjectedOn::Cpu;
 };
 /// Reads the first frame of `source` and takes it through the frame path (FrameProcessor: one
 /// projection, the lights split out when `lights` asks), in the layout and orientation the
 /// options give (layoutSpec, envOrientation), with the display's background when `background`
-/// asks. Warns (one line) about a likely layout mistake. Throws lp::Error naming the source.
+/// asks, projected by `projectWith` where given (the GPU's, FrameRequest::projectWith). Warns
+/// (one line) about a likely layout mistake. Throws lp::Error naming the source.
 Environment loadEnvironment(const std::string& source, const PanoramaSettings& p,
-                            const LightOptions& lights = {.maxLights = 0}, bool background = false);
+                            const LightOptions& lights = {.maxLights = 0}, bool background = false,
+                            const std::function<Sh9(const ProjectionJob&)>& projectWith = {});
 
 /// One warning line when the frame's shape suggests another layout than the one in use: a square
 /// image or a 16:9 frame taken as equirect by default (`given`: --layout named it, and the shape
@@ -71,10 +76,13 @@ struct Lighting {
   Background background;      ///< the environment, when lighting came from one
   LayoutSpec layout;
   glm::mat3 orientation{1.0f};
+  ProjectedOn projectedOn = ProjectedOn::Cpu;  ///< an --env map's
 };
 
 /// From --env FILE [--layout], --coeffs FILE.json or --coeff NAME=VALUE...; nullopt if none given.
-std::optional<Lighting> lightingFrom(const Settings& s);
+/// An --env map is projected by `projectWith` where given (loadEnvironment).
+std::optional<Lighting> lightingFrom(
+    const Settings& s, const std::function<Sh9(const ProjectionJob&)>& projectWith = {});
 
 /// "L20=-0.2" or "L22=0.1,0.2,0.3" (--coeff). Throws lp::Error on an unknown name or bad value.
 CoeffAssignment parseCoeffAssignment(const std::string& text);

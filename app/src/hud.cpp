@@ -365,6 +365,27 @@ void Hud::drawStatusTimes(float maxHeight) {
       all.push_back(float(h.times.ms[k]));
     }
   }
+  // The GPU's own times where a GPU timer read them: in their stage's colour, dimmed.
+  const std::pair<Stage, std::optional<double> GpuTimes::*> gpuStages[] = {
+      {Stage::Upload, &GpuTimes::upload},
+      {Stage::Project, &GpuTimes::project},
+      {Stage::Render, &GpuTimes::render}};
+  std::string gpuLine;
+  for (const auto& [stage, member] : gpuStages) {
+    const std::optional<double>& latest = history_.back().gpu.*member;
+    if (!latest) continue;
+    series.emplace_back();
+    colours.push_back((kStageColour[std::size_t(stage)] & 0x00FFFFFFu) | 0x90000000u);
+    for (const auto& h : history_) {
+      const float ms = float((h.gpu.*member).value_or(0.0));
+      series.back().push_back(ms);
+      all.push_back(ms);
+    }
+    char b[64];
+    std::snprintf(b, sizeof b, "%s%s %.2f", gpuLine.empty() ? "GPU: " : ", ",
+                  std::string(stageName(stage)).c_str(), *latest);
+    gpuLine += b;
+  }
   // The scale follows the 95th percentile: a warm-up spike does not flatten everything else.
   std::nth_element(all.begin(), all.begin() + std::ptrdiff_t(all.size() * 95 / 100), all.end());
   const float top = std::max(1.0f, 1.3f * all[all.size() * 95 / 100]);
@@ -379,6 +400,7 @@ void Hud::drawStatusTimes(float maxHeight) {
     }
     ImGui::EndTable();
   }
+  if (!gpuLine.empty()) ImGui::TextWrapped("%s ms (timer queries)", gpuLine.c_str());
 }
 
 void Hud::drawLight(gl::Renderer& renderer, const HudLayout& layout, float maxHeight) {

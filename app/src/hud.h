@@ -10,6 +10,7 @@
 #include <string>
 #include <vector>
 
+#include "liveprobe/capture/processed_frame.h"
 #include "liveprobe/capture/stages.h"
 #include "liveprobe/gl/context.h"
 #include "liveprobe/gl/renderer.h"
@@ -31,6 +32,7 @@ struct HudSample {
   std::vector<Light> lights;  ///< as lit (--sun): marked on the panorama inset
   FrameConfidence confidence;
   bool held = false;  ///< the lighting is the last good frame's (--hold-below)
+  GpuTimes gpu;       ///< the GPU's own times, where there is a GPU timer
 };
 
 struct HudCounters {

@@ -22,7 +22,18 @@ std::vector<OptionSpec> glOptions(const std::string& group) {
                    }),
       integerOption("--gpu", "N",
                     "--gl egl: the EGL device to draw on (liveprobe --version lists them)", 0, 63,
-                    "the first GPU", LP_FIELD(scene.gpu), group)};
+                    "the first GPU", LP_FIELD(scene.gpu), group),
+      choiceOption("--projection",
+                   "where frames are projected: on the GPU that draws (the frame uploaded, a "
+                   "compute pass; a stream's in a headless EGL context of the capture thread's "
+                   "own), on the CPU, or auto: the GPU where the context is a GPU with compute "
+                   "shaders (not a software rasterizer), else the CPU",
+                   {"auto", "cpu", "gpu"}, "auto", LP_FIELD(scene.projection), group,
+                   [](const std::string& v) {
+                     return v == "cpu"   ? ProjectOn::Cpu
+                            : v == "gpu" ? ProjectOn::Gpu
+                                         : ProjectOn::Auto;
+                   })};
 }
 
 std::vector<OptionSpec> sceneOptions() {

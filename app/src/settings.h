@@ -55,6 +55,9 @@ struct LightingSettings {
 };
 
 /// The model, the camera and the look (sceneOptions).
+/// Where a frame is projected (--projection).
+enum class ProjectOn : std::uint8_t { Auto, Cpu, Gpu };
+
 struct SceneSettings {
   std::string model = "sphere";
   std::optional<Triple> modelRotate;
@@ -65,8 +68,9 @@ struct SceneSettings {
   bool tonemapBackground = false, noBackground = false, fullResolution = false;
   bool shadows = false, ground = false, headless = false;
   int msaa = 4;
-  gl::Backend gl = gl::Backend::Auto;  ///< --gl
-  int gpu = -1;                        ///< --gpu: an EGL device (-1: the first GPU)
+  gl::Backend gl = gl::Backend::Auto;      ///< --gl
+  int gpu = -1;                            ///< --gpu: an EGL device (-1: the first GPU)
+  ProjectOn projection = ProjectOn::Auto;  ///< --projection
 };
 
 /// What a command writes and how much it runs.
@@ -134,11 +138,7 @@ struct StillSettings {
 };
 
 /// bench.
-/// Where a frame is projected (--projection).
-enum class ProjectOn : std::uint8_t { Auto, Cpu, Gpu };
-
 struct BenchSettings {
-  ProjectOn projection = ProjectOn::Auto;
   int repeat = 3;
   double threshold = 25.0;
   double maxContention = 1.5;  ///< above it (over the baseline's) a slower stage is inconclusive

@@ -19,7 +19,11 @@ double StreamTally::deliveredFps(double minSeconds) const {
 }
 
 void recordSample(StreamTally& t, const ProcessedFrame& f, double uploadMs, double renderMs,
-                  double latencyMs, Hud* hud, const PipelineStats& st, const RecordSinks& sinks) {
+                  double latencyMs, Hud* hud, const PipelineStats& st, const RecordSinks& sinks,
+                  const GpuTimes& gpu) {
+  const std::optional<double>* read[] = {&gpu.upload, &gpu.project, &gpu.render};
+  for (std::size_t k = 0; k < 3; ++k)
+    if (*read[k]) t.gpu[k].push_back(**read[k]);
   StageTimes times = f.times;
   times[Stage::Upload] = uploadMs;
   times[Stage::Render] = renderMs;
@@ -48,6 +52,7 @@ void recordSample(StreamTally& t, const ProcessedFrame& f, double uploadMs, doub
   s.lights = f.lights;
   s.confidence = f.confidence;
   s.held = f.held;
+  s.gpu = gpu;
   hud->push(s);
   HudCounters c{st.captured, t.drawn, st.dropped, st.skipped,
                 double(t.saturated) / double(t.frames())};
@@ -65,6 +70,20 @@ std::string stageMedians(const StreamTally& t) {
     out += one;
   }
   return out;
+}
+
+std::string gpuTimeLine(const StreamTally& t, const std::string& gl) {
+  static constexpr const char* kNames[] = {"gpu_upload", "gpu_project", "gpu_render"};
+  std::string line;
+  for (std::size_t k = 0; k < 3; ++k) {
+    if (t.gpu[k].empty()) continue;
+    char b[64];
+    std::snprintf(b, sizeof b, "%s%s %.3f ms", line.empty() ? "" : ", ", kNames[k],
+                  percentile(t.gpu[k], 0.5));
+    line += b;
+  }
+  return line.empty() ? "GPU time: no GPU timer (" + gl + ")"
+                      : "GPU time (medians, timer queries): " + line;
 }
 
 void printSummary(const std::string& description, const PipelineStats& st, const StreamTally& t,

@@ -20,6 +20,8 @@ struct StreamTally {
   std::size_t withLight = 0, clippedLight = 0;  ///< frames with a light; of them, clipped
   std::vector<double> confidence;               ///< each frame's
   std::size_t brightestMeasured = 0;            ///< frames whose brightest pixel was measured
+  /// The GPU's times of the drawn frames, where read (upload, project, render: GpuTimes).
+  std::array<std::vector<double>, 3> gpu;
   /// The source's frame number and timestamp (s) of the first and the last frame drawn: the rate
   /// it delivered at, lost frames included.
   std::uint64_t firstSequence = 0, lastSequence = 0;
@@ -36,7 +38,13 @@ struct StreamTally {
 /// A drawn frame into the tally and, where there is one, the HUD (with the pipeline's counters
 /// and the sinks' lines).
 void recordSample(StreamTally& t, const ProcessedFrame& f, double uploadMs, double renderMs,
-                  double latencyMs, Hud* hud, const PipelineStats& st, const RecordSinks& sinks);
+                  double latencyMs, Hud* hud, const PipelineStats& st, const RecordSinks& sinks,
+                  const GpuTimes& gpu = {});
+
+/// The run's GPU time: "GPU time (medians, timer queries): gpu_upload 0.05 ms, ..." where there
+/// were readings, else "GPU time: no GPU timer (GL)" where `gl` is a software rasterizer or its
+/// timer read nothing.
+std::string gpuTimeLine(const StreamTally& t, const std::string& gl);
 
 /// "grab 0.95, convert 0.00, ...": the median of each stage up to render (merge and resample
 /// only where they ran).

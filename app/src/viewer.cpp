@@ -17,6 +17,7 @@ Viewer::Viewer(const ViewerSpec& spec, const Mesh& mesh) {
                                         gl::isSoftwareRenderer(ctx->describe()));
   renderer = std::make_unique<gl::Renderer>();
   loadModel(*renderer, mesh);
+  if (!gl::isSoftwareRenderer(ctx->describe())) gpuTimer = std::make_unique<gl::GpuTimer>();
   const bool shown = windowed ? !spec.noHud : spec.hud;
   if (shown || windowed) {
     hud = std::make_unique<Hud>(*ctx);
@@ -39,6 +40,7 @@ void Viewer::run(const ViewerLoop& loop) {
   double lastMs = 0;
   while (!ctx->shouldClose() && !stopRequested()) {
     const auto keys = handleInput(*input, hud.get(), state, loop.canPause);
+    if (gpuTimer) gpuTimer->beginFrame();
     const Turn turn = loop.before ? loop.before(keys) : Turn::Draw;
     if (turn == Turn::Stop) break;
     if (turn == Turn::Wait) {
@@ -46,7 +48,9 @@ void Viewer::run(const ViewerLoop& loop) {
       continue;
     }
     StageClock clock;
+    if (gpuTimer) gpuTimer->begin(gl::GpuTimer::Render);
     draw(lastMs);
+    if (gpuTimer) gpuTimer->end();
     gl::Renderer::finish();
     lastMs = clock.lap(Stage::Render);
     dynamicResolution.update(lastMs);
@@ -56,6 +60,12 @@ void Viewer::run(const ViewerLoop& loop) {
     const auto [prefix, suffix] = loop.title();
     rate.tick(*input, prefix, suffix);
   }
+}
+
+std::optional<double> Viewer::gpuMs(gl::GpuTimer::Stage stage) const {
+  if (!gpuTimer) return std::nullopt;
+  const std::optional<double> ms = gpuTimer->ms(stage);
+  return ms && *ms > 0 ? ms : std::nullopt;
 }
 
 }  // namespace lp::cli

@@ -7,6 +7,7 @@
 #include <cstdint>
 #include <functional>
 #include <memory>
+#include <optional>
 #include <string>
 #include <utility>
 #include <vector>
@@ -14,6 +15,7 @@
 #include "dynamic_resolution.h"
 #include "hud.h"
 #include "liveprobe/gl/context.h"
+#include "liveprobe/gl/gpu_timer.h"
 #include "liveprobe/gl/mesh.h"
 #include "liveprobe/gl/renderer.h"
 #include "settings.h"
@@ -59,8 +61,13 @@ class Viewer {
   bool window() const { return !ctx->isHeadless(); }
   /// The model framed beside the HUD where it is shown, at the dynamic resolution, then the HUD.
   void draw(double lastFrameMs);
-  /// Until the window closes, Ctrl-C, or a turn says stop.
+  /// Until the window closes, Ctrl-C, or a turn says stop. With a GPU timer, each turn's upload
+  /// (the caller's, between begin and end of gl::GpuTimer::Upload in `before`) and render are
+  /// timed on the GPU.
   void run(const ViewerLoop& loop);
+  /// The GPU's time of a stage, read a few frames late; none without a GPU timer, before the
+  /// first reading, or where it read 0.
+  std::optional<double> gpuMs(gl::GpuTimer::Stage stage) const;
 
   std::unique_ptr<gl::GlContext> ctx;
   std::unique_ptr<WindowInput> input;  ///< before the HUD, whose ImGui backend chains to it
@@ -68,6 +75,9 @@ class Viewer {
   std::unique_ptr<Hud> hud;
   ViewState state;
   DynamicResolution dynamicResolution;
+  /// Timer queries of the upload and the render (run()); none on a software rasterizer, which
+  /// has no GPU timer.
+  std::unique_ptr<gl::GpuTimer> gpuTimer;
 };
 
 }  // namespace lp::cli

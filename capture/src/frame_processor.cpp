@@ -9,6 +9,8 @@
 
 namespace lp {
 
+const char* projectedOnName(ProjectedOn on) { return on == ProjectedOn::Gpu ? "gpu" : "cpu"; }
+
 bool displayTakesFrameAsIs(const Frame& frame, const Photometry& photometry,
                            const LayoutSpec& layout) {
   return frame.format == PanoramaFormat::BgrU8 && photometry.gamma == 0.0f &&
@@ -47,6 +49,7 @@ void FrameProcessor::fit(const Frame& frame) {
   extractor_.reset();
   projector_ =
       std::make_unique<Projector>(opt_.layout, frame.width / reduce, frame.height / reduce);
+  ++tablesId_;
   if (opt_.lights.maxLights > 0) extractor_ = std::make_unique<LightExtractor>(*projector_);
 }
 
@@ -136,7 +139,11 @@ FrameResult FrameProcessor::run(std::shared_ptr<const Frame> frame, const FrameR
   } else {
     if (request.projectWith) {
       const ProjectedView v = view(f, linear.get());
-      r.lighting = fromProjected(request.projectWith(v.view), v.scale);
+      std::vector<float> peaks;
+      const Sh9 whole = request.projectWith(
+          {v.view, *projector_, tablesId_, extractor_ ? &peaks : nullptr, &r.gpuProjectMs});
+      r.lighting = split(v.view, whole, peaks, v.scale);
+      r.projectedOn = ProjectedOn::Gpu;
     } else {
       r.lighting = process(f, executor, linear.get());
     }
@@ -173,15 +180,20 @@ FrameLighting FrameProcessor::process(const Frame& frame, Executor* executor, co
   const ProjectedView v = view(frame, linear);
   std::vector<float> peaks;
   const Sh9 whole = projector_->project(v.view, executor, extractor_ ? &peaks : nullptr);
-  LightSplit split;
+  return split(v.view, whole, peaks, v.scale);
+}
+
+FrameLighting FrameProcessor::split(const PanoramaView& view, const Sh9& whole,
+                                    const std::vector<float>& peaks, float scale) {
+  LightSplit parts;
   if (extractor_) {
-    split = extractor_->extract(v.view, whole, peaks, opt_.lights);
+    parts = extractor_->extract(view, whole, peaks, opt_.lights);
     // The next frame's hysteresis: where this one's lights are, in the frame's orientation.
     opt_.lights.held.clear();
-    for (const Light& l : split.lights) opt_.lights.held.push_back(l.dir);
+    for (const Light& l : parts.lights) opt_.lights.held.push_back(l.dir);
   } else
-    split.residual = whole;
-  return finish(whole, std::move(split), v.scale);
+    parts.residual = whole;
+  return finish(whole, std::move(parts), scale);
 }
 
 FrameLighting FrameProcessor::fromProjected(const Sh9& whole, float scale) const {

@@ -134,6 +134,7 @@ struct CapturePipeline::Loop {
   /// the viewer's: the next grab takes a new one, and capture never writes it again.
   std::shared_ptr<Frame> frame = std::make_shared<Frame>();
   bool shown = false;
+  std::function<Sh9(const ProjectionJob&)> gpu;  ///< PipelineOptions::projectOnGpu's
   std::uint64_t index = 0;
   Clock::time_point wallStart;
   double streamStart = -1, loopOffset = 0, lastTimestamp = 0;
@@ -236,13 +237,20 @@ void CapturePipeline::project(Loop& s, ProcessedFrame& out) {
         s.frame,
         {.background = opt_.keepImages,
          .saturation = true,
-         .projected = s.projected ? std::optional(s.projection.coefficients) : std::nullopt},
+         .projected = s.projected ? std::optional(s.projection.coefficients) : std::nullopt,
+         .projectWith = s.gpu},
         s.pool.get());
   } catch (const Error& e) {
     throw Error(source_->describe() + ": frame " + std::to_string(out.index + 1) + ": " + e.what());
   }
   out.times += r.times;
   out.saturated = r.saturated;
+  out.projectedOn = r.projectedOn;
+  out.gpu.project = r.gpuProjectMs;
+  if (r.projectedOn == ProjectedOn::Gpu) {
+    std::lock_guard lock(mutex_);
+    ++stats_.projectedOnGpu;
+  }
   out.background = std::move(r.background);
   s.shown = out.background.raw != nullptr;
   FrameLighting& lit = r.lighting;
@@ -312,6 +320,7 @@ void CapturePipeline::pace(Loop& s, double timestamp) {
 void CapturePipeline::run() {
   Loop s(opt_);
   try {
+    if (opt_.projectOnGpu) s.gpu = opt_.projectOnGpu();
     while (!stop_ && !interrupted_ &&
            (opt_.maxFrames < 0 || std::int64_t(s.index) < opt_.maxFrames)) {
       if (!waitForTurn(s)) break;

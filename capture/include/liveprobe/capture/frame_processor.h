@@ -52,12 +52,11 @@ struct FrameRequest {
   /// coefficients of the frame's own pixels, projected as it was made (a bracket merged and
   /// projected in one pass, liveprobe/hdr/merge.h); they are scaled and turned as the CPU's are.
   std::optional<Sh9> projected;
-  /// `projectWith`: a projector of the caller's (the GPU, liveprobe/gl/gpu_projector.h), given
-  /// the frame as the projection reads it (an 8-bit frame with the lookup table that carries the
-  /// photometry, a float frame as it is, a reduction's average); timed as the Project stage. With
-  /// either, lights cannot be searched (they are found in the frame's pixels): lp::Error where the
-  /// options ask for them.
-  std::function<Sh9(const PanoramaView&)> projectWith;
+  /// With `projected`, lights cannot be searched (lp::Error where the options ask for them).
+  /// `projectWith`: the GPU's projection (liveprobe/gl/gpu_projector.h), given the frame as the
+  /// projection reads it; timed as the Project stage. Where lights are asked for it gives the row
+  /// peaks too, and the light search reads the frame's pixels here as the CPU path's does.
+  std::function<Sh9(const ProjectionJob&)> projectWith;
   /// Where the linear copy goes: a buffer of the caller's that nothing else reads any more (bench
   /// reuses one from frame to frame); none: a new one, as a frame handed to another thread needs.
   std::shared_ptr<Image> linearInto = nullptr;
@@ -72,6 +71,8 @@ struct FrameResult {
   std::shared_ptr<const Image> linear;
   std::size_t saturated = 0;  ///< channel values at 255 (with a linear copy, or when asked)
   StageTimes times;           ///< Convert, Project and Resample, where they ran
+  ProjectedOn projectedOn = ProjectedOn::Cpu;
+  std::optional<double> gpuProjectMs;  ///< ProjectionJob::gpuMs, where it said one
 };
 
 class FrameProcessor {
@@ -129,6 +130,10 @@ class FrameProcessor {
   float projectionScale(const Frame& frame) const;
   /// The lighting from coefficients projected elsewhere, scaled and turned as process()'s.
   FrameLighting fromProjected(const Sh9& whole, float scale) const;
+  /// The lights split out of a projected frame (where asked), scaled and turned: the end of
+  /// process() and of a projection of the caller's.
+  FrameLighting split(const PanoramaView& view, const Sh9& whole, const std::vector<float>& peaks,
+                      float scale);
   /// Scale, finiteness and orientation: the end of process() and fromProjected().
   FrameLighting finish(Sh9 whole, LightSplit split, float scale) const;
   FrameProcessorOptions opt_;
@@ -136,7 +141,8 @@ class FrameProcessor {
   // On the heap: the extractor points at the projector, and both survive a move.
   std::unique_ptr<Projector> projector_;
   std::unique_ptr<LightExtractor> extractor_;
-  Image converted_, reduced_;  ///< a reduction's buffers, kept from frame to frame
+  Image converted_, reduced_;   ///< a reduction's buffers, kept from frame to frame
+  std::uint64_t tablesId_ = 0;  ///< counts the projectors made (ProjectionJob::tablesId)
 };
 
 /// Whether the display takes this frame as it is: 8-bit sRGB in a layout the background shader

@@ -81,6 +81,11 @@ struct PipelineOptions {
     std::function<std::optional<FrameWindow>(int width, int height)> searchWithin;
   };
   std::optional<FollowBall> followBall;
+  /// Frames projected on the GPU (--projection): called on the capture thread as it starts (a GL
+  /// context is current on one thread), it gives the projection every frame takes
+  /// (FrameRequest::projectWith), destroyed on the capture thread as it ends. None, or an empty
+  /// projection: the CPU. A bracket merged and projected in one pass stays the merge's.
+  std::function<std::function<Sh9(const ProjectionJob&)>()> projectOnGpu;
 };
 
 /// How often a waiting capture thread polls PipelineOptions::interrupted.
@@ -100,13 +105,14 @@ struct PipelineStats {
   /// contradicted the others), and of them those that disagreed on most of the power they kept
   /// (FrameConfidence::agreement under 0.5): a response other than the camera's does so.
   std::size_t mergesTelling = 0, mergesDisagreeing = 0;
-  std::string endReason;       ///< why the source ended early, if it did
-  std::size_t reconnects = 0;  ///< times the source reopened its stream (a network camera)
-  std::size_t stale = 0;       ///< frames the source replaced before capture took them
-  std::string error;           ///< the fatal error that stopped capture, if any
-  std::size_t beforeBall = 0;  ///< frames before the followed ball was found (FollowBall)
-  std::size_t ballLost = 0;    ///< frames the followed ball was lost in
-  std::size_t ballMoves = 0;   ///< times its circle moved (the layout fitted again)
+  std::string endReason;           ///< why the source ended early, if it did
+  std::size_t reconnects = 0;      ///< times the source reopened its stream (a network camera)
+  std::size_t stale = 0;           ///< frames the source replaced before capture took them
+  std::string error;               ///< the fatal error that stopped capture, if any
+  std::size_t beforeBall = 0;      ///< frames before the followed ball was found (FollowBall)
+  std::size_t ballLost = 0;        ///< frames the followed ball was lost in
+  std::size_t ballMoves = 0;       ///< times its circle moved (the layout fitted again)
+  std::size_t projectedOnGpu = 0;  ///< frames whose coefficients the GPU summed
 };
 
 /// Exponential moving average of coefficients: alpha = 1 - exp(-dt / tau). Exact on SH because

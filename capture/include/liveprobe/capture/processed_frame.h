@@ -18,6 +18,20 @@
 
 namespace lp {
 
+/// Where a frame's coefficients were summed: on the CPU (the frame path's projector, or a
+/// bracket's merge), or on the GPU (FrameRequest::projectWith). The one way the frame path says it.
+enum class ProjectedOn : std::uint8_t { Cpu, Gpu };
+
+/// "cpu", "gpu".
+const char* projectedOnName(ProjectedOn on);
+
+/// The GPU's own time of a frame's GL work (ms), by timer queries read a few frames late, so each
+/// is an earlier frame's: none where the context has no GPU timer (a software rasterizer answers
+/// 0), where the work was not on the GPU, or before the first reading. Never 0.
+struct GpuTimes {
+  std::optional<double> upload, project, render;
+};
+
 /// The frame as the display draws it behind the model, made once for every caller
 /// (FrameProcessor::run): the frame itself where the display decodes it (8-bit sRGB in a layout
 /// GL draws as it is), else its linear copy in radiance units, resampled to equirect where GL
@@ -63,6 +77,8 @@ struct ProcessedFrame {
   /// pixels) this frame was projected with, and whether the ball was lost in it (the last circle).
   std::optional<glm::vec3> ball;
   bool ballLost = false;
+  ProjectedOn projectedOn = ProjectedOn::Cpu;
+  GpuTimes gpu;  ///< capture's: the projection's (the viewer adds the upload's and the render's)
 };
 
 }  // namespace lp

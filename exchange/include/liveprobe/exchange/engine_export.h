@@ -42,6 +42,7 @@ nlohmann::ordered_json gltfDocument(const Image& panorama, const LayoutSpec& lay
 struct RecordTimes {
   double renderMs = -1;
   double shownLatencyMs = -1;
+  GpuTimes gpu;  ///< the viewer's GPU times (upload, render) where it has a GPU timer
 };
 
 /// One frame's record, one line of JSON: frame, time, format, coefficients (and lights) in
