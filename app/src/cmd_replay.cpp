@@ -500,7 +500,7 @@ int finishStream(const StreamPlan& p, const PipelineStats& st, const StreamTally
   else
     std::fprintf(stderr, "  projected on the CPU\n");
   // The GPU's own time, where a GPU takes part (a software rasterizer's is said to be none).
-  if (p.opt.projectOnGpu || view.v->gpuTimer)
+  if (p.opt.projectOnGpu || view.v->hasGpuTimer)
     std::fprintf(stderr, "  %s\n", gpuTimeLine(tally, view.v->ctx->describe()).c_str());
   if (p.live && !p.quiet) printCameraHints(tally, st, p.opt.bracket.has_value(), p.fps);
   // Headless with nowhere to put what it made (no display, and no output asked for): said, so

@@ -57,7 +57,8 @@ std::function<std::function<Sh9(const ProjectionJob&)>()> streamProjection(Proje
       std::shared_ptr<gl::GlContext> ctx;  ///< kept alive while the thread uses it
       std::unique_ptr<gl::GpuFrameProjection> projection =
           std::make_unique<gl::GpuFrameProjection>();
-      std::unique_ptr<gl::GpuTimer> timer;  ///< none on a software rasterizer: no GPU timer
+      std::unique_ptr<gl::GpuTimer> timer = std::make_unique<gl::GpuTimer>();
+      bool hasTimer = false;  ///< a software rasterizer has none (its queries read ~0)
       ~OnThread() {
         projection.reset();
         timer.reset();
@@ -66,16 +67,15 @@ std::function<std::function<Sh9(const ProjectionJob&)>()> streamProjection(Proje
     };
     auto state = std::make_shared<OnThread>();
     state->ctx = ctx;
-    if (!gl::isSoftwareRenderer(ctx->describe())) state->timer = std::make_unique<gl::GpuTimer>();
+    state->hasTimer = !gl::isSoftwareRenderer(ctx->describe());
     return [state](const ProjectionJob& job) {
       gl::GpuTimer* timer = state->timer.get();
-      if (!timer) return (*state->projection)(job);
       timer->beginFrame();
       timer->begin(gl::GpuTimer::Project);
       const Sh9 whole = (*state->projection)(job);
       timer->end();
       const std::optional<double> ms = timer->ms(gl::GpuTimer::Project);
-      if (job.gpuMs && ms && *ms > 0) *job.gpuMs = ms;
+      if (job.gpuMs && state->hasTimer && ms && *ms > 0) *job.gpuMs = ms;
       return whole;
     };
   };

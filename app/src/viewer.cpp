@@ -17,7 +17,8 @@ Viewer::Viewer(const ViewerSpec& spec, const Mesh& mesh) {
                                         gl::isSoftwareRenderer(ctx->describe()));
   renderer = std::make_unique<gl::Renderer>();
   loadModel(*renderer, mesh);
-  if (!gl::isSoftwareRenderer(ctx->describe())) gpuTimer = std::make_unique<gl::GpuTimer>();
+  gpuTimer = std::make_unique<gl::GpuTimer>();
+  hasGpuTimer = !gl::isSoftwareRenderer(ctx->describe());
   const bool shown = windowed ? !spec.noHud : spec.hud;
   if (shown || windowed) {
     hud = std::make_unique<Hud>(*ctx);
@@ -63,7 +64,7 @@ void Viewer::run(const ViewerLoop& loop) {
 }
 
 std::optional<double> Viewer::gpuMs(gl::GpuTimer::Stage stage) const {
-  if (!gpuTimer) return std::nullopt;
+  if (!gpuTimer || !hasGpuTimer) return std::nullopt;
   const std::optional<double> ms = gpuTimer->ms(stage);
   return ms && *ms > 0 ? ms : std::nullopt;
 }

@@ -75,9 +75,10 @@ class Viewer {
   std::unique_ptr<Hud> hud;
   ViewState state;
   DynamicResolution dynamicResolution;
-  /// Timer queries of the upload and the render (run()); none on a software rasterizer, which
-  /// has no GPU timer.
+  /// Timer queries of the upload and the render (run()). A software rasterizer has no GPU timer
+  /// (llvmpipe answers 0 or a few nanoseconds): the queries run, and gpuMs() reads none.
   std::unique_ptr<gl::GpuTimer> gpuTimer;
+  bool hasGpuTimer = false;
 };
 
 }  // namespace lp::cli
