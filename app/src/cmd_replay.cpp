@@ -266,9 +266,9 @@ struct StreamView {
     haveLighting = true;
     gl::Renderer& r = *v->renderer;
     r.setLighting(f.radiance, f.lights);
-    if (v->gpuTimer) v->gpuTimer->begin(gl::GpuTimer::Upload);
+    v->gpuTimer->begin(gl::GpuTimer::Upload);
     setBackground(r, b);
-    if (v->gpuTimer) v->gpuTimer->end();
+    v->gpuTimer->end();
     // The time to hand the data to GL, not waiting for it (no glFinish stalling every frame);
     // `liveprobe bench` times the upload to completion.
     return clock.lap(Stage::Upload);

@@ -366,12 +366,11 @@ void Hud::drawStatusTimes(float maxHeight) {
     }
   }
   // The GPU's own times where a GPU timer read them: in their stage's colour, dimmed.
-  const std::pair<Stage, std::optional<double> GpuTimes::*> gpuStages[] = {
-      {Stage::Upload, &GpuTimes::upload},
-      {Stage::Project, &GpuTimes::project},
-      {Stage::Render, &GpuTimes::render}};
+  constexpr Stage kGpuStage[] = {Stage::Upload, Stage::Project, Stage::Render};  // kTimes's
   std::string gpuLine;
-  for (const auto& [stage, member] : gpuStages) {
+  for (std::size_t g = 0; g < GpuTimes::kTimes.size(); ++g) {
+    const Stage stage = kGpuStage[g];
+    const auto member = GpuTimes::kTimes[g].second;
     const std::optional<double>& latest = history_.back().gpu.*member;
     if (!latest) continue;
     series.emplace_back();

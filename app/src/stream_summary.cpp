@@ -21,9 +21,8 @@ double StreamTally::deliveredFps(double minSeconds) const {
 void recordSample(StreamTally& t, const ProcessedFrame& f, double uploadMs, double renderMs,
                   double latencyMs, Hud* hud, const PipelineStats& st, const RecordSinks& sinks,
                   const GpuTimes& gpu) {
-  const std::optional<double>* read[] = {&gpu.upload, &gpu.project, &gpu.render};
-  for (std::size_t k = 0; k < 3; ++k)
-    if (*read[k]) t.gpu[k].push_back(**read[k]);
+  for (std::size_t k = 0; k < GpuTimes::kTimes.size(); ++k)
+    if (const auto& ms = gpu.*GpuTimes::kTimes[k].second) t.gpu[k].push_back(*ms);
   StageTimes times = f.times;
   times[Stage::Upload] = uploadMs;
   times[Stage::Render] = renderMs;
@@ -73,12 +72,11 @@ std::string stageMedians(const StreamTally& t) {
 }
 
 std::string gpuTimeLine(const StreamTally& t, const std::string& gl) {
-  static constexpr const char* kNames[] = {"gpu_upload", "gpu_project", "gpu_render"};
   std::string line;
-  for (std::size_t k = 0; k < 3; ++k) {
+  for (std::size_t k = 0; k < GpuTimes::kTimes.size(); ++k) {
     if (t.gpu[k].empty()) continue;
     char b[64];
-    std::snprintf(b, sizeof b, "%s%s %.3f ms", line.empty() ? "" : ", ", kNames[k],
+    std::snprintf(b, sizeof b, "%s%s %.3f ms", line.empty() ? "" : ", ", GpuTimes::kTimes[k].first,
                   percentile(t.gpu[k], 0.5));
     line += b;
   }

@@ -20,8 +20,8 @@ struct StreamTally {
   std::size_t withLight = 0, clippedLight = 0;  ///< frames with a light; of them, clipped
   std::vector<double> confidence;               ///< each frame's
   std::size_t brightestMeasured = 0;            ///< frames whose brightest pixel was measured
-  /// The GPU's times of the drawn frames, where read (upload, project, render: GpuTimes).
-  std::array<std::vector<double>, 3> gpu;
+  /// The GPU's times of the drawn frames, where read, in GpuTimes::kTimes's order.
+  std::array<std::vector<double>, GpuTimes::kTimes.size()> gpu;
   /// The source's frame number and timestamp (s) of the first and the last frame drawn: the rate
   /// it delivered at, lost frames included.
   std::uint64_t firstSequence = 0, lastSequence = 0;

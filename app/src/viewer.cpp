@@ -41,7 +41,7 @@ void Viewer::run(const ViewerLoop& loop) {
   double lastMs = 0;
   while (!ctx->shouldClose() && !stopRequested()) {
     const auto keys = handleInput(*input, hud.get(), state, loop.canPause);
-    if (gpuTimer) gpuTimer->beginFrame();
+    gpuTimer->beginFrame();
     const Turn turn = loop.before ? loop.before(keys) : Turn::Draw;
     if (turn == Turn::Stop) break;
     if (turn == Turn::Wait) {
@@ -49,9 +49,9 @@ void Viewer::run(const ViewerLoop& loop) {
       continue;
     }
     StageClock clock;
-    if (gpuTimer) gpuTimer->begin(gl::GpuTimer::Render);
+    gpuTimer->begin(gl::GpuTimer::Render);
     draw(lastMs);
-    if (gpuTimer) gpuTimer->end();
+    gpuTimer->end();
     gl::Renderer::finish();
     lastMs = clock.lap(Stage::Render);
     dynamicResolution.update(lastMs);
@@ -64,7 +64,7 @@ void Viewer::run(const ViewerLoop& loop) {
 }
 
 std::optional<double> Viewer::gpuMs(gl::GpuTimer::Stage stage) const {
-  if (!gpuTimer || !hasGpuTimer) return std::nullopt;
+  if (!hasGpuTimer) return std::nullopt;
   const std::optional<double> ms = gpuTimer->ms(stage);
   return ms && *ms > 0 ? ms : std::nullopt;
 }

@@ -429,11 +429,12 @@ std::string frameRecord(const ProcessedFrame& f, const CoeffFormat& format, Reco
   for (const Stage s : {Stage::Grab, Stage::Merge, Stage::Convert, Stage::Project, Stage::Resample})
     if (!stageRunsForSomeSources(s) || f.times[s] > 0) tm[std::string(stageName(s))] = f.times[s];
   tm["render"] = t.renderMs < 0 ? ojson(nullptr) : ojson(t.renderMs);
-  // The GPU's own times, where there is a GPU timer (an earlier frame's: read late).
-  const std::pair<const char*, std::optional<double>> gpu[] = {
-      {"gpu_upload", t.gpu.upload}, {"gpu_project", f.gpu.project}, {"gpu_render", t.gpu.render}};
-  for (const auto& [key, ms] : gpu)
-    if (ms) tm[key] = *ms;
+  // The GPU's own times, where there is a GPU timer (an earlier frame's: read late): capture's
+  // projection, the viewer's upload and render.
+  GpuTimes gpu = t.gpu;
+  gpu.project = f.gpu.project;
+  for (const auto& [key, member] : GpuTimes::kTimes)
+    if (gpu.*member) tm[key] = *(gpu.*member);
   j["timings_ms"] = tm;
   const FrameConfidence& c = f.confidence;
   j["confidence"] = {{"value", c.value()},

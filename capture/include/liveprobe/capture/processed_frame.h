@@ -2,10 +2,12 @@
 // One frame as the capture pipeline hands it on (liveprobe/capture/pipeline.h): its coefficients
 // and lights, what to draw behind the model, its stage times and its confidence. Its own header:
 // what reads a frame's record (liveprobe/exchange) needs this, not the pipeline that makes it.
+#include <array>
 #include <cstddef>
 #include <cstdint>
 #include <memory>
 #include <optional>
+#include <utility>
 #include <vector>
 
 #include "liveprobe/capture/image.h"
@@ -30,6 +32,11 @@ const char* projectedOnName(ProjectedOn on);
 /// 0), where the work was not on the GPU, or before the first reading. Never 0.
 struct GpuTimes {
   std::optional<double> upload, project, render;
+  /// Each time's record key and member, in the order of gl::GpuTimer's stages.
+  static constexpr std::array<std::pair<const char*, std::optional<double> GpuTimes::*>, 3> kTimes =
+      {{{"gpu_upload", &GpuTimes::upload},
+        {"gpu_project", &GpuTimes::project},
+        {"gpu_render", &GpuTimes::render}}};
 };
 
 /// The frame as the display draws it behind the model, made once for every caller
