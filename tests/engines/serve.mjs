@@ -23,9 +23,11 @@ export function serve(args, extraEnv = {}) {
   return { proc, port, exited, stderr: () => stderr };
 }
 
-/// Resident memory (kB) and open file descriptors of a process, from /proc.
+/// Resident memory (kB) and open file descriptors of a process, from /proc. `rss` is the
+/// anonymous part (RssAnon: the heap and stacks, where anything held for clients lives); the
+/// file-backed pages (code and data of the libraries, paged in as new paths first run) are `file`.
 export function usage(pid) {
   const status = readFileSync(`/proc/${pid}/status`, 'utf8');
-  const rss = Number(status.match(/VmRSS:\s+(\d+)/)[1]);
-  return { rss, fds: readdirSync(`/proc/${pid}/fd`).length };
+  const kb = (key) => Number(status.match(new RegExp(`${key}:\\s+(\\d+)`))[1]);
+  return { rss: kb('RssAnon'), file: kb('RssFile'), fds: readdirSync(`/proc/${pid}/fd`).length };
 }
