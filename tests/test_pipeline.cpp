@@ -311,10 +311,12 @@ TEST(Handoff, AProjectionOfTheCallersIsMadeUsedAndDroppedOnTheCaptureThread) {
     madeOn.push_back(std::this_thread::get_id());
     auto dropped = std::make_shared<Dropped>();
     dropped->on = &droppedOn;
-    return [&, dropped](const lp::ProjectionJob& job) {
+    lp::GpuWork work;
+    work.project = [&, dropped](const lp::ProjectionJob& job) {
       usedOn.push_back(std::this_thread::get_id());
       return job.tables.project(job.view);
     };
+    return work;
   };
   lp::PipelineOptions cpuOpt = opt;
   cpuOpt.projectOnGpu = nullptr;

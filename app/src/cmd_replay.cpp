@@ -491,13 +491,13 @@ int finishStream(const StreamPlan& p, const PipelineStats& st, const StreamTally
   if (out.video) out.video->finish();
   if (out.frames) out.frames->keep();
   printSummary(p.description, st, tally, p.opt.smoothSeconds, stopRequested(), sinks);
-  if (p.opt.projectOnGpu)
-    std::fprintf(stderr, "  projected on %s: %zu of %zu frames%s\n", p.projection.c_str(),
-                 st.projectedOnGpu, st.captured,
-                 st.projectedOnGpu < st.captured && p.opt.bracket
-                     ? " (the rest by the bracket's merge as it merged, on the CPU)"
-                     : "");
-  else
+  if (p.opt.projectOnGpu) {
+    std::fprintf(stderr, "  projected on %s: %zu of %zu frames\n", p.projection.c_str(),
+                 st.projectedOnGpu, st.captured);
+    if (p.opt.bracket)
+      std::fprintf(stderr, "  bracket merged on the GPU: %zu of %zu frames\n", st.mergedOnGpu,
+                   st.captured);
+  } else
     std::fprintf(stderr, "  projected on the CPU\n");
   // The GPU's own time, where a GPU takes part (a software rasterizer's is said to be none).
   if (p.opt.projectOnGpu || view.v->hasGpuTimer)

@@ -12,9 +12,8 @@ bool projectsOnGpu(ProjectOn asked, const gl::GlContext& ctx) {
   return compute && (asked == ProjectOn::Gpu || !gl::isSoftwareRenderer(ctx.describe()));
 }
 
-std::function<std::function<Sh9(const ProjectionJob&)>()> streamProjection(ProjectOn asked,
-                                                                           gl::GlContext& drawing,
-                                                                           std::string& used) {
+std::function<GpuWork()> streamProjection(ProjectOn asked, gl::GlContext& drawing,
+                                          std::string& used) {
   used = "the CPU";
   if (asked == ProjectOn::Cpu) return {};
   if (drawing.backend() == gl::Backend::OsMesa) {  // (its GL is not EGL's)
@@ -57,27 +56,47 @@ std::function<std::function<Sh9(const ProjectionJob&)>()> streamProjection(Proje
       std::shared_ptr<gl::GlContext> ctx;  ///< kept alive while the thread uses it
       std::unique_ptr<gl::GpuFrameProjection> projection =
           std::make_unique<gl::GpuFrameProjection>();
-      std::unique_ptr<gl::GpuTimer> timer = std::make_unique<gl::GpuTimer>();
-      bool hasTimer = false;  ///< a software rasterizer has none (its queries read ~0)
+      std::unique_ptr<gl::GpuMerge> merge = std::make_unique<gl::GpuMerge>();
+      /// One timer each (a timer's frames are its own calls).
+      std::unique_ptr<gl::GpuTimer> timer = std::make_unique<gl::GpuTimer>(),
+                                    mergeTimer = std::make_unique<gl::GpuTimer>();
+      bool hasTimer = false;          ///< a software rasterizer has none (its queries read ~0)
+      std::optional<double> mergeMs;  ///< the last merge's
       ~OnThread() {
         projection.reset();
+        merge.reset();
         timer.reset();
+        mergeTimer.reset();
         gl::releaseCurrentContext();
+      }
+      /// `work` timed as `stage` (a few frames late: the timer's latency).
+      std::optional<double> timed(gl::GpuTimer& t, gl::GpuTimer::Stage stage,
+                                  const std::function<void()>& work) const {
+        t.beginFrame();
+        t.begin(stage);
+        work();
+        t.end();
+        const std::optional<double> ms = t.ms(stage);
+        return hasTimer && ms && *ms > 0 ? ms : std::nullopt;
       }
     };
     auto state = std::make_shared<OnThread>();
     state->ctx = ctx;
     state->hasTimer = !gl::isSoftwareRenderer(ctx->describe());
-    return [state](const ProjectionJob& job) {
-      gl::GpuTimer* timer = state->timer.get();
-      timer->beginFrame();
-      timer->begin(gl::GpuTimer::Project);
-      const Sh9 whole = (*state->projection)(job);
-      timer->end();
-      const std::optional<double> ms = timer->ms(gl::GpuTimer::Project);
-      if (job.gpuMs && state->hasTimer && ms && *ms > 0) *job.gpuMs = ms;
+    GpuWork work;
+    work.project = [state](const ProjectionJob& job) {
+      Sh9 whole;
+      const auto ms = state->timed(*state->timer, gl::GpuTimer::Project,
+                                   [&] { whole = (*state->projection)(job); });
+      if (job.gpuMs && ms) *job.gpuMs = ms;
       return whole;
     };
+    work.merge = [state](const merge::FrameInput& in, std::vector<merge::RowSums>& rows) {
+      state->mergeMs =
+          state->timed(*state->mergeTimer, gl::GpuTimer::Merge, [&] { (*state->merge)(in, rows); });
+    };
+    work.mergeMs = [state] { return state->mergeMs; };
+    return work;
   };
 }
 

@@ -8,7 +8,9 @@
 #include <string>
 
 #include "liveprobe/capture/frame_processor.h"
+#include "liveprobe/capture/pipeline.h"
 #include "liveprobe/gl/context.h"
+#include "liveprobe/gl/gpu_merge.h"
 #include "liveprobe/gl/gpu_projector.h"
 #include "liveprobe/gl/gpu_timer.h"
 #include "settings.h"
@@ -22,11 +24,11 @@ bool projectsOnGpu(ProjectOn asked, const gl::GlContext& ctx);
 
 /// A stream's projection on the GPU (PipelineOptions::projectOnGpu), decided as projectsOnGpu()
 /// decides for the capture thread's own context: a headless EGL context on the device that
-/// `drawing` (current) draws on, made here and made current on the capture thread. `gpu` where
+/// `drawing` (current) draws on, made here and made current on the capture thread. A bracket is
+/// merged there too (gl::GpuMerge). `gpu` where
 /// `drawing` is not EGL (a window, OSMesa) is refused in one line; `auto` there is the CPU.
 /// Returns none for the CPU; `used` says where frames go ("the GPU, EGL device 0 (...)").
-std::function<std::function<Sh9(const ProjectionJob&)>()> streamProjection(ProjectOn asked,
-                                                                           gl::GlContext& drawing,
-                                                                           std::string& used);
+std::function<GpuWork()> streamProjection(ProjectOn asked, gl::GlContext& drawing,
+                                          std::string& used);
 
 }  // namespace lp::cli

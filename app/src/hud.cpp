@@ -366,7 +366,8 @@ void Hud::drawStatusTimes(float maxHeight) {
     }
   }
   // The GPU's own times where a GPU timer read them: in their stage's colour, dimmed.
-  constexpr Stage kGpuStage[] = {Stage::Upload, Stage::Project, Stage::Render};  // kTimes's
+  constexpr Stage kGpuStage[] = {Stage::Upload, Stage::Project, Stage::Merge,
+                                 Stage::Render};  // kTimes's
   std::string gpuLine;
   for (std::size_t g = 0; g < GpuTimes::kTimes.size(); ++g) {
     const Stage stage = kGpuStage[g];

@@ -134,7 +134,8 @@ struct CapturePipeline::Loop {
   /// the viewer's: the next grab takes a new one, and capture never writes it again.
   std::shared_ptr<Frame> frame = std::make_shared<Frame>();
   bool shown = false;
-  std::function<Sh9(const ProjectionJob&)> gpu;  ///< PipelineOptions::projectOnGpu's
+  std::function<Sh9(const ProjectionJob&)> gpu;       ///< PipelineOptions::projectOnGpu's
+  std::function<std::optional<double>()> gpuMergeMs;  ///< GpuWork::mergeMs
   std::uint64_t index = 0;
   Clock::time_point wallStart;
   double streamStart = -1, loopOffset = 0, lastTimestamp = 0;
@@ -175,6 +176,9 @@ void CapturePipeline::merge(Loop& s, ProcessedFrame& out) const {
     out.confidence = s.merger->add(*s.frame, s.merged, s.pool.get());
   }
   std::swap(*s.frame, s.merged);
+  if (!s.merger->hasFrameKernel()) return;
+  out.mergedOnGpu = true;
+  if (s.gpuMergeMs) out.gpu.merge = s.gpuMergeMs();
 }
 
 bool CapturePipeline::hold(Loop& s, ProcessedFrame& out) {
@@ -245,11 +249,13 @@ void CapturePipeline::project(Loop& s, ProcessedFrame& out) {
   }
   out.times += r.times;
   out.saturated = r.saturated;
-  out.projectedOn = r.projectedOn;
+  // A bracket projected as it merged was projected where it was merged.
+  out.projectedOn = s.projected && out.mergedOnGpu ? ProjectedOn::Gpu : r.projectedOn;
   out.gpu.project = r.gpuProjectMs;
-  if (r.projectedOn == ProjectedOn::Gpu) {
+  {
     std::lock_guard lock(mutex_);
-    ++stats_.projectedOnGpu;
+    stats_.projectedOnGpu += out.projectedOn == ProjectedOn::Gpu;
+    stats_.mergedOnGpu += out.mergedOnGpu;
   }
   out.background = std::move(r.background);
   s.shown = out.background.raw != nullptr;
@@ -320,7 +326,12 @@ void CapturePipeline::pace(Loop& s, double timestamp) {
 void CapturePipeline::run() {
   Loop s(opt_);
   try {
-    if (opt_.projectOnGpu) s.gpu = opt_.projectOnGpu();
+    if (opt_.projectOnGpu) {
+      GpuWork work = opt_.projectOnGpu();
+      s.gpu = std::move(work.project);
+      if (s.merger && work.merge) s.merger->setFrameKernel(std::move(work.merge));
+      s.gpuMergeMs = std::move(work.mergeMs);
+    }
     while (!stop_ && !interrupted_ &&
            (opt_.maxFrames < 0 || std::int64_t(s.index) < opt_.maxFrames)) {
       if (!waitForTurn(s)) break;

@@ -269,18 +269,24 @@ FrameConfidence BracketMerger::add(const Frame& in, Frame& out, Executor* execut
                          align_->nearHigh.data(), executor);
     view.nearLow = align_->nearLow.data(), view.nearHigh = align_->nearHigh.data();
   }
-  const MergeTally total = parallelReduce(
-      executor, std::size_t(h), Split{.grain = 1, .perThread = 4}, MergeTally{},
-      [&](std::size_t y0, std::size_t y1) {
-        MergeTally t;
-        for (std::size_t y = y0; y < y1; ++y)
-          t.add(mergeRow(view, y, keep ? out.rgb.data() + y * std::size_t(w) * 3 : nullptr,
-                         {previous + y * std::size_t(w), luminanceOut + y * std::size_t(w),
-                          reference + y * std::size_t(w)},
-                         fresh, project));
-        return t;
-      },
-      [](MergeTally& into, const MergeTally& part) { into.add(part); });
+  const merge::FrameInput frame = frameInput(view, keep ? out.rgb.data() : nullptr,
+                                             {previous, luminanceOut, reference}, fresh, project);
+  MergeTally total;
+  if (frameKernel_) {
+    std::vector<merge::RowSums> rows(static_cast<std::size_t>(h));
+    frameKernel_(frame, rows);
+    for (std::size_t y = 0; y < std::size_t(h); ++y) total.add(tally(rows[y], y, project));
+  } else {
+    total = parallelReduce(
+        executor, std::size_t(h), Split{.grain = 1, .perThread = 4}, MergeTally{},
+        [&](std::size_t y0, std::size_t y1) {
+          MergeTally t;
+          for (std::size_t y = y0; y < y1; ++y)
+            t.add(tally(view.kernel(merge::RowInput::of(frame, y)), y, project));
+          return t;
+        },
+        [](MergeTally& into, const MergeTally& part) { into.add(part); });
+  }
   if (project)
     for (int k = 0; k < kShCount; ++k) projection.coefficients.c[std::size_t(k)] = Rgb(total.sh[k]);
   FrameConfidence c = total.confidence(std::size_t(w) * h, exposures);
@@ -337,32 +343,33 @@ BracketView BracketMerger::prepare(const std::array<const std::uint8_t*, kMaxBra
   return v;
 }
 
-MergeTally BracketMerger::mergeRow(const BracketView& v, std::size_t y, float* out,
-                                   const LuminanceRow& lum, bool fresh,
-                                   const EquirectIntegrals* project) const {
-  const int w = window_.back().width, h = window_.back().height;
-  merge::RowInput in;
+merge::FrameInput BracketMerger::frameInput(const BracketView& v, float* rgb, const Luminance& lum,
+                                            bool fresh, const EquirectIntegrals* project) const {
+  merge::FrameInput in;
   // The usable frames, newest last (frames left out whole take no part).
   for (int i = 0; i < v.n; ++i) {
     if (!v.usable[std::size_t(i)]) continue;
     if (i == v.longest) in.longest = in.frames;
-    in.bgr[in.frames] = v.pixels[std::size_t(i)] + y * std::size_t(w) * 3;
+    in.bgr[in.frames] = v.pixels[std::size_t(i)];
     in.scale[in.frames++] = v.scales[std::size_t(i)];
   }
   for (int c = 0; c < 3; ++c) in.lut[c] = (*v.lut)[std::size_t(c)].data();
   in.floor = v.judge.floor, in.clip = v.judge.clip, in.wellExposed = kWellExposed;
   in.wellLinear = v.judge.wellLinear, in.belowClipLinear = v.judge.belowClipLinear;
   in.inv2s2 = v.inv2s2;
-  in.width = w;
+  in.width = window_.back().width, in.height = window_.back().height;
   in.previous = lum.previous, in.luminance = lum.out, in.reference = lum.reference;
   in.fresh = fresh;
-  in.nearLow = v.nearLow ? v.nearLow + y * std::size_t(w) : nullptr;
-  in.nearHigh = v.nearHigh ? v.nearHigh + y * std::size_t(w) : nullptr;
-  in.rgb = out;
+  in.nearLow = v.nearLow, in.nearHigh = v.nearHigh;
+  in.rgb = rgb;
   if (project)
     for (int k = 0; k < 5; ++k) in.col[k] = project->col[std::size_t(k)].data();
-  const merge::RowSums s = v.kernel(in);
-  const float rw = rowWeight(int(y), h, opt_.equirect);
+  return in;
+}
+
+MergeTally BracketMerger::tally(const merge::RowSums& s, std::size_t y,
+                                const EquirectIntegrals* project) const {
+  const float rw = rowWeight(int(y), window_.back().height, opt_.equirect);
   MergeTally t;
   if (project) {
     glm::dvec3 colSums[5];
@@ -375,6 +382,18 @@ MergeTally BracketMerger::mergeRow(const BracketView& v, std::size_t y, float* o
   t.brightest = s.brightest, t.brightestClipped = s.brightestClipped;
   t.brightestFresh = s.brightestFresh;
   return t;
+}
+
+merge::RowInput merge::RowInput::of(const FrameInput& frame, std::size_t y) {
+  RowInput in;
+  static_cast<FrameInput&>(in) = frame;
+  const std::size_t at = y * std::size_t(frame.width);
+  for (int i = 0; i < frame.frames; ++i) in.bgr[i] = frame.bgr[i] + 3 * at;
+  in.previous = frame.previous + at, in.luminance = frame.luminance + at;
+  in.reference = frame.reference + at;
+  if (frame.nearLow) in.nearLow = frame.nearLow + at, in.nearHigh = frame.nearHigh + at;
+  if (frame.rgb) in.rgb = frame.rgb + 3 * at;
+  return in;
 }
 
 std::array<bool, kMaxBracket> BracketMerger::usableFrames(const BracketView& v) const {

@@ -25,6 +25,7 @@
 #include <vector>
 
 #include "liveprobe/gl/context.h"
+#include "liveprobe/gl/gpu_merge.h"
 #include "liveprobe/gl/gpu_projector.h"
 #include "liveprobe/gl/gpu_timer.h"
 #include "liveprobe/gl/mesh.h"
@@ -451,6 +452,48 @@ std::string multiprocessors() {
   return "not reported";
 }
 
+/// The bracket merge on the GPU (gl::GpuMerge, what a live --bracket run with --projection gpu
+/// runs): three 8-bit frames of the sky at 1/65536, 1/256 and 1 s (the sun measured by the
+/// first, the sky by the others), decoded through the gamma table, judged per pixel and
+/// projected in the same pass, the merged frame not read back (a live run without a light
+/// search): the frames' upload, the pass, and the row sums' and the luminance's readback.
+/// Correctness is liveprobe_gpu_tests' (GpuMerge.EveryPixelIsTheCpusMerge: the CPU's merge is
+/// not in this build).
+void mergeGpu(benchmark::State& state, Size s) {
+  context();
+  if (!lp::gl::hasCompute()) return state.SkipWithError("no compute shaders (GL 4.3)");
+  const std::vector<float> sky = skyF32(s);
+  const FrameU8 table = skyU8({1, 1});
+  const double times[3] = {1.0 / 65536, 1.0 / 256, 1.0};
+  std::array<std::vector<std::uint8_t>, 3> codes;
+  lp::merge::FrameInput in;
+  in.frames = 3, in.longest = 2, in.width = s.w, in.height = s.h;
+  for (int k = 0; k < 3; ++k) {
+    auto& c = codes[std::size_t(k)];
+    c.resize(sky.size());
+    for (std::size_t i = 0; i < sky.size(); ++i)  // B, G, R
+      c[i / 3 * 3 + 2 - i % 3] = std::uint8_t(
+          std::lround(255.0f * std::pow(std::min(float(sky[i] * times[k]), 1.0f), 1 / 2.2f)));
+    in.bgr[k] = c.data();
+    in.scale[k] = float(1.0 / times[k]);
+  }
+  for (const float*& lut : in.lut) lut = table.decode.data();
+  in.floor = 6, in.clip = 250, in.wellExposed = 16;
+  in.wellLinear = table.decode[16], in.belowClipLinear = table.decode[200];
+  in.inv2s2 = float(1.0 / (2 * 0.3 * 0.3));
+  const std::size_t pixels = std::size_t(s.w) * std::size_t(s.h);
+  std::vector<float> previous(pixels, 0.0f), reference(pixels, 0.0f);
+  in.previous = previous.data(), in.luminance = previous.data(), in.reference = reference.data();
+  in.fresh = true;
+  const lp::Projector projector(lp::Layout::Equirect, s.w, s.h);
+  for (int k = 0; k < 5; ++k) in.col[k] = projector.equirectIntegrals()->col[std::size_t(k)].data();
+  lp::gl::GpuMerge gpu;
+  std::vector<lp::merge::RowSums> rows;
+  timedLoop(
+      state, GpuTimer::Merge, [&] { gpu(in, rows); }, [] {});
+  state.counters["frames"] = in.frames;
+}
+
 void registerAll() {
   for (Size s : {Size{300, 300}, Size{1920, 960}, Size{3840, 1920}, Size{7680, 3840}})
     for (bool u8 : {false, true}) {
@@ -477,6 +520,11 @@ void registerAll() {
                                      [=](benchmark::State& st) { projectGpu(st, s, u8, rows); })
             ->UseRealTime()
             ->Unit(benchmark::kMicrosecond);
+  for (Size s : {Size{300, 300}, Size{1920, 960}, Size{3840, 1920}})
+    benchmark::RegisterBenchmark(("Merge/u8x3/" + sizeName(s) + "/gpu").c_str(),
+                                 [=](benchmark::State& st) { mergeGpu(st, s); })
+        ->UseRealTime()
+        ->Unit(benchmark::kMicrosecond);
   for (Size s : {Size{1920, 1080}, Size{3840, 2160}})
     benchmark::RegisterBenchmark(("Render/bunny/" + sizeName(s) + "/msaa:4").c_str(),
                                  [=](benchmark::State& st) { renderBunny(st, s); })

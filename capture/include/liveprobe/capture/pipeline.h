@@ -32,6 +32,17 @@ namespace lp {
 
 enum class Handoff : std::uint8_t { Latest, Every };
 
+/// What the capture thread runs on its GPU (PipelineOptions::projectOnGpu).
+struct GpuWork {
+  /// The projection every frame takes (FrameRequest::projectWith).
+  std::function<Sh9(const ProjectionJob&)> project;
+  /// A bracket's pixel loop (BracketMerger::setFrameKernel): merged, and projected as it merges,
+  /// on the GPU.
+  merge::FrameKernel merge;
+  /// The GPU's time for the last merge (ms), where the context has a timer.
+  std::function<std::optional<double>()> mergeMs;
+};
+
 struct PipelineOptions {
   LayoutSpec layout;
   Photometry photometry;
@@ -82,10 +93,9 @@ struct PipelineOptions {
   };
   std::optional<FollowBall> followBall;
   /// Frames projected on the GPU (--projection): called on the capture thread as it starts (a GL
-  /// context is current on one thread), it gives the projection every frame takes
-  /// (FrameRequest::projectWith), destroyed on the capture thread as it ends. None, or an empty
-  /// projection: the CPU. A bracket merged and projected in one pass stays the merge's.
-  std::function<std::function<Sh9(const ProjectionJob&)>()> projectOnGpu;
+  /// context is current on one thread), it gives what runs on that thread's GPU (GpuWork),
+  /// destroyed on the capture thread as it ends. None, or empty parts: the CPU.
+  std::function<GpuWork()> projectOnGpu;
 };
 
 /// How often a waiting capture thread polls PipelineOptions::interrupted.
@@ -113,6 +123,7 @@ struct PipelineStats {
   std::size_t ballLost = 0;        ///< frames the followed ball was lost in
   std::size_t ballMoves = 0;       ///< times its circle moved (the layout fitted again)
   std::size_t projectedOnGpu = 0;  ///< frames whose coefficients the GPU summed
+  std::size_t mergedOnGpu = 0;     ///< brackets the GPU merged
 };
 
 /// Exponential moving average of coefficients: alpha = 1 - exp(-dt / tau). Exact on SH because

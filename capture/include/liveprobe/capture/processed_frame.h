@@ -31,11 +31,12 @@ const char* projectedOnName(ProjectedOn on);
 /// is an earlier frame's: none where the context has no GPU timer (a software rasterizer answers
 /// 0), where the work was not on the GPU, or before the first reading. Never 0.
 struct GpuTimes {
-  std::optional<double> upload, project, render;
-  /// Each time's record key and member, in the order of gl::GpuTimer's stages.
-  static constexpr std::array<std::pair<const char*, std::optional<double> GpuTimes::*>, 3> kTimes =
+  std::optional<double> upload, project, merge, render;
+  /// Each time's record key and member, in the order of the frame's stages.
+  static constexpr std::array<std::pair<const char*, std::optional<double> GpuTimes::*>, 4> kTimes =
       {{{"gpu_upload", &GpuTimes::upload},
         {"gpu_project", &GpuTimes::project},
+        {"gpu_merge", &GpuTimes::merge},
         {"gpu_render", &GpuTimes::render}}};
 };
 
@@ -85,7 +86,9 @@ struct ProcessedFrame {
   std::optional<glm::vec3> ball;
   bool ballLost = false;
   ProjectedOn projectedOn = ProjectedOn::Cpu;
-  GpuTimes gpu;  ///< capture's: the projection's (the viewer adds the upload's and the render's)
+  bool mergedOnGpu = false;  ///< a bracket merged (and projected, where in one pass) on the GPU
+  GpuTimes gpu;  ///< capture's: the projection's and the merge's (the viewer adds the upload's
+                 ///< and the render's)
 };
 
 }  // namespace lp

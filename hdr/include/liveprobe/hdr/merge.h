@@ -37,6 +37,7 @@
 
 #include "liveprobe/frame/frame.h"
 #include "liveprobe/frame/frame_confidence.h"
+#include "liveprobe/hdr/merge_frame.h"
 #include "liveprobe/hdr/response.h"
 #include "liveprobe/sh/executor.h"
 #include "liveprobe/sh/projector.h"
@@ -48,7 +49,7 @@ struct BracketView;
 struct MergeTally;
 
 /// The most frames one merge takes.
-inline constexpr int kMaxBracket = 5;
+inline constexpr int kMaxBracket = merge::kMaxFrames;
 
 struct MergeOptions {
   int frames = 3;  ///< the window: each merge uses the last `frames` frames (1 to kMaxBracket)
@@ -94,6 +95,11 @@ class BracketMerger {
   /// frame's size.
   FrameConfidence add(const Frame& in, Frame& out, Executor* executor, MergeProjection& projection);
 
+  /// The pixel loop run elsewhere from here on (the GPU's: liveprobe/gl/gpu_merge.h), in place
+  /// of the CPU's row kernel; none: the CPU's again. Everything else stays the merger's.
+  void setFrameKernel(merge::FrameKernel kernel) { frameKernel_ = std::move(kernel); }
+  bool hasFrameKernel() const { return bool(frameKernel_); }
+
   const MergeOptions& options() const { return opt_; }
   std::size_t held() const { return window_.size(); }
 
@@ -106,16 +112,20 @@ class BracketMerger {
                       int& exposures) const;
   /// The frames of the window that do not contradict the newest as a whole.
   std::array<bool, kMaxBracket> usableFrames(const BracketView& view) const;
-  /// One row merged into `out` (RGB) and its luminance into `previous`; the row's sums.
-  /// One row's luminance: the last merge's, this merge's (possibly the same buffer), and the
+  /// The frame's luminance: the last merge's, this merge's (possibly the same buffer), and the
   /// last trusted merge's.
-  struct LuminanceRow {
+  struct Luminance {
     const float* previous;
     float* out;
     const float* reference;
   };
-  MergeTally mergeRow(const BracketView& view, std::size_t y, float* out, const LuminanceRow& lum,
-                      bool fresh, const EquirectIntegrals* project) const;
+  /// The merge's frames and buffers as a pixel loop reads them; `rgb`: the merged frame (or
+  /// null).
+  merge::FrameInput frameInput(const BracketView& view, float* rgb, const Luminance& lum,
+                               bool fresh, const EquirectIntegrals* project) const;
+  /// A row's sums weighed by its solid angle, and its coefficients' sums where it projects.
+  MergeTally tally(const merge::RowSums& sums, std::size_t y,
+                   const EquirectIntegrals* project) const;
   MergeOptions opt_;
   std::deque<Frame> window_;          ///< oldest first
   std::vector<float> previous_;       ///< the last merge's luminance, per pixel
@@ -124,6 +134,7 @@ class BracketMerger {
   std::deque<double> agreements_;     ///< per window frame: the agreement of its own merge
   struct Alignment;                   ///< the camera's rotation, and the frames turned by it
   std::unique_ptr<Alignment> align_;  ///< null where the frames are not aligned
+  merge::FrameKernel frameKernel_;    ///< setFrameKernel()
 };
 
 }  // namespace lp

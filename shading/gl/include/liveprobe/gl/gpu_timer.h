@@ -15,8 +15,9 @@ namespace lp::gl {
 class GpuTimer {
  public:
   /// Stages timed, one query each per frame in flight.
-  enum Stage : std::uint8_t { Upload, Project, Render, kStages };
-  static constexpr const char* kNames[kStages] = {"gpu_upload", "gpu_project", "gpu_render"};
+  enum Stage : std::uint8_t { Upload, Project, Merge, Render, kStages };
+  static constexpr const char* kNames[kStages] = {"gpu_upload", "gpu_project", "gpu_merge",
+                                                  "gpu_render"};
   /// Frames in flight: a result is read this many frames after it was asked for.
   static constexpr int kLatency = 3;
 

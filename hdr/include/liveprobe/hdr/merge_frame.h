@@ -1,0 +1,63 @@
+#pragma once
+// The bracket merge's pixel loop over a whole frame, as another processor runs it (the GPU:
+// liveprobe/gl/gpu_merge.h): what lp::BracketMerger hands it, and each row's sums it hands back.
+// The merger keeps everything else (the window, the alignment, the frames left out whole, the
+// confidence); merge.h says what a merge does, and the CPU's row kernel (merge_kernel.cpp) is
+// the reference every other runs against.
+#include <cstddef>
+#include <cstdint>
+#include <functional>
+#include <vector>
+
+namespace lp::merge {
+
+/// The most frames a merge takes (lp::kMaxBracket).
+inline constexpr int kMaxFrames = 5;
+
+/// One merge's frames and buffers, whole frames of width x height pixels, rows top to bottom.
+struct FrameInput {
+  /// The frames the merge uses, oldest first and the newest last (frames left out whole are not
+  /// here): their pixels (B, G, R bytes, older frames already turned to the newest) and
+  /// radianceScale (1 / exposure time) of each.
+  int frames = 0;
+  const std::uint8_t* bgr[kMaxFrames] = {};
+  float scale[kMaxFrames] = {};
+  int longest = 0;            ///< which of them has the longest exposure
+  const float* lut[3] = {};   ///< the response: linear per code (256 each), for R, G and B
+  int floor = 0, clip = 255;  ///< noise floor and clip level (codes)
+  int wellExposed = 16;       ///< codes from here up are compared as ratios
+  float wellLinear = 0,
+        belowClipLinear = 0;  ///< green's linear at wellExposed, at surely-unclipped
+  float inv2s2 = 0;           ///< 1 / (2 sigma^2) of the motion weighting
+  int width = 0, height = 0;
+  /// Luminance per pixel: the last merge's (read only where `fresh`), this merge's (written; may
+  /// be `previous` itself: each pixel is read before it is written), and the last trusted merge's.
+  const float* previous = nullptr;
+  float* luminance = nullptr;
+  const float* reference = nullptr;
+  bool fresh = false;
+  /// Where the older frames were turned to the newest (null: not turned): the least and the most
+  /// code the newest frame read over each pixel and its eight neighbours (its largest channel).
+  const std::uint8_t* nearLow = nullptr;
+  const std::uint8_t* nearHigh = nullptr;
+  float* rgb = nullptr;  ///< the merged radiance, R, G, B per pixel (null: not written)
+  /// Equirect frames projected as they merge: the five column integrals (width floats each,
+  /// EquirectIntegrals::col), or null: no projection.
+  const float* col[5] = {};
+};
+
+/// A row's sums (unweighted by its solid angle).
+struct RowSums {
+  double power = 0, clippedPower = 0, clippedEstimate = 0, lostPower = 0;
+  std::size_t dark = 0;
+  float brightest = -1;  ///< the largest luminance; the flags are of its first pixel
+  bool brightestClipped = false, brightestFresh = true;
+  /// With FrameInput::col: the merged radiance's column-weighted sums, [column integral][R, G, B].
+  double col[5][3] = {};
+};
+
+/// A whole frame's pixel loop: writes `in`'s luminance (and rgb where asked) and `rows`
+/// (height of them). Throws lp::Error (or one derived from it) where it cannot run.
+using FrameKernel = std::function<void(const FrameInput& in, std::vector<RowSums>& rows)>;
+
+}  // namespace lp::merge

@@ -1,0 +1,35 @@
+#pragma once
+// The bracket merge's pixel loop on the GPU (lp::merge::FrameKernel, liveprobe/hdr/merge_frame.h):
+// the frames' 8-bit codes uploaded as they are, decoded through the camera's response in the
+// shader, each pixel judged as the CPU's row kernel judges it (the same weights, the same
+// contradictions, the same confidence sums), and the merged radiance weighed by the equirect
+// column integrals in the same pass: one workgroup a row, each row's sums read back. The
+// luminance the next merge reads comes back too, and the merged frame where it is asked for.
+// Needs a current context with compute shaders (GL 4.3; hasCompute()).
+#include <vector>
+
+#include "liveprobe/gl/handles.h"
+#include "liveprobe/hdr/merge_frame.h"
+
+namespace lp::gl {
+
+class GpuMerge {
+ public:
+  /// Throws ContextError where the context has no compute shaders.
+  GpuMerge();
+  ~GpuMerge();
+  GpuMerge(const GpuMerge&) = delete;
+  GpuMerge& operator=(const GpuMerge&) = delete;
+
+  /// One merge (what lp::BracketMerger::setFrameKernel takes).
+  void operator()(const merge::FrameInput& in, std::vector<merge::RowSums>& rows);
+
+ private:
+  /// `buffer` holding `bytes` from `data` (grown where it is smaller), bound at `binding`.
+  void fill(int binding, const void* data, std::size_t bytes);
+  Program program_;
+  Buffer buffers_[9];
+  std::size_t sizes_[9] = {};
+};
+
+}  // namespace lp::gl

@@ -1,0 +1,303 @@
+#include "liveprobe/gl/gpu_merge.h"
+
+#include <algorithm>
+#include <string>
+
+#include "liveprobe/gl/context.h"
+#include "liveprobe/gl/gpu_projector.h"
+#include "programs.h"
+
+namespace lp::gl {
+
+namespace {
+
+enum Binding { kFrames, kLut, kPrevious, kReference, kLuminance, kNear, kRgb, kCol, kRows };
+
+// Floats a row's sums take in the Rows buffer: power, clipped power, clipped estimate, lost
+// power, dark pixels, the brightest luminance, its clipped and fresh flags, its column, and the
+// 15 column-weighted sums.
+constexpr int kRowFloats = 24;
+constexpr int kGroup = 128;
+
+// One workgroup a row; each invocation merges every 128th pixel of it as the CPU's row kernel
+// (hdr/src/merge_kernel.cpp, Chunk) merges a lane, then the row's sums are halved down in shared
+// memory. Bytes are read from 32-bit words (GLSL has no 8-bit storage in 4.3).
+const char* const kMergeCs = R"(#version 430
+layout(local_size_x = 128) in;
+layout(std430, binding = 0) readonly buffer Frames { uint frameWords[]; };
+layout(std430, binding = 1) readonly buffer Lut { float lut[]; };
+layout(std430, binding = 2) readonly buffer Previous { float previous[]; };
+layout(std430, binding = 3) readonly buffer Reference { float reference[]; };
+layout(std430, binding = 4) writeonly buffer Luminance { float luminance[]; };
+layout(std430, binding = 5) readonly buffer Near { uint nearWords[]; };
+layout(std430, binding = 6) writeonly buffer Rgb { float rgb[]; };
+layout(std430, binding = 7) readonly buffer Col { float col[]; };
+layout(std430, binding = 8) writeonly buffer Rows { float rows[]; };
+uniform int width, frames, longest, floorCode, clipCode, wellCode;
+uniform float wellLinear, belowClipLinear, inv2s2;
+uniform int fresh, turned, writeRgb, project;
+uniform float scale[5];
+uniform uint frameOffset[5];
+uniform uint nearHighOffset;
+
+const float kInf = uintBitsToFloat(0x7F800000u);
+const int kFloats = 24;
+shared float red[kFloats][128];
+
+uint byteOf(uint word, uint o) { return (word >> ((o & 3u) * 8u)) & 255u; }
+uint frameByte(uint o) { return byteOf(frameWords[o >> 2], o); }
+uint nearByte(uint o) { return byteOf(nearWords[o >> 2], o); }
+
+struct Reading {
+  vec3 e;
+  float peak, code, w;
+  bool well;
+};
+
+float luma(vec3 c) { return 0.0722 * c.b + (0.7152 * c.g + 0.2126 * c.r); }
+
+bool wellCoded(float code) { return code >= float(wellCode) && code < float(clipCode); }
+
+Reading readFrame(int i, uint pixel) {
+  const uint o = frameOffset[i] + 3u * pixel;
+  const uint b = frameByte(o), g = frameByte(o + 1u), r = frameByte(o + 2u);
+  const float s = scale[i];
+  Reading x;
+  x.e = vec3(lut[r] * s, lut[256u + g] * s, lut[512u + b] * s);
+  x.peak = max(x.e.r, max(x.e.g, x.e.b));
+  x.code = float(max(b, max(g, r)));
+  // The hat of Debevec and Malik over the radiance scale.
+  const float hat = min(x.code - float(floorCode), float(clipCode) - x.code);
+  x.w = x.code > float(floorCode) && x.code < float(clipCode) ? hat * (1.0 / s) : 0.0;
+  x.well = wellCoded(x.code);
+  return x;
+}
+
+// The newest frame's neighbourhood reading: green's response for the largest channel's code.
+Reading readNear(uint code, float s) {
+  Reading q;
+  q.code = float(code);
+  q.peak = lut[256u + code] * s;
+  q.well = wellCoded(q.code);
+  return q;
+}
+
+// What a reading says of its pixel's radiance, as an interval (x: low, y: high).
+vec2 boundsOf(Reading r, float s) {
+  const bool dark = r.code <= float(floorCode), clipped = r.code >= float(clipCode);
+  const float k = r.well ? 1.25 : 2.0, invK = r.well ? 0.8 : 0.5;
+  const float lo = clipped ? belowClipLinear * s : r.peak * invK;
+  const float hi = clipped ? kInf : r.peak * k;
+  return vec2(dark ? 0.0 : lo, dark ? wellLinear * s : hi);
+}
+
+void main() {
+  const uint lid = gl_LocalInvocationID.x;
+  const int y = int(gl_WorkGroupID.x);
+  float acc[kFloats];
+  for (int k = 0; k < kFloats; ++k) acc[k] = 0.0;
+  acc[5] = -1.0;
+  acc[7] = 1.0;
+  const int now = frames - 1;
+  const float sNow = scale[now];
+  for (int x = int(lid); x < width; x += 128) {
+    const uint p = uint(y) * uint(width) + uint(x);
+    Reading r[5];
+    for (int i = 0; i < frames; ++i) r[i] = readFrame(i, p);
+    const vec2 bNow = boundsOf(r[now], sNow);
+    float lost = -1.0;
+    vec2 wide = bNow;
+    bool edge = false;
+    if (turned != 0) {
+      const uint low = nearByte(p), high = nearByte(nearHighOffset + p);
+      wide.x = min(wide.x, boundsOf(readNear(low, sNow), sNow).x);
+      wide.y = max(wide.y, boundsOf(readNear(high, sNow), sNow).y);
+      edge = float(high) >= float(clipCode);
+    }
+    // Where an older reading contradicts the newest, the newest wins.
+    bool newestGivesWay = false;
+    for (int i = 0; i < now; ++i) {
+      const bool both = r[i].well && r[now].well;
+      const bool edgeOfSource = scale[i] > 1.02 * sNow && edge && both &&
+                                r[i].peak > 1.5625 * r[now].peak;
+      newestGivesWay = newestGivesWay || edgeOfSource;
+      const vec2 b = boundsOf(r[i], scale[i]);
+      const bool apart = b.x > wide.y || wide.x > b.y;
+      const bool agree = turned != 0 ? !apart && both
+                                     : both && r[i].peak < 1.5625 * r[now].peak &&
+                                           1.5625 * r[i].peak > r[now].peak;
+      const bool disagree =
+          !edgeOfSource && (turned != 0 ? apart : (!agree && both) || (!both && apart));
+      const float dq = 2.0 * (r[i].peak - r[now].peak) / (r[i].peak + r[now].peak);
+      const float closeness = exp(-(dq * dq * inv2s2));
+      r[i].w = disagree ? 0.0 : agree ? r[i].w * closeness : r[i].w;
+      if (disagree) lost = max(lost, luma(r[i].e));
+    }
+    if (newestGivesWay) r[now].w = 0.0;
+    // Two older readings where the shorter exposure reads brighter: the longer gives way.
+    for (int i = 0; i < now; ++i)
+      for (int j = 0; j < now; ++j) {
+        if (j == i || !(scale[j] > 1.02 * scale[i])) continue;
+        if (r[i].well && r[j].w > 0.0 && r[j].well && r[j].peak > 1.5625 * r[i].peak)
+          r[i].w = 0.0;
+      }
+    // The weighted mean; the clipped reading that bounds the pixel highest (the first of equals).
+    float sw = 0.0, kPeak = -1.0;
+    vec3 c = vec3(0.0), kE = vec3(0.0);
+    bool wellSeen = false, hasClip = false;
+    for (int i = 0; i < frames; ++i) {
+      sw += r[i].w;
+      wellSeen = wellSeen || (r[i].w > 0.0 && r[i].well);
+      c += r[i].w * r[i].e;
+      const bool higher = r[i].code >= float(clipCode) && r[i].peak > kPeak;
+      hasClip = hasClip || higher;
+      if (higher) kPeak = r[i].peak, kE = r[i].e;
+    }
+    const bool measured = sw > 0.0, contradicted = lost >= 0.0;
+    c = measured ? c * (1.0 / sw)
+                 : contradicted ? r[now].e : hasClip ? kE : r[longest].e;
+    const bool clipped =
+        !measured && ((contradicted && r[now].code >= float(clipCode)) || (!contradicted && hasClip));
+    if (writeRgb != 0) rgb[3u * p] = c.r, rgb[3u * p + 1u] = c.g, rgb[3u * p + 2u] = c.b;
+    // The row's sums, as the CPU's row kernel makes them.
+    const float l = luma(c);
+    const float seen = fresh != 0 ? previous[p] : 0.0;  // read before it is written
+    luminance[p] = l;
+    if (contradicted || seen > 1.25 * wide.y) acc[3] += max(max(lost, seen) - l, 0.0);
+    acc[0] += l;
+    if (clipped) acc[1] += l, acc[2] += max(l, reference[p]);
+    if (!(clipped || wellSeen)) acc[4] += 1.0;
+    if (l > acc[5]) {
+      acc[5] = l, acc[6] = clipped ? 1.0 : 0.0, acc[7] = r[now].w > 0.0 ? 1.0 : 0.0;
+      acc[8] = float(x);
+    }
+    if (project != 0)
+      for (int k = 0; k < 5; ++k) {
+        const float wk = col[k * width + x];
+        acc[9 + 3 * k] += wk * c.r, acc[10 + 3 * k] += wk * c.g, acc[11 + 3 * k] += wk * c.b;
+      }
+  }
+  for (int k = 0; k < kFloats; ++k) red[k][lid] = acc[k];
+  barrier();
+  for (uint stride = 64u; stride > 0u; stride >>= 1) {
+    if (lid < stride) {
+      const uint o = lid + stride;
+      for (int k = 0; k < 5; ++k) red[k][lid] += red[k][o];
+      for (int k = 9; k < kFloats; ++k) red[k][lid] += red[k][o];
+      // The brightest: the larger, or of equals the first pixel.
+      if (red[5][o] > red[5][lid] || (red[5][o] == red[5][lid] && red[8][o] < red[8][lid]))
+        for (int k = 5; k < 9; ++k) red[k][lid] = red[k][o];
+    }
+    barrier();
+  }
+  if (lid == 0u)
+    for (int k = 0; k < kFloats; ++k) rows[y * kFloats + k] = red[k][0];
+}
+)";
+
+void setInt(GLuint program, const char* name, int value) {
+  glUniform1i(glGetUniformLocation(program, name), value);
+}
+void setFloat(GLuint program, const char* name, float value) {
+  glUniform1f(glGetUniformLocation(program, name), value);
+}
+
+}  // namespace
+
+GpuMerge::GpuMerge() {
+  if (!hasCompute())
+    throw ContextError("the bracket merge on the GPU needs compute shaders (GL 4.3)");
+  program_ = linkCompute(kMergeCs, "the bracket merge");
+  for (Buffer& b : buffers_) {
+    GLuint id = 0;
+    glGenBuffers(1, &id);
+    b = Buffer(id);
+  }
+}
+
+GpuMerge::~GpuMerge() = default;
+
+void GpuMerge::fill(int binding, const void* data, std::size_t bytes) {
+  const std::size_t b = std::size_t(binding);
+  glBindBuffer(GL_SHADER_STORAGE_BUFFER, buffers_[b].get());
+  bytes = std::max<std::size_t>((bytes + 3) / 4 * 4, 16);
+  if (sizes_[b] < bytes) {
+    glBufferData(GL_SHADER_STORAGE_BUFFER, GLsizeiptr(bytes), nullptr, GL_DYNAMIC_DRAW);
+    sizes_[b] = bytes;
+  }
+  if (data) glBufferSubData(GL_SHADER_STORAGE_BUFFER, 0, GLsizeiptr(bytes), data);
+  glBindBufferBase(GL_SHADER_STORAGE_BUFFER, GLuint(binding), buffers_[b].get());
+}
+
+void GpuMerge::operator()(const merge::FrameInput& in, std::vector<merge::RowSums>& rows) {
+  const std::size_t pixels = std::size_t(in.width) * std::size_t(in.height);
+  const std::size_t frameBytes = pixels * 3, stride = (frameBytes + 3) / 4 * 4;
+  // The frames' codes, each at a word boundary, as they are.
+  fill(kFrames, nullptr, stride * std::size_t(in.frames));
+  GLuint offsets[merge::kMaxFrames] = {};
+  for (int i = 0; i < in.frames; ++i) {
+    offsets[i] = GLuint(stride * std::size_t(i));
+    glBufferSubData(GL_SHADER_STORAGE_BUFFER, GLintptr(offsets[i]), GLsizeiptr(frameBytes),
+                    in.bgr[i]);
+  }
+  float lut[3 * 256];
+  for (int c = 0; c < 3; ++c) std::copy(in.lut[c], in.lut[c] + 256, lut + 256 * c);
+  fill(kLut, lut, sizeof lut);
+  fill(kPrevious, in.previous, pixels * sizeof(float));
+  fill(kReference, in.reference, pixels * sizeof(float));
+  fill(kLuminance, nullptr, pixels * sizeof(float));
+  const bool turned = in.nearLow != nullptr;
+  const std::size_t nearStride = (pixels + 3) / 4 * 4;
+  fill(kNear, nullptr, turned ? 2 * nearStride : 4);
+  if (turned) {
+    glBufferSubData(GL_SHADER_STORAGE_BUFFER, 0, GLsizeiptr(pixels), in.nearLow);
+    glBufferSubData(GL_SHADER_STORAGE_BUFFER, GLintptr(nearStride), GLsizeiptr(pixels),
+                    in.nearHigh);
+  }
+  fill(kRgb, nullptr, in.rgb ? pixels * 3 * sizeof(float) : 4);
+  const bool project = in.col[0] != nullptr;
+  fill(kCol, nullptr, project ? 5 * std::size_t(in.width) * sizeof(float) : 4);
+  if (project)
+    for (int k = 0; k < 5; ++k)
+      glBufferSubData(GL_SHADER_STORAGE_BUFFER, GLintptr(std::size_t(k) * in.width * sizeof(float)),
+                      GLsizeiptr(std::size_t(in.width) * sizeof(float)), in.col[k]);
+  fill(kRows, nullptr, std::size_t(in.height) * kRowFloats * sizeof(float));
+
+  const GLuint p = program_.get();
+  glUseProgram(p);
+  setInt(p, "width", in.width), setInt(p, "frames", in.frames), setInt(p, "longest", in.longest);
+  setInt(p, "floorCode", in.floor), setInt(p, "clipCode", in.clip);
+  setInt(p, "wellCode", in.wellExposed);
+  setFloat(p, "wellLinear", in.wellLinear), setFloat(p, "belowClipLinear", in.belowClipLinear);
+  setFloat(p, "inv2s2", in.inv2s2);
+  setInt(p, "fresh", in.fresh), setInt(p, "turned", turned),
+      setInt(p, "writeRgb", in.rgb != nullptr);
+  setInt(p, "project", project);
+  glUniform1fv(glGetUniformLocation(p, "scale"), merge::kMaxFrames, in.scale);
+  glUniform1uiv(glGetUniformLocation(p, "frameOffset"), merge::kMaxFrames, offsets);
+  glUniform1ui(glGetUniformLocation(p, "nearHighOffset"), GLuint(nearStride));
+  glDispatchCompute(GLuint(in.height), 1, 1);
+  glMemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT);
+  glUseProgram(0);
+
+  std::vector<float> sums(std::size_t(in.height) * kRowFloats);
+  const auto read = [](const Buffer& b, void* into, std::size_t bytes) {
+    glBindBuffer(GL_SHADER_STORAGE_BUFFER, b.get());
+    glGetBufferSubData(GL_SHADER_STORAGE_BUFFER, 0, GLsizeiptr(bytes), into);
+  };
+  read(buffers_[kRows], sums.data(), sums.size() * sizeof(float));
+  read(buffers_[kLuminance], in.luminance, pixels * sizeof(float));
+  if (in.rgb) read(buffers_[kRgb], in.rgb, pixels * 3 * sizeof(float));
+  rows.resize(std::size_t(in.height));
+  for (std::size_t y = 0; y < rows.size(); ++y) {
+    const float* s = sums.data() + y * kRowFloats;
+    merge::RowSums& r = rows[y];
+    r.power = s[0], r.clippedPower = s[1], r.clippedEstimate = s[2], r.lostPower = s[3];
+    r.dark = std::size_t(s[4]);
+    r.brightest = s[5], r.brightestClipped = s[6] > 0, r.brightestFresh = s[7] > 0;
+    for (int k = 0; k < 5; ++k)
+      for (int c = 0; c < 3; ++c) r.col[k][c] = project ? double(s[9 + 3 * k + c]) : 0.0;
+  }
+}
+
+}  // namespace lp::gl
