@@ -2,7 +2,7 @@
 """docs/speed.md's GPU table from liveprobe-gpu-bench JSON files (medians; a later file's row
 replaces an earlier one's of the same name): per frame size and pixel type, the upload (direct
 and through the pixel-buffer objects), the read floor, the GPU and CPU projections; then the
-bunny renders and the frame loop. Usage: scripts/gpu_table.py RUN.json [RUN.json ...]"""
+bunny renders and the frame loop; the bracket merge where the runs have it. Usage: scripts/gpu_table.py RUN.json [RUN.json ...]"""
 import json
 import sys
 
@@ -72,3 +72,12 @@ for mode in ["serial", "overlapped"]:
     n = f"Frame/u8/3840x1920/render:1920x1080/{mode}"
     print(f"| {mode} | {fmt(us(n))} | {fmt(us(n, 'cpu_write_us'))} | {fmt(us(n, 'gpu_upload_us'))} | "
           f"{fmt(us(n, 'gpu_project_us'))} | {fmt(us(n, 'gpu_render_us'))} |")
+if any(name.startswith("Merge/") for name in rows):
+    print()
+    print("| bracket of three 8-bit frames | merge and projection, one pass: wall (uploads, "
+          "read-backs) | GPU time | projection alone (GPU time) | / projection |")
+    print("|---|---|---|---|---|")
+    for size in ["300x300", "1920x960", "3840x1920"]:
+        merge, alone = us(f"Merge/u8x3/{size}/gpu", "gpu_us"), us(f"Project/u8/{size}/gpu", "gpu_us")
+        ratio = f"{merge / alone:.1f}x" if merge and alone else "-"
+        print(f"| {size} | {fmt(us(f'Merge/u8x3/{size}/gpu'))} | {fmt(merge)} | {fmt(alone)} | {ratio} |")
