@@ -592,7 +592,8 @@ std::vector<lp::Frame> movingBracket(int w, int h, int count) {
 // kernel, pixel by pixel, on a bracket whose sun moves (older readings contradicted, light lost,
 // a clipped sun) in windows of 3 and 5 frames, a width that fills no workgroup: each merged
 // value within 1e-5 of the CPU's, the coefficients projected in the same pass within 1e-5 of
-// L00, and every confidence term within 1e-5.
+// L00, and every confidence term within 1e-5; each frame uploaded once, however many merges
+// read it.
 TEST(GpuMerge, EveryPixelIsTheCpusMerge) {
   eglContext().makeCurrent();
   if (!lp::gl::hasCompute()) GTEST_FAIL() << "Mesa's EGL has compute shaders";
@@ -606,6 +607,7 @@ TEST(GpuMerge, EveryPixelIsTheCpusMerge) {
         onGpu(lp::MergeOptions{.frames = window});
     onGpu.setFrameKernel([&](const lp::merge::FrameInput& in,
                              std::vector<lp::merge::RowSums>& rows) { gpu(in, rows); });
+    const std::size_t uploadedBefore = gpu.framesUploaded();
     for (const lp::Frame& f : frames) {
       lp::Frame a, b;
       lp::MergeProjection pa{.integrals = projector.equirectIntegrals()}, pb = pa;
@@ -628,6 +630,8 @@ TEST(GpuMerge, EveryPixelIsTheCpusMerge) {
       EXPECT_EQ(cb.complete, ca.complete) << what;
       said.push_back(ca);
     }
+    // The camera did not turn: each frame went up once, the older ones kept on the GPU.
+    EXPECT_EQ(gpu.framesUploaded() - uploadedBefore, frames.size()) << "window " << window;
   }
   // The run exercised what it is meant to: light found contradicted, and a clipped sun.
   EXPECT_TRUE(std::any_of(said.begin(), said.end(), [](auto& c) { return c.agreement < 0.99; }));

@@ -1,6 +1,7 @@
 #include "liveprobe/hdr/merge.h"
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <limits>
 #include <utility>
@@ -71,6 +72,9 @@ struct BracketMerger::Alignment {
 };
 
 namespace {
+// merge::FrameInput::key: one count over every merger of the process, so that no two frames
+// share one.
+std::atomic<std::uint64_t> frameKeys{0};
 // A turn that moves no pixel by more than this is not applied (a still camera's estimate is
 // noise of a hundredth of a pixel).
 constexpr double kLeastTurnPixels = 0.25;
@@ -94,7 +98,7 @@ void BracketMerger::push(const Frame& in) {
     throw Error("an exposure bracket merges 8-bit frames; this frame is already radiance");
   if (!window_.empty() &&
       (window_.back().width != in.width || window_.back().height != in.height)) {
-    window_.clear(), agreements_.clear();
+    window_.clear(), agreements_.clear(), keys_.clear();
     if (align_) align_->tracker.clear();
   }
   // The window keeps copies; the oldest frame's buffer is reused for the newest.
@@ -103,6 +107,7 @@ void BracketMerger::push(const Frame& in) {
     kept.bgr8 = std::move(window_.front().bgr8);
     window_.pop_front();
     agreements_.pop_front();
+    keys_.pop_front();
   }
   kept.bgr8.assign(in.bgr8.begin(), in.bgr8.end());
   kept.sequence = in.sequence, kept.timestamp = in.timestamp;
@@ -111,6 +116,7 @@ void BracketMerger::push(const Frame& in) {
   kept.exposure100us = in.exposure100us, kept.gain = in.gain;
   window_.push_back(std::move(kept));
   agreements_.push_back(1.0);  // its merge's own agreement, once measured
+  keys_.push_back(++frameKeys);
   if (align_ && in.width >= align::kLeastWidth && in.height >= align::kLeastHeight) {
     align_->tracker.add(
         align::logPyramid(in, opt_.response.linear, kWellExposed - 1, opt_.clipLevel),
@@ -350,6 +356,8 @@ merge::FrameInput BracketMerger::frameInput(const BracketView& v, float* rgb, co
   for (int i = 0; i < v.n; ++i) {
     if (!v.usable[std::size_t(i)]) continue;
     if (i == v.longest) in.longest = in.frames;
+    const bool asTaken = v.pixels[std::size_t(i)] == window_[std::size_t(i)].bgr8.data();
+    in.key[in.frames] = asTaken ? keys_[std::size_t(i)] : 0;
     in.bgr[in.frames] = v.pixels[std::size_t(i)];
     in.scale[in.frames++] = v.scales[std::size_t(i)];
   }

@@ -232,13 +232,32 @@ void GpuMerge::fill(int binding, const void* data, std::size_t bytes) {
 void GpuMerge::operator()(const merge::FrameInput& in, std::vector<merge::RowSums>& rows) {
   const std::size_t pixels = std::size_t(in.width) * std::size_t(in.height);
   const std::size_t frameBytes = pixels * 3, stride = (frameBytes + 3) / 4 * 4;
-  // The frames' codes, each at a word boundary, as they are.
-  fill(kFrames, nullptr, stride * std::size_t(in.frames));
+  // The frames' codes, each in a slot at a word boundary, as they are; a frame still in a slot
+  // from an earlier merge (its key) is not uploaded again.
+  if (stride != slotStride_) {
+    fill(kFrames, nullptr, stride * merge::kMaxFrames);
+    slotStride_ = stride;
+    std::fill(std::begin(slotKey_), std::end(slotKey_), 0);
+  }
+  glBindBuffer(GL_SHADER_STORAGE_BUFFER, buffers_[kFrames].get());
+  glBindBufferBase(GL_SHADER_STORAGE_BUFFER, kFrames, buffers_[kFrames].get());
+  int slotOf[merge::kMaxFrames];
+  bool taken[merge::kMaxFrames] = {};
+  for (int i = 0; i < in.frames; ++i) {
+    slotOf[i] = -1;
+    for (int k = 0; in.key[i] != 0 && k < merge::kMaxFrames && slotOf[i] < 0; ++k)
+      if (slotKey_[k] == in.key[i] && !taken[k]) slotOf[i] = k, taken[k] = true;
+  }
   GLuint offsets[merge::kMaxFrames] = {};
   for (int i = 0; i < in.frames; ++i) {
-    offsets[i] = GLuint(stride * std::size_t(i));
-    glBufferSubData(GL_SHADER_STORAGE_BUFFER, GLintptr(offsets[i]), GLsizeiptr(frameBytes),
-                    in.bgr[i]);
+    if (slotOf[i] < 0) {
+      const int k = int(std::find(std::begin(taken), std::end(taken), false) - std::begin(taken));
+      slotOf[i] = k, taken[k] = true, slotKey_[k] = in.key[i];
+      glBufferSubData(GL_SHADER_STORAGE_BUFFER, GLintptr(stride * std::size_t(k)),
+                      GLsizeiptr(frameBytes), in.bgr[i]);
+      ++uploaded_;
+    }
+    offsets[i] = GLuint(stride * std::size_t(slotOf[i]));
   }
   float lut[3 * 256];
   for (int c = 0; c < 3; ++c) std::copy(in.lut[c], in.lut[c] + 256, lut + 256 * c);

@@ -132,6 +132,7 @@ class BracketMerger {
   std::vector<float> reference_;      ///< the last trusted merge's (complete, in agreement)
   bool referenceIsPrevious_ = false;  ///< the last merge was trusted: reference_ is stale
   std::deque<double> agreements_;     ///< per window frame: the agreement of its own merge
+  std::deque<std::uint64_t> keys_;    ///< per window frame: merge::FrameInput::key
   struct Alignment;                   ///< the camera's rotation, and the frames turned by it
   std::unique_ptr<Alignment> align_;  ///< null where the frames are not aligned
   merge::FrameKernel frameKernel_;    ///< setFrameKernel()

@@ -22,6 +22,10 @@ struct FrameInput {
   int frames = 0;
   const std::uint8_t* bgr[kMaxFrames] = {};
   float scale[kMaxFrames] = {};
+  /// Each frame's identity while its pixels stay as they are (a number given as it joins a window,
+  /// never given again in the process), or 0 where they change from one merge to the next (turned
+  /// to the newest): what a processor uploaded under an identity it may keep and reuse.
+  std::uint64_t key[kMaxFrames] = {};
   int longest = 0;            ///< which of them has the longest exposure
   const float* lut[3] = {};   ///< the response: linear per code (256 each), for R, G and B
   int floor = 0, clip = 255;  ///< noise floor and clip level (codes)

@@ -6,6 +6,8 @@
 // column integrals in the same pass: one workgroup a row, each row's sums read back. The
 // luminance the next merge reads comes back too, and the merged frame where it is asked for.
 // Needs a current context with compute shaders (GL 4.3; hasCompute()).
+#include <cstddef>
+#include <cstdint>
 #include <vector>
 
 #include "liveprobe/gl/handles.h"
@@ -21,8 +23,12 @@ class GpuMerge {
   GpuMerge(const GpuMerge&) = delete;
   GpuMerge& operator=(const GpuMerge&) = delete;
 
-  /// One merge (what lp::BracketMerger::setFrameKernel takes).
+  /// One merge (what lp::BracketMerger::setFrameKernel takes). A frame kept from an earlier
+  /// merge (merge::FrameInput::key) is not uploaded again: a still camera's bracket uploads one
+  /// frame a merge.
   void operator()(const merge::FrameInput& in, std::vector<merge::RowSums>& rows);
+  /// Frames uploaded so far.
+  std::size_t framesUploaded() const { return uploaded_; }
 
  private:
   /// `buffer` holding `bytes` from `data` (grown where it is smaller), bound at `binding`.
@@ -30,6 +36,9 @@ class GpuMerge {
   Program program_;
   Buffer buffers_[9];
   std::size_t sizes_[9] = {};
+  std::uint64_t slotKey_[merge::kMaxFrames] = {};  ///< the frame each slot holds (0: none kept)
+  std::size_t slotStride_ = 0;                     ///< the bytes of a slot
+  std::size_t uploaded_ = 0;
 };
 
 }  // namespace lp::gl
