@@ -220,10 +220,15 @@ GpuMerge::~GpuMerge() = default;
 void GpuMerge::fill(int binding, const void* data, std::size_t bytes) {
   const std::size_t b = std::size_t(binding);
   glBindBuffer(GL_SHADER_STORAGE_BUFFER, buffers_[b].get());
-  bytes = std::max<std::size_t>((bytes + 3) / 4 * 4, 16);
-  if (sizes_[b] < bytes) {
-    glBufferData(GL_SHADER_STORAGE_BUFFER, GLsizeiptr(bytes), nullptr, GL_DYNAMIC_DRAW);
-    sizes_[b] = bytes;
+  const std::size_t size = std::max<std::size_t>((bytes + 3) / 4 * 4, 16);
+  if (sizes_[b] < size) {
+    while (glGetError() != GL_NO_ERROR) {
+    }
+    glBufferData(GL_SHADER_STORAGE_BUFFER, GLsizeiptr(size), nullptr, GL_DYNAMIC_DRAW);
+    if (glGetError() == GL_OUT_OF_MEMORY)
+      throw ContextError("the bracket merge on the GPU: out of GPU memory for " +
+                         std::to_string(size >> 20) + " MB");
+    sizes_[b] = size;
   }
   if (data) glBufferSubData(GL_SHADER_STORAGE_BUFFER, 0, GLsizeiptr(bytes), data);
   glBindBufferBase(GL_SHADER_STORAGE_BUFFER, GLuint(binding), buffers_[b].get());
