@@ -95,6 +95,7 @@ std::function<GpuWork()> streamProjection(ProjectOn asked, gl::GlContext& drawin
       state->mergeMs =
           state->timed(*state->mergeTimer, gl::GpuTimer::Merge, [&] { (*state->merge)(in, rows); });
     };
+    work.mergeTurns = true;
     work.mergeMs = [state] { return state->mergeMs; };
     return work;
   };

@@ -329,7 +329,7 @@ void CapturePipeline::run() {
     if (opt_.projectOnGpu) {
       GpuWork work = opt_.projectOnGpu();
       s.gpu = std::move(work.project);
-      if (s.merger && work.merge) s.merger->setFrameKernel(std::move(work.merge));
+      if (s.merger && work.merge) s.merger->setFrameKernel(std::move(work.merge), work.mergeTurns);
       s.gpuMergeMs = std::move(work.mergeMs);
     }
     while (!stop_ && !interrupted_ &&

@@ -272,6 +272,17 @@ namespace {
 // Where each pixel of one row reads from: the index of the corner above-left (row y0, column
 // x0) and of the one above-right (x0 + 1, wrapped), and the bilinear fractions; the corners
 // below are a row further.
+// Where pixel (x, y) of an equirect frame w x h reads from under the turn qd.
+void turnSource(const glm::dmat3& qd, int w, int h, double x, double y, double& fx, double& fy) {
+  const double theta = kPi * (y + 0.5) / h, phi = 2 * kPi * (x + 0.5) / w;
+  const glm::dvec3 p = qd * glm::dvec3(std::sin(theta) * std::cos(phi),
+                                       std::sin(theta) * std::sin(phi), std::cos(theta));
+  pixelOf(p, w, h, fx, fy);
+}
+
+// A row within 1.1 degrees of a pole: its pixels' sources are found one by one.
+bool polarRow(int y, int h) { return std::sin(kPi * (y + 0.5) / h) < 0.02; }
+
 struct RowSamples {
   std::vector<std::uint32_t> left, right;
   std::vector<float> ax, ay;
@@ -300,38 +311,49 @@ struct RowSamples {
   }
 };
 
+}  // namespace
+
+TurnGrid turnGrid(int w, int h, const glm::mat3& q) {
+  const glm::dmat3 qd(q);
+  TurnGrid g;
+  g.nodesX = (w + kTurnGrid - 1) / kTurnGrid + 1, g.nodesY = (h + kTurnGrid - 1) / kTurnGrid + 1;
+  g.offset.resize(std::size_t(g.nodesX) * std::size_t(g.nodesY)), g.row.resize(g.offset.size());
+  for (int j = 0; j < g.nodesY; ++j)
+    for (int i = 0; i < g.nodesX; ++i) {
+      double fx, fy;
+      turnSource(qd, w, h, i * kTurnGrid, std::min(j * kTurnGrid, h - 1), fx, fy);
+      const std::size_t at = std::size_t(j) * std::size_t(g.nodesX) + std::size_t(i);
+      g.offset[at] = float(std::remainder(fx - i * kTurnGrid, w));
+      g.row[at] = float(fy);
+    }
+  while (g.polar < h / 2 && polarRow(g.polar, h)) ++g.polar;
+  return g;
+}
+
+namespace {
+
 // Calls row(y, samples) for every row of an equirect frame w x h with where its pixels read
 // from under the turn q: exact on a grid every 16 pixels, bilinear between (a small turn moves
 // pixels smoothly), exact per pixel within 1.1 degrees of the poles (where a turn moves a
 // pixel's azimuth fast).
 template <class Row>
 void forEachTurnedRow(int w, int h, const glm::mat3& q, Executor* executor, Row row) {
-  constexpr int kGrid = 16;
+  constexpr int kGrid = kTurnGrid;
   const glm::dmat3 qd(q);
   const auto source = [&](double x, double y, double& fx, double& fy) {
-    const double theta = kPi * (y + 0.5) / h, phi = 2 * kPi * (x + 0.5) / w;
-    const glm::dvec3 p = qd * glm::dvec3(std::sin(theta) * std::cos(phi),
-                                         std::sin(theta) * std::sin(phi), std::cos(theta));
-    pixelOf(p, w, h, fx, fy);
+    turnSource(qd, w, h, x, y, fx, fy);
   };
-  const int gw = (w + kGrid - 1) / kGrid + 1, gh = (h + kGrid - 1) / kGrid + 1;
+  const TurnGrid grid = turnGrid(w, h, q);
+  const int gw = grid.nodesX, gh = grid.nodesY;
   const auto nodeY = [&](int j) { return std::min(j * kGrid, h - 1); };
-  // Per node: the column offset (unwrapped across the seam) and the row read from.
-  std::vector<float> offset(std::size_t(gw) * gh), rowAt(std::size_t(gw) * gh);
-  for (int j = 0; j < gh; ++j)
-    for (int i = 0; i < gw; ++i) {
-      double fx, fy;
-      source(i * kGrid, nodeY(j), fx, fy);
-      offset[std::size_t(j) * gw + std::size_t(i)] = float(std::remainder(fx - i * kGrid, w));
-      rowAt[std::size_t(j) * gw + std::size_t(i)] = float(fy);
-    }
+  const std::vector<float>&offset = grid.offset, &rowAt = grid.row;
   parallelFor(executor, std::size_t(h), Split{.grain = 1, .perThread = 4},
               [&](std::size_t y0, std::size_t y1) {
                 RowSamples samples(w);
                 std::vector<float> o(static_cast<std::size_t>(gw)), r(o);
                 std::vector<float> fx(static_cast<std::size_t>(w)), fy(fx);
                 for (int y = int(y0); y < int(y1); ++y) {
-                  if (std::sin(kPi * (y + 0.5) / h) < 0.02) {
+                  if (polarRow(y, h)) {
                     for (int x = 0; x < w; ++x) {
                       double sx, sy;
                       source(x, y, sx, sy);

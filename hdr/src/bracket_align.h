@@ -101,15 +101,30 @@ class Coder {
     const std::uint32_t i = std::clamp<std::uint32_t>(bits >> 15, kFirst, kLast) - kFirst;
     return table_[std::size_t(c)][i];
   }
-
- private:
+  /// What code() reads, for a processor that codes back itself (merge::FrameInput::Recode).
+  const std::uint8_t* table(int c) const { return table_[std::size_t(c)].data(); }
+  float inverseTop(int c) const { return inverseTop_[std::size_t(c)]; }
   // Buckets from 2^-24 to 1 (of the curve's top), below and above clamped (negatives too: their
   // sign bit puts them above).
   static constexpr std::uint32_t kFirst = 103u << 8, kLast = 127u << 8;
+
+ private:
   ResponseTable linear_;
   std::array<std::array<std::uint8_t, kLast - kFirst + 1>, 3> table_{};
   std::array<float, 3> inverseTop_{};
 };
+
+/// Where an equirect frame's pixels read from under a turn q (dst(d) = src(q d)): exact at nodes
+/// every kTurnGrid pixels (the last row's at row h - 1), linear between them along the row and
+/// down the column, and exact per pixel in the `polar` rows at each pole. Per node (nodesX
+/// across, row by row), the column read from less the node's own (unwrapped across the seam), and
+/// the row read from.
+inline constexpr int kTurnGrid = 16;
+struct TurnGrid {
+  int nodesX = 0, nodesY = 0, polar = 0;
+  std::vector<float> offset, row;
+};
+TurnGrid turnGrid(int width, int height, const glm::mat3& q);
 
 /// dst(d) = src(q d) for an 8-bit BGR equirect frame: bilinear in linear units, coded back to
 /// the nearest code; a pixel whose corners are clipped (a code at or above `clip`) by half their

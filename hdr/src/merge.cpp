@@ -4,6 +4,7 @@
 #include <atomic>
 #include <cmath>
 #include <limits>
+#include <optional>
 #include <utility>
 #include <vector>
 
@@ -69,6 +70,10 @@ struct BracketMerger::Alignment {
   std::vector<float> previousTurned, referenceTurned;
   std::uint64_t previousSequence = 0, referenceSequence = 0;  ///< the frames they were merged for
   std::vector<std::uint8_t> nearLow, nearHigh;  ///< the newest frame's 3x3 least and most code
+  /// The older frames the pixel loop turns itself (setFrameKernel's `turns`): their turns, and
+  /// where their pixels read from.
+  std::array<std::optional<glm::mat3>, kMaxBracket> byKernel;
+  std::array<align::TurnGrid, kMaxBracket> grids;
 };
 
 namespace {
@@ -127,12 +132,18 @@ void BracketMerger::push(const Frame& in) {
 std::array<const std::uint8_t*, kMaxBracket> BracketMerger::alignedWindow(Executor* executor) {
   std::array<const std::uint8_t*, kMaxBracket> pixels{};
   const int n = int(window_.size());
+  if (align_) align_->byKernel = {};
   for (int i = 0; i < n; ++i) {
     const Frame& f = window_[std::size_t(i)];
     pixels[std::size_t(i)] = f.bgr8.data();
     if (!align_ || i == n - 1) continue;
     const glm::mat3 q = align_->tracker.turnSince(f.sequence);
     if (align::displacementPixels(q, f.width) < kLeastTurnPixels) continue;
+    if (kernelTurns_) {  // the pixel loop turns it, from the frame as taken
+      align_->byKernel[std::size_t(i)] = q;
+      align_->grids[std::size_t(i)] = align::turnGrid(f.width, f.height, q);
+      continue;
+    }
     auto& turned = align_->turned[std::size_t(i)];
     turned.resize(f.bgr8.size());
     align::turnCodes(f.bgr8.data(), f.width, f.height, q, align_->coder, opt_.clipLevel,
@@ -268,7 +279,8 @@ FrameConfidence BracketMerger::add(const Frame& in, Frame& out, Executor* execut
   // neighbourhood.
   bool turned = false;
   for (int i = 0; i < view.newest; ++i)
-    turned |= view.pixels[std::size_t(i)] != window_[std::size_t(i)].bgr8.data();
+    turned |= view.pixels[std::size_t(i)] != window_[std::size_t(i)].bgr8.data() ||
+              (align_ && align_->byKernel[std::size_t(i)]);
   if (turned) {
     align_->nearLow.resize(pixels), align_->nearHigh.resize(pixels);
     align::neighbourhood(window_.back().bgr8.data(), w, h, align_->nearLow.data(),
@@ -358,6 +370,14 @@ merge::FrameInput BracketMerger::frameInput(const BracketView& v, float* rgb, co
     if (i == v.longest) in.longest = in.frames;
     const bool asTaken = v.pixels[std::size_t(i)] == window_[std::size_t(i)].bgr8.data();
     in.key[in.frames] = asTaken ? keys_[std::size_t(i)] : 0;
+    if (const auto& q = align_ ? align_->byKernel[std::size_t(i)] : std::nullopt) {
+      merge::FrameInput::Turn& t = in.turn[in.frames];
+      t.apply = true;
+      std::copy(&(*q)[0][0], &(*q)[0][0] + 9, t.q);
+      const align::TurnGrid& g = align_->grids[std::size_t(i)];
+      t.nodesX = g.nodesX, t.nodesY = g.nodesY, t.polar = g.polar;
+      t.offset = g.offset.data(), t.row = g.row.data();
+    }
     in.bgr[in.frames] = v.pixels[std::size_t(i)];
     in.scale[in.frames++] = v.scales[std::size_t(i)];
   }
@@ -370,6 +390,12 @@ merge::FrameInput BracketMerger::frameInput(const BracketView& v, float* rgb, co
   in.fresh = fresh;
   in.nearLow = v.nearLow, in.nearHigh = v.nearHigh;
   in.rgb = rgb;
+  if (align_) {
+    for (int c = 0; c < 3; ++c)
+      in.recode.table[c] = align_->coder.table(c),
+      in.recode.inverseTop[c] = align_->coder.inverseTop(c);
+    in.recode.first = align::Coder::kFirst, in.recode.last = align::Coder::kLast;
+  }
   if (project)
     for (int k = 0; k < 5; ++k) in.col[k] = project->col[std::size_t(k)].data();
   return in;

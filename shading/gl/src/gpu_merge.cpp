@@ -11,7 +11,22 @@ namespace lp::gl {
 
 namespace {
 
-enum Binding { kFrames, kLut, kPrevious, kReference, kLuminance, kNear, kRgb, kCol, kRows };
+enum Binding {
+  kFrames,
+  kLut,
+  kPrevious,
+  kReference,
+  kLuminance,
+  kNear,
+  kRgb,
+  kCol,
+  kRows,
+  kRecode,
+  kNodes,
+  kBindings
+};
+// Frame slots: the window's frames as taken, and as many turned to the newest.
+constexpr int kSlots = 2 * merge::kMaxFrames;
 
 // Floats a row's sums take in the Rows buffer: power, clipped power, clipped estimate, lost
 // power, dark pixels, the brightest luminance, its clipped and fresh flags, its column, and the
@@ -195,6 +210,104 @@ void main() {
 }
 )";
 
+// An older frame turned to the newest (align::turnCodes on the CPU): dst(d) = src(q d) for an
+// equirect frame, each pixel bilinear over the four around where it reads from, in linear units,
+// and coded back through the response's inverse table; a pixel whose corners are clipped by half
+// their weight or more reads as the clipped corner of most weight. Each invocation writes four
+// pixels, three whole words (a slot is a multiple of 12 bytes).
+const char* const kTurnCs = R"(#version 430
+layout(local_size_x = 64) in;
+layout(std430, binding = 0) buffer Frames { uint frameWords[]; };
+layout(std430, binding = 1) readonly buffer Lut { float lut[]; };
+layout(std430, binding = 9) readonly buffer Recode { uint recodeWords[]; };
+layout(std430, binding = 10) readonly buffer Nodes { float nodes[]; };
+uniform int width, height, clipCode, nodesX, nodesY, polar;
+uniform uint source, dest, first, last, span;
+uniform mat3 q;
+uniform vec3 inverseTop;
+const float kPi = 3.14159265358979;
+
+uint byteOf(uint word, uint o) { return (word >> ((o & 3u) * 8u)) & 255u; }
+uint sourceByte(uint o) { return byteOf(frameWords[o >> 2], o); }
+uint codeOf(int c, float v) {
+  const uint i = clamp(floatBitsToUint(v * inverseTop[c]) >> 15, first, last) - first;
+  const uint o = uint(c) * span + i;
+  return byteOf(recodeWords[o >> 2], o);
+}
+
+// Where pixel (x, y) reads from: from the grid's nodes as the CPU interpolates them, or in the
+// polar rows from q itself.
+vec2 sourceOf(int x, int y) {
+  if (y < polar || y >= height - polar) {
+    const float theta = kPi * (float(y) + 0.5) / float(height);
+    const float phi = 2.0 * kPi * (float(x) + 0.5) / float(width);
+    const vec3 p = q * vec3(sin(theta) * cos(phi), sin(theta) * sin(phi), cos(theta));
+    float azimuth = atan(p.y, p.x);
+    if (azimuth < 0.0) azimuth += 2.0 * kPi;
+    return vec2(azimuth / (2.0 * kPi) * float(width) - 0.5,
+                acos(clamp(p.z, -1.0, 1.0)) / kPi * float(height) - 0.5);
+  }
+  const int j = min(y / 16, nodesY - 2);
+  const int top = min(j * 16, height - 1), next = min((j + 1) * 16, height - 1);
+  const float t = float(y - top) / float(max(1, next - top));
+  const int i = x / 16;
+  const int a = j * nodesX + i, b = a + nodesX;
+  const float oa = nodes[a] + t * (nodes[b] - nodes[a]);
+  const float ob = nodes[a + 1] + t * (nodes[b + 1] - nodes[a + 1]);
+  const int rows = nodesX * nodesY;
+  const float ra = nodes[rows + a] + t * (nodes[rows + b] - nodes[rows + a]);
+  const float rb = nodes[rows + a + 1] + t * (nodes[rows + b + 1] - nodes[rows + a + 1]);
+  const float s = float(x - 16 * i) * (1.0 / 16.0);
+  return vec2(float(x) + oa + s * (ob - oa), ra + s * (rb - ra));
+}
+
+uvec3 turned(uint pixel) {
+  const int x = int(pixel % uint(width)), y = int(pixel / uint(width));
+  const vec2 from = sourceOf(x, y);
+  const float fx = from.x, fy = clamp(from.y, 0.0, float(height - 1));
+  int c0 = int(fx + float(width)) - width;
+  const float ax = fx - float(c0);
+  c0 += c0 < 0 ? width : 0;
+  c0 -= c0 >= width ? width : 0;
+  const int c1 = c0 + 1 == width ? 0 : c0 + 1;
+  const int r0 = min(int(fy), height - 2);
+  const float ay = fy - float(r0);
+  const int at[4] = int[4](r0 * width + c0, r0 * width + c1, (r0 + 1) * width + c0,
+                           (r0 + 1) * width + c1);
+  const float weight[4] = float[4]((1.0 - ax) * (1.0 - ay), ax * (1.0 - ay), (1.0 - ax) * ay,
+                                   ax * ay);
+  float r = 0.0, g = 0.0, b = 0.0, unclipped = 0.0, most = -1.0;
+  uvec3 result = uvec3(0u);
+  for (int k = 0; k < 4; ++k) {
+    const uint o = source + 3u * uint(at[k]);
+    const uvec3 bgr = uvec3(sourceByte(o), sourceByte(o + 1u), sourceByte(o + 2u));
+    if (max(bgr.x, max(bgr.y, bgr.z)) >= uint(clipCode)) {
+      if (weight[k] > most) most = weight[k], result = bgr;
+      continue;
+    }
+    unclipped += weight[k];
+    b += weight[k] * lut[512u + bgr.x], g += weight[k] * lut[256u + bgr.y];
+    r += weight[k] * lut[bgr.z];
+  }
+  if (unclipped <= 0.5) return result;  // the clipped corner of most weight
+  const float inv = 1.0 / unclipped;
+  return uvec3(codeOf(2, b * inv), codeOf(1, g * inv), codeOf(0, r * inv));
+}
+
+void main() {
+  const uint i = gl_GlobalInvocationID.x, pixels = uint(width * height);
+  if (4u * i >= pixels) return;
+  uint bytes[12];
+  for (uint j = 0u; j < 4u; ++j) {
+    const uvec3 v = 4u * i + j < pixels ? turned(4u * i + j) : uvec3(0u);
+    bytes[3u * j] = v.x, bytes[3u * j + 1u] = v.y, bytes[3u * j + 2u] = v.z;
+  }
+  for (uint w = 0u; w < 3u; ++w)
+    frameWords[dest / 4u + 3u * i + w] = bytes[4u * w] | (bytes[4u * w + 1u] << 8) |
+                                         (bytes[4u * w + 2u] << 16) | (bytes[4u * w + 3u] << 24);
+}
+)";
+
 void setInt(GLuint program, const char* name, int value) {
   glUniform1i(glGetUniformLocation(program, name), value);
 }
@@ -208,6 +321,7 @@ GpuMerge::GpuMerge() {
   if (!hasCompute())
     throw ContextError("the bracket merge on the GPU needs compute shaders (GL 4.3)");
   program_ = linkCompute(kMergeCs, "the bracket merge");
+  turn_ = linkCompute(kTurnCs, "the bracket's turn");
   for (Buffer& b : buffers_) {
     GLuint id = 0;
     glGenBuffers(1, &id);
@@ -234,39 +348,92 @@ void GpuMerge::fill(int binding, const void* data, std::size_t bytes) {
   glBindBufferBase(GL_SHADER_STORAGE_BUFFER, GLuint(binding), buffers_[b].get());
 }
 
+void GpuMerge::turnFrame(const merge::FrameInput& in, int frame, GLuint source, GLuint dest) {
+  const merge::FrameInput::Recode& rc = in.recode;
+  if (!rc.table[0])
+    throw ContextError("the bracket merge on the GPU: a turn without the response's way back");
+  const std::size_t span = (rc.last - rc.first + 1 + 3) / 4 * 4;
+  std::vector<std::uint8_t> tables(3 * span, 0);
+  for (int c = 0; c < 3; ++c)
+    std::copy(rc.table[c], rc.table[c] + (rc.last - rc.first + 1),
+              tables.begin() + std::ptrdiff_t(span * std::size_t(c)));
+  if (tables != recode_) {  // uploaded once per response
+    fill(kRecode, tables.data(), tables.size());
+    recode_ = std::move(tables);
+  }
+  glBindBufferBase(GL_SHADER_STORAGE_BUFFER, kRecode, buffers_[kRecode].get());
+  const merge::FrameInput::Turn& turn = in.turn[frame];
+  const std::size_t nodes = std::size_t(turn.nodesX) * std::size_t(turn.nodesY);
+  if (!turn.offset || nodes < 4)
+    throw ContextError("the bracket merge on the GPU: a turn without its grid of sources");
+  std::vector<float> grid(turn.offset, turn.offset + nodes);
+  grid.insert(grid.end(), turn.row, turn.row + nodes);
+  fill(kNodes, grid.data(), grid.size() * sizeof(float));
+  glBindBufferBase(GL_SHADER_STORAGE_BUFFER, kFrames, buffers_[kFrames].get());
+  glBindBufferBase(GL_SHADER_STORAGE_BUFFER, kLut, buffers_[kLut].get());
+  const GLuint p = turn_.get();
+  glUseProgram(p);
+  setInt(p, "width", in.width), setInt(p, "height", in.height), setInt(p, "clipCode", in.clip);
+  setInt(p, "nodesX", turn.nodesX), setInt(p, "nodesY", turn.nodesY),
+      setInt(p, "polar", turn.polar);
+  glUniform1ui(glGetUniformLocation(p, "source"), source);
+  glUniform1ui(glGetUniformLocation(p, "dest"), dest);
+  glUniform1ui(glGetUniformLocation(p, "first"), rc.first);
+  glUniform1ui(glGetUniformLocation(p, "last"), rc.last);
+  glUniform1ui(glGetUniformLocation(p, "span"), GLuint(span));
+  glUniformMatrix3fv(glGetUniformLocation(p, "q"), 1, GL_FALSE, in.turn[frame].q);
+  glUniform3fv(glGetUniformLocation(p, "inverseTop"), 1, rc.inverseTop);
+  const std::size_t quads = (std::size_t(in.width) * std::size_t(in.height) + 3) / 4;
+  glDispatchCompute(GLuint((quads + 63) / 64), 1, 1);
+  glUseProgram(0);
+}
+
 void GpuMerge::operator()(const merge::FrameInput& in, std::vector<merge::RowSums>& rows) {
   const std::size_t pixels = std::size_t(in.width) * std::size_t(in.height);
-  const std::size_t frameBytes = pixels * 3, stride = (frameBytes + 3) / 4 * 4;
-  // The frames' codes, each in a slot at a word boundary, as they are; a frame still in a slot
-  // from an earlier merge (its key) is not uploaded again.
+  // A slot: whole words, and whole groups of four pixels for the turn's writes.
+  const std::size_t frameBytes = pixels * 3, stride = (frameBytes + 11) / 12 * 12;
+  float lut[3 * 256];
+  for (int c = 0; c < 3; ++c) std::copy(in.lut[c], in.lut[c] + 256, lut + 256 * c);
+  fill(kLut, lut, sizeof lut);
+  // The frames' codes, each in a slot, as they are; a frame still in a slot from an earlier merge
+  // (its key) is not uploaded again.
   if (stride != slotStride_) {
-    fill(kFrames, nullptr, stride * merge::kMaxFrames);
+    fill(kFrames, nullptr, stride * kSlots);
     slotStride_ = stride;
     std::fill(std::begin(slotKey_), std::end(slotKey_), 0);
   }
   glBindBuffer(GL_SHADER_STORAGE_BUFFER, buffers_[kFrames].get());
   glBindBufferBase(GL_SHADER_STORAGE_BUFFER, kFrames, buffers_[kFrames].get());
   int slotOf[merge::kMaxFrames];
-  bool taken[merge::kMaxFrames] = {};
+  bool taken[kSlots] = {};
+  const auto freeSlot = [&](std::uint64_t key) {
+    const int k = int(std::find(std::begin(taken), std::end(taken), false) - std::begin(taken));
+    taken[k] = true, slotKey_[k] = key;
+    return k;
+  };
   for (int i = 0; i < in.frames; ++i) {
     slotOf[i] = -1;
-    for (int k = 0; in.key[i] != 0 && k < merge::kMaxFrames && slotOf[i] < 0; ++k)
+    for (int k = 0; in.key[i] != 0 && k < kSlots && slotOf[i] < 0; ++k)
       if (slotKey_[k] == in.key[i] && !taken[k]) slotOf[i] = k, taken[k] = true;
   }
-  GLuint offsets[merge::kMaxFrames] = {};
-  for (int i = 0; i < in.frames; ++i) {
+  for (int i = 0; i < in.frames; ++i)
     if (slotOf[i] < 0) {
-      const int k = int(std::find(std::begin(taken), std::end(taken), false) - std::begin(taken));
-      slotOf[i] = k, taken[k] = true, slotKey_[k] = in.key[i];
-      glBufferSubData(GL_SHADER_STORAGE_BUFFER, GLintptr(stride * std::size_t(k)),
+      slotOf[i] = freeSlot(in.key[i]);
+      glBufferSubData(GL_SHADER_STORAGE_BUFFER, GLintptr(stride * std::size_t(slotOf[i])),
                       GLsizeiptr(frameBytes), in.bgr[i]);
       ++uploaded_;
     }
+  // Older frames turned to the newest, each from its slot into one of its own.
+  GLuint offsets[merge::kMaxFrames] = {};
+  for (int i = 0; i < in.frames; ++i) {
     offsets[i] = GLuint(stride * std::size_t(slotOf[i]));
+    if (!in.turn[i].apply) continue;
+    const int into = freeSlot(0);
+    turnFrame(in, i, offsets[i], GLuint(stride * std::size_t(into)));
+    offsets[i] = GLuint(stride * std::size_t(into));
   }
-  float lut[3 * 256];
-  for (int c = 0; c < 3; ++c) std::copy(in.lut[c], in.lut[c] + 256, lut + 256 * c);
-  fill(kLut, lut, sizeof lut);
+  if (std::any_of(std::begin(in.turn), std::end(in.turn), [](auto& t) { return t.apply; }))
+    glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
   fill(kPrevious, in.previous, pixels * sizeof(float));
   fill(kReference, in.reference, pixels * sizeof(float));
   fill(kLuminance, nullptr, pixels * sizeof(float));

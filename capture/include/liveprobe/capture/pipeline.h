@@ -39,6 +39,7 @@ struct GpuWork {
   /// A bracket's pixel loop (BracketMerger::setFrameKernel): merged, and projected as it merges,
   /// on the GPU.
   merge::FrameKernel merge;
+  bool mergeTurns = false;  ///< it turns the older frames itself (merge::FrameInput::turn)
   /// The GPU's time for the last merge (ms), where the context has a timer.
   std::function<std::optional<double>()> mergeMs;
 };

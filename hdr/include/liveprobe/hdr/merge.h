@@ -96,8 +96,12 @@ class BracketMerger {
   FrameConfidence add(const Frame& in, Frame& out, Executor* executor, MergeProjection& projection);
 
   /// The pixel loop run elsewhere from here on (the GPU's: liveprobe/gl/gpu_merge.h), in place
-  /// of the CPU's row kernel; none: the CPU's again. Everything else stays the merger's.
-  void setFrameKernel(merge::FrameKernel kernel) { frameKernel_ = std::move(kernel); }
+  /// of the CPU's row kernel; none: the CPU's again. `turns`: it turns the older frames itself
+  /// (merge::FrameInput::turn); else they come to it turned. Everything else stays the merger's.
+  void setFrameKernel(merge::FrameKernel kernel, bool turns = false) {
+    frameKernel_ = std::move(kernel);
+    kernelTurns_ = frameKernel_ && turns;
+  }
   bool hasFrameKernel() const { return bool(frameKernel_); }
 
   const MergeOptions& options() const { return opt_; }
@@ -136,6 +140,7 @@ class BracketMerger {
   struct Alignment;                   ///< the camera's rotation, and the frames turned by it
   std::unique_ptr<Alignment> align_;  ///< null where the frames are not aligned
   merge::FrameKernel frameKernel_;    ///< setFrameKernel()
+  bool kernelTurns_ = false;
 };
 
 }  // namespace lp

@@ -26,6 +26,30 @@ struct FrameInput {
   /// never given again in the process), or 0 where they change from one merge to the next (turned
   /// to the newest): what a processor uploaded under an identity it may keep and reuse.
   std::uint64_t key[kMaxFrames] = {};
+  /// Where the processor turns the older frames itself (BracketMerger::setFrameKernel's
+  /// `turns`): each frame's turn to the newest, dst(d) = src(q d) for an equirect frame (q
+  /// column-major), applied to the frame as it was taken (`bgr`, `key`), bilinear in linear units
+  /// and coded back through `recode`, as the CPU turns it (a pixel whose corners are clipped by
+  /// half their weight or more reads as the clipped corner of most weight).
+  struct Turn {
+    bool apply = false;
+    float q[9] = {};
+    /// Where each pixel reads from, as the CPU finds it: exact at nodes every 16 pixels (the
+    /// last row's at row height - 1), linear between them along the row and down the column,
+    /// exact per pixel (from q) in the `polar` rows at each pole. Per node (nodesX across, row by
+    /// row): the column read from less the node's own, and the row read from.
+    int nodesX = 0, nodesY = 0, polar = 0;
+    const float* offset = nullptr;
+    const float* row = nullptr;
+  };
+  Turn turn[kMaxFrames];
+  /// The response's way back to a code, per channel (R, G, B): the code of linear v is
+  /// table[c][min(max(bits(v * inverseTop[c]) >> 15, first), last) - first].
+  struct Recode {
+    const std::uint8_t* table[3] = {};
+    float inverseTop[3] = {};
+    std::uint32_t first = 0, last = 0;
+  } recode;
   int longest = 0;            ///< which of them has the longest exposure
   const float* lut[3] = {};   ///< the response: linear per code (256 each), for R, G and B
   int floor = 0, clip = 255;  ///< noise floor and clip level (codes)

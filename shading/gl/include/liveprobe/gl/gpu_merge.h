@@ -33,11 +33,14 @@ class GpuMerge {
  private:
   /// `buffer` holding `bytes` from `data` (grown where it is smaller), bound at `binding`.
   void fill(int binding, const void* data, std::size_t bytes);
-  Program program_;
-  Buffer buffers_[9];
-  std::size_t sizes_[9] = {};
-  std::uint64_t slotKey_[merge::kMaxFrames] = {};  ///< the frame each slot holds (0: none kept)
-  std::size_t slotStride_ = 0;                     ///< the bytes of a slot
+  /// Frame `frame` of `in` turned from the slot at byte `source` into the one at `dest`.
+  void turnFrame(const merge::FrameInput& in, int frame, GLuint source, GLuint dest);
+  Program program_, turn_;
+  Buffer buffers_[11];
+  std::size_t sizes_[11] = {};
+  std::uint64_t slotKey_[2 * merge::kMaxFrames] = {};  ///< the frame each slot holds (0: none)
+  std::vector<std::uint8_t> recode_;  ///< the response's way back, as uploaded for the turn
+  std::size_t slotStride_ = 0;        ///< the bytes of a slot
   std::size_t uploaded_ = 0;
 };
 
