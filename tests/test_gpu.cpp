@@ -594,7 +594,7 @@ std::vector<lp::Frame> movingBracket(int w, int h, int count) {
 // a clipped sun) in windows of 3 and 5 frames, a width that fills no workgroup: each merged
 // value within 1e-5 of the CPU's, the coefficients projected in the same pass within 1e-5 of
 // L00, and every confidence term within 1e-5; each frame uploaded once, however many merges
-// read it.
+// read it, and the last merges' luminance never again.
 TEST(GpuMerge, EveryPixelIsTheCpusMerge) {
   eglContext().makeCurrent();
   if (!lp::gl::hasCompute()) GTEST_FAIL() << "Mesa's EGL has compute shaders";
@@ -608,7 +608,8 @@ TEST(GpuMerge, EveryPixelIsTheCpusMerge) {
         onGpu(lp::MergeOptions{.frames = window});
     onGpu.setFrameKernel([&](const lp::merge::FrameInput& in,
                              std::vector<lp::merge::RowSums>& rows) { gpu(in, rows); });
-    const std::size_t uploadedBefore = gpu.framesUploaded();
+    const std::size_t uploadedBefore = gpu.framesUploaded(),
+                      luminanceBefore = gpu.luminanceUploaded();
     for (const lp::Frame& f : frames) {
       lp::Frame a, b;
       lp::MergeProjection pa{.integrals = projector.equirectIntegrals()}, pb = pa;
@@ -631,12 +632,75 @@ TEST(GpuMerge, EveryPixelIsTheCpusMerge) {
       EXPECT_EQ(cb.complete, ca.complete) << what;
       said.push_back(ca);
     }
-    // The camera did not turn: each frame went up once, the older ones kept on the GPU.
+    // The camera did not turn: each frame went up once, the older ones kept on the GPU, and the
+    // last merges' luminance stayed there (the first merge's two, zeros, uploaded).
     EXPECT_EQ(gpu.framesUploaded() - uploadedBefore, frames.size()) << "window " << window;
+    EXPECT_EQ(gpu.luminanceUploaded() - luminanceBefore, 2u) << "window " << window;
   }
   // The run exercised what it is meant to: light found contradicted, and a clipped sun.
   EXPECT_TRUE(std::any_of(said.begin(), said.end(), [](auto& c) { return c.agreement < 0.99; }));
   EXPECT_TRUE(std::any_of(said.begin(), said.end(), [](auto& c) { return !c.brightestMeasured; }));
+}
+
+// The last merges' luminance kept on the GPU (merge::FrameInput::previousKey, referenceKey) is
+// what the merge wrote, not what the caller's buffers hold: a merge told its previous and
+// reference are the last merge's own (by key), handed buffers of garbage, sums as one handed that
+// merge's luminance read back; handed the garbage under no key, it sums otherwise (the garbage is
+// read, so the keys are what kept it out).
+TEST(GpuMerge, KeptLuminanceIsTheLastMergesOwn) {
+  eglContext().makeCurrent();
+  constexpr int w = 125, h = 64;
+  const auto frames = movingBracket(w, h, 4);
+  const std::size_t pixels = std::size_t(w) * h;
+  std::array<std::array<float, 256>, 3> lut{};
+  for (auto& l : lut)
+    for (int c = 0; c < 256; ++c) l[std::size_t(c)] = lp::srgbToLinear(float(c) / 255.0f);
+  const auto input = [&](int newest, const float* previous, const float* reference,
+                         float* luminance) {
+    lp::merge::FrameInput in;
+    in.frames = 3, in.width = w, in.height = h;
+    for (int i = 0; i < 3; ++i) {
+      const lp::Frame& f = frames[std::size_t(newest - 2 + i)];
+      in.bgr[i] = f.bgr8.data(), in.scale[i] = float(f.radianceScale);
+      if (in.scale[i] < in.scale[in.longest]) in.longest = i;
+    }
+    for (int c = 0; c < 3; ++c) in.lut[c] = lut[std::size_t(c)].data();
+    in.floor = 6, in.clip = 250, in.wellExposed = 16;
+    in.wellLinear = lut[1][16], in.belowClipLinear = lut[1][200];
+    in.inv2s2 = float(1.0 / (2 * 0.3 * 0.3));
+    in.previous = previous, in.reference = reference, in.luminance = luminance, in.fresh = true;
+    return in;
+  };
+  const std::vector<float> zeros(pixels, 0.0f), garbage(pixels, 1e6f);
+  std::vector<float> first(pixels), second(pixels), third(pixels);
+  std::vector<lp::merge::RowSums> rows;
+  const auto sums = [&](const std::vector<lp::merge::RowSums>& r) {
+    double lost = 0, estimate = 0;
+    for (const auto& s : r) lost += s.lostPower, estimate += s.clippedEstimate;
+    return std::pair(lost, estimate);
+  };
+  lp::gl::GpuMerge kept, apart;
+  lp::merge::FrameInput a = input(2, zeros.data(), zeros.data(), first.data());
+  a.previousKey = a.referenceKey = 5, a.luminanceKey = 11;
+  kept(a, rows);
+  // The next merge: its previous and reference are the first's own, by key; the buffers lie.
+  lp::merge::FrameInput b = input(3, garbage.data(), garbage.data(), second.data());
+  b.previousKey = b.referenceKey = 11, b.luminanceKey = 12;
+  kept(b, rows);
+  const auto byKey = sums(rows);
+  const std::size_t uploads = kept.luminanceUploaded();
+  // The same merge handed the first's luminance as read back, under no key.
+  lp::merge::FrameInput c = input(3, first.data(), first.data(), third.data());
+  apart(c, rows);
+  const auto handed = sums(rows);
+  EXPECT_EQ(second, third);
+  EXPECT_NEAR(byKey.first, handed.first, 1e-6 * (1 + handed.first));
+  EXPECT_NEAR(byKey.second, handed.second, 1e-6 * (1 + handed.second));
+  EXPECT_EQ(uploads, 1u) << "the first merge's buffers, once (previous and reference are one)";
+  // The garbage, read: another answer.
+  lp::merge::FrameInput d = input(3, garbage.data(), garbage.data(), third.data());
+  apart(d, rows);
+  EXPECT_GT(sums(rows).first, 10 * (1 + handed.first));
 }
 
 // The older frames of a turning camera turned on the GPU (GpuMerge's turn, merge::FrameInput::turn)

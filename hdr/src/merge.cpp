@@ -121,7 +121,7 @@ void BracketMerger::push(const Frame& in) {
   kept.exposure100us = in.exposure100us, kept.gain = in.gain;
   window_.push_back(std::move(kept));
   agreements_.push_back(1.0);  // its merge's own agreement, once measured
-  keys_.push_back(++frameKeys);
+  keys_.push_back(newKey());
   if (align_ && in.width >= align::kLeastWidth && in.height >= align::kLeastHeight) {
     align_->tracker.add(
         align::logPyramid(in, opt_.response.linear, kWellExposed - 1, opt_.clipLevel),
@@ -253,6 +253,7 @@ FrameConfidence BracketMerger::add(const Frame& in, Frame& out, Executor* execut
   if (!fresh) {
     previous_.assign(pixels, 0.0f), reference_.assign(pixels, 0.0f);
     referenceIsPrevious_ = false;
+    previousKey_ = newKey(), referenceKey_ = newKey();
   }
   // Where the last merge was trusted, its luminance is the reference: this merge's goes into the
   // other buffer, and neither is copied.
@@ -287,8 +288,14 @@ FrameConfidence BracketMerger::add(const Frame& in, Frame& out, Executor* execut
                          align_->nearHigh.data(), executor);
     view.nearLow = align_->nearLow.data(), view.nearHigh = align_->nearHigh.data();
   }
-  const merge::FrameInput frame = frameInput(view, keep ? out.rgb.data() : nullptr,
-                                             {previous, luminanceOut, reference}, fresh, project);
+  merge::FrameInput frame = frameInput(view, keep ? out.rgb.data() : nullptr,
+                                       {previous, luminanceOut, reference}, fresh, project);
+  // The luminance as some earlier merge wrote it (not turned since) keeps its key.
+  frame.previousKey = previous == previous_.data() ? previousKey_ : 0;
+  frame.referenceKey = reference == previous_.data()    ? previousKey_
+                       : reference == reference_.data() ? referenceKey_
+                                                        : 0;
+  frame.luminanceKey = newKey();
   MergeTally total;
   if (frameKernel_) {
     std::vector<merge::RowSums> rows(static_cast<std::size_t>(h));
@@ -323,7 +330,11 @@ FrameConfidence BracketMerger::add(const Frame& in, Frame& out, Executor* execut
       std::all_of(view.usable.begin(), view.usable.begin() + view.n, [](bool u) { return u; });
   // A trusted merge (complete, its brightest pixel read unclipped, its confidence 0.9 or more)
   // is what later clipped pixels are measured against.
-  if (referenceIsPrevious_) std::swap(previous_, reference_);  // this merge's is the last
+  if (referenceIsPrevious_) {  // this merge's is the last
+    std::swap(previous_, reference_);
+    referenceKey_ = previousKey_;
+  }
+  previousKey_ = frame.luminanceKey;
   if (align_) {
     if (referenceIsPrevious_) align_->referenceSequence = previousSequence;
     align_->previousSequence = in.sequence;
@@ -417,6 +428,8 @@ MergeTally BracketMerger::tally(const merge::RowSums& s, std::size_t y,
   t.brightestFresh = s.brightestFresh;
   return t;
 }
+
+std::uint64_t BracketMerger::newKey() { return ++frameKeys; }
 
 merge::RowInput merge::RowInput::of(const FrameInput& frame, std::size_t y) {
   RowInput in;

@@ -456,7 +456,8 @@ std::string multiprocessors() {
 /// runs): three 8-bit frames of the sky at 1/65536, 1/256 and 1 s (the sun measured by the
 /// first, the sky by the others), decoded through the gamma table, judged per pixel and
 /// projected in the same pass, the merged frame not read back (a live run without a light
-/// search): the frames' upload, the pass, and the row sums' and the luminance's readback.
+/// search), as a camera's stream runs it: the newest frame's upload (the older two kept from
+/// the merges before), the pass, and the row sums' and the luminance's readback.
 /// Correctness is liveprobe_gpu_tests' (GpuMerge.EveryPixelIsTheCpusMerge: the CPU's merge is
 /// not in this build).
 void mergeGpu(benchmark::State& state, Size s) {
@@ -489,8 +490,18 @@ void mergeGpu(benchmark::State& state, Size s) {
   for (int k = 0; k < 5; ++k) in.col[k] = projector.equirectIntegrals()->col[std::size_t(k)].data();
   lp::gl::GpuMerge gpu;
   std::vector<lp::merge::RowSums> rows;
+  // As a still camera's stream: one new frame a merge (the window's keys move on by one), the
+  // last merge's luminance kept on the GPU.
+  std::uint64_t next = 1;
   timedLoop(
-      state, GpuTimer::Merge, [&] { gpu(in, rows); }, [] {});
+      state, GpuTimer::Merge,
+      [&] {
+        for (int k = 0; k < 3; ++k) in.key[k] = next + std::uint64_t(k);
+        in.previousKey = in.referenceKey = 1000000 + next - 1;
+        in.luminanceKey = 1000000 + next++;
+        gpu(in, rows);
+      },
+      [] {});
   state.counters["frames"] = in.frames;
 }
 

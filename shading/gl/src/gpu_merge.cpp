@@ -327,6 +327,11 @@ GpuMerge::GpuMerge() {
     glGenBuffers(1, &id);
     b = Buffer(id);
   }
+  for (Buffer& b : luminance_) {
+    GLuint id = 0;
+    glGenBuffers(1, &id);
+    b = Buffer(id);
+  }
 }
 
 GpuMerge::~GpuMerge() = default;
@@ -346,6 +351,51 @@ void GpuMerge::fill(int binding, const void* data, std::size_t bytes) {
   }
   if (data) glBufferSubData(GL_SHADER_STORAGE_BUFFER, 0, GLsizeiptr(bytes), data);
   glBindBufferBase(GL_SHADER_STORAGE_BUFFER, GLuint(binding), buffers_[b].get());
+}
+
+int GpuMerge::bindLuminance(const merge::FrameInput& in, std::size_t pixels) {
+  const std::size_t bytes = std::max<std::size_t>(pixels * sizeof(float), 16);
+  if (bytes != luminanceBytes_) {
+    for (Buffer& b : luminance_) {
+      glBindBuffer(GL_SHADER_STORAGE_BUFFER, b.get());
+      glBufferData(GL_SHADER_STORAGE_BUFFER, GLsizeiptr(bytes), nullptr, GL_DYNAMIC_DRAW);
+    }
+    luminanceBytes_ = bytes;
+    std::fill(std::begin(luminanceKey_), std::end(luminanceKey_), 0);
+  }
+  // The last merges' luminance where a buffer still holds it; else uploaded into one no other
+  // part of this merge uses; this merge's into the third.
+  bool taken[3] = {};
+  const auto kept = [&](std::uint64_t key) {
+    for (int k = 0; key != 0 && k < 3; ++k)
+      if (luminanceKey_[k] == key) return taken[k] = true, k;
+    return -1;
+  };
+  const auto free = [&](std::uint64_t key) {
+    const int k = int(std::find(std::begin(taken), std::end(taken), false) - std::begin(taken));
+    taken[k] = true, luminanceKey_[k] = key;
+    return k;
+  };
+  const int previous = kept(in.previousKey);
+  int reference = in.referenceKey == in.previousKey ? previous : kept(in.referenceKey);
+  const int out = free(0);
+  const auto upload = [&](const float* data, std::uint64_t key) {
+    const int k = free(key);
+    glBindBuffer(GL_SHADER_STORAGE_BUFFER, luminance_[std::size_t(k)].get());
+    glBufferSubData(GL_SHADER_STORAGE_BUFFER, 0, GLsizeiptr(pixels * sizeof(float)), data);
+    ++luminanceUploaded_;
+    return k;
+  };
+  const int prev = previous >= 0 ? previous : upload(in.previous, in.previousKey);
+  if (reference < 0)
+    reference = in.referenceKey != 0 && in.referenceKey == in.previousKey
+                    ? prev
+                    : upload(in.reference, in.referenceKey);
+  glBindBufferBase(GL_SHADER_STORAGE_BUFFER, kPrevious, luminance_[std::size_t(prev)].get());
+  glBindBufferBase(GL_SHADER_STORAGE_BUFFER, kReference, luminance_[std::size_t(reference)].get());
+  glBindBufferBase(GL_SHADER_STORAGE_BUFFER, kLuminance, luminance_[std::size_t(out)].get());
+  luminanceKey_[out] = in.luminanceKey;
+  return out;
 }
 
 void GpuMerge::turnFrame(const merge::FrameInput& in, int frame, GLuint source, GLuint dest) {
@@ -434,9 +484,7 @@ void GpuMerge::operator()(const merge::FrameInput& in, std::vector<merge::RowSum
   }
   if (std::any_of(std::begin(in.turn), std::end(in.turn), [](auto& t) { return t.apply; }))
     glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
-  fill(kPrevious, in.previous, pixels * sizeof(float));
-  fill(kReference, in.reference, pixels * sizeof(float));
-  fill(kLuminance, nullptr, pixels * sizeof(float));
+  const int out = bindLuminance(in, pixels);
   const bool turned = in.nearLow != nullptr;
   const std::size_t nearStride = (pixels + 3) / 4 * 4;
   fill(kNear, nullptr, turned ? 2 * nearStride : 4);
@@ -477,7 +525,7 @@ void GpuMerge::operator()(const merge::FrameInput& in, std::vector<merge::RowSum
     glGetBufferSubData(GL_SHADER_STORAGE_BUFFER, 0, GLsizeiptr(bytes), into);
   };
   read(buffers_[kRows], sums.data(), sums.size() * sizeof(float));
-  read(buffers_[kLuminance], in.luminance, pixels * sizeof(float));
+  read(luminance_[std::size_t(out)], in.luminance, pixels * sizeof(float));
   if (in.rgb) read(buffers_[kRgb], in.rgb, pixels * 3 * sizeof(float));
   rows.resize(std::size_t(in.height));
   for (std::size_t y = 0; y < rows.size(); ++y) {

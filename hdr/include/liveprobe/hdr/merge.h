@@ -127,6 +127,8 @@ class BracketMerger {
   /// null).
   merge::FrameInput frameInput(const BracketView& view, float* rgb, const Luminance& lum,
                                bool fresh, const EquirectIntegrals* project) const;
+  /// A key no frame or luminance of the process had (merge::FrameInput::key).
+  static std::uint64_t newKey();
   /// A row's sums weighed by its solid angle, and its coefficients' sums where it projects.
   MergeTally tally(const merge::RowSums& sums, std::size_t y,
                    const EquirectIntegrals* project) const;
@@ -137,6 +139,8 @@ class BracketMerger {
   bool referenceIsPrevious_ = false;  ///< the last merge was trusted: reference_ is stale
   std::deque<double> agreements_;     ///< per window frame: the agreement of its own merge
   std::deque<std::uint64_t> keys_;    ///< per window frame: merge::FrameInput::key
+  /// previous_'s and reference_'s keys (merge::FrameInput::previousKey): what they hold.
+  std::uint64_t previousKey_ = 0, referenceKey_ = 0;
   struct Alignment;                   ///< the camera's rotation, and the frames turned by it
   std::unique_ptr<Alignment> align_;  ///< null where the frames are not aligned
   merge::FrameKernel frameKernel_;    ///< setFrameKernel()

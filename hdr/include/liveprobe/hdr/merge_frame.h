@@ -64,6 +64,9 @@ struct FrameInput {
   float* luminance = nullptr;
   const float* reference = nullptr;
   bool fresh = false;
+  /// The luminance buffers' identities as in the keys of the frames: `previous` and `reference`
+  /// as some earlier merge wrote them (0: turned since, or otherwise new), and this merge's.
+  std::uint64_t previousKey = 0, referenceKey = 0, luminanceKey = 0;
   /// Where the older frames were turned to the newest (null: not turned): the least and the most
   /// code the newest frame read over each pixel and its eight neighbours (its largest channel).
   const std::uint8_t* nearLow = nullptr;

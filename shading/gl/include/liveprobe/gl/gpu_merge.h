@@ -29,10 +29,16 @@ class GpuMerge {
   void operator()(const merge::FrameInput& in, std::vector<merge::RowSums>& rows);
   /// Frames uploaded so far.
   std::size_t framesUploaded() const { return uploaded_; }
+  /// Luminance buffers (the last merges') uploaded so far: the first merge's two, then only
+  /// those the camera's turn changed (merge::FrameInput::previousKey).
+  std::size_t luminanceUploaded() const { return luminanceUploaded_; }
 
  private:
   /// `buffer` holding `bytes` from `data` (grown where it is smaller), bound at `binding`.
   void fill(int binding, const void* data, std::size_t bytes);
+  /// The last merges' luminance and this merge's bound (kept ones by key, the rest uploaded);
+  /// which of luminance_ this merge writes.
+  int bindLuminance(const merge::FrameInput& in, std::size_t pixels);
   /// Frame `frame` of `in` turned from the slot at byte `source` into the one at `dest`.
   void turnFrame(const merge::FrameInput& in, int frame, GLuint source, GLuint dest);
   Program program_, turn_;
@@ -42,6 +48,9 @@ class GpuMerge {
   std::vector<std::uint8_t> recode_;  ///< the response's way back, as uploaded for the turn
   std::size_t slotStride_ = 0;        ///< the bytes of a slot
   std::size_t uploaded_ = 0;
+  Buffer luminance_[3];                 ///< the last merge's, the last trusted one's, this one's
+  std::uint64_t luminanceKey_[3] = {};  ///< what each holds (merge::FrameInput::previousKey)
+  std::size_t luminanceBytes_ = 0, luminanceUploaded_ = 0;
 };
 
 }  // namespace lp::gl
