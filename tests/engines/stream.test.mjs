@@ -14,6 +14,11 @@ import { spawnSync } from 'node:child_process';
 
 const sleep = (ms) => new Promise((r) => setTimeout(r, ms));
 
+// The most the server's anonymous memory may grow over a run (kB): 4 MB, or 16 MB under
+// AddressSanitizer (scripts/test-sanitizers), whose allocator and shadow memory grow it by 4.6 to
+// 4.8 MB on their own there (the normal build: 0.3 to 0.7 MB); LeakSanitizer checks leaks there.
+const kGrowthKb = process.env.ASAN_OPTIONS ? 16384 : 4096;
+
 /// Opens a client; resolves when open. Collects messages and the close code.
 function client(port, query = '') {
   const ws = new WebSocket(`ws://127.0.0.1:${port}/${query}`);
@@ -120,7 +125,7 @@ test('a client that reads nothing for 10 s slows nothing and grows no memory', a
   assert.ok(frames.every((f, i) => i === 0 || f > frames[i - 1]), 'frames in order, never repeated');
   assert.ok(longestGap < 2000, `the reading client waited ${longestGap} ms for a frame`);
   assert.ok(dropped > 100, `the slow client's frames were dropped, not queued: ${dropped}`);
-  assert.ok(after.rss - before.rss < 4096, `anonymous memory grew ${after.rss - before.rss} kB`);
+  assert.ok(after.rss - before.rss < kGrowthKb, `anonymous memory grew ${after.rss - before.rss} kB`);
 });
 
 test('50 clients connecting and disconnecting for 30 s leak nothing', async () => {
@@ -148,7 +153,7 @@ test('50 clients connecting and disconnecting for 30 s leak nothing', async () =
               `anonymous memory ${before.rss} -> ${after.rss} kB (file-backed ${before.file} -> ${after.file})`);
   assert.equal(served, rounds * 50);
   assert.equal(after.fds, before.fds, 'every connection closed its descriptor');
-  assert.ok(after.rss - before.rss < 4096, `anonymous memory grew ${after.rss - before.rss} kB`);
+  assert.ok(after.rss - before.rss < kGrowthKb, `anonymous memory grew ${after.rss - before.rss} kB`);
 });
 
 test('malformed, oversized and binary client frames close that client only', async () => {
