@@ -431,18 +431,6 @@ MergeTally BracketMerger::tally(const merge::RowSums& s, std::size_t y,
 
 std::uint64_t BracketMerger::newKey() { return ++frameKeys; }
 
-merge::RowInput merge::RowInput::of(const FrameInput& frame, std::size_t y) {
-  RowInput in;
-  static_cast<FrameInput&>(in) = frame;
-  const std::size_t at = y * std::size_t(frame.width);
-  for (int i = 0; i < frame.frames; ++i) in.bgr[i] = frame.bgr[i] + 3 * at;
-  in.previous = frame.previous + at, in.luminance = frame.luminance + at;
-  in.reference = frame.reference + at;
-  if (frame.nearLow) in.nearLow = frame.nearLow + at, in.nearHigh = frame.nearHigh + at;
-  if (frame.rgb) in.rgb = frame.rgb + 3 * at;
-  return in;
-}
-
 std::array<bool, kMaxBracket> BracketMerger::usableFrames(const BracketView& v) const {
   // A whole frame that contradicts the newest on most of a sparse grid (a hand over the lens, a
   // flash) is left out; the newest frame always counts.

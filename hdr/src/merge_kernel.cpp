@@ -374,6 +374,18 @@ HWY_AFTER_NAMESPACE();
 
 namespace lp::merge {
 
+RowInput RowInput::of(const FrameInput& frame, std::size_t y) {
+  RowInput in;
+  static_cast<FrameInput&>(in) = frame;
+  const std::size_t at = y * std::size_t(frame.width);
+  for (int i = 0; i < frame.frames; ++i) in.bgr[i] = frame.bgr[i] + 3 * at;
+  in.previous = frame.previous + at, in.luminance = frame.luminance + at;
+  in.reference = frame.reference + at;
+  if (frame.nearLow) in.nearLow = frame.nearLow + at, in.nearHigh = frame.nearHigh + at;
+  if (frame.rgb) in.rgb = frame.rgb + 3 * at;
+  return in;
+}
+
 RowKernel active() {
   const std::string path = lp::simd::current();
 #if HWY_TARGETS & HWY_AVX3
