@@ -606,8 +606,15 @@ TEST(GpuMerge, EveryPixelIsTheCpusMerge) {
   for (const int window : {3, 5}) {
     lp::BracketMerger cpu(lp::MergeOptions{.frames = window}),
         onGpu(lp::MergeOptions{.frames = window});
-    onGpu.setFrameKernel([&](const lp::merge::FrameInput& in,
-                             std::vector<lp::merge::RowSums>& rows) { gpu(in, rows); });
+    // The luminance kept on the GPU, read back only where the merger asks.
+    std::size_t fetched = 0;
+    onGpu.setFrameKernel(
+        [&](const lp::merge::FrameInput& in, std::vector<lp::merge::RowSums>& rows) {
+          EXPECT_FALSE(in.luminanceBack);
+          gpu(in, rows);
+        },
+        false,
+        [&](std::uint64_t key, float* into) { return ++fetched, gpu.readLuminance(key, into); });
     const std::size_t uploadedBefore = gpu.framesUploaded(),
                       luminanceBefore = gpu.luminanceUploaded();
     for (const lp::Frame& f : frames) {
@@ -636,6 +643,7 @@ TEST(GpuMerge, EveryPixelIsTheCpusMerge) {
     // last merges' luminance stayed there (the first merge's two, zeros, uploaded).
     EXPECT_EQ(gpu.framesUploaded() - uploadedBefore, frames.size()) << "window " << window;
     EXPECT_EQ(gpu.luminanceUploaded() - luminanceBefore, 2u) << "window " << window;
+    EXPECT_EQ(fetched, 0u) << "window " << window << ": the camera did not turn";
   }
   // The run exercised what it is meant to: light found contradicted, and a clipped sun.
   EXPECT_TRUE(std::any_of(said.begin(), said.end(), [](auto& c) { return c.agreement < 0.99; }));
@@ -723,12 +731,14 @@ TEST(GpuMerge, TurnedFramesMergeAsTheCpuTurnsThem) {
   const lp::Projector projector(lp::Layout::Equirect, map.width, map.height);
   lp::BracketMerger cpu(lp::MergeOptions{.frames = 3}), onGpu(lp::MergeOptions{.frames = 3});
   bool turnedSome = false;
+  std::size_t fetched = 0;
   onGpu.setFrameKernel(
       [&](const lp::merge::FrameInput& in, std::vector<lp::merge::RowSums>& rows) {
         for (int i = 0; i < in.frames; ++i) turnedSome = turnedSome || in.turn[i].apply;
         gpu(in, rows);
       },
-      true);
+      true,
+      [&](std::uint64_t key, float* into) { return ++fetched, gpu.readLuminance(key, into); });
   for (int n = 0; n < 12; ++n) {
     const lp::Image now = lpt::turnedMap(map, axis, n);
     const double t = t0 * std::exp2(std::array{-13, -7, 0}[std::size_t(n % 3)]);
@@ -762,6 +772,8 @@ TEST(GpuMerge, TurnedFramesMergeAsTheCpuTurnsThem) {
     EXPECT_LE(off, a.rgb.size() / 1000) << "frame " << n;
   }
   EXPECT_TRUE(turnedSome) << "the camera turned enough to be turned";
+  // The last merges' luminance, kept on the GPU, read back to be turned on the CPU.
+  EXPECT_GT(fetched, 0u);
 }
 
 }  // namespace

@@ -96,6 +96,9 @@ std::function<GpuWork()> streamProjection(ProjectOn asked, gl::GlContext& drawin
           state->timed(*state->mergeTimer, gl::GpuTimer::Merge, [&] { (*state->merge)(in, rows); });
     };
     work.mergeTurns = true;
+    work.mergeLuminance = [state](std::uint64_t key, float* into) {
+      return state->merge->readLuminance(key, into);
+    };
     work.mergeMs = [state] { return state->mergeMs; };
     return work;
   };

@@ -329,7 +329,9 @@ void CapturePipeline::run() {
     if (opt_.projectOnGpu) {
       GpuWork work = opt_.projectOnGpu();
       s.gpu = std::move(work.project);
-      if (s.merger && work.merge) s.merger->setFrameKernel(std::move(work.merge), work.mergeTurns);
+      if (s.merger && work.merge)
+        s.merger->setFrameKernel(std::move(work.merge), work.mergeTurns,
+                                 std::move(work.mergeLuminance));
       s.gpuMergeMs = std::move(work.mergeMs);
     }
     while (!stop_ && !interrupted_ &&

@@ -253,6 +253,7 @@ FrameConfidence BracketMerger::add(const Frame& in, Frame& out, Executor* execut
   if (!fresh) {
     previous_.assign(pixels, 0.0f), reference_.assign(pixels, 0.0f);
     referenceIsPrevious_ = false;
+    previousAway_ = referenceAway_ = false;
     previousKey_ = newKey(), referenceKey_ = newKey();
   }
   // Where the last merge was trusted, its luminance is the reference: this merge's goes into the
@@ -268,6 +269,7 @@ FrameConfidence BracketMerger::add(const Frame& in, Frame& out, Executor* execut
     const auto turn = [&](const float* lum, std::uint64_t then, std::vector<float>& into) {
       const glm::mat3 q = a.tracker.turnSince(then);
       if (align::displacementPixels(q, w) < kLeastTurnPixels) return lum;
+      bringBack(lum == previous_.data(), lum == reference_.data());
       into.resize(pixels);
       align::turnLuminance(lum, w, h, q, into.data(), executor);
       return static_cast<const float*>(into.data());
@@ -296,6 +298,7 @@ FrameConfidence BracketMerger::add(const Frame& in, Frame& out, Executor* execut
                        : reference == reference_.data() ? referenceKey_
                                                         : 0;
   frame.luminanceKey = newKey();
+  frame.luminanceBack = !(frameKernel_ && fetchLuminance_);
   MergeTally total;
   if (frameKernel_) {
     std::vector<merge::RowSums> rows(static_cast<std::size_t>(h));
@@ -330,8 +333,10 @@ FrameConfidence BracketMerger::add(const Frame& in, Frame& out, Executor* execut
       std::all_of(view.usable.begin(), view.usable.begin() + view.n, [](bool u) { return u; });
   // A trusted merge (complete, its brightest pixel read unclipped, its confidence 0.9 or more)
   // is what later clipped pixels are measured against.
+  (luminanceOut == previous_.data() ? previousAway_ : referenceAway_) = !frame.luminanceBack;
   if (referenceIsPrevious_) {  // this merge's is the last
     std::swap(previous_, reference_);
+    std::swap(previousAway_, referenceAway_);
     referenceKey_ = previousKey_;
   }
   previousKey_ = frame.luminanceKey;
@@ -430,6 +435,25 @@ MergeTally BracketMerger::tally(const merge::RowSums& s, std::size_t y,
 }
 
 std::uint64_t BracketMerger::newKey() { return ++frameKeys; }
+
+void BracketMerger::setFrameKernel(merge::FrameKernel kernel, bool turns,
+                                   merge::LuminanceFetch fetch) {
+  bringBack(true, true);  // what the kernel kept, before it goes
+  frameKernel_ = std::move(kernel);
+  kernelTurns_ = frameKernel_ && turns;
+  fetchLuminance_ = frameKernel_ ? std::move(fetch) : merge::LuminanceFetch{};
+}
+
+void BracketMerger::bringBack(bool previous, bool reference) {
+  const auto fetch = [&](bool& away, std::uint64_t key, std::vector<float>& into) {
+    if (!away) return;
+    if (!fetchLuminance_ || !fetchLuminance_(key, into.data()))
+      throw Error("the bracket merge: the last merge's luminance is no longer where it was kept");
+    away = false;
+  };
+  if (previous) fetch(previousAway_, previousKey_, previous_);
+  if (reference) fetch(referenceAway_, referenceKey_, reference_);
+}
 
 std::array<bool, kMaxBracket> BracketMerger::usableFrames(const BracketView& v) const {
   // A whole frame that contradicts the newest on most of a sparse grid (a hand over the lens, a

@@ -360,7 +360,7 @@ int GpuMerge::bindLuminance(const merge::FrameInput& in, std::size_t pixels) {
       glBindBuffer(GL_SHADER_STORAGE_BUFFER, b.get());
       glBufferData(GL_SHADER_STORAGE_BUFFER, GLsizeiptr(bytes), nullptr, GL_DYNAMIC_DRAW);
     }
-    luminanceBytes_ = bytes;
+    luminanceBytes_ = bytes, luminancePixels_ = pixels;
     std::fill(std::begin(luminanceKey_), std::end(luminanceKey_), 0);
   }
   // The last merges' luminance where a buffer still holds it; else uploaded into one no other
@@ -525,7 +525,7 @@ void GpuMerge::operator()(const merge::FrameInput& in, std::vector<merge::RowSum
     glGetBufferSubData(GL_SHADER_STORAGE_BUFFER, 0, GLsizeiptr(bytes), into);
   };
   read(buffers_[kRows], sums.data(), sums.size() * sizeof(float));
-  read(luminance_[std::size_t(out)], in.luminance, pixels * sizeof(float));
+  if (in.luminanceBack) read(luminance_[std::size_t(out)], in.luminance, pixels * sizeof(float));
   if (in.rgb) read(buffers_[kRgb], in.rgb, pixels * 3 * sizeof(float));
   rows.resize(std::size_t(in.height));
   for (std::size_t y = 0; y < rows.size(); ++y) {
@@ -537,6 +537,17 @@ void GpuMerge::operator()(const merge::FrameInput& in, std::vector<merge::RowSum
     for (int k = 0; k < 5; ++k)
       for (int c = 0; c < 3; ++c) r.col[k][c] = project ? double(s[9 + 3 * k + c]) : 0.0;
   }
+}
+
+bool GpuMerge::readLuminance(std::uint64_t key, float* into) {
+  for (int k = 0; key != 0 && k < 3; ++k)
+    if (luminanceKey_[k] == key) {
+      glBindBuffer(GL_SHADER_STORAGE_BUFFER, luminance_[std::size_t(k)].get());
+      glGetBufferSubData(GL_SHADER_STORAGE_BUFFER, 0, GLsizeiptr(luminancePixels_ * sizeof(float)),
+                         into);
+      return true;
+    }
+  return false;
 }
 
 }  // namespace lp::gl

@@ -40,6 +40,8 @@ struct GpuWork {
   /// on the GPU.
   merge::FrameKernel merge;
   bool mergeTurns = false;  ///< it turns the older frames itself (merge::FrameInput::turn)
+  /// It keeps each merge's luminance, read back where the merger asks (merge::LuminanceFetch).
+  merge::LuminanceFetch mergeLuminance;
   /// The GPU's time for the last merge (ms), where the context has a timer.
   std::function<std::optional<double>()> mergeMs;
 };

@@ -97,11 +97,11 @@ class BracketMerger {
 
   /// The pixel loop run elsewhere from here on (the GPU's: liveprobe/gl/gpu_merge.h), in place
   /// of the CPU's row kernel; none: the CPU's again. `turns`: it turns the older frames itself
-  /// (merge::FrameInput::turn); else they come to it turned. Everything else stays the merger's.
-  void setFrameKernel(merge::FrameKernel kernel, bool turns = false) {
-    frameKernel_ = std::move(kernel);
-    kernelTurns_ = frameKernel_ && turns;
-  }
+  /// (merge::FrameInput::turn); else they come to it turned. `fetch`: it keeps each merge's
+  /// luminance, read back only where the merger needs it (the camera turned); none: it writes
+  /// the luminance back every merge. Everything else stays the merger's.
+  void setFrameKernel(merge::FrameKernel kernel, bool turns = false,
+                      merge::LuminanceFetch fetch = {});
   bool hasFrameKernel() const { return bool(frameKernel_); }
 
   const MergeOptions& options() const { return opt_; }
@@ -127,6 +127,8 @@ class BracketMerger {
   /// null).
   merge::FrameInput frameInput(const BracketView& view, float* rgb, const Luminance& lum,
                                bool fresh, const EquirectIntegrals* project) const;
+  /// previous_ and/or reference_ read back from the frame kernel where it kept them.
+  void bringBack(bool previous, bool reference);
   /// A key no frame or luminance of the process had (merge::FrameInput::key).
   static std::uint64_t newKey();
   /// A row's sums weighed by its solid angle, and its coefficients' sums where it projects.
@@ -137,14 +139,18 @@ class BracketMerger {
   std::vector<float> previous_;       ///< the last merge's luminance, per pixel
   std::vector<float> reference_;      ///< the last trusted merge's (complete, in agreement)
   bool referenceIsPrevious_ = false;  ///< the last merge was trusted: reference_ is stale
-  std::deque<double> agreements_;     ///< per window frame: the agreement of its own merge
-  std::deque<std::uint64_t> keys_;    ///< per window frame: merge::FrameInput::key
+  /// previous_ and reference_ not yet read back from the frame kernel, which keeps them by key
+  /// (setFrameKernel's `fetch`).
+  bool previousAway_ = false, referenceAway_ = false;
+  std::deque<double> agreements_;   ///< per window frame: the agreement of its own merge
+  std::deque<std::uint64_t> keys_;  ///< per window frame: merge::FrameInput::key
   /// previous_'s and reference_'s keys (merge::FrameInput::previousKey): what they hold.
   std::uint64_t previousKey_ = 0, referenceKey_ = 0;
   struct Alignment;                   ///< the camera's rotation, and the frames turned by it
   std::unique_ptr<Alignment> align_;  ///< null where the frames are not aligned
   merge::FrameKernel frameKernel_;    ///< setFrameKernel()
   bool kernelTurns_ = false;
+  merge::LuminanceFetch fetchLuminance_;
 };
 
 }  // namespace lp

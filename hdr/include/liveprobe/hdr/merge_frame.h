@@ -67,6 +67,9 @@ struct FrameInput {
   /// The luminance buffers' identities as in the keys of the frames: `previous` and `reference`
   /// as some earlier merge wrote them (0: turned since, or otherwise new), and this merge's.
   std::uint64_t previousKey = 0, referenceKey = 0, luminanceKey = 0;
+  /// false: the processor keeps this merge's luminance (under luminanceKey) and need not write
+  /// `luminance`; the merger reads it back where it needs it (LuminanceFetch).
+  bool luminanceBack = true;
   /// Where the older frames were turned to the newest (null: not turned): the least and the most
   /// code the newest frame read over each pixel and its eight neighbours (its largest channel).
   const std::uint8_t* nearLow = nullptr;
@@ -90,5 +93,9 @@ struct RowSums {
 /// A whole frame's pixel loop: writes `in`'s luminance (and rgb where asked) and `rows`
 /// (height of them). Throws lp::Error (or one derived from it) where it cannot run.
 using FrameKernel = std::function<void(const FrameInput& in, std::vector<RowSums>& rows)>;
+
+/// Reads the luminance a FrameKernel kept under `key` (FrameInput::luminanceKey; width x height
+/// floats) into `into`; false where it no longer holds it.
+using LuminanceFetch = std::function<bool(std::uint64_t key, float* into)>;
 
 }  // namespace lp::merge

@@ -4,7 +4,8 @@
 // shader, each pixel judged as the CPU's row kernel judges it (the same weights, the same
 // contradictions, the same confidence sums), and the merged radiance weighed by the equirect
 // column integrals in the same pass: one workgroup a row, each row's sums read back. The
-// luminance the next merge reads comes back too, and the merged frame where it is asked for.
+// luminance the next merge reads stays on the GPU (read back where the merge asks:
+// FrameInput::luminanceBack, readLuminance), and the merged frame comes back where it is asked for.
 // Needs a current context with compute shaders (GL 4.3; hasCompute()).
 #include <cstddef>
 #include <cstdint>
@@ -27,6 +28,10 @@ class GpuMerge {
   /// merge (merge::FrameInput::key) is not uploaded again: a still camera's bracket uploads one
   /// frame a merge.
   void operator()(const merge::FrameInput& in, std::vector<merge::RowSums>& rows);
+  /// The luminance of the merge whose FrameInput::luminanceKey was `key`, read into `into`
+  /// (what lp::BracketMerger::setFrameKernel's `fetch` takes); false where no buffer holds it.
+  /// The last merge's and the one before it are always held.
+  bool readLuminance(std::uint64_t key, float* into);
   /// Frames uploaded so far.
   std::size_t framesUploaded() const { return uploaded_; }
   /// Luminance buffers (the last merges') uploaded so far: the first merge's two, then only
@@ -50,7 +55,7 @@ class GpuMerge {
   std::size_t uploaded_ = 0;
   Buffer luminance_[3];                 ///< the last merge's, the last trusted one's, this one's
   std::uint64_t luminanceKey_[3] = {};  ///< what each holds (merge::FrameInput::previousKey)
-  std::size_t luminanceBytes_ = 0, luminanceUploaded_ = 0;
+  std::size_t luminanceBytes_ = 0, luminancePixels_ = 0, luminanceUploaded_ = 0;
 };
 
 }  // namespace lp::gl
