@@ -60,7 +60,6 @@ const int kFloats = 24;
 shared float red[kFloats][128];
 
 uint byteOf(uint word, uint o) { return (word >> ((o & 3u) * 8u)) & 255u; }
-uint frameByte(uint o) { return byteOf(frameWords[o >> 2], o); }
 uint nearByte(uint o) { return byteOf(nearWords[o >> 2], o); }
 
 struct Reading {
@@ -75,7 +74,10 @@ bool wellCoded(float code) { return code >= float(wellCode) && code < float(clip
 
 Reading readFrame(int i, uint pixel) {
   const uint o = frameOffset[i] + 3u * pixel;
-  const uint b = frameByte(o), g = frameByte(o + 1u), r = frameByte(o + 2u);
+  // A pixel's three bytes lie in at most two words.
+  const uint w0 = frameWords[o >> 2], w1 = frameWords[(o + 2u) >> 2];
+  const uint b = byteOf(w0, o), g = byteOf((o & 3u) == 3u ? w1 : w0, o + 1u),
+             r = byteOf(w1, o + 2u);
   const float s = scale[i];
   Reading x;
   x.e = vec3(lut[r] * s, lut[256u + g] * s, lut[512u + b] * s);
@@ -117,9 +119,13 @@ void main() {
   const float sNow = scale[now];
   for (int x = int(lid); x < width; x += 128) {
     const uint p = uint(y) * uint(width) + uint(x);
-    Reading r[5];
-    for (int i = 0; i < frames; ++i) r[i] = readFrame(i, p);
-    const vec2 bNow = boundsOf(r[now], sNow);
+    // The older frames in registers: every loop over them runs to the constant bound (indices
+    // known at compile time), the newest apart.
+    Reading r[4];
+    for (int i = 0; i < 4; ++i)
+      if (i < now) r[i] = readFrame(i, p);
+    Reading n = readFrame(now, p);
+    const vec2 bNow = boundsOf(n, sNow);
     float lost = -1.0;
     vec2 wide = bNow;
     bool edge = false;
@@ -131,48 +137,52 @@ void main() {
     }
     // Where an older reading contradicts the newest, the newest wins.
     bool newestGivesWay = false;
-    for (int i = 0; i < now; ++i) {
-      const bool both = r[i].well && r[now].well;
+    for (int i = 0; i < 4; ++i) {
+      if (i >= now) break;
+      const bool both = r[i].well && n.well;
       const bool edgeOfSource = scale[i] > 1.02 * sNow && edge && both &&
-                                r[i].peak > 1.5625 * r[now].peak;
+                                r[i].peak > 1.5625 * n.peak;
       newestGivesWay = newestGivesWay || edgeOfSource;
       const vec2 b = boundsOf(r[i], scale[i]);
       const bool apart = b.x > wide.y || wide.x > b.y;
       const bool agree = turned != 0 ? !apart && both
-                                     : both && r[i].peak < 1.5625 * r[now].peak &&
-                                           1.5625 * r[i].peak > r[now].peak;
+                                     : both && r[i].peak < 1.5625 * n.peak &&
+                                           1.5625 * r[i].peak > n.peak;
       const bool disagree =
           !edgeOfSource && (turned != 0 ? apart : (!agree && both) || (!both && apart));
-      const float dq = 2.0 * (r[i].peak - r[now].peak) / (r[i].peak + r[now].peak);
+      const float dq = 2.0 * (r[i].peak - n.peak) / (r[i].peak + n.peak);
       const float closeness = exp(-(dq * dq * inv2s2));
       r[i].w = disagree ? 0.0 : agree ? r[i].w * closeness : r[i].w;
       if (disagree) lost = max(lost, luma(r[i].e));
     }
-    if (newestGivesWay) r[now].w = 0.0;
+    if (newestGivesWay) n.w = 0.0;
     // Two older readings where the shorter exposure reads brighter: the longer gives way.
-    for (int i = 0; i < now; ++i)
-      for (int j = 0; j < now; ++j) {
-        if (j == i || !(scale[j] > 1.02 * scale[i])) continue;
+    for (int i = 0; i < 4; ++i)
+      for (int j = 0; j < 4; ++j) {
+        if (i >= now || j >= now || j == i || !(scale[j] > 1.02 * scale[i])) continue;
         if (r[i].well && r[j].w > 0.0 && r[j].well && r[j].peak > 1.5625 * r[i].peak)
           r[i].w = 0.0;
       }
-    // The weighted mean; the clipped reading that bounds the pixel highest (the first of equals).
+    // The weighted mean, oldest first; the clipped reading that bounds the pixel highest (the
+    // first of equals); the longest exposure's.
     float sw = 0.0, kPeak = -1.0;
-    vec3 c = vec3(0.0), kE = vec3(0.0);
+    vec3 c = vec3(0.0), kE = vec3(0.0), longE = n.e;
     bool wellSeen = false, hasClip = false;
-    for (int i = 0; i < frames; ++i) {
-      sw += r[i].w;
-      wellSeen = wellSeen || (r[i].w > 0.0 && r[i].well);
-      c += r[i].w * r[i].e;
-      const bool higher = r[i].code >= float(clipCode) && r[i].peak > kPeak;
+    for (int i = 0; i < 5; ++i) {
+      if (i > now) break;
+      const Reading ri = i < now ? r[min(i, 3)] : n;
+      sw += ri.w;
+      wellSeen = wellSeen || (ri.w > 0.0 && ri.well);
+      c += ri.w * ri.e;
+      const bool higher = ri.code >= float(clipCode) && ri.peak > kPeak;
       hasClip = hasClip || higher;
-      if (higher) kPeak = r[i].peak, kE = r[i].e;
+      if (higher) kPeak = ri.peak, kE = ri.e;
+      if (i == longest) longE = ri.e;
     }
     const bool measured = sw > 0.0, contradicted = lost >= 0.0;
-    c = measured ? c * (1.0 / sw)
-                 : contradicted ? r[now].e : hasClip ? kE : r[longest].e;
+    c = measured ? c * (1.0 / sw) : contradicted ? n.e : hasClip ? kE : longE;
     const bool clipped =
-        !measured && ((contradicted && r[now].code >= float(clipCode)) || (!contradicted && hasClip));
+        !measured && ((contradicted && n.code >= float(clipCode)) || (!contradicted && hasClip));
     if (writeRgb != 0) rgb[3u * p] = c.r, rgb[3u * p + 1u] = c.g, rgb[3u * p + 2u] = c.b;
     // The row's sums, as the CPU's row kernel makes them.
     const float l = luma(c);
@@ -183,7 +193,7 @@ void main() {
     if (clipped) acc[1] += l, acc[2] += max(l, reference[p]);
     if (!(clipped || wellSeen)) acc[4] += 1.0;
     if (l > acc[5]) {
-      acc[5] = l, acc[6] = clipped ? 1.0 : 0.0, acc[7] = r[now].w > 0.0 ? 1.0 : 0.0;
+      acc[5] = l, acc[6] = clipped ? 1.0 : 0.0, acc[7] = n.w > 0.0 ? 1.0 : 0.0;
       acc[8] = float(x);
     }
     if (project != 0)
