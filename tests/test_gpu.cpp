@@ -598,53 +598,56 @@ std::vector<lp::Frame> movingBracket(int w, int h, int count) {
 TEST(GpuMerge, EveryPixelIsTheCpusMerge) {
   eglContext().makeCurrent();
   if (!lp::gl::hasCompute()) GTEST_FAIL() << "Mesa's EGL has compute shaders";
-  lp::gl::GpuMerge gpu;
   constexpr int w = 125, h = 64;
   const auto frames = movingBracket(w, h, 9);
   const lp::Projector projector(lp::Layout::Equirect, w, h);
   std::vector<lp::FrameConfidence> said;
-  for (const int window : {3, 5}) {
-    lp::BracketMerger cpu(lp::MergeOptions{.frames = window}),
-        onGpu(lp::MergeOptions{.frames = window});
-    // The luminance kept on the GPU, read back only where the merger asks.
-    std::size_t fetched = 0;
-    onGpu.setFrameKernel(
-        [&](const lp::merge::FrameInput& in, std::vector<lp::merge::RowSums>& rows) {
-          EXPECT_FALSE(in.luminanceBack);
-          gpu(in, rows);
-        },
-        false,
-        [&](std::uint64_t key, float* into) { return ++fetched, gpu.readLuminance(key, into); });
-    const std::size_t uploadedBefore = gpu.framesUploaded(),
-                      luminanceBefore = gpu.luminanceUploaded();
-    for (const lp::Frame& f : frames) {
-      lp::Frame a, b;
-      lp::MergeProjection pa{.integrals = projector.equirectIntegrals()}, pb = pa;
-      const lp::FrameConfidence ca = cpu.add(f, a, nullptr, pa), cb = onGpu.add(f, b, nullptr, pb);
-      const std::string what =
-          "window " + std::to_string(window) + ", frame " + std::to_string(f.sequence);
-      ASSERT_EQ(a.rgb.size(), b.rgb.size());
-      for (std::size_t i = 0; i < a.rgb.size(); ++i)
-        ASSERT_NEAR(b.rgb[i], a.rgb[i], 1e-5f * a.rgb[i] + 1e-9f) << what << " value " << i;
-      for (int k = 0; k < lp::kShCount; ++k)
-        for (int c = 0; c < 3; ++c)
-          EXPECT_NEAR(pb.coefficients.c[k][c], pa.coefficients.c[k][c],
-                      1e-5 * pa.coefficients.c[0][1])
-              << what << " coefficient " << k;
-      EXPECT_NEAR(cb.value(), ca.value(), 1e-5) << what;
-      EXPECT_NEAR(cb.agreement, ca.agreement, 1e-5) << what;
-      EXPECT_NEAR(cb.clippedShare, ca.clippedShare, 1e-5) << what;
-      EXPECT_EQ(cb.darkShare, ca.darkShare) << what;
-      EXPECT_EQ(cb.brightestMeasured, ca.brightestMeasured) << what;
-      EXPECT_EQ(cb.complete, ca.complete) << what;
-      said.push_back(ca);
+  // A row in one workgroup, and in three (spans of 42, 42 and 41 pixels).
+  for (const int parts : {1, 3})
+    for (const int window : {3, 5}) {
+      lp::gl::GpuMerge gpu(parts);
+      lp::BracketMerger cpu(lp::MergeOptions{.frames = window}),
+          onGpu(lp::MergeOptions{.frames = window});
+      // The luminance kept on the GPU, read back only where the merger asks.
+      std::size_t fetched = 0;
+      onGpu.setFrameKernel(
+          [&](const lp::merge::FrameInput& in, std::vector<lp::merge::RowSums>& rows) {
+            EXPECT_FALSE(in.luminanceBack);
+            gpu(in, rows);
+          },
+          false,
+          [&](std::uint64_t key, float* into) { return ++fetched, gpu.readLuminance(key, into); });
+      const std::size_t uploadedBefore = gpu.framesUploaded(),
+                        luminanceBefore = gpu.luminanceUploaded();
+      for (const lp::Frame& f : frames) {
+        lp::Frame a, b;
+        lp::MergeProjection pa{.integrals = projector.equirectIntegrals()}, pb = pa;
+        const lp::FrameConfidence ca = cpu.add(f, a, nullptr, pa),
+                                  cb = onGpu.add(f, b, nullptr, pb);
+        const std::string what = std::to_string(parts) + " parts, window " +
+                                 std::to_string(window) + ", frame " + std::to_string(f.sequence);
+        ASSERT_EQ(a.rgb.size(), b.rgb.size());
+        for (std::size_t i = 0; i < a.rgb.size(); ++i)
+          ASSERT_NEAR(b.rgb[i], a.rgb[i], 1e-5f * a.rgb[i] + 1e-9f) << what << " value " << i;
+        for (int k = 0; k < lp::kShCount; ++k)
+          for (int c = 0; c < 3; ++c)
+            EXPECT_NEAR(pb.coefficients.c[k][c], pa.coefficients.c[k][c],
+                        1e-5 * pa.coefficients.c[0][1])
+                << what << " coefficient " << k;
+        EXPECT_NEAR(cb.value(), ca.value(), 1e-5) << what;
+        EXPECT_NEAR(cb.agreement, ca.agreement, 1e-5) << what;
+        EXPECT_NEAR(cb.clippedShare, ca.clippedShare, 1e-5) << what;
+        EXPECT_EQ(cb.darkShare, ca.darkShare) << what;
+        EXPECT_EQ(cb.brightestMeasured, ca.brightestMeasured) << what;
+        EXPECT_EQ(cb.complete, ca.complete) << what;
+        said.push_back(ca);
+      }
+      // The camera did not turn: each frame went up once, the older ones kept on the GPU, and the
+      // last merges' luminance stayed there (the first merge's two, zeros, uploaded).
+      EXPECT_EQ(gpu.framesUploaded() - uploadedBefore, frames.size()) << "window " << window;
+      EXPECT_EQ(gpu.luminanceUploaded() - luminanceBefore, 2u) << "window " << window;
+      EXPECT_EQ(fetched, 0u) << "window " << window << ": the camera did not turn";
     }
-    // The camera did not turn: each frame went up once, the older ones kept on the GPU, and the
-    // last merges' luminance stayed there (the first merge's two, zeros, uploaded).
-    EXPECT_EQ(gpu.framesUploaded() - uploadedBefore, frames.size()) << "window " << window;
-    EXPECT_EQ(gpu.luminanceUploaded() - luminanceBefore, 2u) << "window " << window;
-    EXPECT_EQ(fetched, 0u) << "window " << window << ": the camera did not turn";
-  }
   // The run exercised what it is meant to: light found contradicted, and a clipped sun.
   EXPECT_TRUE(std::any_of(said.begin(), said.end(), [](auto& c) { return c.agreement < 0.99; }));
   EXPECT_TRUE(std::any_of(said.begin(), said.end(), [](auto& c) { return !c.brightestMeasured; }));

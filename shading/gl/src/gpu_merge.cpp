@@ -34,9 +34,10 @@ constexpr int kSlots = 2 * merge::kMaxFrames;
 constexpr int kRowFloats = 24;
 constexpr int kGroup = 128;
 
-// One workgroup a row; each invocation merges every 128th pixel of it as the CPU's row kernel
-// (hdr/src/merge_kernel.cpp, Chunk) merges a lane, then the row's sums are halved down in shared
-// memory. Bytes are read from 32-bit words (GLSL has no 8-bit storage in 4.3).
+// A workgroup a row, or a part of one (`parts` a row); each invocation merges every 128th pixel
+// of it as the CPU's row kernel (hdr/src/merge_kernel.cpp, Chunk) merges a lane, then the part's
+// sums are halved down in shared memory, and the CPU adds a row's parts. Bytes are read from
+// 32-bit words (GLSL has no 8-bit storage in 4.3); the response from shared memory.
 const char* const kMergeCs = R"(#version 430
 layout(local_size_x = 128) in;
 layout(std430, binding = 0) readonly buffer Frames { uint frameWords[]; };
@@ -50,7 +51,7 @@ layout(std430, binding = 7) readonly buffer Col { float col[]; };
 layout(std430, binding = 8) writeonly buffer Rows { float rows[]; };
 uniform int width, frames, longest, floorCode, clipCode, wellCode;
 uniform float wellLinear, belowClipLinear, inv2s2;
-uniform int fresh, turned, writeRgb, project;
+uniform int fresh, turned, writeRgb, project, parts;
 uniform float scale[5];
 uniform uint frameOffset[5];
 uniform uint nearHighOffset;
@@ -58,6 +59,7 @@ uniform uint nearHighOffset;
 const float kInf = uintBitsToFloat(0x7F800000u);
 const int kFloats = 24;
 shared float red[kFloats][128];
+shared float sLut[768];  // the response, read from shared memory
 
 uint byteOf(uint word, uint o) { return (word >> ((o & 3u) * 8u)) & 255u; }
 uint nearByte(uint o) { return byteOf(nearWords[o >> 2], o); }
@@ -80,7 +82,7 @@ Reading readFrame(int i, uint pixel) {
              r = byteOf(w1, o + 2u);
   const float s = scale[i];
   Reading x;
-  x.e = vec3(lut[r] * s, lut[256u + g] * s, lut[512u + b] * s);
+  x.e = vec3(sLut[r] * s, sLut[256u + g] * s, sLut[512u + b] * s);
   x.peak = max(x.e.r, max(x.e.g, x.e.b));
   x.code = float(max(b, max(g, r)));
   // The hat of Debevec and Malik over the radiance scale.
@@ -94,7 +96,7 @@ Reading readFrame(int i, uint pixel) {
 Reading readNear(uint code, float s) {
   Reading q;
   q.code = float(code);
-  q.peak = lut[256u + code] * s;
+  q.peak = sLut[256u + code] * s;
   q.well = wellCoded(q.code);
   return q;
 }
@@ -110,14 +112,19 @@ vec2 boundsOf(Reading r, float s) {
 
 void main() {
   const uint lid = gl_LocalInvocationID.x;
-  const int y = int(gl_WorkGroupID.x);
+  // A workgroup merges one of a row's `parts`, each a span of whole pixels.
+  const int y = int(gl_WorkGroupID.x) / parts, part = int(gl_WorkGroupID.x) % parts;
+  const int span = (width + parts - 1) / parts;
+  const int x0 = part * span, x1 = min(width, x0 + span);
+  for (uint i = lid; i < 768u; i += 128u) sLut[i] = lut[i];
+  barrier();
   float acc[kFloats];
   for (int k = 0; k < kFloats; ++k) acc[k] = 0.0;
   acc[5] = -1.0;
   acc[7] = 1.0;
   const int now = frames - 1;
   const float sNow = scale[now];
-  for (int x = int(lid); x < width; x += 128) {
+  for (int x = x0 + int(lid); x < x1; x += 128) {
     const uint p = uint(y) * uint(width) + uint(x);
     // The older frames in registers: every loop over them runs to the constant bound (indices
     // known at compile time), the newest apart.
@@ -216,7 +223,7 @@ void main() {
     barrier();
   }
   if (lid == 0u)
-    for (int k = 0; k < kFloats; ++k) rows[y * kFloats + k] = red[k][0];
+    for (int k = 0; k < kFloats; ++k) rows[int(gl_WorkGroupID.x) * kFloats + k] = red[k][0];
 }
 )";
 
@@ -327,7 +334,7 @@ void setFloat(GLuint program, const char* name, float value) {
 
 }  // namespace
 
-GpuMerge::GpuMerge() {
+GpuMerge::GpuMerge(int rowParts) : rowParts_(rowParts) {
   if (!hasCompute())
     throw ContextError("the bracket merge on the GPU needs compute shaders (GL 4.3)");
   program_ = linkCompute(kMergeCs, "the bracket merge");
@@ -510,7 +517,9 @@ void GpuMerge::operator()(const merge::FrameInput& in, std::vector<merge::RowSum
     for (int k = 0; k < 5; ++k)
       glBufferSubData(GL_SHADER_STORAGE_BUFFER, GLintptr(std::size_t(k) * in.width * sizeof(float)),
                       GLsizeiptr(std::size_t(in.width) * sizeof(float)), in.col[k]);
-  fill(kRows, nullptr, std::size_t(in.height) * kRowFloats * sizeof(float));
+  const int parts = std::max(1, rowParts_);
+  const std::size_t groups = std::size_t(in.height) * std::size_t(parts);
+  fill(kRows, nullptr, groups * kRowFloats * sizeof(float));
 
   const GLuint p = program_.get();
   glUseProgram(p);
@@ -521,15 +530,15 @@ void GpuMerge::operator()(const merge::FrameInput& in, std::vector<merge::RowSum
   setFloat(p, "inv2s2", in.inv2s2);
   setInt(p, "fresh", in.fresh), setInt(p, "turned", turned),
       setInt(p, "writeRgb", in.rgb != nullptr);
-  setInt(p, "project", project);
+  setInt(p, "project", project), setInt(p, "parts", parts);
   glUniform1fv(glGetUniformLocation(p, "scale"), merge::kMaxFrames, in.scale);
   glUniform1uiv(glGetUniformLocation(p, "frameOffset"), merge::kMaxFrames, offsets);
   glUniform1ui(glGetUniformLocation(p, "nearHighOffset"), GLuint(nearStride));
-  glDispatchCompute(GLuint(in.height), 1, 1);
+  glDispatchCompute(GLuint(groups), 1, 1);
   glMemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT);
   glUseProgram(0);
 
-  std::vector<float> sums(std::size_t(in.height) * kRowFloats);
+  std::vector<float> sums(groups * kRowFloats);
   const auto read = [](const Buffer& b, void* into, std::size_t bytes) {
     glBindBuffer(GL_SHADER_STORAGE_BUFFER, b.get());
     glGetBufferSubData(GL_SHADER_STORAGE_BUFFER, 0, GLsizeiptr(bytes), into);
@@ -537,15 +546,18 @@ void GpuMerge::operator()(const merge::FrameInput& in, std::vector<merge::RowSum
   read(buffers_[kRows], sums.data(), sums.size() * sizeof(float));
   if (in.luminanceBack) read(luminance_[std::size_t(out)], in.luminance, pixels * sizeof(float));
   if (in.rgb) read(buffers_[kRgb], in.rgb, pixels * 3 * sizeof(float));
-  rows.resize(std::size_t(in.height));
-  for (std::size_t y = 0; y < rows.size(); ++y) {
-    const float* s = sums.data() + y * kRowFloats;
-    merge::RowSums& r = rows[y];
-    r.power = s[0], r.clippedPower = s[1], r.clippedEstimate = s[2], r.lostPower = s[3];
-    r.dark = std::size_t(s[4]);
-    r.brightest = s[5], r.brightestClipped = s[6] > 0, r.brightestFresh = s[7] > 0;
-    for (int k = 0; k < 5; ++k)
-      for (int c = 0; c < 3; ++c) r.col[k][c] = project ? double(s[9 + 3 * k + c]) : 0.0;
+  // Each row's parts in order: their sums added, the brightest the larger (of equals the first).
+  rows.assign(std::size_t(in.height), merge::RowSums{});
+  for (std::size_t g = 0; g < groups; ++g) {
+    const float* s = sums.data() + g * kRowFloats;
+    merge::RowSums& r = rows[g / std::size_t(parts)];
+    r.power += s[0], r.clippedPower += s[1], r.clippedEstimate += s[2], r.lostPower += s[3];
+    r.dark += std::size_t(s[4]);
+    if (s[5] > r.brightest)
+      r.brightest = s[5], r.brightestClipped = s[6] > 0, r.brightestFresh = s[7] > 0;
+    if (project)
+      for (int k = 0; k < 5; ++k)
+        for (int c = 0; c < 3; ++c) r.col[k][c] += double(s[9 + 3 * k + c]);
   }
 }
 

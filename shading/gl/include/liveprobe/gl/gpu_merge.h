@@ -18,8 +18,10 @@ namespace lp::gl {
 
 class GpuMerge {
  public:
-  /// Throws ContextError where the context has no compute shaders.
-  GpuMerge();
+  /// Throws ContextError where the context has no compute shaders. `rowParts`: the workgroups a
+  /// row is merged in; one is fastest (each workgroup's fixed cost, the response's load and the
+  /// sums' reduction, outweighs the parallelism: liveprobe-gpu-bench's sweep on an H200).
+  explicit GpuMerge(int rowParts = 1);
   ~GpuMerge();
   GpuMerge(const GpuMerge&) = delete;
   GpuMerge& operator=(const GpuMerge&) = delete;
@@ -56,6 +58,7 @@ class GpuMerge {
   Buffer luminance_[3];                 ///< the last merge's, the last trusted one's, this one's
   std::uint64_t luminanceKey_[3] = {};  ///< what each holds (merge::FrameInput::previousKey)
   std::size_t luminanceBytes_ = 0, luminancePixels_ = 0, luminanceUploaded_ = 0;
+  int rowParts_ = 1;
 };
 
 }  // namespace lp::gl
