@@ -8,11 +8,20 @@
 //   Frame/u8/.../serial      write, transfer, project and render one after another
 //   Frame/u8/.../overlapped  the same with nothing waited for: the CPU writes frame n + 1 while
 //                            the GPU works on frame n; coefficients read one frame late
+//   Merge/u8x3/.../gpu       a bracket of three 8-bit frames merged and projected in one pass,
+//                            the newest frame uploaded each merge, as a camera's stream runs it
+//   Merge/u8x3/.../gpu/resident  the same pass with the three frames on the GPU already
+//   Merge/u8x3/.../gpu/resident/parts:N  with each row merged in N workgroups
+//   Merge/u8x3/.../cpu       the CPU's merge row kernel on every hardware thread
+//   Frame/u8x3/.../merge/... a bracketed frame: the newest frame's upload, the merge and its
+//                            projection, and the bunny rendered at 1080p
 // gpu_us counters are GL timer queries (absent where the GL has no timer, as llvmpipe).
-// Every Project/gpu run first checks the GPU's coefficients against the CPU's (1e-5 of L00)
-// and stops the benchmark with an error where they differ.
+// Every Project/gpu and Merge/gpu run first checks the GPU's sums against the CPU's (1e-5) and
+// stops the benchmark with an error where they differ.
 #include <benchmark/benchmark.h>
 
+#include <algorithm>
+#include <array>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -30,8 +39,10 @@
 #include "liveprobe/gl/gpu_timer.h"
 #include "liveprobe/gl/mesh.h"
 #include "liveprobe/gl/renderer.h"
+#include "liveprobe/hdr/merge_frame.h"
 #include "liveprobe/sh/executor.h"
 #include "liveprobe/sh/projector.h"
+#include "merge_kernel.h"
 
 extern "C" const char lp_baked_model[];
 extern "C" const char lp_baked_model_end[];
@@ -452,57 +463,164 @@ std::string multiprocessors() {
   return "not reported";
 }
 
+/// A bracket of three 8-bit frames of the sky at 1/65536, 1/256 and 1 s (the sun measured by the
+/// first, the sky by the others), decoded through the gamma table, as a still camera's stream
+/// hands it to a merge: the merge's input, and the buffers it points into.
+struct MergeBracket {
+  std::array<std::vector<std::uint8_t>, 3> codes;
+  FrameU8 table = skyU8({1, 1});
+  std::vector<float> previous, reference, luminance;
+  lp::Projector projector;
+  lp::merge::FrameInput in;
+  explicit MergeBracket(Size s) : projector(lp::Layout::Equirect, s.w, s.h) {
+    const std::vector<float> sky = skyF32(s);
+    const double times[3] = {1.0 / 65536, 1.0 / 256, 1.0};
+    in.frames = 3, in.longest = 2, in.width = s.w, in.height = s.h;
+    for (int k = 0; k < 3; ++k) {
+      auto& c = codes[std::size_t(k)];
+      c.resize(sky.size());
+      for (std::size_t i = 0; i < sky.size(); ++i)  // B, G, R
+        c[i / 3 * 3 + 2 - i % 3] = std::uint8_t(
+            std::lround(255.0f * std::pow(std::min(float(sky[i] * times[k]), 1.0f), 1 / 2.2f)));
+      in.bgr[k] = c.data();
+      in.scale[k] = float(1.0 / times[k]);
+    }
+    for (const float*& lut : in.lut) lut = table.decode.data();
+    in.floor = 6, in.clip = 250, in.wellExposed = 16;
+    in.wellLinear = table.decode[16], in.belowClipLinear = table.decode[200];
+    in.inv2s2 = float(1.0 / (2 * 0.3 * 0.3));
+    const std::size_t pixels = std::size_t(s.w) * std::size_t(s.h);
+    previous.assign(pixels, 0.0f), reference.assign(pixels, 0.0f), luminance.assign(pixels, 0.0f);
+    in.previous = previous.data(), in.reference = reference.data();
+    in.luminance = luminance.data();
+    in.fresh = true;
+    in.luminanceBack = false;  // kept on the GPU, as a live run keeps it
+    for (int k = 0; k < 5; ++k)
+      in.col[k] = projector.equirectIntegrals()->col[std::size_t(k)].data();
+  }
+};
+
+/// The CPU's row kernel (the merge's SIMD path) over every row on `pool`.
+std::vector<lp::merge::RowSums> mergeOnCpu(const lp::merge::FrameInput& in, lp::Executor* pool) {
+  std::vector<lp::merge::RowSums> rows(std::size_t(in.height));
+  const lp::merge::RowKernel kernel = lp::merge::active();
+  lp::parallelFor(pool, rows.size(), lp::Split{}, [&](std::size_t y0, std::size_t y1) {
+    for (std::size_t y = y0; y < y1; ++y) rows[y] = kernel(lp::merge::RowInput::of(in, y));
+  });
+  return rows;
+}
+
+/// The GPU's row sums against the CPU's: every row's dark count, and the whole frame's power and
+/// column-weighted sums (what the coefficients are made of) within 1e-5 of the largest.
+std::string mergeDisagreement(const std::vector<lp::merge::RowSums>& gpu,
+                              const std::vector<lp::merge::RowSums>& cpu) {
+  double g[16] = {}, c[16] = {};
+  for (std::size_t y = 0; y < cpu.size(); ++y) {
+    if (gpu[y].dark != cpu[y].dark)
+      return "row " + std::to_string(y) + ": " + std::to_string(gpu[y].dark) + " dark pixels, " +
+             "the CPU's " + std::to_string(cpu[y].dark);
+    g[15] += gpu[y].power, c[15] += cpu[y].power;
+    for (int k = 0; k < 5; ++k)
+      for (int ch = 0; ch < 3; ++ch)
+        g[k * 3 + ch] += gpu[y].col[k][ch], c[k * 3 + ch] += cpu[y].col[k][ch];
+  }
+  double largest = 0;
+  for (double v : c) largest = std::max(largest, std::abs(v));
+  for (int i = 0; i < 16; ++i)
+    if (std::abs(g[i] - c[i]) > 1e-5 * largest)
+      return (i == 15 ? std::string("power") : "column sum " + std::to_string(i)) + ": " +
+             std::to_string(g[i]) + ", the CPU's " + std::to_string(c[i]);
+  return {};
+}
+
 /// The bracket merge on the GPU (gl::GpuMerge, what a live --bracket run with --projection gpu
-/// runs): three 8-bit frames of the sky at 1/65536, 1/256 and 1 s (the sun measured by the
-/// first, the sky by the others), decoded through the gamma table, judged per pixel and
-/// projected in the same pass, the merged frame not read back (a live run without a light
-/// search), as a camera's stream runs it: the newest frame's upload (the older two kept from
-/// the merges before), the pass, and the row sums' and the luminance's readback.
-/// Correctness is liveprobe_gpu_tests' (GpuMerge.EveryPixelIsTheCpusMerge: the CPU's merge is
-/// not in this build).
-void mergeGpu(benchmark::State& state, Size s) {
+/// runs): judged per pixel and projected in the same pass, the merged frame and its luminance not
+/// read back (a live run without a light search), and the row sums' readback. `streaming`: as a
+/// camera's stream runs it, the newest frame uploaded each merge (the older two kept from the
+/// merges before); else all three resident, the pass and its readback alone. First the GPU's sums
+/// are checked against the CPU's row kernel, as the projections are.
+void mergeGpu(benchmark::State& state, Size s, bool streaming, int parts = 1) {
   context();
   if (!lp::gl::hasCompute()) return state.SkipWithError("no compute shaders (GL 4.3)");
-  const std::vector<float> sky = skyF32(s);
-  const FrameU8 table = skyU8({1, 1});
-  const double times[3] = {1.0 / 65536, 1.0 / 256, 1.0};
-  std::array<std::vector<std::uint8_t>, 3> codes;
-  lp::merge::FrameInput in;
-  in.frames = 3, in.longest = 2, in.width = s.w, in.height = s.h;
-  for (int k = 0; k < 3; ++k) {
-    auto& c = codes[std::size_t(k)];
-    c.resize(sky.size());
-    for (std::size_t i = 0; i < sky.size(); ++i)  // B, G, R
-      c[i / 3 * 3 + 2 - i % 3] = std::uint8_t(
-          std::lround(255.0f * std::pow(std::min(float(sky[i] * times[k]), 1.0f), 1 / 2.2f)));
-    in.bgr[k] = c.data();
-    in.scale[k] = float(1.0 / times[k]);
-  }
-  for (const float*& lut : in.lut) lut = table.decode.data();
-  in.floor = 6, in.clip = 250, in.wellExposed = 16;
-  in.wellLinear = table.decode[16], in.belowClipLinear = table.decode[200];
-  in.inv2s2 = float(1.0 / (2 * 0.3 * 0.3));
-  const std::size_t pixels = std::size_t(s.w) * std::size_t(s.h);
-  std::vector<float> previous(pixels, 0.0f), reference(pixels, 0.0f);
-  in.previous = previous.data(), in.luminance = previous.data(), in.reference = reference.data();
-  in.fresh = true;
-  const lp::Projector projector(lp::Layout::Equirect, s.w, s.h);
-  for (int k = 0; k < 5; ++k) in.col[k] = projector.equirectIntegrals()->col[std::size_t(k)].data();
-  lp::gl::GpuMerge gpu;
+  MergeBracket b(s);
+  lp::merge::FrameInput& in = b.in;
+  lp::gl::GpuMerge gpu(parts);
   std::vector<lp::merge::RowSums> rows;
-  // As a still camera's stream: one new frame a merge (the window's keys move on by one), the
-  // last merge's luminance kept on the GPU.
   std::uint64_t next = 1;
+  const auto keys = [&] {
+    for (int k = 0; k < 3; ++k) in.key[k] = (streaming ? next : 1) + std::uint64_t(k);
+    // The last merge's luminance kept on the GPU.
+    in.previousKey = in.referenceKey = 1000000 + next - 1;
+    in.luminanceKey = 1000000 + next++;
+  };
+  {
+    keys();
+    gpu(in, rows);
+    lp::ThreadPool pool(0);
+    lp::merge::FrameInput cpuIn = in;
+    std::vector<float> luminance(b.luminance.size());
+    cpuIn.luminance = luminance.data();
+    const std::string wrong = mergeDisagreement(rows, mergeOnCpu(cpuIn, &pool));
+    if (!wrong.empty()) {
+      std::fprintf(stderr,
+                   "liveprobe-gpu-bench: the GPU merge disagrees with the CPU's at %s: %s\n",
+                   sizeName(s).c_str(), wrong.c_str());
+      gMismatch = true;
+      return state.SkipWithError("the GPU merge disagrees with the CPU's");
+    }
+  }
   timedLoop(
       state, GpuTimer::Merge,
       [&] {
-        for (int k = 0; k < 3; ++k) in.key[k] = next + std::uint64_t(k);
-        in.previousKey = in.referenceKey = 1000000 + next - 1;
-        in.luminanceKey = 1000000 + next++;
+        keys();
         gpu(in, rows);
       },
       [] {});
   state.counters["frames"] = in.frames;
+}
+
+/// A live bracketed run's frame on the GPU: the newest 8-bit frame uploaded, the bracket merged
+/// and projected (its sums read back, as the merge's confidence needs them before the frame is
+/// done), then the bunny rendered at 1080p over the background.
+void frameLoopMerge(benchmark::State& state, Size s) {
+  context();
+  if (!lp::gl::hasCompute()) return state.SkipWithError("no compute shaders (GL 4.3)");
+  MergeBracket b(s);
+  lp::gl::GpuMerge gpu;
+  BunnyScene scene({1920, 960});
+  std::vector<lp::merge::RowSums> rows;
+  GpuTimer timer;
+  GpuMs merge, render;
+  std::uint64_t next = 1;
+  glFinish();
+  for (auto _ : state) {
+    timer.beginFrame();
+    merge.add(timer, GpuTimer::Merge);
+    render.add(timer, GpuTimer::Render);
+    for (int k = 0; k < 3; ++k) b.in.key[k] = next + std::uint64_t(k);
+    b.in.previousKey = b.in.referenceKey = 1000000 + next - 1;
+    b.in.luminanceKey = 1000000 + next++;
+    timer.begin(GpuTimer::Merge);
+    gpu(b.in, rows);
+    timer.end();
+    timer.begin(GpuTimer::Render);
+    scene.draw({1920, 1080});
+    timer.end();
+  }
+  drain(timer, [&] {
+    merge.add(timer, GpuTimer::Merge);
+    render.add(timer, GpuTimer::Render);
+  });
+  merge.report(state, "gpu_merge_us");
+  render.report(state, "gpu_render_us");
+}
+
+/// The CPU's merge of the same bracket: the row kernel on every hardware thread.
+void mergeCpu(benchmark::State& state, Size s) {
+  MergeBracket b(s);
+  lp::ThreadPool pool(0);
+  for (auto _ : state) benchmark::DoNotOptimize(mergeOnCpu(b.in, &pool));
+  state.counters["threads"] = pool.concurrency();
 }
 
 void registerAll() {
@@ -531,14 +649,37 @@ void registerAll() {
                                      [=](benchmark::State& st) { projectGpu(st, s, u8, rows); })
             ->UseRealTime()
             ->Unit(benchmark::kMicrosecond);
-  for (Size s : {Size{300, 300}, Size{1920, 960}, Size{3840, 1920}})
-    benchmark::RegisterBenchmark(("Merge/u8x3/" + sizeName(s) + "/gpu").c_str(),
-                                 [=](benchmark::State& st) { mergeGpu(st, s); })
+  for (Size s : {Size{300, 300}, Size{1920, 960}, Size{3840, 1920}}) {
+    const std::string name = "Merge/u8x3/" + sizeName(s);
+    benchmark::RegisterBenchmark((name + "/gpu").c_str(),
+                                 [=](benchmark::State& st) { mergeGpu(st, s, true); })
         ->UseRealTime()
         ->Unit(benchmark::kMicrosecond);
+    benchmark::RegisterBenchmark((name + "/gpu/resident").c_str(),
+                                 [=](benchmark::State& st) { mergeGpu(st, s, false); })
+        ->UseRealTime()
+        ->Unit(benchmark::kMicrosecond);
+    benchmark::RegisterBenchmark((name + "/cpu").c_str(),
+                                 [=](benchmark::State& st) { mergeCpu(st, s); })
+        ->UseRealTime()
+        ->Unit(benchmark::kMicrosecond);
+  }
+  // The workgroups a row is merged in (the default: one).
+  for (Size s : {Size{1920, 960}, Size{3840, 1920}})
+    for (int parts : {1, 2, 4, 8, 16, 32})
+      benchmark::RegisterBenchmark(
+          ("Merge/u8x3/" + sizeName(s) + "/gpu/resident/parts:" + std::to_string(parts)).c_str(),
+          [=](benchmark::State& st) { mergeGpu(st, s, false, parts); })
+          ->UseRealTime()
+          ->Unit(benchmark::kMicrosecond);
   for (Size s : {Size{1920, 1080}, Size{3840, 2160}})
     benchmark::RegisterBenchmark(("Render/bunny/" + sizeName(s) + "/msaa:4").c_str(),
                                  [=](benchmark::State& st) { renderBunny(st, s); })
+        ->UseRealTime()
+        ->Unit(benchmark::kMicrosecond);
+  for (Size s : {Size{1920, 960}, Size{3840, 1920}})
+    benchmark::RegisterBenchmark(("Frame/u8x3/" + sizeName(s) + "/merge/render:1920x1080").c_str(),
+                                 [=](benchmark::State& st) { frameLoopMerge(st, s); })
         ->UseRealTime()
         ->Unit(benchmark::kMicrosecond);
   for (bool overlapped : {false, true})
