@@ -2,7 +2,8 @@
 """docs/speed.md's GPU table from liveprobe-gpu-bench JSON files (medians; a later file's row
 replaces an earlier one's of the same name): per frame size and pixel type, the upload (direct
 and through the pixel-buffer objects), the read floor, the GPU and CPU projections; then the
-bunny renders and the frame loop; the bracket merge where the runs have it. Usage: scripts/gpu_table.py RUN.json [RUN.json ...]"""
+bunny renders and the frame loop; the bracket merge, its workgroup sweep and its frame loop where
+the runs have them. Usage: scripts/gpu_table.py RUN.json [RUN.json ...]"""
 import json
 import sys
 
@@ -74,10 +75,29 @@ for mode in ["serial", "overlapped"]:
           f"{fmt(us(n, 'gpu_project_us'))} | {fmt(us(n, 'gpu_render_us'))} |")
 if any(name.startswith("Merge/") for name in rows):
     print()
-    print("| bracket of three 8-bit frames | merge and projection, one pass: wall (uploads, "
-          "read-backs) | GPU time | projection alone (GPU time) | / projection |")
-    print("|---|---|---|---|---|")
+    print("| bracket of three 8-bit frames | merge and projection, one pass: wall (newest frame's "
+          "upload, sums read back) | GPU time | the pass alone (frames on the GPU; GPU time) | "
+          "projection alone (GPU time) | / projection | CPU merge (16 threads) |")
+    print("|---|---|---|---|---|---|---|")
     for size in ["300x300", "1920x960", "3840x1920"]:
-        merge, alone = us(f"Merge/u8x3/{size}/gpu", "gpu_us"), us(f"Project/u8/{size}/gpu", "gpu_us")
-        ratio = f"{merge / alone:.1f}x" if merge and alone else "-"
-        print(f"| {size} | {fmt(us(f'Merge/u8x3/{size}/gpu'))} | {fmt(merge)} | {fmt(alone)} | {ratio} |")
+        n = f"Merge/u8x3/{size}/gpu"
+        merge, alone = us(n + "/resident", "gpu_us"), us(f"Project/u8/{size}/gpu", "gpu_us")
+        ratio = f"{merge / alone:.0f}x" if merge and alone else "-"
+        print(f"| {size} | {fmt(us(n))} | {fmt(us(n, 'gpu_us'))} | {fmt(merge)} | {fmt(alone)} | "
+              f"{ratio} | {fmt(us(f'Merge/u8x3/{size}/cpu'))} |")
+if any("/resident/parts:" in name for name in rows):
+    print()
+    print("| still bracket, the pass alone (GPU time), a row in N workgroups | 1 | 2 | 4 | 8 | 16 | 32 |")
+    print("|---|---|---|---|---|---|---|")
+    for size in ["1920x960", "3840x1920"]:
+        cells = [fmt(us(f"Merge/u8x3/{size}/gpu/resident/parts:{n}", "gpu_us"))
+                 for n in [1, 2, 4, 8, 16, 32]]
+        print(f"| {size} | " + " | ".join(cells) + " |")
+if any(name.startswith("Frame/u8x3/") for name in rows):
+    print()
+    print("| bracketed frame: upload, merge, 1920x1080 render | frame time | GPU: merge | render |")
+    print("|---|---|---|---|")
+    for size in ["1920x960", "3840x1920"]:
+        n = f"Frame/u8x3/{size}/merge/render:1920x1080"
+        print(f"| {size} | {fmt(us(n))} | {fmt(us(n, 'gpu_merge_us'))} | "
+              f"{fmt(us(n, 'gpu_render_us'))} |")
