@@ -332,12 +332,12 @@ TurnGrid turnGrid(int w, int h, const glm::mat3& q) {
 
 namespace {
 
-// Calls row(y, samples) for every row of an equirect frame w x h with where its pixels read
-// from under the turn q: exact on a grid every 16 pixels, bilinear between (a small turn moves
-// pixels smoothly), exact per pixel within 1.1 degrees of the poles (where a turn moves a
-// pixel's azimuth fast).
+// Calls row(y, samples) for every row of an equirect frame w x h (every step-th from step / 2)
+// with where its pixels read from under the turn q: exact on a grid every 16 pixels, bilinear
+// between (a small turn moves pixels smoothly), exact per pixel within 1.1 degrees of the poles
+// (where a turn moves a pixel's azimuth fast).
 template <class Row>
-void forEachTurnedRow(int w, int h, const glm::mat3& q, Executor* executor, Row row) {
+void forEachTurnedRow(int w, int h, const glm::mat3& q, Executor* executor, Row row, int step = 1) {
   constexpr int kGrid = kTurnGrid;
   const glm::dmat3 qd(q);
   const auto source = [&](double x, double y, double& fx, double& fy) {
@@ -353,6 +353,7 @@ void forEachTurnedRow(int w, int h, const glm::mat3& q, Executor* executor, Row 
                 std::vector<float> o(static_cast<std::size_t>(gw)), r(o);
                 std::vector<float> fx(static_cast<std::size_t>(w)), fy(fx);
                 for (int y = int(y0); y < int(y1); ++y) {
+                  if (y % step != step / 2) continue;
                   if (polarRow(y, h)) {
                     for (int x = 0; x < w; ++x) {
                       double sx, sy;
@@ -409,38 +410,41 @@ Coder::Coder(const ResponseTable& response) : linear_(response) {
 }
 
 void turnCodes(const std::uint8_t* src, int w, int h, const glm::mat3& q, const Coder& coder,
-               int clip, std::uint8_t* dst, Executor* executor) {
+               int clip, std::uint8_t* dst, Executor* executor, int step) {
   // Bilinear in linear units, coded back: a turn of a fraction of a pixel moves a one-pixel sun
   // by that fraction, its power kept. A clipped reading is a bound, not a value: a pixel whose
   // corners are clipped by half their weight or more reads clipped (as the nearest pixel would),
   // otherwise from its unclipped corners alone.
   const ResponseTable& lut = coder.linear();
   const std::size_t stride = std::size_t(w);
-  forEachTurnedRow(w, h, q, executor, [&](int y, const RowSamples& rs) {
-    std::uint8_t* out = dst + std::size_t(y) * stride * 3;
-    for (int x = 0; x < w; ++x, out += 3) {
-      const std::size_t at[4] = {rs.left[std::size_t(x)], rs.right[std::size_t(x)],
-                                 rs.left[std::size_t(x)] + stride,
-                                 rs.right[std::size_t(x)] + stride};
-      const float ax = rs.ax[std::size_t(x)], ay = rs.ay[std::size_t(x)];
-      const float weight[4] = {(1 - ax) * (1 - ay), ax * (1 - ay), (1 - ax) * ay, ax * ay};
-      float r = 0, g = 0, b = 0, unclipped = 0, most = -1;
-      for (int k = 0; k < 4; ++k) {
-        const std::uint8_t* p = src + at[k] * 3;
-        if (std::max({p[0], p[1], p[2]}) >= clip) {
-          if (weight[k] > most) most = weight[k], std::copy(p, p + 3, out);
-          continue;
+  forEachTurnedRow(
+      w, h, q, executor,
+      [&](int y, const RowSamples& rs) {
+        for (int x = step / 2; x < w; x += step) {
+          std::uint8_t* out = dst + (std::size_t(y) * stride + std::size_t(x)) * 3;
+          const std::size_t at[4] = {rs.left[std::size_t(x)], rs.right[std::size_t(x)],
+                                     rs.left[std::size_t(x)] + stride,
+                                     rs.right[std::size_t(x)] + stride};
+          const float ax = rs.ax[std::size_t(x)], ay = rs.ay[std::size_t(x)];
+          const float weight[4] = {(1 - ax) * (1 - ay), ax * (1 - ay), (1 - ax) * ay, ax * ay};
+          float r = 0, g = 0, b = 0, unclipped = 0, most = -1;
+          for (int k = 0; k < 4; ++k) {
+            const std::uint8_t* p = src + at[k] * 3;
+            if (std::max({p[0], p[1], p[2]}) >= clip) {
+              if (weight[k] > most) most = weight[k], std::copy(p, p + 3, out);
+              continue;
+            }
+            const float wk = weight[k];
+            unclipped += wk;
+            b += wk * lut[2][p[0]], g += wk * lut[1][p[1]], r += wk * lut[0][p[2]];
+          }
+          if (unclipped <= 0.5f) continue;  // the clipped corner of most weight, copied
+          const float inv = 1.0f / unclipped;
+          out[0] = coder.code(2, b * inv), out[1] = coder.code(1, g * inv);
+          out[2] = coder.code(0, r * inv);
         }
-        const float wk = weight[k];
-        unclipped += wk;
-        b += wk * lut[2][p[0]], g += wk * lut[1][p[1]], r += wk * lut[0][p[2]];
-      }
-      if (unclipped <= 0.5f) continue;  // the clipped corner of most weight, copied
-      const float inv = 1.0f / unclipped;
-      out[0] = coder.code(2, b * inv), out[1] = coder.code(1, g * inv);
-      out[2] = coder.code(0, r * inv);
-    }
-  });
+      },
+      step);
 }
 
 void turnLuminance(const float* src, int w, int h, const glm::mat3& q, float* dst,

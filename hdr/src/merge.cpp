@@ -83,6 +83,9 @@ std::atomic<std::uint64_t> frameKeys{0};
 // A turn that moves no pixel by more than this is not applied (a still camera's estimate is
 // noise of a hundredth of a pixel).
 constexpr double kLeastTurnPixels = 0.25;
+// The whole-frame check (usableFrames) reads every kCheckStep-th pixel of every kCheckStep-th
+// row, from kCheckStep / 2.
+constexpr int kCheckStep = 4;
 }  // namespace
 
 BracketMerger::BracketMerger(MergeOptions options) : opt_(std::move(options)) {
@@ -139,15 +142,17 @@ std::array<const std::uint8_t*, kMaxBracket> BracketMerger::alignedWindow(Execut
     if (!align_ || i == n - 1) continue;
     const glm::mat3 q = align_->tracker.turnSince(f.sequence);
     if (align::displacementPixels(q, f.width) < kLeastTurnPixels) continue;
-    if (kernelTurns_) {  // the pixel loop turns it, from the frame as taken
+    // Where the pixel loop turns it (from the frame as taken), only the whole-frame check's grid
+    // is turned here.
+    auto& turned = align_->turned[std::size_t(i)];
+    turned.resize(f.bgr8.size());
+    align::turnCodes(f.bgr8.data(), f.width, f.height, q, align_->coder, opt_.clipLevel,
+                     turned.data(), executor, kernelTurns_ ? kCheckStep : 1);
+    if (kernelTurns_) {
       align_->byKernel[std::size_t(i)] = q;
       align_->grids[std::size_t(i)] = align::turnGrid(f.width, f.height, q);
       continue;
     }
-    auto& turned = align_->turned[std::size_t(i)];
-    turned.resize(f.bgr8.size());
-    align::turnCodes(f.bgr8.data(), f.width, f.height, q, align_->coder, opt_.clipLevel,
-                     turned.data(), executor);
     pixels[std::size_t(i)] = turned.data();
   }
   return pixels;
@@ -202,6 +207,9 @@ struct BracketView {
   int n = 0, newest = 0, longest = 0;
   std::array<bool, kMaxBracket> usable{};
   std::array<const std::uint8_t*, kMaxBracket> pixels{};
+  /// What the whole-frame check reads: the pixels, or where the pixel loop turns a frame itself,
+  /// its check's grid turned here.
+  std::array<const std::uint8_t*, kMaxBracket> judged{};
   std::array<float, kMaxBracket> scales{};
   const std::array<std::array<float, 256>, 3>* lut = nullptr;
   Judge judge{};
@@ -211,7 +219,7 @@ struct BracketView {
   const std::uint8_t *nearLow = nullptr, *nearHigh = nullptr;
 
   void read(int i, std::size_t at, Reading& r) const {
-    const std::uint8_t* p = pixels[std::size_t(i)] + at;
+    const std::uint8_t* p = judged[std::size_t(i)] + at;
     const auto& l = *lut;
     r.scale = scales[std::size_t(i)];
     r.e[0] = l[0][p[2]] * r.scale, r.e[1] = l[1][p[1]] * r.scale, r.e[2] = l[2][p[0]] * r.scale;
@@ -359,6 +367,9 @@ BracketView BracketMerger::prepare(const std::array<const std::uint8_t*, kMaxBra
   v.kernel = merge::active();
   for (int i = 0; i < v.n; ++i) {
     v.pixels[std::size_t(i)] = pixels[std::size_t(i)];
+    v.judged[std::size_t(i)] = align_ && align_->byKernel[std::size_t(i)]
+                                   ? align_->turned[std::size_t(i)].data()
+                                   : pixels[std::size_t(i)];
     v.scales[std::size_t(i)] = float(window_[std::size_t(i)].radianceScale);
   }
   v.usable = usableFrames(v);
@@ -463,8 +474,8 @@ std::array<bool, kMaxBracket> BracketMerger::usableFrames(const BracketView& v) 
   usable[std::size_t(v.newest)] = true;
   std::array<std::size_t, kMaxBracket> agree{}, disagree{};
   Reading now, old;
-  for (int y = 2; y < h; y += 4)
-    for (int x = 2; x < w; x += 4) {
+  for (int y = kCheckStep / 2; y < h; y += kCheckStep)
+    for (int x = kCheckStep / 2; x < w; x += kCheckStep) {
       const std::size_t at = (std::size_t(y) * std::size_t(w) + std::size_t(x)) * 3;
       v.read(v.newest, at, now);
       for (int i = 0; i < v.newest; ++i) {
@@ -474,7 +485,8 @@ std::array<bool, kMaxBracket> BracketMerger::usableFrames(const BracketView& v) 
         disagree[std::size_t(i)] += verdict == Verdict::Disagree;
       }
     }
-  const std::size_t grid = std::size_t((h + 1) / 4) * std::size_t((w + 1) / 4);
+  const auto count = [](int n) { return std::size_t((n + kCheckStep / 2 - 1) / kCheckStep); };
+  const std::size_t grid = count(h) * count(w);
   for (int i = 0; i < v.newest; ++i) {
     const std::size_t decided = agree[std::size_t(i)] + disagree[std::size_t(i)];
     usable[std::size_t(i)] = decided * 100 < grid || disagree[std::size_t(i)] * 2 <= decided;
