@@ -378,26 +378,17 @@ int GpuMerge::bindLuminance(const merge::FrameInput& in, std::size_t pixels) {
       glBufferData(GL_SHADER_STORAGE_BUFFER, GLsizeiptr(bytes), nullptr, GL_DYNAMIC_DRAW);
     }
     luminanceBytes_ = bytes, luminancePixels_ = pixels;
-    std::fill(std::begin(luminanceKey_), std::end(luminanceKey_), 0);
+    luminanceKeys_.forget();
   }
   // The last merges' luminance where a buffer still holds it; else uploaded into one no other
   // part of this merge uses; this merge's into the third.
-  bool taken[3] = {};
-  const auto kept = [&](std::uint64_t key) {
-    for (int k = 0; key != 0 && k < 3; ++k)
-      if (luminanceKey_[k] == key) return taken[k] = true, k;
-    return -1;
-  };
-  const auto free = [&](std::uint64_t key) {
-    const int k = int(std::find(std::begin(taken), std::end(taken), false) - std::begin(taken));
-    taken[k] = true, luminanceKey_[k] = key;
-    return k;
-  };
-  const int previous = kept(in.previousKey);
-  int reference = in.referenceKey == in.previousKey ? previous : kept(in.referenceKey);
-  const int out = free(0);
+  Keyed<3>& keys = luminanceKeys_;
+  keys.startMerge();
+  const int previous = keys.find(in.previousKey);
+  int reference = in.referenceKey == in.previousKey ? previous : keys.find(in.referenceKey);
+  const int out = keys.claim(0);
   const auto upload = [&](const float* data, std::uint64_t key) {
-    const int k = free(key);
+    const int k = keys.claim(key);
     glBindBuffer(GL_SHADER_STORAGE_BUFFER, luminance_[std::size_t(k)].get());
     glBufferSubData(GL_SHADER_STORAGE_BUFFER, 0, GLsizeiptr(pixels * sizeof(float)), data);
     ++luminanceUploaded_;
@@ -411,7 +402,7 @@ int GpuMerge::bindLuminance(const merge::FrameInput& in, std::size_t pixels) {
   glBindBufferBase(GL_SHADER_STORAGE_BUFFER, kPrevious, luminance_[std::size_t(prev)].get());
   glBindBufferBase(GL_SHADER_STORAGE_BUFFER, kReference, luminance_[std::size_t(reference)].get());
   glBindBufferBase(GL_SHADER_STORAGE_BUFFER, kLuminance, luminance_[std::size_t(out)].get());
-  luminanceKey_[out] = in.luminanceKey;
+  keys.key[out] = in.luminanceKey;
   return out;
 }
 
@@ -467,25 +458,16 @@ void GpuMerge::operator()(const merge::FrameInput& in, std::vector<merge::RowSum
   if (stride != slotStride_) {
     fill(kFrames, nullptr, stride * kSlots);
     slotStride_ = stride;
-    std::fill(std::begin(slotKey_), std::end(slotKey_), 0);
+    slots_.forget();
   }
   glBindBuffer(GL_SHADER_STORAGE_BUFFER, buffers_[kFrames].get());
   glBindBufferBase(GL_SHADER_STORAGE_BUFFER, kFrames, buffers_[kFrames].get());
   int slotOf[merge::kMaxFrames];
-  bool taken[kSlots] = {};
-  const auto freeSlot = [&](std::uint64_t key) {
-    const int k = int(std::find(std::begin(taken), std::end(taken), false) - std::begin(taken));
-    taken[k] = true, slotKey_[k] = key;
-    return k;
-  };
-  for (int i = 0; i < in.frames; ++i) {
-    slotOf[i] = -1;
-    for (int k = 0; in.key[i] != 0 && k < kSlots && slotOf[i] < 0; ++k)
-      if (slotKey_[k] == in.key[i] && !taken[k]) slotOf[i] = k, taken[k] = true;
-  }
+  slots_.startMerge();
+  for (int i = 0; i < in.frames; ++i) slotOf[i] = slots_.find(in.key[i]);
   for (int i = 0; i < in.frames; ++i)
     if (slotOf[i] < 0) {
-      slotOf[i] = freeSlot(in.key[i]);
+      slotOf[i] = slots_.claim(in.key[i]);
       glBufferSubData(GL_SHADER_STORAGE_BUFFER, GLintptr(stride * std::size_t(slotOf[i])),
                       GLsizeiptr(frameBytes), in.bgr[i]);
       ++uploaded_;
@@ -495,7 +477,7 @@ void GpuMerge::operator()(const merge::FrameInput& in, std::vector<merge::RowSum
   for (int i = 0; i < in.frames; ++i) {
     offsets[i] = GLuint(stride * std::size_t(slotOf[i]));
     if (!in.turn[i].apply) continue;
-    const int into = freeSlot(0);
+    const int into = slots_.claim(0);
     turnFrame(in, i, offsets[i], GLuint(stride * std::size_t(into)));
     offsets[i] = GLuint(stride * std::size_t(into));
   }
@@ -563,7 +545,7 @@ void GpuMerge::operator()(const merge::FrameInput& in, std::vector<merge::RowSum
 
 bool GpuMerge::readLuminance(std::uint64_t key, float* into) {
   for (int k = 0; key != 0 && k < 3; ++k)
-    if (luminanceKey_[k] == key) {
+    if (luminanceKeys_.key[k] == key) {
       glBindBuffer(GL_SHADER_STORAGE_BUFFER, luminance_[std::size_t(k)].get());
       glGetBufferSubData(GL_SHADER_STORAGE_BUFFER, 0, GLsizeiptr(luminancePixels_ * sizeof(float)),
                          into);

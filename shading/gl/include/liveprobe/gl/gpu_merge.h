@@ -7,6 +7,7 @@
 // luminance the next merge reads stays on the GPU (read back where the merge asks:
 // FrameInput::luminanceBack, readLuminance), and the merged frame comes back where it is asked for.
 // Needs a current context with compute shaders (GL 4.3; hasCompute()).
+#include <algorithm>
 #include <cstddef>
 #include <cstdint>
 #include <vector>
@@ -41,6 +42,27 @@ class GpuMerge {
   std::size_t luminanceUploaded() const { return luminanceUploaded_; }
 
  private:
+  /// N places (frame slots, luminance buffers), each holding what went in under a key (0: none,
+  /// or nothing to find again), and which of them one merge has taken.
+  template <int N>
+  struct Keyed {
+    std::uint64_t key[N] = {};
+    bool taken[N] = {};
+    void startMerge() { std::fill(std::begin(taken), std::end(taken), false); }
+    void forget() { std::fill(std::begin(key), std::end(key), 0); }
+    /// The place still holding `k` (not `0`), now taken; -1 where none does.
+    int find(std::uint64_t k) {
+      for (int i = 0; k != 0 && i < N; ++i)
+        if (key[i] == k && !taken[i]) return taken[i] = true, i;
+      return -1;
+    }
+    /// A place this merge has not taken, now holding `k`.
+    int claim(std::uint64_t k) {
+      const int i = int(std::find(std::begin(taken), std::end(taken), false) - std::begin(taken));
+      taken[i] = true, key[i] = k;
+      return i;
+    }
+  };
   /// `buffer` holding `bytes` from `data` (grown where it is smaller), bound at `binding`.
   void fill(int binding, const void* data, std::size_t bytes);
   /// The last merges' luminance and this merge's bound (kept ones by key, the rest uploaded);
@@ -51,12 +73,12 @@ class GpuMerge {
   Program program_, turn_;
   Buffer buffers_[11];
   std::size_t sizes_[11] = {};
-  std::uint64_t slotKey_[2 * merge::kMaxFrames] = {};  ///< the frame each slot holds (0: none)
-  std::vector<std::uint8_t> recode_;  ///< the response's way back, as uploaded for the turn
-  std::size_t slotStride_ = 0;        ///< the bytes of a slot
+  Keyed<2 * merge::kMaxFrames> slots_;  ///< the window's frames, as taken and turned
+  std::vector<std::uint8_t> recode_;    ///< the response's way back, as uploaded for the turn
+  std::size_t slotStride_ = 0;          ///< the bytes of a slot
   std::size_t uploaded_ = 0;
-  Buffer luminance_[3];                 ///< the last merge's, the last trusted one's, this one's
-  std::uint64_t luminanceKey_[3] = {};  ///< what each holds (merge::FrameInput::previousKey)
+  Buffer luminance_[3];     ///< the last merge's, the last trusted one's, this one's
+  Keyed<3> luminanceKeys_;  ///< what each holds (merge::FrameInput::previousKey)
   std::size_t luminanceBytes_ = 0, luminancePixels_ = 0, luminanceUploaded_ = 0;
   int rowParts_ = 1;
 };
