@@ -337,13 +337,15 @@ namespace {
 // between (a small turn moves pixels smoothly), exact per pixel within 1.1 degrees of the poles
 // (where a turn moves a pixel's azimuth fast).
 template <class Row>
-void forEachTurnedRow(int w, int h, const glm::mat3& q, Executor* executor, Row row, int step = 1) {
+void forEachTurnedRow(int w, int h, const glm::mat3& q, Executor* executor, Row row, int step = 1,
+                      const TurnGrid* given = nullptr) {
   constexpr int kGrid = kTurnGrid;
   const glm::dmat3 qd(q);
   const auto source = [&](double x, double y, double& fx, double& fy) {
     turnSource(qd, w, h, x, y, fx, fy);
   };
-  const TurnGrid grid = turnGrid(w, h, q);
+  const TurnGrid made = given ? TurnGrid{} : turnGrid(w, h, q);
+  const TurnGrid& grid = given ? *given : made;
   const int gw = grid.nodesX, gh = grid.nodesY;
   const auto nodeY = [&](int j) { return std::min(j * kGrid, h - 1); };
   const std::vector<float>&offset = grid.offset, &rowAt = grid.row;
@@ -410,7 +412,7 @@ Coder::Coder(const ResponseTable& response) : linear_(response) {
 }
 
 void turnCodes(const std::uint8_t* src, int w, int h, const glm::mat3& q, const Coder& coder,
-               int clip, std::uint8_t* dst, Executor* executor, int step) {
+               int clip, std::uint8_t* dst, Executor* executor, int step, const TurnGrid* grid) {
   // Bilinear in linear units, coded back: a turn of a fraction of a pixel moves a one-pixel sun
   // by that fraction, its power kept. A clipped reading is a bound, not a value: a pixel whose
   // corners are clipped by half their weight or more reads clipped (as the nearest pixel would),
@@ -444,7 +446,7 @@ void turnCodes(const std::uint8_t* src, int w, int h, const glm::mat3& q, const 
           out[2] = coder.code(0, r * inv);
         }
       },
-      step);
+      step, grid);
 }
 
 void turnLuminance(const float* src, int w, int h, const glm::mat3& q, float* dst,

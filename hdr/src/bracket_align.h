@@ -130,8 +130,10 @@ TurnGrid turnGrid(int width, int height, const glm::mat3& q);
 /// the nearest code; a pixel whose corners are clipped (a code at or above `clip`) by half their
 /// weight or more reads as the clipped corner of most weight. `step` > 1: only every step-th
 /// pixel of every step-th row, from step / 2 (a sparse grid; the rest of dst is left as it is).
+/// `grid`: turnGrid(width, height, q) where the caller has it already.
 void turnCodes(const std::uint8_t* src, int width, int height, const glm::mat3& q,
-               const Coder& coder, int clip, std::uint8_t* dst, Executor* executor, int step = 1);
+               const Coder& coder, int clip, std::uint8_t* dst, Executor* executor, int step = 1,
+               const TurnGrid* grid = nullptr);
 /// dst(d) = src(q d) for one float per pixel, the nearest pixel.
 void turnLuminance(const float* src, int width, int height, const glm::mat3& q, float* dst,
                    Executor* executor);

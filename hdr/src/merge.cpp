@@ -146,13 +146,16 @@ std::array<const std::uint8_t*, kMaxBracket> BracketMerger::alignedWindow(Execut
     // is turned here.
     auto& turned = align_->turned[std::size_t(i)];
     turned.resize(f.bgr8.size());
-    align::turnCodes(f.bgr8.data(), f.width, f.height, q, align_->coder, opt_.clipLevel,
-                     turned.data(), executor, kernelTurns_ ? kCheckStep : 1);
     if (kernelTurns_) {
       align_->byKernel[std::size_t(i)] = q;
-      align_->grids[std::size_t(i)] = align::turnGrid(f.width, f.height, q);
+      const align::TurnGrid& grid = align_->grids[std::size_t(i)] =
+          align::turnGrid(f.width, f.height, q);
+      align::turnCodes(f.bgr8.data(), f.width, f.height, q, align_->coder, opt_.clipLevel,
+                       turned.data(), executor, kCheckStep, &grid);
       continue;
     }
+    align::turnCodes(f.bgr8.data(), f.width, f.height, q, align_->coder, opt_.clipLevel,
+                     turned.data(), executor);
     pixels[std::size_t(i)] = turned.data();
   }
   return pixels;
