@@ -13,6 +13,7 @@
 #include <opencv2/imgcodecs.hpp>
 #include <random>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include "layout_dirs.h"
@@ -23,6 +24,7 @@
 #include "liveprobe/gl/gpu_merge.h"
 #include "liveprobe/gl/gpu_projector.h"
 #include "liveprobe/gl/gpu_timer.h"
+#include "liveprobe/gl/renderer.h"
 #include "liveprobe/hdr/merge.h"
 #include "liveprobe/sh/error.h"
 #include "liveprobe/sh/projector.h"
@@ -712,6 +714,121 @@ TEST(GpuMerge, KeptLuminanceIsTheLastMergesOwn) {
   lp::merge::FrameInput d = input(3, garbage.data(), garbage.data(), third.data());
   apart(d, rows);
   EXPECT_GT(sums(rows).first, 10 * (1 + handed.first));
+}
+
+// The merged frame kept on the GPU for the drawing context (merge::FrameInput::rgbKept,
+// gl::GpuImage): merged on another thread in a context that shares the drawing one's objects
+// (ContextSpec::shareWith), as a stream's capture thread merges. Each kept frame, read in the
+// drawing context, is the CPU's merged frame (1e-5), however many later merges ran while it was
+// held (a held buffer is never written: one more is made); drawn as the background it is what the
+// CPU's frame draws. Frames let go are written again (no more buffers); once the merge is gone, a
+// frame still held reads nothing and the background stays as it was.
+TEST(GpuMerge, AKeptFrameIsDrawnAsTheCpusMergedFrame) {
+  lp::gl::GlContext& drawing = eglContext();
+  drawing.makeCurrent();
+  constexpr int w = 125, h = 64;
+  const auto frames = movingBracket(w, h, 9);
+  const lp::Projector projector(lp::Layout::Equirect, w, h);
+  lp::gl::releaseCurrentContext();
+  std::shared_ptr<lp::gl::GlContext> capture =
+      lp::gl::createGlContext({.backend = lp::gl::Backend::Egl,
+                               .width = 16,
+                               .height = 16,
+                               .title = "capture",
+                               .vsync = false,
+                               .gpu = drawing.device(),
+                               .shareWith = &drawing});
+  lp::gl::releaseCurrentContext();
+  std::unique_ptr<lp::gl::GpuMerge> gpu;
+  lp::BracketMerger cpu(lp::MergeOptions{.frames = 3}), onGpu(lp::MergeOptions{.frames = 3});
+  std::vector<std::shared_ptr<const lp::gl::GpuImage>> kept;
+  std::vector<std::vector<float>> expected;
+  // Merges frames [first, last) on a thread of their own; `hold`: every kept frame is held.
+  const auto mergeOnThread = [&](std::size_t first, std::size_t last, bool hold) {
+    std::thread([&] {
+      capture->makeCurrent();
+      if (!gpu) {
+        gpu = std::make_unique<lp::gl::GpuMerge>();
+        onGpu.setFrameKernel([&](const lp::merge::FrameInput& in,
+                                 std::vector<lp::merge::RowSums>& rows) { (*gpu)(in, rows); });
+      }
+      for (std::size_t i = first; i < last; ++i) {
+        if (!hold) kept.clear(), expected.clear();
+        lp::Frame a, b;
+        lp::MergeProjection pa{.integrals = projector.equirectIntegrals()},
+            pb{.integrals = projector.equirectIntegrals(),
+               .keepFrame = false,
+               .keepWhereMerged = true};
+        cpu.add(frames[i], a, nullptr, pa);
+        onGpu.add(frames[i], b, nullptr, pb);
+        EXPECT_TRUE(b.rgb.empty()) << "frame " << i << ": kept on the GPU, not read back";
+        kept.push_back(gpu->takeKeptImage());
+        expected.push_back(a.rgb);
+        EXPECT_FALSE(gpu->takeKeptImage()) << "handed over once";
+      }
+      lp::gl::releaseCurrentContext();
+    }).join();
+    drawing.makeCurrent();
+  };
+  // Reads a kept frame in the drawing context.
+  const auto read = [](const lp::gl::GpuImage& image) {
+    std::vector<float> rgb(std::size_t(image.width()) * image.height() * 3, -1.0f);
+    const bool done = image.read([&](GLuint buffer) {
+      glBindBuffer(GL_COPY_READ_BUFFER, buffer);
+      glGetBufferSubData(GL_COPY_READ_BUFFER, 0, GLsizeiptr(rgb.size() * sizeof(float)),
+                         rgb.data());
+      glBindBuffer(GL_COPY_READ_BUFFER, 0);
+    });
+    return done ? rgb : std::vector<float>{};
+  };
+  const auto expectSame = [](const std::vector<float>& got, const std::vector<float>& want,
+                             const std::string& what) {
+    ASSERT_EQ(got.size(), want.size()) << what;
+    for (std::size_t i = 0; i < want.size(); ++i)
+      ASSERT_NEAR(got[i], want[i], 1e-5f * want[i] + 1e-9f) << what << " value " << i;
+  };
+  mergeOnThread(0, 6, true);
+  ASSERT_EQ(kept.size(), 6u);
+  EXPECT_EQ(gpu->keptBuffers(), 6u) << "each merge while the others were held: a buffer of its own";
+  for (std::size_t i = 0; i < kept.size(); ++i) {
+    ASSERT_TRUE(kept[i]);
+    EXPECT_EQ(kept[i]->width(), w);
+    EXPECT_EQ(kept[i]->height(), h);
+    expectSame(read(*kept[i]), expected[i], "merge " + std::to_string(i));
+  }
+  // Drawn as the background, from the GPU and from the CPU's frame.
+  lp::gl::Renderer r;
+  const auto background = [&] {
+    lp::gl::FloatTarget target(64, 32);
+    target.bind();
+    lp::gl::ShadingSettings s;
+    s.toneMap = lp::gl::ToneMap::Linear;
+    lp::gl::Camera cam;
+    r.draw({64, 32}, cam, s);
+    return target.readRgba();
+  };
+  r.setBackground(*kept[4], lp::gl::BackgroundMapping::Equirect, 1.0f);
+  const auto fromGpu = background();
+  r.setBackground(expected[4].data(), w, h, lp::gl::BackgroundMapping::Equirect);
+  const auto fromCpu = background();
+  expectSame(fromGpu, fromCpu, "the background");
+  // Let go, the buffers are written again.
+  mergeOnThread(6, 9, false);
+  EXPECT_EQ(gpu->keptBuffers(), 6u);
+  expectSame(read(*kept.back()), expected.back(), "merge 8");
+  // The merge gone (on its thread, its context current), a frame still held reads nothing.
+  std::thread([&] {
+    capture->makeCurrent();
+    gpu.reset();
+    lp::gl::releaseCurrentContext();
+  }).join();
+  drawing.makeCurrent();
+  EXPECT_TRUE(read(*kept.back()).empty());
+  r.setBackground(*kept.back(), lp::gl::BackgroundMapping::Equirect, 1.0f);
+  expectSame(background(), fromCpu, "the background, its maker gone");
+  kept.clear();
+  std::thread([&] { capture.reset(); }).join();
+  drawing.makeCurrent();
 }
 
 // The older frames of a turning camera turned on the GPU (GpuMerge's turn, merge::FrameInput::turn)

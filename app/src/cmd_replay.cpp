@@ -494,9 +494,14 @@ int finishStream(const StreamPlan& p, const PipelineStats& st, const StreamTally
   if (p.opt.projectOnGpu) {
     std::fprintf(stderr, "  projected on %s: %zu of %zu frames\n", p.projection.c_str(),
                  st.projectedOnGpu, st.captured);
-    if (p.opt.bracket)
-      std::fprintf(stderr, "  bracket merged on the GPU: %zu of %zu frames\n", st.mergedOnGpu,
-                   st.captured);
+    if (p.opt.bracket) {
+      const std::string kept = st.backgroundsOnGpu == 0
+                                   ? ""
+                                   : ", " + std::to_string(st.backgroundsOnGpu) +
+                                         " kept there for the background (not read back)";
+      std::fprintf(stderr, "  bracket merged on the GPU: %zu of %zu frames%s\n", st.mergedOnGpu,
+                   st.captured, kept.c_str());
+    }
   } else
     std::fprintf(stderr, "  projected on the CPU\n");
   // The GPU's own time, where a GPU takes part (a software rasterizer's is said to be none).

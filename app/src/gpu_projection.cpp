@@ -26,11 +26,30 @@ std::function<GpuWork()> streamProjection(ProjectOn asked, gl::GlContext& drawin
   // The capture thread's context, on the drawing context's device: made (and GL loaded) here,
   // then this thread's own made current again.
   std::shared_ptr<gl::GlContext> ctx;
+  bool shared = false;
   try {
     gl::releaseCurrentContext();  // (a GLX window's and an EGL one are not current together)
     // (A window's: the first GPU EGL finds, else its software device.)
-    ctx = gl::createGlContext({gl::Backend::Egl, 16, 16, "capture", false, 0, 0,
-                               drawing.backend() == gl::Backend::Egl ? drawing.device() : -1});
+    gl::ContextSpec spec{gl::Backend::Egl,
+                         16,
+                         16,
+                         "capture",
+                         false,
+                         0,
+                         0,
+                         drawing.backend() == gl::Backend::Egl ? drawing.device() : -1};
+    // Drawing with EGL, the two contexts share objects: the merged frame is drawn where it was
+    // merged. (A window's GLX context shares nothing with EGL: its frames are read back.)
+    if (drawing.backend() == gl::Backend::Egl) {
+      spec.shareWith = &drawing;
+      try {
+        ctx = gl::createGlContext(spec);
+        shared = true;
+      } catch (const gl::ContextError&) {
+        spec.shareWith = nullptr;  // (a driver that will not share: read back)
+      }
+    }
+    if (!ctx) ctx = gl::createGlContext(spec);
   } catch (const gl::ContextError& e) {
     drawing.makeCurrent();
     if (asked == ProjectOn::Gpu) throw Error(std::string("--projection gpu: ") + e.what());
@@ -48,7 +67,7 @@ std::function<GpuWork()> streamProjection(ProjectOn asked, gl::GlContext& drawin
   drawing.makeCurrent();
   if (!onGpu) return {};
   used = "the GPU, " + ctx->describe();
-  return [ctx] {
+  return [ctx, shared] {
     ctx->makeCurrent();
     // The passes and the frame's texture belong to the capture thread's context: deleted there,
     // before the context is let go (the last owner of `ctx` destroys it on its own thread).
@@ -100,6 +119,7 @@ std::function<GpuWork()> streamProjection(ProjectOn asked, gl::GlContext& drawin
       return state->merge->readLuminance(key, into);
     };
     work.mergeMs = [state] { return state->mergeMs; };
+    if (shared) work.mergedImage = [state] { return state->merge->takeKeptImage(); };
     return work;
   };
 }

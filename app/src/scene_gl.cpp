@@ -23,6 +23,8 @@ void setBackground(gl::Renderer& r, const Background& b) {
   else if (b.image)
     r.setBackground(b.image->rgb.data(), b.image->width, b.image->height,
                     backgroundMapping(b.layout), b.scale);
+  else if (b.onGpu)
+    r.setBackground(*b.onGpu, backgroundMapping(b.layout), b.scale);
 }
 
 gl::Backend glBackend(const SceneSettings& sc) {

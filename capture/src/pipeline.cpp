@@ -119,7 +119,8 @@ struct CapturePipeline::Loop {
   /// Equirect frames without a light search are projected as they merge (their coefficients
   /// here), and the float frame is written only where the display draws it.
   MergeProjection projection;
-  bool projected = false;  ///< `frame` was projected as it merged
+  bool projected = false;        ///< `frame` was projected as it merged
+  bool backgroundOnGpu = false;  ///< its background is where the GPU merged it (Background::onGpu)
   struct Lit {
     Sh9 radiance, unsmoothed;
     std::vector<Light> lights;
@@ -136,6 +137,7 @@ struct CapturePipeline::Loop {
   bool shown = false;
   std::function<Sh9(const ProjectionJob&)> gpu;       ///< PipelineOptions::projectOnGpu's
   std::function<std::optional<double>()> gpuMergeMs;  ///< GpuWork::mergeMs
+  std::function<std::shared_ptr<const gl::GpuImage>()> gpuMergedImage;  ///< GpuWork::mergedImage
   std::uint64_t index = 0;
   Clock::time_point wallStart;
   double streamStart = -1, loopOffset = 0, lastTimestamp = 0;
@@ -163,14 +165,17 @@ bool CapturePipeline::grab(Loop& s) {
   return true;
 }
 
-void CapturePipeline::merge(Loop& s, ProcessedFrame& out) const {
+void CapturePipeline::merge(Loop& s, ProcessedFrame& out) {
+  s.backgroundOnGpu = false;
   if (!s.merger) return;
   s.projected =
       opt_.layout.layout == Layout::Equirect && opt_.reduce == 1 && opt_.lights.maxLights == 0;
   if (s.projected) {
     s.processor.fit(*s.frame);  // the projector of the frame's size
     s.projection.integrals = s.processor.projector()->equirectIntegrals();
-    s.projection.keepFrame = opt_.keepImages;
+    // (The display draws the frame where the GPU merged it, where it can.)
+    s.projection.keepWhereMerged = opt_.keepImages && s.gpuMergedImage;
+    s.projection.keepFrame = opt_.keepImages && !s.projection.keepWhereMerged;
     out.confidence = s.merger->add(*s.frame, s.merged, s.pool.get(), s.projection);
   } else {
     out.confidence = s.merger->add(*s.frame, s.merged, s.pool.get());
@@ -179,6 +184,16 @@ void CapturePipeline::merge(Loop& s, ProcessedFrame& out) const {
   if (!s.merger->hasFrameKernel()) return;
   out.mergedOnGpu = true;
   if (s.gpuMergeMs) out.gpu.merge = s.gpuMergeMs();
+  s.backgroundOnGpu = s.projected && s.projection.keepWhereMerged;
+  if (s.backgroundOnGpu) {
+    Background& b = out.background;
+    b.onGpu = s.gpuMergedImage();
+    b.onGpuWidth = s.frame->width, b.onGpuHeight = s.frame->height;
+    b.layout = Layout::Equirect;
+    b.scale = float(s.frame->radianceScale) * opt_.photometry.exposure;
+    std::lock_guard lock(mutex_);
+    ++stats_.backgroundsOnGpu;
+  }
 }
 
 bool CapturePipeline::hold(Loop& s, ProcessedFrame& out) {
@@ -239,7 +254,7 @@ void CapturePipeline::project(Loop& s, ProcessedFrame& out) {
   try {
     r = s.processor.run(
         s.frame,
-        {.background = opt_.keepImages,
+        {.background = opt_.keepImages && !s.backgroundOnGpu,
          .saturation = true,
          .projected = s.projected ? std::optional(s.projection.coefficients) : std::nullopt,
          .projectWith = s.gpu},
@@ -257,7 +272,7 @@ void CapturePipeline::project(Loop& s, ProcessedFrame& out) {
     stats_.projectedOnGpu += out.projectedOn == ProjectedOn::Gpu;
     stats_.mergedOnGpu += out.mergedOnGpu;
   }
-  out.background = std::move(r.background);
+  if (!s.backgroundOnGpu) out.background = std::move(r.background);
   s.shown = out.background.raw != nullptr;
   FrameLighting& lit = r.lighting;
   // A merged bracket judged itself; a single frame is judged by its clipped pixels. A bracket
@@ -329,9 +344,11 @@ void CapturePipeline::run() {
     if (opt_.projectOnGpu) {
       GpuWork work = opt_.projectOnGpu();
       s.gpu = std::move(work.project);
-      if (s.merger && work.merge)
+      if (s.merger && work.merge) {
         s.merger->setFrameKernel(std::move(work.merge), work.mergeTurns,
                                  std::move(work.mergeLuminance));
+        s.gpuMergedImage = std::move(work.mergedImage);
+      }
       s.gpuMergeMs = std::move(work.mergeMs);
     }
     while (!stop_ && !interrupted_ &&

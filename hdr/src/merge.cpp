@@ -310,6 +310,7 @@ FrameConfidence BracketMerger::add(const Frame& in, Frame& out, Executor* execut
                                                         : 0;
   frame.luminanceKey = newKey();
   frame.luminanceBack = !(frameKernel_ && fetchLuminance_);
+  frame.rgbKept = !keep && projection.keepWhereMerged && frameKernel_;
   MergeTally total;
   if (frameKernel_) {
     std::vector<merge::RowSums> rows(static_cast<std::size_t>(h));

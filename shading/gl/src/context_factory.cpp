@@ -90,6 +90,9 @@ std::unique_ptr<GlContext> openHeadless(const ContextSpec& spec) {
 
 std::unique_ptr<GlContext> createGlContext(const ContextSpec& spec) {
   checkSize(spec.width, spec.height);
+  if (spec.shareWith && spec.backend != Backend::Egl)
+    throw ContextError(std::string("a context shares objects only as EGL (asked: ") +
+                       backendName(spec.backend) + ")");
   std::string whyNot;
   switch (spec.backend) {
     case Backend::Egl:

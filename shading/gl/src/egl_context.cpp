@@ -149,7 +149,7 @@ class EglContext final : public GlContext {
         height_(spec.height) {
     if (!initialiseDisplay(display_)) throw eglFailure("cannot initialise the display");
     try {
-      open();
+      open(sharedContext(spec.shareWith));
       description_ = "EGL " + platform_ + " (" + rendererString() + ")";
       backend_ = Backend::Egl, device_ = device;
     } catch (...) {
@@ -186,7 +186,16 @@ class EglContext final : public GlContext {
   void pollEvents() override {}
 
  private:
-  void open() {
+  /// The EGL context of `with` (none: EGL_NO_CONTEXT), checked to be on this display.
+  EGLContext sharedContext(const GlContext* with) const {
+    if (!with) return EGL_NO_CONTEXT;
+    const auto* egl = dynamic_cast<const EglContext*>(with);
+    if (!egl || egl->display_ != display_)
+      throw ContextError("EGL: a context shares objects only with an EGL context on its device (" +
+                         with->describe() + " is not one)");
+    return egl->context_;
+  }
+  void open(EGLContext share) {
     if (!hasExtension(eglQueryString(display_, EGL_EXTENSIONS), "EGL_KHR_surfaceless_context"))
       throw ContextError("EGL: the display has no EGL_KHR_surfaceless_context");
     if (!eglBindAPI(EGL_OPENGL_API)) throw eglFailure("no desktop OpenGL");
@@ -209,7 +218,7 @@ class EglContext final : public GlContext {
                                 EGL_CONTEXT_OPENGL_PROFILE_MASK,
                                 EGL_CONTEXT_OPENGL_CORE_PROFILE_BIT,
                                 EGL_NONE};
-      context_ = eglCreateContext(display_, config, EGL_NO_CONTEXT, attribs);
+      context_ = eglCreateContext(display_, config, share, attribs);
       if (context_ != EGL_NO_CONTEXT) break;
     }
     if (context_ == EGL_NO_CONTEXT) throw eglFailure("cannot create a GL 3.3 core context");

@@ -492,7 +492,12 @@ void GpuMerge::operator()(const merge::FrameInput& in, std::vector<merge::RowSum
     glBufferSubData(GL_SHADER_STORAGE_BUFFER, GLintptr(nearStride), GLsizeiptr(pixels),
                     in.nearHigh);
   }
-  fill(kRgb, nullptr, in.rgb ? pixels * 3 * sizeof(float) : 4);
+  kept_.reset();
+  const std::size_t rgbBytes = pixels * 3 * sizeof(float);
+  if (in.rgbKept)
+    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, kRgb, keptPool_.take(rgbBytes));
+  else
+    fill(kRgb, nullptr, in.rgb ? rgbBytes : 4);
   const bool project = in.col[0] != nullptr;
   fill(kCol, nullptr, project ? 5 * std::size_t(in.width) * sizeof(float) : 4);
   if (project)
@@ -511,14 +516,16 @@ void GpuMerge::operator()(const merge::FrameInput& in, std::vector<merge::RowSum
   setFloat(p, "wellLinear", in.wellLinear), setFloat(p, "belowClipLinear", in.belowClipLinear);
   setFloat(p, "inv2s2", in.inv2s2);
   setInt(p, "fresh", in.fresh), setInt(p, "turned", turned),
-      setInt(p, "writeRgb", in.rgb != nullptr);
+      setInt(p, "writeRgb", in.rgb != nullptr || in.rgbKept);
   setInt(p, "project", project), setInt(p, "parts", parts);
   glUniform1fv(glGetUniformLocation(p, "scale"), merge::kMaxFrames, in.scale);
   glUniform1uiv(glGetUniformLocation(p, "frameOffset"), merge::kMaxFrames, offsets);
   glUniform1ui(glGetUniformLocation(p, "nearHighOffset"), GLuint(nearStride));
   glDispatchCompute(GLuint(groups), 1, 1);
-  glMemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT);
+  // (A kept frame is read by the drawing context's copy from a pixel buffer.)
+  glMemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT | (in.rgbKept ? GL_PIXEL_BUFFER_BARRIER_BIT : 0));
   glUseProgram(0);
+  if (in.rgbKept) kept_ = keptPool_.give(in.width, in.height);
 
   std::vector<float> sums(groups * kRowFloats);
   const auto read = [](const Buffer& b, void* into, std::size_t bytes) {
@@ -527,7 +534,7 @@ void GpuMerge::operator()(const merge::FrameInput& in, std::vector<merge::RowSum
   };
   read(buffers_[kRows], sums.data(), sums.size() * sizeof(float));
   if (in.luminanceBack) read(luminance_[std::size_t(out)], in.luminance, pixels * sizeof(float));
-  if (in.rgb) read(buffers_[kRgb], in.rgb, pixels * 3 * sizeof(float));
+  if (in.rgb && !in.rgbKept) read(buffers_[kRgb], in.rgb, rgbBytes);
   // Each row's parts in order: their sums added, the brightest the larger (of equals the first).
   rows.assign(std::size_t(in.height), merge::RowSums{});
   for (std::size_t g = 0; g < groups; ++g) {

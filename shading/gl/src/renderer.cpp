@@ -243,7 +243,29 @@ void Renderer::setBackground(const float* rgb, int width, int height, Background
   backgroundMapping_ = mapping;
   backgroundScale_ = 1.0f;
   backgroundDisplayScale_ = displayScale;
-  backgroundSrgb_ = false;
+  backgroundW_ = width, backgroundH_ = height, backgroundSrgb_ = false;
+}
+
+void Renderer::setBackground(const GpuImage& image, BackgroundMapping mapping, float scale) {
+  const int w = image.width(), h = image.height();
+  const bool copied = image.read([&](GLuint buffer) {
+    // A float texture of the image's size and wrap is written over; else one is made.
+    if (!backgroundTex_.isValid() || backgroundSrgb_ || w != backgroundW_ || h != backgroundH_ ||
+        mapping != backgroundMapping_)
+      backgroundTex_ = makeFloatTexture(
+          nullptr, w, h, mapping == BackgroundMapping::Equirect ? GL_REPEAT : GL_CLAMP_TO_EDGE);
+    glBindBuffer(GL_PIXEL_UNPACK_BUFFER, buffer);
+    glBindTexture(GL_TEXTURE_2D, backgroundTex_.get());
+    glPixelStorei(GL_UNPACK_ALIGNMENT, 4);
+    glTexSubImage2D(GL_TEXTURE_2D, 0, 0, 0, w, h, GL_RGB, GL_FLOAT, nullptr);
+    glBindBuffer(GL_PIXEL_UNPACK_BUFFER, 0);
+  });
+  checkGl("Renderer::setBackground (a frame kept on the GPU)");
+  if (!copied) return;
+  backgroundMapping_ = mapping;
+  backgroundScale_ = scale;
+  backgroundDisplayScale_ = 0.0f;
+  backgroundW_ = w, backgroundH_ = h, backgroundSrgb_ = false;
 }
 
 void Renderer::setBackgroundSrgb8(const std::uint8_t* bgr, int width, int height,

@@ -44,6 +44,10 @@ struct GpuWork {
   merge::LuminanceFetch mergeLuminance;
   /// The GPU's time for the last merge (ms), where the context has a timer.
   std::function<std::optional<double>()> mergeMs;
+  /// Where the display's context shares the merging one's objects: the last merge's frame, kept
+  /// on the GPU (merge::FrameInput::rgbKept), handed over as the background (Background::onGpu)
+  /// instead of read back.
+  std::function<std::shared_ptr<const gl::GpuImage>()> mergedImage;
 };
 
 struct PipelineOptions {
@@ -118,15 +122,16 @@ struct PipelineStats {
   /// contradicted the others), and of them those that disagreed on most of the power they kept
   /// (FrameConfidence::agreement under 0.5): a response other than the camera's does so.
   std::size_t mergesTelling = 0, mergesDisagreeing = 0;
-  std::string endReason;           ///< why the source ended early, if it did
-  std::size_t reconnects = 0;      ///< times the source reopened its stream (a network camera)
-  std::size_t stale = 0;           ///< frames the source replaced before capture took them
-  std::string error;               ///< the fatal error that stopped capture, if any
-  std::size_t beforeBall = 0;      ///< frames before the followed ball was found (FollowBall)
-  std::size_t ballLost = 0;        ///< frames the followed ball was lost in
-  std::size_t ballMoves = 0;       ///< times its circle moved (the layout fitted again)
-  std::size_t projectedOnGpu = 0;  ///< frames whose coefficients the GPU summed
-  std::size_t mergedOnGpu = 0;     ///< brackets the GPU merged
+  std::string endReason;             ///< why the source ended early, if it did
+  std::size_t reconnects = 0;        ///< times the source reopened its stream (a network camera)
+  std::size_t stale = 0;             ///< frames the source replaced before capture took them
+  std::string error;                 ///< the fatal error that stopped capture, if any
+  std::size_t beforeBall = 0;        ///< frames before the followed ball was found (FollowBall)
+  std::size_t ballLost = 0;          ///< frames the followed ball was lost in
+  std::size_t ballMoves = 0;         ///< times its circle moved (the layout fitted again)
+  std::size_t projectedOnGpu = 0;    ///< frames whose coefficients the GPU summed
+  std::size_t mergedOnGpu = 0;       ///< brackets the GPU merged
+  std::size_t backgroundsOnGpu = 0;  ///< of those, handed over kept on the GPU (Background::onGpu)
 };
 
 /// Exponential moving average of coefficients: alpha = 1 - exp(-dt / tau). Exact on SH because
@@ -191,7 +196,7 @@ class CapturePipeline {
   void run();
   bool waitForTurn(Loop& s);  ///< the pause / step gate; false when stopping
   bool grab(Loop& s);         ///< the next frame (looping if asked); false at the end
-  void merge(Loop& s, ProcessedFrame& out) const;  ///< a bracket into radiance; the confidence
+  void merge(Loop& s, ProcessedFrame& out);  ///< a bracket into radiance; the confidence
   /// Below holdBelow, after a good frame: the last good lighting stands (counted).
   bool hold(Loop& s, ProcessedFrame& out);
   /// The frame through its FrameProcessor (lighting, background, stage times), judged, held or

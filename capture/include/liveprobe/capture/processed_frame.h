@@ -18,6 +18,10 @@
 #include "liveprobe/sh/lights.h"
 #include "liveprobe/sh/sh.h"
 
+namespace lp::gl {
+class GpuImage;  // liveprobe/gl/gpu_image.h: named here, never included (capture knows no GL)
+}
+
 namespace lp {
 
 /// Where a frame's coefficients were summed: on the CPU (the frame path's projector, or a
@@ -47,15 +51,19 @@ struct GpuTimes {
 struct Background {
   std::shared_ptr<const Frame> raw;    ///< the frame as captured; the GPU decodes sRGB
   std::shared_ptr<const Image> image;  ///< or the linear copy
-  Layout layout = Layout::Equirect;    ///< as drawn: equirect or angular
-  /// `raw`: the linear scale of its decoded values (the exposure). `image` made from an 8-bit
+  /// Or a bracket's merged radiance kept on the GPU that merged it (GpuWork::mergedImage), for a
+  /// display whose context shares that one's objects; its size beside it.
+  std::shared_ptr<const gl::GpuImage> onGpu;
+  int onGpuWidth = 0, onGpuHeight = 0;
+  Layout layout = Layout::Equirect;  ///< as drawn: equirect or angular
+  /// `raw`, `onGpu`: the linear scale of its values (the exposure). `image` made from an 8-bit
   /// frame: the scale its values carry, so the display can show it as the source looks
   /// (gl::Renderer::setBackground); 0 for HDR frames.
   float scale = 0.0f;
 
-  bool empty() const { return !raw && !image; }
-  int width() const { return raw ? raw->width : image ? image->width : 0; }
-  int height() const { return raw ? raw->height : image ? image->height : 0; }
+  bool empty() const { return !raw && !image && !onGpu; }
+  int width() const { return raw ? raw->width : image ? image->width : onGpuWidth; }
+  int height() const { return raw ? raw->height : image ? image->height : onGpuHeight; }
 };
 
 struct ProcessedFrame {

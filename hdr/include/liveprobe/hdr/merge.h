@@ -73,6 +73,9 @@ struct MergeProjection {
   const EquirectIntegrals* integrals = nullptr;
   /// false: `out` gets the merged frame's size, times and scale, and no pixels.
   bool keepFrame = true;
+  /// With keepFrame false and a frame kernel (BracketMerger::setFrameKernel): the kernel keeps
+  /// the merged frame where it merges (merge::FrameInput::rgbKept), for a display drawing there.
+  bool keepWhereMerged = false;
   /// The result: the merged frame's radiance coefficients, the sums Projector::project makes of
   /// it (in its units, before any photometry or rotation).
   Sh9 coefficients;

@@ -75,6 +75,9 @@ struct FrameInput {
   const std::uint8_t* nearLow = nullptr;
   const std::uint8_t* nearHigh = nullptr;
   float* rgb = nullptr;  ///< the merged radiance, R, G, B per pixel (null: not written)
+  /// The processor keeps the merged radiance where it runs (a GPU's buffer the display draws
+  /// from: gl::GpuMerge::takeKeptImage) instead of writing `rgb`.
+  bool rgbKept = false;
   /// Equirect frames projected as they merge: the five column integrals (width floats each,
   /// EquirectIntegrals::col), or null: no projection.
   const float* col[5] = {};

@@ -37,6 +37,8 @@ const char* backendName(Backend backend);
 /// where the build has no EGL or EGL enumerates none. ContextSpec::gpu indexes this list.
 std::vector<std::string> eglDevices();
 
+class GlContext;
+
 struct ContextSpec {
   Backend backend = Backend::Auto;
   int width = 1280;
@@ -47,6 +49,10 @@ struct ContextSpec {
   int headlessWidth = 0, headlessHeight = 0;
   /// EGL: the device to open (an index of eglDevices()); -1 takes the first GPU.
   int gpu = -1;
+  /// EGL: a context whose objects (buffers, textures, fences) the new one shares, as another
+  /// thread's context shares the drawing one's: an EGL context on the same device (gpu), else a
+  /// ContextError.
+  const GlContext* shareWith = nullptr;
 };
 
 /// What a platform provides for liveprobe to draw into (as Filament's OpenGLPlatform): a current

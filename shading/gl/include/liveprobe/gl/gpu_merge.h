@@ -5,13 +5,16 @@
 // contradictions, the same confidence sums), and the merged radiance weighed by the equirect
 // column integrals in the same pass: one workgroup a row, each row's sums read back. The
 // luminance the next merge reads stays on the GPU (read back where the merge asks:
-// FrameInput::luminanceBack, readLuminance), and the merged frame comes back where it is asked for.
+// FrameInput::luminanceBack, readLuminance); the merged frame comes back where it is asked for
+// (FrameInput::rgb), or stays on the GPU for a context that shares this one's objects to draw
+// (FrameInput::rgbKept, takeKeptImage: liveprobe/gl/gpu_image.h).
 // Needs a current context with compute shaders (GL 4.3; hasCompute()).
 #include <algorithm>
 #include <cstddef>
 #include <cstdint>
 #include <vector>
 
+#include "liveprobe/gl/gpu_image.h"
 #include "liveprobe/gl/handles.h"
 #include "liveprobe/hdr/merge_frame.h"
 
@@ -35,6 +38,11 @@ class GpuMerge {
   /// (what lp::BracketMerger::setFrameKernel's `fetch` takes); false where no buffer holds it.
   /// The last merge's and the one before it are always held.
   bool readLuminance(std::uint64_t key, float* into);
+  /// The last merge's frame where it was kept (FrameInput::rgbKept), handed over once; none
+  /// where it was not kept, or was taken.
+  std::shared_ptr<const GpuImage> takeKeptImage() { return std::move(kept_); }
+  /// Buffers made for kept frames: those a reader held when a merge wrote one, plus one.
+  std::size_t keptBuffers() const { return keptPool_.buffers(); }
   /// Frames uploaded so far.
   std::size_t framesUploaded() const { return uploaded_; }
   /// Luminance buffers (the last merges') uploaded so far: the first merge's two, then only
@@ -81,6 +89,8 @@ class GpuMerge {
   Keyed<3> luminanceKeys_;  ///< what each holds (merge::FrameInput::previousKey)
   std::size_t luminanceBytes_ = 0, luminancePixels_ = 0, luminanceUploaded_ = 0;
   int rowParts_ = 1;
+  GpuImagePool keptPool_;
+  std::shared_ptr<const GpuImage> kept_;
 };
 
 }  // namespace lp::gl

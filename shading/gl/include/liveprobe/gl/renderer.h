@@ -7,6 +7,7 @@
 #include <glm/glm.hpp>
 #include <vector>
 
+#include "liveprobe/gl/gpu_image.h"
 #include "liveprobe/gl/handles.h"
 #include "liveprobe/gl/mesh.h"
 #include "liveprobe/sh/lights.h"
@@ -101,6 +102,11 @@ class Renderer {
   /// looks as the source does. 0: a scene-referred (HDR) panorama, exposed and tone-mapped.
   void setBackground(const float* rgb, int width, int height, BackgroundMapping mapping,
                      float displayScale = 0.0f);
+
+  /// A linear RGB panorama kept on the GPU by a context sharing this one's objects (a bracket
+  /// merged there), copied into the background's texture on the GPU, its values times `scale`
+  /// (the exposure). Where its maker is gone, the background stays as it was.
+  void setBackground(const GpuImage& image, BackgroundMapping mapping, float scale);
 
   /// 8-bit sRGB BGR panorama (rows top to bottom): the texture unit decodes sRGB to linear, and
   /// the shader multiplies by `scale` (the input exposure). Saves a per-frame CPU conversion.
