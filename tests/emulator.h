@@ -17,7 +17,8 @@ namespace lpt {
 struct Emulator {
   lpt::TempDir tmp;
   std::string faults;
-  std::string env;  ///< more LPEMU_* settings, "NAME=VALUE " each
+  std::string env;     ///< more LPEMU_* settings, "NAME=VALUE " each
+  std::string prefix;  ///< what the run goes through (xvfb-run ...)
   /// Modes of rendered 8-bit sky frames (lpt::makeModes).
   explicit Emulator(const std::vector<std::string>& modes, std::string f = "")
       : faults(std::move(f)) {
@@ -40,7 +41,8 @@ struct Emulator {
         " LPEMU_DEVICE=/dev/video7 LPEMU_SOURCE=" + (tmp.path / "modes").string() +
         " LPEMU_META_DEVICE=/dev/video8 LPEMU_LOG=" + log() + " LPEMU_FAULTS=" + faults + " " +
         this->env;
-    return lpt::runCommand(vars + LIVEPROBE_BIN + " " + args);
+    return lpt::runCommand(prefix + (prefix.empty() ? "" : "env ") + vars + LIVEPROBE_BIN + " " +
+                           args);
   }
   std::string logText() const {
     std::ifstream in(log());

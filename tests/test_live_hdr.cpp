@@ -828,6 +828,23 @@ TEST(LiveHdr, TheBracketMergedOnTheGpuIsTheCpusMerge) {
   }
 }
 
+// In a window (GLFW's EGL context, under Xvfb on Mesa's llvmpipe) the bracket merged on the GPU
+// stays there for the background as it does headless: the capture thread's EGL context shares
+// the window's objects, on the window's display.
+TEST(LiveHdr, AWindowDrawsTheMergedFrameWhereTheGpuMergedIt) {
+  Emulator emu("MJPG_256x128", {skyFrame(30)}, "control_delay=2");
+  emu.prefix = lpt::xvfbRun("320x240x24");
+  const auto r = emu.run(
+      "live /dev/video7 --bracket -12,-6,0 --lock-exposure 0.3 --view-size 160x90 --no-hud "
+      "--frames 12 --projection gpu");
+  ASSERT_EQ(r.exitCode, 0) << r.output;
+  EXPECT_NE(r.output.find("GLFW window, EGL"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("bracket merged on the GPU: 12 of 12 frames, 12 kept there for the "
+                          "background (not read back)"),
+            std::string::npos)
+      << r.output;
+}
+
 // A container that would not replay the merge is refused before the camera opens, in one line
 // that names it, and nothing is written: MJPEG (.avi) and H.264 (.mp4) are lossy; .exr frames
 // keep radiance, not the codes.

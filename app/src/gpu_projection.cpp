@@ -29,25 +29,22 @@ std::function<GpuWork()> streamProjection(ProjectOn asked, gl::GlContext& drawin
   bool shared = false;
   try {
     gl::releaseCurrentContext();  // (a GLX window's and an EGL one are not current together)
-    // (A window's: the first GPU EGL finds, else its software device.)
-    gl::ContextSpec spec{gl::Backend::Egl,
-                         16,
-                         16,
-                         "capture",
-                         false,
-                         0,
-                         0,
-                         drawing.backend() == gl::Backend::Egl ? drawing.device() : -1};
-    // Drawing with EGL, the two contexts share objects: the merged frame is drawn where it was
-    // merged. (A window's GLX context shares nothing with EGL: its frames are read back.)
-    if (drawing.backend() == gl::Backend::Egl) {
-      spec.shareWith = &drawing;
-      try {
-        ctx = gl::createGlContext(spec);
-        shared = true;
-      } catch (const gl::ContextError&) {
-        spec.shareWith = nullptr;  // (a driver that will not share: read back)
-      }
+    // The two contexts share objects where the drawing one is EGL's (headless, or a window's on
+    // the window's display): the merged frame is drawn where it was merged. Else (a window's GLX
+    // context shares nothing with EGL, a driver that will not share) the frames are read back,
+    // and a window's capture context is the first GPU EGL finds, else its software device.
+    gl::ContextSpec spec{.backend = gl::Backend::Egl,
+                         .width = 16,
+                         .height = 16,
+                         .title = "capture",
+                         .vsync = false,
+                         .gpu = drawing.backend() == gl::Backend::Egl ? drawing.device() : -1,
+                         .shareWith = &drawing};
+    try {
+      ctx = gl::createGlContext(spec);
+      shared = true;
+    } catch (const gl::ContextError&) {
+      spec.shareWith = nullptr;
     }
     if (!ctx) ctx = gl::createGlContext(spec);
   } catch (const gl::ContextError& e) {

@@ -24,6 +24,15 @@ std::unique_ptr<GlContext> openWindow(const ContextSpec& spec, std::string& whyN
 /// throws ContextError when the one chosen fails.
 std::unique_ptr<GlContext> openEgl(const ContextSpec& spec, bool hardwareOnly, std::string& whyNot);
 
+/// A window's EGL display and context (EGLDisplay, EGLContext: this header includes no EGL),
+/// for a context that shares its objects (ContextSpec::shareWith); null where the window's
+/// context is not EGL's (GLX) or `window` is not a window.
+struct WindowEgl {
+  void* display = nullptr;
+  void* context = nullptr;
+};
+WindowEgl windowEgl(const GlContext& window);
+
 /// Makes no window's context (releaseWindowContext) or EGL context (releaseEglContext) current
 /// on this thread; nothing where the build has none.
 void releaseWindowContext();

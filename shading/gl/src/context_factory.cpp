@@ -49,6 +49,7 @@ void releaseCurrentContext() {
 }
 
 #if !LIVEPROBE_WITH_GLFW
+WindowEgl windowEgl(const GlContext&) { return {}; }
 std::unique_ptr<GlContext> openWindow(const ContextSpec&, std::string& whyNot) {
   whyNot = "this liveprobe was built without the GLFW window (LIVEPROBE_WITH_GLFW)";
   return nullptr;

@@ -142,18 +142,24 @@ void terminateDisplay(EGLDisplay display) {
 
 class EglContext final : public GlContext {
  public:
-  EglContext(EGLDisplay display, std::string platform, const ContextSpec& spec, int device)
+  /// `share`: the context whose objects it shares (EGL_NO_CONTEXT: none). `borrowed`: the
+  /// display is another's (a window's), initialised and terminated by it.
+  EglContext(EGLDisplay display, std::string platform, const ContextSpec& spec, int device,
+             EGLContext share = EGL_NO_CONTEXT, bool borrowed = false)
       : display_(display),
         platform_(std::move(platform)),
         width_(spec.width),
-        height_(spec.height) {
-    if (!initialiseDisplay(display_)) throw eglFailure("cannot initialise the display");
+        height_(spec.height),
+        borrowed_(borrowed) {
+    if (!borrowed_ && !initialiseDisplay(display_))
+      throw eglFailure("cannot initialise the display");
     try {
-      open(sharedContext(spec.shareWith));
+      if (share == EGL_NO_CONTEXT && spec.shareWith) share = sharedContext(*spec.shareWith);
+      open(share);
       description_ = "EGL " + platform_ + " (" + rendererString() + ")";
       backend_ = Backend::Egl, device_ = device;
     } catch (...) {
-      terminateDisplay(display_);
+      if (!borrowed_) terminateDisplay(display_);
       throw;
     }
   }
@@ -171,7 +177,7 @@ class EglContext final : public GlContext {
     eglMakeCurrent(display_, EGL_NO_SURFACE, EGL_NO_SURFACE, EGL_NO_CONTEXT);
     eglDestroyContext(display_, context_);
     if (!mine && before != EGL_NO_CONTEXT) eglMakeCurrent(beforeDisplay, draw, read, before);
-    terminateDisplay(display_);
+    if (!borrowed_) terminateDisplay(display_);
     if (mine || before == EGL_NO_CONTEXT)
       eglReleaseThread();  // the thread's EGL state (its current API, its last error) too
   }
@@ -186,13 +192,12 @@ class EglContext final : public GlContext {
   void pollEvents() override {}
 
  private:
-  /// The EGL context of `with` (none: EGL_NO_CONTEXT), checked to be on this display.
-  EGLContext sharedContext(const GlContext* with) const {
-    if (!with) return EGL_NO_CONTEXT;
-    const auto* egl = dynamic_cast<const EglContext*>(with);
+  /// The EGL context of `with`, checked to be on this display.
+  EGLContext sharedContext(const GlContext& with) const {
+    const auto* egl = dynamic_cast<const EglContext*>(&with);
     if (!egl || egl->display_ != display_)
       throw ContextError("EGL: a context shares objects only with an EGL context on its device (" +
-                         with->describe() + " is not one)");
+                         with.describe() + " is not one)");
     return egl->context_;
   }
   void open(EGLContext share) {
@@ -258,6 +263,7 @@ class EglContext final : public GlContext {
   EGLContext context_ = EGL_NO_CONTEXT;
   std::string platform_;
   int width_, height_;
+  bool borrowed_;
   Framebuffer fbo_;
   Renderbuffer colour_, depth_;
 };
@@ -289,6 +295,15 @@ std::unique_ptr<GlContext> openEgl(const ContextSpec& spec, bool hardwareOnly,
   if (!getDisplay) {
     whyNot = "EGL has no eglGetPlatformDisplayEXT";
     return nullptr;
+  }
+  // Sharing a window's objects: on the window's own display.
+  if (spec.shareWith && spec.shareWith->backend() == Backend::Window) {
+    const WindowEgl w = windowEgl(*spec.shareWith);
+    if (!w.display)
+      throw ContextError("EGL: the window's context is not EGL's (" + spec.shareWith->describe() +
+                         "): it shares nothing with an EGL context");
+    return std::make_unique<EglContext>(EGLDisplay(w.display), "the window's display", spec, -1,
+                                        EGLContext(w.context), true);
   }
   const std::vector<Device> devices =
       hasExtension(client, "EGL_EXT_platform_device") ? listDevices() : std::vector<Device>{};

@@ -5,6 +5,12 @@
 
 #include <GLFW/glfw3.h>
 
+#include "liveprobe/backends.h"
+#if LIVEPROBE_WITH_EGL
+#define GLFW_EXPOSE_NATIVE_EGL
+#include <GLFW/glfw3native.h>
+#endif
+
 #include <cstdlib>
 
 #include "context_backends.h"
@@ -25,7 +31,17 @@ class GlfwContext final : public GlContext {
     glfwWindowHint(GLFW_CONTEXT_VERSION_MINOR, 3);
     glfwWindowHint(GLFW_OPENGL_PROFILE, GLFW_OPENGL_CORE_PROFILE);
     glfwWindowHint(GLFW_OPENGL_FORWARD_COMPAT, GLFW_TRUE);
-    window_ = glfwCreateWindow(spec.width, spec.height, spec.title.c_str(), nullptr, nullptr);
+    // An EGL context where the build has EGL, so that the capture thread's EGL context can share
+    // its objects (ContextSpec::shareWith: the merged frame drawn where it was merged); else, or
+    // where the display offers no EGL, the platform's own (GLX).
+    if (LIVEPROBE_WITH_EGL) {
+      glfwWindowHint(GLFW_CONTEXT_CREATION_API, GLFW_EGL_CONTEXT_API);
+      window_ = glfwCreateWindow(spec.width, spec.height, spec.title.c_str(), nullptr, nullptr);
+      egl_ = window_ != nullptr;
+      glfwWindowHint(GLFW_CONTEXT_CREATION_API, GLFW_NATIVE_CONTEXT_API);
+    }
+    if (!window_)
+      window_ = glfwCreateWindow(spec.width, spec.height, spec.title.c_str(), nullptr, nullptr);
     if (!window_) {
       glfwTerminate();
       throw ContextError("cannot create a GLFW window: " + glfwLastError());
@@ -37,9 +53,11 @@ class GlfwContext final : public GlContext {
       throw ContextError("GLFW window: cannot load GL 3.3 core functions");
     }
     glfwSwapInterval(spec.vsync ? 1 : 0);
-    description_ = "GLFW window (" + rendererString() + ")";
+    description_ =
+        std::string("GLFW window, ") + (egl_ ? "EGL" : "GLX") + " (" + rendererString() + ")";
     backend_ = Backend::Window;
   }
+  bool egl_ = false;  ///< the window's context is EGL's
   ~GlfwContext() override {
     glfwDestroyWindow(window_);
     glfwTerminate();
@@ -56,6 +74,15 @@ class GlfwContext final : public GlContext {
 };
 
 }  // namespace
+
+WindowEgl windowEgl(const GlContext& window) {
+#if LIVEPROBE_WITH_EGL
+  const auto* w = dynamic_cast<const GlfwContext*>(&window);
+  if (w && w->egl_) return {glfwGetEGLDisplay(), glfwGetEGLContext(w->window())};
+#endif
+  (void)window;
+  return {};
+}
 
 void releaseWindowContext() {
   // (Before glfwInit, or after glfwTerminate, GLFW has no context to let go.)
