@@ -14,7 +14,10 @@
 //   Merge/u8x3/.../gpu/resident/parts:N  with each row merged in N workgroups
 //   Merge/u8x3/.../cpu       the CPU's merge row kernel on every hardware thread
 //   Frame/u8x3/.../merge/... a bracketed frame: the newest frame's upload, the merge and its
-//                            projection, and the bunny rendered at 1080p
+//                            projection, and the bunny rendered at 1080p before a still sky;
+//                            .../merge/background/... before the merged frame, kept on the GPU
+//                            and copied into the background there; .../background:readback/...
+//                            the merged frame read back and uploaded
 // gpu_us counters are GL timer queries (absent where the GL has no timer, as llvmpipe).
 // Every Project/gpu and Merge/gpu run first checks the GPU's sums against the CPU's (1e-5) and
 // stops the benchmark with an error where they differ.
@@ -582,20 +585,29 @@ void mergeGpu(benchmark::State& state, Size s, bool streaming, int parts = 1) {
 /// A live bracketed run's frame on the GPU: the newest 8-bit frame uploaded, the bracket merged
 /// and projected (its sums read back, as the merge's confidence needs them before the frame is
 /// done), then the bunny rendered at 1080p over the background.
-void frameLoopMerge(benchmark::State& state, Size s) {
+/// Where a bracketed frame's background comes from: the bunny's own still sky (none), the merged
+/// frame kept on the GPU and copied into the background's texture there, or the merged frame
+/// read back and uploaded (a display that shares nothing with the merge's context).
+enum class MergedBackground { None, Kept, ReadBack };
+
+void frameLoopMerge(benchmark::State& state, Size s, MergedBackground bg) {
   context();
   if (!lp::gl::hasCompute()) return state.SkipWithError("no compute shaders (GL 4.3)");
   MergeBracket b(s);
   lp::gl::GpuMerge gpu;
   BunnyScene scene({1920, 960});
   std::vector<lp::merge::RowSums> rows;
+  std::vector<float> rgb(bg == MergedBackground::ReadBack ? std::size_t(s.w) * s.h * 3 : 0);
+  b.in.rgbKept = bg == MergedBackground::Kept;
+  b.in.rgb = rgb.empty() ? nullptr : rgb.data();
   GpuTimer timer;
-  GpuMs merge, render;
+  GpuMs merge, upload, render;
   std::uint64_t next = 1;
   glFinish();
   for (auto _ : state) {
     timer.beginFrame();
     merge.add(timer, GpuTimer::Merge);
+    upload.add(timer, GpuTimer::Upload);
     render.add(timer, GpuTimer::Render);
     for (int k = 0; k < 3; ++k) b.in.key[k] = next + std::uint64_t(k);
     b.in.previousKey = b.in.referenceKey = 1000000 + next - 1;
@@ -603,15 +615,23 @@ void frameLoopMerge(benchmark::State& state, Size s) {
     timer.begin(GpuTimer::Merge);
     gpu(b.in, rows);
     timer.end();
+    timer.begin(GpuTimer::Upload);
+    if (bg == MergedBackground::Kept)
+      scene.renderer.setBackground(*gpu.takeKeptImage(), lp::gl::BackgroundMapping::Equirect, 1.0f);
+    else if (bg == MergedBackground::ReadBack)
+      scene.renderer.setBackground(rgb.data(), s.w, s.h, lp::gl::BackgroundMapping::Equirect);
+    timer.end();
     timer.begin(GpuTimer::Render);
     scene.draw({1920, 1080});
     timer.end();
   }
   drain(timer, [&] {
     merge.add(timer, GpuTimer::Merge);
+    upload.add(timer, GpuTimer::Upload);
     render.add(timer, GpuTimer::Render);
   });
   merge.report(state, "gpu_merge_us");
+  if (bg != MergedBackground::None) upload.report(state, "gpu_background_us");
   render.report(state, "gpu_render_us");
 }
 
@@ -677,11 +697,15 @@ void registerAll() {
                                  [=](benchmark::State& st) { renderBunny(st, s); })
         ->UseRealTime()
         ->Unit(benchmark::kMicrosecond);
-  for (Size s : {Size{1920, 960}, Size{3840, 1920}})
-    benchmark::RegisterBenchmark(("Frame/u8x3/" + sizeName(s) + "/merge/render:1920x1080").c_str(),
-                                 [=](benchmark::State& st) { frameLoopMerge(st, s); })
-        ->UseRealTime()
-        ->Unit(benchmark::kMicrosecond);
+  for (Size s : {Size{300, 300}, Size{1920, 960}, Size{3840, 1920}})
+    for (const auto& [bg, name] : {std::pair{MergedBackground::None, "merge"},
+                                   {MergedBackground::Kept, "merge/background"},
+                                   {MergedBackground::ReadBack, "merge/background:readback"}})
+      benchmark::RegisterBenchmark(
+          ("Frame/u8x3/" + sizeName(s) + "/" + name + "/render:1920x1080").c_str(),
+          [=, bg = bg](benchmark::State& st) { frameLoopMerge(st, s, bg); })
+          ->UseRealTime()
+          ->Unit(benchmark::kMicrosecond);
   for (bool overlapped : {false, true})
     benchmark::RegisterBenchmark((std::string("Frame/u8/3840x1920/render:1920x1080/") +
                                   (overlapped ? "overlapped" : "serial"))
