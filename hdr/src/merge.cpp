@@ -343,9 +343,10 @@ FrameConfidence BracketMerger::add(const Frame& in, Frame& out, Executor* execut
   c.complete =
       int(window_.size()) == opt_.frames && exposures == opt_.frames &&
       std::all_of(view.usable.begin(), view.usable.begin() + view.n, [](bool u) { return u; });
-  // A trusted merge (complete, its brightest pixel read unclipped, its confidence 0.9 or more)
-  // is what later clipped pixels are measured against.
+  // This merge's luminance is away where the kernel kept it (FrameInput::luminanceBack).
   (luminanceOut == previous_.data() ? previousAway_ : referenceAway_) = !frame.luminanceBack;
+  // A trusted merge (complete, its brightest pixel read unclipped, its confidence 0.9 or more)
+  // is what later clipped pixels are measured against: the last one stays the reference.
   if (referenceIsPrevious_) {  // this merge's is the last
     std::swap(previous_, reference_);
     std::swap(previousAway_, referenceAway_);

@@ -339,16 +339,14 @@ GpuMerge::GpuMerge(int rowParts) : rowParts_(rowParts) {
     throw ContextError("the bracket merge on the GPU needs compute shaders (GL 4.3)");
   program_ = linkCompute(kMergeCs, "the bracket merge");
   turn_ = linkCompute(kTurnCs, "the bracket's turn");
-  for (Buffer& b : buffers_) {
-    GLuint id = 0;
-    glGenBuffers(1, &id);
-    b = Buffer(id);
-  }
-  for (Buffer& b : luminance_) {
-    GLuint id = 0;
-    glGenBuffers(1, &id);
-    b = Buffer(id);
-  }
+  const auto make = [](auto& buffers) {
+    for (Buffer& b : buffers) {
+      GLuint id = 0;
+      glGenBuffers(1, &id);
+      b = Buffer(id);
+    }
+  };
+  make(buffers_), make(luminance_);
 }
 
 GpuMerge::~GpuMerge() = default;
@@ -371,13 +369,13 @@ void GpuMerge::fill(int binding, const void* data, std::size_t bytes) {
 }
 
 int GpuMerge::bindLuminance(const merge::FrameInput& in, std::size_t pixels) {
-  const std::size_t bytes = std::max<std::size_t>(pixels * sizeof(float), 16);
-  if (bytes != luminanceBytes_) {
+  if (pixels != luminancePixels_) {
+    const std::size_t bytes = std::max<std::size_t>(pixels * sizeof(float), 16);
     for (Buffer& b : luminance_) {
       glBindBuffer(GL_SHADER_STORAGE_BUFFER, b.get());
       glBufferData(GL_SHADER_STORAGE_BUFFER, GLsizeiptr(bytes), nullptr, GL_DYNAMIC_DRAW);
     }
-    luminanceBytes_ = bytes, luminancePixels_ = pixels;
+    luminancePixels_ = pixels;
     luminanceKeys_.forget();
   }
   // The last merges' luminance where a buffer still holds it; else uploaded into one no other
@@ -551,14 +549,12 @@ void GpuMerge::operator()(const merge::FrameInput& in, std::vector<merge::RowSum
 }
 
 bool GpuMerge::readLuminance(std::uint64_t key, float* into) {
-  for (int k = 0; key != 0 && k < 3; ++k)
-    if (luminanceKeys_.key[k] == key) {
-      glBindBuffer(GL_SHADER_STORAGE_BUFFER, luminance_[std::size_t(k)].get());
-      glGetBufferSubData(GL_SHADER_STORAGE_BUFFER, 0, GLsizeiptr(luminancePixels_ * sizeof(float)),
-                         into);
-      return true;
-    }
-  return false;
+  const int k = luminanceKeys_.holding(key);
+  if (k < 0) return false;
+  glBindBuffer(GL_SHADER_STORAGE_BUFFER, luminance_[std::size_t(k)].get());
+  glGetBufferSubData(GL_SHADER_STORAGE_BUFFER, 0, GLsizeiptr(luminancePixels_ * sizeof(float)),
+                     into);
+  return true;
 }
 
 }  // namespace lp::gl

@@ -58,6 +58,12 @@ class GpuMerge {
     bool taken[N] = {};
     void startMerge() { std::fill(std::begin(taken), std::end(taken), false); }
     void forget() { std::fill(std::begin(key), std::end(key), 0); }
+    /// The place holding `k` (not `0`) whatever this merge took; -1 where none does.
+    int holding(std::uint64_t k) const {
+      for (int i = 0; k != 0 && i < N; ++i)
+        if (key[i] == k) return i;
+      return -1;
+    }
     /// The place still holding `k` (not `0`), now taken; -1 where none does.
     int find(std::uint64_t k) {
       for (int i = 0; k != 0 && i < N; ++i)
@@ -87,7 +93,7 @@ class GpuMerge {
   std::size_t uploaded_ = 0;
   Buffer luminance_[3];     ///< the last merge's, the last trusted one's, this one's
   Keyed<3> luminanceKeys_;  ///< what each holds (merge::FrameInput::previousKey)
-  std::size_t luminanceBytes_ = 0, luminancePixels_ = 0, luminanceUploaded_ = 0;
+  std::size_t luminancePixels_ = 0, luminanceUploaded_ = 0;
   int rowParts_ = 1;
   GpuImagePool keptPool_;
   std::shared_ptr<const GpuImage> kept_;
