@@ -85,14 +85,26 @@ if any(name.startswith("Merge/") for name in rows):
         ratio = f"{merge / alone:.0f}x" if merge and alone else "-"
         print(f"| {size} | {fmt(us(n))} | {fmt(us(n, 'gpu_us'))} | {fmt(merge)} | {fmt(alone)} | "
               f"{ratio} | {fmt(us(f'Merge/u8x3/{size}/cpu'))} |")
-if any("/resident/parts:" in name for name in rows):
+
+
+def sweep(header, names):
+    """A table of the still bracket's pass alone (GPU time): a row per size, a cell per name."""
     print()
-    print("| still bracket, the pass alone (GPU time), a row in N workgroups | 1 | 2 | 4 | 8 | 16 | 32 |")
-    print("|---|---|---|---|---|---|---|")
+    print(header)
+    print("|---" * (header.count("|") - 1) + "|")
     for size in ["1920x960", "3840x1920"]:
-        cells = [fmt(us(f"Merge/u8x3/{size}/gpu/resident/parts:{n}", "gpu_us"))
-                 for n in [1, 2, 4, 8, 16, 32]]
-        print(f"| {size} | " + " | ".join(cells) + " |")
+        n = f"Merge/u8x3/{size}/gpu/resident"
+        print(f"| {size} | " + " | ".join(fmt(us(n + tail, "gpu_us")) for tail in names) + " |")
+
+
+if any("/resident/parts:" in name for name in rows):
+    sweep("| still bracket, the pass alone (GPU time), a row in N workgroups | 1 | 2 | 4 | 8 | 16 "
+          "| 32 |", [f"/parts:{n}" for n in [1, 2, 4, 8, 16, 32]])
+if any("/resident/group:" in name or "/resident/bound:" in name for name in rows):
+    sweep("| still bracket, the pass alone (GPU time) | workgroup of 32 | 64 | 128 | 256 "
+          "| unprojected | bound: no judgement |",
+          [f"/group:{g}" if g != 128 else "" for g in [32, 64, 128, 256]]
+          + ["/unprojected", "/bound:no-judgement"])
 if any(name.startswith("Frame/u8x3/") for name in rows):
     print()
     print("| bracketed frame: upload, merge, 1920x1080 render | background | frame time "

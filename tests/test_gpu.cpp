@@ -593,7 +593,8 @@ std::vector<lp::Frame> movingBracket(int w, int h, int count) {
 
 // The bracket merge on the GPU (gl::GpuMerge as the merger's pixel loop) against the CPU's row
 // kernel, pixel by pixel, on a bracket whose sun moves (older readings contradicted, light lost,
-// a clipped sun) in windows of 3 and 5 frames, a width that fills no workgroup: each merged
+// a clipped sun) in windows of 3 and 5 frames, in workgroups of 32, 128 and 256 invocations and a
+// row in one workgroup or three, a width that fills no workgroup: each merged
 // value within 1e-5 of the CPU's, the coefficients projected in the same pass within 1e-5 of
 // L00, and every confidence term within 1e-5; each frame uploaded once, however many merges
 // read it, and the last merges' luminance never again.
@@ -604,10 +605,11 @@ TEST(GpuMerge, EveryPixelIsTheCpusMerge) {
   const auto frames = movingBracket(w, h, 9);
   const lp::Projector projector(lp::Layout::Equirect, w, h);
   std::vector<lp::FrameConfidence> said;
-  // A row in one workgroup, and in three (spans of 42, 42 and 41 pixels).
-  for (const int parts : {1, 3})
+  // A row in one workgroup, and in three (spans of 42, 42 and 41 pixels); workgroups of 128
+  // invocations, and of 32 and 256.
+  for (const auto& [parts, group] : {std::pair{1, 128}, {3, 128}, {1, 32}, {1, 256}})
     for (const int window : {3, 5}) {
-      lp::gl::GpuMerge gpu(parts);
+      lp::gl::GpuMerge gpu({.rowParts = parts, .groupSize = group});
       lp::BracketMerger cpu(lp::MergeOptions{.frames = window}),
           onGpu(lp::MergeOptions{.frames = window});
       // The luminance kept on the GPU, read back only where the merger asks.
@@ -626,8 +628,9 @@ TEST(GpuMerge, EveryPixelIsTheCpusMerge) {
         lp::MergeProjection pa{.integrals = projector.equirectIntegrals()}, pb = pa;
         const lp::FrameConfidence ca = cpu.add(f, a, nullptr, pa),
                                   cb = onGpu.add(f, b, nullptr, pb);
-        const std::string what = std::to_string(parts) + " parts, window " +
-                                 std::to_string(window) + ", frame " + std::to_string(f.sequence);
+        const std::string what = std::to_string(parts) + " parts of " + std::to_string(group) +
+                                 ", window " + std::to_string(window) + ", frame " +
+                                 std::to_string(f.sequence);
         ASSERT_EQ(a.rgb.size(), b.rgb.size());
         for (std::size_t i = 0; i < a.rgb.size(); ++i)
           ASSERT_NEAR(b.rgb[i], a.rgb[i], 1e-5f * a.rgb[i] + 1e-9f) << what << " value " << i;
@@ -653,6 +656,21 @@ TEST(GpuMerge, EveryPixelIsTheCpusMerge) {
   // The run exercised what it is meant to: light found contradicted, and a clipped sun.
   EXPECT_TRUE(std::any_of(said.begin(), said.end(), [](auto& c) { return c.agreement < 0.99; }));
   EXPECT_TRUE(std::any_of(said.begin(), said.end(), [](auto& c) { return !c.brightestMeasured; }));
+  // The bound without the judgement (a measuring aid) is not the CPU's merge here: the moving
+  // sun's older readings are kept.
+  lp::gl::GpuMerge bound({.judge = false});
+  lp::BracketMerger cpu(lp::MergeOptions{.frames = 3}), onBound(lp::MergeOptions{.frames = 3});
+  onBound.setFrameKernel([&](const lp::merge::FrameInput& in,
+                             std::vector<lp::merge::RowSums>& rows) { bound(in, rows); });
+  float worst = 0;
+  for (const lp::Frame& f : frames) {
+    lp::Frame a, b;
+    cpu.add(f, a, nullptr), onBound.add(f, b, nullptr);
+    for (std::size_t i = 0; i < a.rgb.size(); ++i)
+      worst = std::max(worst, std::abs(b.rgb[i] - a.rgb[i]) / (a.rgb[i] + 1e-9f));
+  }
+  EXPECT_GT(worst, 0.1f) << "without the judgement, some merged value is the CPU's";
+  EXPECT_THROW(lp::gl::GpuMerge({.groupSize = 100}), lp::gl::ContextError);
 }
 
 // The last merges' luminance kept on the GPU (merge::FrameInput::previousKey, referenceKey) is

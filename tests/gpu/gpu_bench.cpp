@@ -12,6 +12,11 @@
 //                            the newest frame uploaded each merge, as a camera's stream runs it
 //   Merge/u8x3/.../gpu/resident  the same pass with the three frames on the GPU already
 //   Merge/u8x3/.../gpu/resident/parts:N  with each row merged in N workgroups
+//   Merge/u8x3/.../gpu/resident/group:N  in workgroups of N invocations (128 otherwise; 512
+//                            takes more shared memory than GL promises, 32 kB)
+//   Merge/u8x3/.../gpu/resident/unprojected  without the projection (a light search's merge)
+//   Merge/u8x3/.../gpu/resident/bound:no-judgement  a bound, not the CPU's merge (not checked):
+//                            every reading at its hat weight, no contradiction judged
 //   Merge/u8x3/.../cpu       the CPU's merge row kernel on every hardware thread
 //   Frame/u8x3/.../merge/... a bracketed frame: the newest frame's upload, the merge and its
 //                            projection, and the bunny rendered at 1080p before a still sky;
@@ -19,8 +24,8 @@
 //                            and copied into the background there; .../background:readback/...
 //                            the merged frame read back and uploaded
 // gpu_us counters are GL timer queries (absent where the GL has no timer, as llvmpipe).
-// Every Project/gpu and Merge/gpu run first checks the GPU's sums against the CPU's (1e-5) and
-// stops the benchmark with an error where they differ.
+// Every Project/gpu and Merge/gpu run (bar the bound) first checks the GPU's sums against the CPU's
+// (1e-5) and stops the benchmark with an error where they differ.
 #include <benchmark/benchmark.h>
 
 #include <algorithm>
@@ -542,12 +547,20 @@ std::string mergeDisagreement(const std::vector<lp::merge::RowSums>& gpu,
 /// camera's stream runs it, the newest frame uploaded each merge (the older two kept from the
 /// merges before); else all three resident, the pass and its readback alone. First the GPU's sums
 /// are checked against the CPU's row kernel, as the projections are.
-void mergeGpu(benchmark::State& state, Size s, bool streaming, int parts = 1) {
+void mergeGpu(benchmark::State& state, Size s, bool streaming, lp::gl::GpuMergeShape shape = {},
+              bool projected = true) {
   context();
   if (!lp::gl::hasCompute()) return state.SkipWithError("no compute shaders (GL 4.3)");
   MergeBracket b(s);
   lp::merge::FrameInput& in = b.in;
-  lp::gl::GpuMerge gpu(parts);
+  if (!projected) std::fill(std::begin(in.col), std::end(in.col), nullptr);
+  std::unique_ptr<lp::gl::GpuMerge> made;
+  try {
+    made = std::make_unique<lp::gl::GpuMerge>(shape);
+  } catch (const lp::gl::ContextError& e) {  // (a shape this GL cannot link)
+    return state.SkipWithError(e.what());
+  }
+  lp::gl::GpuMerge& gpu = *made;
   std::vector<lp::merge::RowSums> rows;
   std::uint64_t next = 1;
   const auto keys = [&] {
@@ -563,7 +576,9 @@ void mergeGpu(benchmark::State& state, Size s, bool streaming, int parts = 1) {
     lp::merge::FrameInput cpuIn = in;
     std::vector<float> luminance(b.luminance.size());
     cpuIn.luminance = luminance.data();
-    const std::string wrong = mergeDisagreement(rows, mergeOnCpu(cpuIn, &pool));
+    // (The bound without the judgement is not the CPU's merge: not checked.)
+    const std::string wrong =
+        shape.judge ? mergeDisagreement(rows, mergeOnCpu(cpuIn, &pool)) : std::string();
     if (!wrong.empty()) {
       std::fprintf(stderr,
                    "liveprobe-gpu-bench: the GPU merge disagrees with the CPU's at %s: %s\n",
@@ -582,13 +597,14 @@ void mergeGpu(benchmark::State& state, Size s, bool streaming, int parts = 1) {
   state.counters["frames"] = in.frames;
 }
 
-/// A live bracketed run's frame on the GPU: the newest 8-bit frame uploaded, the bracket merged
-/// and projected (its sums read back, as the merge's confidence needs them before the frame is
-/// done), then the bunny rendered at 1080p over the background.
 /// Where a bracketed frame's background comes from: the bunny's own still sky (none), the merged
 /// frame kept on the GPU and copied into the background's texture there, or the merged frame
 /// read back and uploaded (a display that shares nothing with the merge's context).
 enum class MergedBackground { None, Kept, ReadBack };
+
+/// A live bracketed run's frame on the GPU: the newest 8-bit frame uploaded, the bracket merged
+/// and projected (its sums read back, as the merge's confidence needs them before the frame is
+/// done), then the bunny rendered at 1080p over the background.
 
 void frameLoopMerge(benchmark::State& state, Size s, MergedBackground bg) {
   context();
@@ -684,14 +700,25 @@ void registerAll() {
         ->UseRealTime()
         ->Unit(benchmark::kMicrosecond);
   }
-  // The workgroups a row is merged in (the default: one).
-  for (Size s : {Size{1920, 960}, Size{3840, 1920}})
-    for (int parts : {1, 2, 4, 8, 16, 32})
+  // The workgroups a row is merged in (the default: one); the invocations of a workgroup (the
+  // default: 128); the pass without its projection (a light search's merge); and a bound: the
+  // pass without the per-pixel judgement.
+  for (Size s : {Size{1920, 960}, Size{3840, 1920}}) {
+    const std::string name = "Merge/u8x3/" + sizeName(s) + "/gpu/resident/";
+    const auto reg = [&](const std::string& tail, lp::gl::GpuMergeShape shape, bool projected) {
       benchmark::RegisterBenchmark(
-          ("Merge/u8x3/" + sizeName(s) + "/gpu/resident/parts:" + std::to_string(parts)).c_str(),
-          [=](benchmark::State& st) { mergeGpu(st, s, false, parts); })
+          (name + tail).c_str(),
+          [=](benchmark::State& st) { mergeGpu(st, s, false, shape, projected); })
           ->UseRealTime()
           ->Unit(benchmark::kMicrosecond);
+    };
+    for (int parts : {1, 2, 4, 8, 16, 32})
+      reg("parts:" + std::to_string(parts), {.rowParts = parts}, true);
+    for (int group : {32, 64, 256})
+      reg("group:" + std::to_string(group), {.groupSize = group}, true);
+    reg("unprojected", {}, false);
+    reg("bound:no-judgement", {.judge = false}, true);
+  }
   for (Size s : {Size{1920, 1080}, Size{3840, 2160}})
     benchmark::RegisterBenchmark(("Render/bunny/" + sizeName(s) + "/msaa:4").c_str(),
                                  [=](benchmark::State& st) { renderBunny(st, s); })

@@ -32,14 +32,15 @@ constexpr int kSlots = 2 * merge::kMaxFrames;
 // power, dark pixels, the brightest luminance, its clipped and fresh flags, its column, and the
 // 15 column-weighted sums.
 constexpr int kRowFloats = 24;
-constexpr int kGroup = 128;
 
-// A workgroup a row, or a part of one (`parts` a row); each invocation merges every 128th pixel
-// of it as the CPU's row kernel (hdr/src/merge_kernel.cpp, Chunk) merges a lane, then the part's
-// sums are halved down in shared memory, and the CPU adds a row's parts. Bytes are read from
-// 32-bit words (GLSL has no 8-bit storage in 4.3); the response from shared memory.
-const char* const kMergeCs = R"(#version 430
-layout(local_size_x = 128) in;
+// A workgroup a row, or a part of one (`parts` a row); each of its GROUP invocations merges every
+// GROUP-th pixel of it as the CPU's row kernel (hdr/src/merge_kernel.cpp, Chunk) merges a lane,
+// then the part's sums are halved down in shared memory, and the CPU adds a row's parts. Bytes are
+// read from 32-bit words (GLSL has no 8-bit storage in 4.3); the response from shared memory. GROUP
+// (the invocations of a workgroup) and JUDGE (0: no contradictions judged, a bound for measuring)
+// are defined before it (GpuMergeShape).
+const char* const kMergeCs = R"(
+layout(local_size_x = GROUP) in;
 layout(std430, binding = 0) readonly buffer Frames { uint frameWords[]; };
 layout(std430, binding = 1) readonly buffer Lut { float lut[]; };
 layout(std430, binding = 2) readonly buffer Previous { float previous[]; };
@@ -58,7 +59,7 @@ uniform uint nearHighOffset;
 
 const float kInf = uintBitsToFloat(0x7F800000u);
 const int kFloats = 24;
-shared float red[kFloats][128];
+shared float red[kFloats][GROUP];
 shared float sLut[768];  // the response, read from shared memory
 
 uint byteOf(uint word, uint o) { return (word >> ((o & 3u) * 8u)) & 255u; }
@@ -116,7 +117,7 @@ void main() {
   const int y = int(gl_WorkGroupID.x) / parts, part = int(gl_WorkGroupID.x) % parts;
   const int span = (width + parts - 1) / parts;
   const int x0 = part * span, x1 = min(width, x0 + span);
-  for (uint i = lid; i < 768u; i += 128u) sLut[i] = lut[i];
+  for (uint i = lid; i < 768u; i += uint(GROUP)) sLut[i] = lut[i];
   barrier();
   float acc[kFloats];
   for (int k = 0; k < kFloats; ++k) acc[k] = 0.0;
@@ -124,7 +125,7 @@ void main() {
   acc[7] = 1.0;
   const int now = frames - 1;
   const float sNow = scale[now];
-  for (int x = x0 + int(lid); x < x1; x += 128) {
+  for (int x = x0 + int(lid); x < x1; x += GROUP) {
     const uint p = uint(y) * uint(width) + uint(x);
     // The older frames in registers: every loop over them runs to the constant bound (indices
     // known at compile time), the newest apart.
@@ -145,7 +146,7 @@ void main() {
     // Where an older reading contradicts the newest, the newest wins.
     bool newestGivesWay = false;
     for (int i = 0; i < 4; ++i) {
-      if (i >= now) break;
+      if (i >= now || JUDGE == 0) break;
       const bool both = r[i].well && n.well;
       const bool edgeOfSource = scale[i] > 1.02 * sNow && edge && both &&
                                 r[i].peak > 1.5625 * n.peak;
@@ -166,7 +167,8 @@ void main() {
     // Two older readings where the shorter exposure reads brighter: the longer gives way.
     for (int i = 0; i < 4; ++i)
       for (int j = 0; j < 4; ++j) {
-        if (i >= now || j >= now || j == i || !(scale[j] > 1.02 * scale[i])) continue;
+        if (JUDGE == 0 || i >= now || j >= now || j == i || !(scale[j] > 1.02 * scale[i]))
+          continue;
         if (r[i].well && r[j].w > 0.0 && r[j].well && r[j].peak > 1.5625 * r[i].peak)
           r[i].w = 0.0;
       }
@@ -211,7 +213,7 @@ void main() {
   }
   for (int k = 0; k < kFloats; ++k) red[k][lid] = acc[k];
   barrier();
-  for (uint stride = 64u; stride > 0u; stride >>= 1) {
+  for (uint stride = uint(GROUP) / 2u; stride > 0u; stride >>= 1) {
     if (lid < stride) {
       const uint o = lid + stride;
       for (int k = 0; k < 5; ++k) red[k][lid] += red[k][o];
@@ -334,10 +336,16 @@ void setFloat(GLuint program, const char* name, float value) {
 
 }  // namespace
 
-GpuMerge::GpuMerge(int rowParts) : rowParts_(rowParts) {
+GpuMerge::GpuMerge(const GpuMergeShape& shape) : rowParts_(std::max(1, shape.rowParts)) {
   if (!hasCompute())
     throw ContextError("the bracket merge on the GPU needs compute shaders (GL 4.3)");
-  program_ = linkCompute(kMergeCs, "the bracket merge");
+  const int group = shape.groupSize;
+  if (group < 32 || group > 1024 || (group & (group - 1)) != 0)
+    throw ContextError("the bracket merge on the GPU: a workgroup of " + std::to_string(group) +
+                       " invocations (a power of two from 32 to 1024)");
+  const std::string source = "#version 430\n#define GROUP " + std::to_string(group) +
+                             "\n#define JUDGE " + (shape.judge ? "1" : "0") + "\n" + kMergeCs;
+  program_ = linkCompute(source.c_str(), "the bracket merge");
   turn_ = linkCompute(kTurnCs, "the bracket's turn");
   const auto make = [](auto& buffers) {
     for (Buffer& b : buffers) {
@@ -502,7 +510,7 @@ void GpuMerge::operator()(const merge::FrameInput& in, std::vector<merge::RowSum
     for (int k = 0; k < 5; ++k)
       glBufferSubData(GL_SHADER_STORAGE_BUFFER, GLintptr(std::size_t(k) * in.width * sizeof(float)),
                       GLsizeiptr(std::size_t(in.width) * sizeof(float)), in.col[k]);
-  const int parts = std::max(1, rowParts_);
+  const int parts = rowParts_;
   const std::size_t groups = std::size_t(in.height) * std::size_t(parts);
   fill(kRows, nullptr, groups * kRowFloats * sizeof(float));
 

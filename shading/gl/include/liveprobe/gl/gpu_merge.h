@@ -20,12 +20,22 @@
 
 namespace lp::gl {
 
+/// How the merge's pass is laid out: the defaults are what every command runs; the rest is
+/// for measuring (liveprobe-gpu-bench's sweeps).
+struct GpuMergeShape {
+  /// The workgroups a row is merged in; one is fastest (each workgroup's fixed cost, the
+  /// response's load and the sums' reduction, outweighs the parallelism: the sweep on an H200).
+  int rowParts = 1;
+  int groupSize = 128;  ///< invocations a workgroup: a power of two from 32 to 1024
+  /// false: a bound, not the CPU's merge: every reading kept at its hat weight, no contradiction
+  /// judged, to time what the judgement costs.
+  bool judge = true;
+};
+
 class GpuMerge {
  public:
-  /// Throws ContextError where the context has no compute shaders. `rowParts`: the workgroups a
-  /// row is merged in; one is fastest (each workgroup's fixed cost, the response's load and the
-  /// sums' reduction, outweighs the parallelism: liveprobe-gpu-bench's sweep on an H200).
-  explicit GpuMerge(int rowParts = 1);
+  /// Throws ContextError where the context has no compute shaders, or `shape` is not one.
+  explicit GpuMerge(const GpuMergeShape& shape = {});
   ~GpuMerge();
   GpuMerge(const GpuMerge&) = delete;
   GpuMerge& operator=(const GpuMerge&) = delete;
