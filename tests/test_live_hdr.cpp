@@ -780,9 +780,8 @@ TEST(LiveHdr, TheBracketMergedOnTheGpuIsTheCpusMerge) {
     // display (the two EGL contexts share objects); with the light search it is read back.
     const std::string kept = "20 of 20 frames, 20 kept there for the background";
     EXPECT_EQ(live.output.find(kept) != std::string::npos, !sun) << live.output;
-    const std::string replay =
-        "replay " + emu.tmp / "b.mkv" + (sun ? " --sun" : "") +
-        " --headless --size 64x36 --exposure 1 --gl egl --full-resolution --msaa 1 ";
+    const std::string replay = "replay " + emu.tmp / "b.mkv" + (sun ? " --sun" : "") +
+                               " --headless --size 64x36 --exposure 1 --gl egl ";
     const auto cpu = lpt::runLiveprobe(replay + "--quiet --projection cpu --out-dir " +
                                        emu.tmp / "cpu" + " --coeffs-out " + emu.tmp / "cpu.jsonl");
     ASSERT_EQ(cpu.exitCode, 0) << cpu.output;
