@@ -782,13 +782,27 @@ TEST(LiveHdr, TheBracketMergedOnTheGpuIsTheCpusMerge) {
     EXPECT_EQ(live.output.find(kept) != std::string::npos, !sun) << live.output;
     const std::string replay = "replay " + emu.tmp / "b.mkv" + (sun ? " --sun" : "") +
                                " --headless --size 64x36 --exposure 1 --gl egl ";
-    const auto cpu = lpt::runLiveprobe(replay + "--quiet --projection cpu --coeffs-out " +
-                                       emu.tmp / "cpu.jsonl");
+    const auto cpu = lpt::runLiveprobe(replay + "--quiet --projection cpu --out-dir " +
+                                       emu.tmp / "cpu" + " --coeffs-out " + emu.tmp / "cpu.jsonl");
     ASSERT_EQ(cpu.exitCode, 0) << cpu.output;
-    // The recording replayed on the GPU with its backgrounds drawn keeps them there too.
-    const auto gpuDrawn = lpt::runLiveprobe(replay + "--projection gpu");
+    // The recording replayed with its backgrounds drawn: from the GPU's frame as from the CPU's.
+    const auto gpuDrawn =
+        lpt::runLiveprobe(replay + "--projection gpu --out-dir " + emu.tmp / "gpu");
     ASSERT_EQ(gpuDrawn.exitCode, 0) << gpuDrawn.output;
     EXPECT_EQ(gpuDrawn.output.find(kept) != std::string::npos, !sun) << gpuDrawn.output;
+    double drawnWorst = 0;
+    for (int i = 0; i < 20; ++i) {
+      char name[32];
+      std::snprintf(name, sizeof name, "/frame_%06d.png", i);
+      const cv::Mat a = cv::imread(emu.tmp / "cpu" + name), b = cv::imread(emu.tmp / "gpu" + name);
+      ASSERT_FALSE(a.empty() || b.empty()) << what << name;
+      cv::Mat diff;
+      cv::absdiff(a, b, diff);
+      double most = 0;
+      cv::minMaxLoc(diff.reshape(1), nullptr, &most);
+      drawnWorst = std::max(drawnWorst, most);
+    }
+    EXPECT_LE(drawnWorst, 1.0) << what << ": the drawn frames differ";
     const auto g = readJsonl(emu.tmp / "gpu.jsonl"), c = readJsonl(emu.tmp / "cpu.jsonl");
     ASSERT_EQ(g.size(), c.size()) << what;
     double worst = 0, worstConfidence = 0;

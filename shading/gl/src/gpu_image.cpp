@@ -16,7 +16,8 @@ struct GpuImage::Places {
     GLuint buffer = 0;
     std::size_t bytes = 0;
     GLsync written = nullptr, read = nullptr;
-    bool held = false;  ///< by the pool (taken) or by an image
+    bool held = false;     ///< by the pool (taken) or by an image
+    bool deleted = false;  ///< the pool gone, read by its image once (or never held)
   };
   std::mutex mutex;
   bool alive = true;
@@ -35,16 +36,25 @@ GpuImage::GpuImage(std::shared_ptr<Places> places, int place, int width, int hei
 
 GpuImage::~GpuImage() {
   std::lock_guard lock(places_->mutex);
+  // (Once the pool is gone, a buffer never read goes with the share group: deleting it here
+  // would need a context of that group current, which the dropping thread may not have.)
   places_->places[std::size_t(place_)].held = false;
 }
 
 bool GpuImage::read(const std::function<void(GLuint buffer)>& copy) const {
   std::lock_guard lock(places_->mutex);
-  if (!places_->alive) return false;
   Places::Place& p = places_->places[std::size_t(place_)];
+  if (p.deleted) return false;
   if (p.written) glWaitSync(p.written, 0, GL_TIMEOUT_IGNORED);
   copy(p.buffer);
   dropFence(p.read);
+  if (!places_->alive) {
+    // The last read: nothing writes the buffer again. GL deletes it once the copy is done.
+    dropFence(p.written);
+    glDeleteBuffers(1, &p.buffer);
+    p.deleted = true;
+    return true;
+  }
   p.read = glFenceSync(GL_SYNC_GPU_COMMANDS_COMPLETE, 0);
   glFlush();  // (a fence another context waits on must reach the GPU)
   return true;
@@ -56,9 +66,13 @@ GpuImagePool::~GpuImagePool() {
   std::lock_guard lock(places_->mutex);
   places_->alive = false;
   for (auto& p : places_->places) {
-    dropFence(p.written), dropFence(p.read);
+    dropFence(p.read);
+    if (p.held) continue;  // an image's: its read deletes it (the written fence too)
+    dropFence(p.written);
     glDeleteBuffers(1, &p.buffer);
+    p.deleted = true;
   }
+  glFlush();  // (the held images' written fences must reach the GPU before this context goes)
 }
 
 GLuint GpuImagePool::take(std::size_t bytes) {

@@ -5,7 +5,8 @@
 // is a buffer of RGB floats, rows top to bottom. Fences order them (as the GL spec's shared
 // objects ask): the drawing context waits on the GPU for the merge that wrote the buffer, and
 // the merge that writes it next waits for the copy that read it. A buffer is written again only
-// once no GpuImage of it is held.
+// once no GpuImage of it is held. An image outlives its pool (the last frame of a stream is drawn
+// after its merge ended): its buffer is then deleted by its first read, in the drawing context.
 #include <cstddef>
 #include <functional>
 #include <memory>
@@ -24,8 +25,9 @@ class GpuImage {
   int width() const { return width_; }
   int height() const { return height_; }
   /// In the current context (one sharing with the maker's): waits on the GPU for the write,
-  /// calls `copy` with the buffer, then fences what `copy` issued. False, calling nothing, where
-  /// the maker is gone (its buffers deleted with its GpuImagePool).
+  /// calls `copy` with the buffer, then fences what `copy` issued. Where the maker is gone (its
+  /// GpuImagePool), the buffer is deleted after `copy`: a later read returns false, calling
+  /// nothing (the copy it made is the image).
   bool read(const std::function<void(GLuint buffer)>& copy) const;
 
  private:
@@ -41,7 +43,7 @@ class GpuImage {
 class GpuImagePool {
  public:
   GpuImagePool();
-  ~GpuImagePool();  ///< deletes the buffers and fences (the images left read nothing)
+  ~GpuImagePool();  ///< deletes the buffers no image holds (a held one: its image's read does)
   GpuImagePool(const GpuImagePool&) = delete;
   GpuImagePool& operator=(const GpuImagePool&) = delete;
   /// A buffer of at least `bytes` that no image holds, to write the next image into; the GPU
