@@ -73,10 +73,12 @@ inline std::string shellQuote(const std::string& s) {
 /// in parallel, each in its own process: `-a` alone would start every search for a free display
 /// number at 99, and two servers started at once can pick the same one (the second fails, and
 /// its command runs on the first's display until that one goes away). Each process starts its
-/// search at its own number.
+/// search at its own number. `-noreset`: a server resets as its last client leaves, and signals
+/// xvfb-run (SIGUSR1) as it comes up again; arriving while xvfb-run removes its temporary
+/// directory, that signal fails the removal, and xvfb-run exits 5 for a command that ended well.
 inline std::string xvfbRun(const std::string& screen) {
-  return "xvfb-run -n " + std::to_string(100 + int(::getpid() % 30000)) + " -a -s '-screen 0 " +
-         screen + "' ";
+  return "xvfb-run -n " + std::to_string(100 + int(::getpid() % 30000)) +
+         " -a -s '-noreset -screen 0 " + screen + "' ";
 }
 
 inline int lineCount(const std::string& s) { return int(std::count(s.begin(), s.end(), '\n')); }
