@@ -150,9 +150,9 @@ TEST(Window, ReplaySaysWhenTheWindowCloses) {
   EXPECT_NE(run.output.find("--loop plays on"), std::string::npos) << run.output;
 }
 
-// A stream in a window projected on the GPU: the capture thread's headless EGL context beside
-// the window's GLX one (one process, GL's functions loaded once for both), the CPU's
-// coefficients frame by frame, said in the summary.
+// A stream in a window projected on the GPU: the capture thread's EGL context beside the
+// window's (sharing its objects, on the window's EGL display; one process, GL's functions loaded
+// once for both), the CPU's coefficients frame by frame, said in the summary.
 TEST(Window, ReplayProjectsOnTheGpuBesideTheWindow) {
   const std::string xvfb = lpt::xvfbRun("640x480x24");
   const std::string seq = std::string(LIVEPROBE_SOURCE_DIR) + "/recordings/sky-hdr";
@@ -181,6 +181,24 @@ TEST(Window, ReplayProjectsOnTheGpuBesideTheWindow) {
       for (int c = 0; c < 3; ++c)
         EXPECT_NEAR(a[name][c].get<double>(), value[c].get<double>(), 1e-5 * l00) << i << name;
   }
+}
+
+// A display without EGL (EGL's vendor library pointing nowhere): the window's context is GLX's,
+// the stream plays in it on the CPU, and --projection gpu is refused in one line.
+TEST(Window, WithoutEglTheWindowIsGlx) {
+  const std::string run = lpt::xvfbRun("640x480x24") +
+                          "env __EGL_VENDOR_LIBRARY_FILENAMES=/nonexistent.json " + LIVEPROBE_BIN +
+                          " replay " + LIVEPROBE_SOURCE_DIR +
+                          "/recordings/sky-hdr --size 160x90 --msaa 1 --no-hud --frames 3";
+  const auto cpu = lpt::runCommand(run);
+  ASSERT_EQ(cpu.exitCode, 0) << cpu.output;
+  EXPECT_NE(cpu.output.find("the window closes after 3 frames"), std::string::npos) << cpu.output;
+  EXPECT_EQ(cpu.output.find("drawing headless"), std::string::npos) << cpu.output;
+  EXPECT_NE(cpu.output.find("projected on the CPU"), std::string::npos) << cpu.output;
+  const auto gpu = lpt::runCommand(run + " --projection gpu");
+  EXPECT_EQ(gpu.exitCode, 1) << gpu.output;
+  EXPECT_EQ(lpt::lineCount(gpu.output), 1) << gpu.output;
+  EXPECT_NE(gpu.output.find("--projection gpu: cannot open EGL"), std::string::npos) << gpu.output;
 }
 
 // The coefficient editor saves with Ctrl+S (in a real window) what `render --coeffs` reads.
