@@ -236,26 +236,35 @@ void Renderer::setIrradianceUniforms(const Program& program) const {
   }
 }
 
+void Renderer::bindFloatBackground(int width, int height, BackgroundMapping mapping) {
+  const GLint wrapS = mapping == BackgroundMapping::Equirect ? GL_REPEAT : GL_CLAMP_TO_EDGE;
+  // A float texture of the size is written over (its wrap set for the mapping); else one is made.
+  if (!backgroundTex_.isValid() || backgroundSrgb_ || width != backgroundW_ ||
+      height != backgroundH_) {
+    backgroundTex_ = makeFloatTexture(nullptr, width, height, wrapS);
+  } else {
+    glBindTexture(GL_TEXTURE_2D, backgroundTex_.get());
+    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_S, wrapS);
+  }
+  backgroundW_ = width, backgroundH_ = height, backgroundSrgb_ = false;
+}
+
 void Renderer::setBackground(const float* rgb, int width, int height, BackgroundMapping mapping,
                              float displayScale) {
-  backgroundTex_ = makeFloatTexture(
-      rgb, width, height, mapping == BackgroundMapping::Equirect ? GL_REPEAT : GL_CLAMP_TO_EDGE);
+  bindFloatBackground(width, height, mapping);
+  glPixelStorei(GL_UNPACK_ALIGNMENT, 4);
+  glTexSubImage2D(GL_TEXTURE_2D, 0, 0, 0, width, height, GL_RGB, GL_FLOAT, rgb);
+  checkGl("Renderer::setBackground");
   backgroundMapping_ = mapping;
   backgroundScale_ = 1.0f;
   backgroundDisplayScale_ = displayScale;
-  backgroundW_ = width, backgroundH_ = height, backgroundSrgb_ = false;
 }
 
 void Renderer::setBackground(const GpuImage& image, BackgroundMapping mapping, float scale) {
   const int w = image.width(), h = image.height();
   const bool copied = image.read([&](GLuint buffer) {
-    // A float texture of the image's size and wrap is written over; else one is made.
-    if (!backgroundTex_.isValid() || backgroundSrgb_ || w != backgroundW_ || h != backgroundH_ ||
-        mapping != backgroundMapping_)
-      backgroundTex_ = makeFloatTexture(
-          nullptr, w, h, mapping == BackgroundMapping::Equirect ? GL_REPEAT : GL_CLAMP_TO_EDGE);
+    bindFloatBackground(w, h, mapping);
     glBindBuffer(GL_PIXEL_UNPACK_BUFFER, buffer);
-    glBindTexture(GL_TEXTURE_2D, backgroundTex_.get());
     glPixelStorei(GL_UNPACK_ALIGNMENT, 4);
     glTexSubImage2D(GL_TEXTURE_2D, 0, 0, 0, w, h, GL_RGB, GL_FLOAT, nullptr);
     glBindBuffer(GL_PIXEL_UNPACK_BUFFER, 0);
@@ -265,7 +274,6 @@ void Renderer::setBackground(const GpuImage& image, BackgroundMapping mapping, f
   backgroundMapping_ = mapping;
   backgroundScale_ = scale;
   backgroundDisplayScale_ = 0.0f;
-  backgroundW_ = w, backgroundH_ = h, backgroundSrgb_ = false;
 }
 
 void Renderer::setBackgroundSrgb8(const std::uint8_t* bgr, int width, int height,

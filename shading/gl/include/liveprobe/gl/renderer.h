@@ -152,6 +152,8 @@ class Renderer {
   void setShadowUniforms(const Program& program, bool on) const;
   void drawGround(const glm::mat4& viewProj, const Camera& camera, const ShadingSettings& s);
   void bindPanorama(const Program& program, const ShadingSettings& s) const;
+  /// The background's float texture of `width` x `height`, bound: the last one where it fits.
+  void bindFloatBackground(int width, int height, BackgroundMapping mapping);
 
   // Variants: without lights, with lights, with lights and the shadow map (see shaders.cpp).
   Program modelProgram_, modelLitProgram_, modelShadowProgram_, backgroundProgram_, probeProgram_,
