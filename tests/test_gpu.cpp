@@ -639,6 +639,12 @@ TEST(GpuMerge, EveryPixelIsTheCpusMerge) {
             EXPECT_NEAR(pb.coefficients.c[k][c], pa.coefficients.c[k][c],
                         1e-5 * pa.coefficients.c[0][1])
                 << what << " coefficient " << k;
+        // Each row's largest channel value, where a light search starts.
+        ASSERT_EQ(pb.rowPeaks.size(), std::size_t(h)) << what;
+        for (int y = 0; y < h; ++y)
+          EXPECT_NEAR(pb.rowPeaks[std::size_t(y)], pa.rowPeaks[std::size_t(y)],
+                      1e-5f * pa.rowPeaks[std::size_t(y)])
+              << what << " row " << y;
         EXPECT_NEAR(cb.value(), ca.value(), 1e-5) << what;
         EXPECT_NEAR(cb.agreement, ca.agreement, 1e-5) << what;
         EXPECT_NEAR(cb.clippedShare, ca.clippedShare, 1e-5) << what;

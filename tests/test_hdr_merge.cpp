@@ -581,8 +581,13 @@ TEST(HdrMerge, ProjectingAsItMergesGivesTheMergedFramesCoefficients) {
           EXPECT_EQ(o.value(), c.value()) << at;
           EXPECT_EQ(o.brightestMeasured, c.brightestMeasured) << at;
         }
+        std::vector<float> peaks;
         const lp::Sh9 truth = projector.project(
-            lp::PanoramaView::rgbF32(merged.rgb.data(), merged.width, merged.height));
+            lp::PanoramaView::rgbF32(merged.rgb.data(), merged.width, merged.height), nullptr,
+            &peaks);
+        // The row peaks the projector finds in the merged frame, where a light search starts.
+        EXPECT_EQ(withFrame.rowPeaks, peaks) << at;
+        EXPECT_EQ(alone.rowPeaks, peaks) << at;
         const float l00 = std::max({truth.c[0].r, truth.c[0].g, truth.c[0].b});
         ASSERT_GT(l00, 0.0f) << at;
         for (int k = 0; k < lp::kShCount; ++k)

@@ -117,16 +117,31 @@ TEST(FrameProcessor, OneExposureOneProjectionEveryFormat) {
     EXPECT_THROW(withSun.run(shared, {.projected = own}), lp::Error);
     lp::FrameProcessor withSunElsewhere(
         {lp::LayoutSpec(), photometry, std::nullopt, 1, {.maxLights = 1}});
+    lp::Sh9 projectedThere;
+    std::vector<float> peaksThere;
     const lp::FrameResult sunElsewhere =
         withSunElsewhere.run(shared, {.projectWith = [&](const lp::ProjectionJob& job) {
                                EXPECT_NE(job.rowPeaks, nullptr);
-                               return job.tables.project(job.view, nullptr, job.rowPeaks);
+                               projectedThere = job.tables.project(job.view, nullptr, job.rowPeaks);
+                               peaksThere = *job.rowPeaks;
+                               return projectedThere;
                              }});
+    // Projected as it was made, with its row peaks (a merge's, projecting as it merges): the
+    // light search reads the frame here, the same lights.
+    lp::FrameProcessor withSunMade(
+        {lp::LayoutSpec(), photometry, std::nullopt, 1, {.maxLights = 1}});
+    const lp::FrameResult sunMade =
+        withSunMade.run(shared, {.projected = projectedThere, .projectedPeaks = &peaksThere});
     const lp::FrameLighting s = withSun.process(*frame);
     ASSERT_EQ(s.lights.size(), 1u);
     ASSERT_EQ(sunElsewhere.lighting.lights.size(), 1u);
     EXPECT_EQ(sunElsewhere.lighting.lights[0].dir, s.lights[0].dir);
     EXPECT_EQ(sunElsewhere.lighting.lights[0].power, s.lights[0].power);
+    ASSERT_EQ(sunMade.lighting.lights.size(), 1u);
+    EXPECT_EQ(sunMade.lighting.lights[0].dir, s.lights[0].dir);
+    EXPECT_EQ(sunMade.lighting.lights[0].power, s.lights[0].power);
+    for (int k = 0; k < lp::kShCount; ++k)
+      EXPECT_EQ(sunMade.lighting.radiance.c[k], s.radiance.c[k]) << "coefficient " << k;
     const lp::Sh9 sum = s.radiance + lp::lightsToSh(s.lights);
     for (int c = 0; c < 3; ++c) EXPECT_NEAR(sum.c[0][c], truth.c[0][c], 1e-4 * truth.c[0][c]);
   }

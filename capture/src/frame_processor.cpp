@@ -132,7 +132,12 @@ FrameResult FrameProcessor::run(std::shared_ptr<const Frame> frame, const FrameR
     r.saturated = countSaturated(f);
   }
   clock.lap(Stage::Convert);
-  if (request.projected) {
+  if (request.projected && opt_.lights.maxLights > 0 && request.projectedPeaks) {
+    // Projected as it was made; the light search is this stage's.
+    const ProjectedView v = view(f, linear.get());
+    r.lighting = split(v.view, *request.projected, *request.projectedPeaks, v.scale);
+    clock.lap(Stage::Project);
+  } else if (request.projected) {
     // Projected as it was made: its time is that stage's (a merge's), not this one's.
     r.lighting = fromProjected(*request.projected, projectionScale(f));
     clock.skip();

@@ -168,14 +168,15 @@ bool CapturePipeline::grab(Loop& s) {
 void CapturePipeline::merge(Loop& s, ProcessedFrame& out) {
   s.backgroundOnGpu = false;
   if (!s.merger) return;
-  s.projected =
-      opt_.layout.layout == Layout::Equirect && opt_.reduce == 1 && opt_.lights.maxLights == 0;
+  s.projected = opt_.layout.layout == Layout::Equirect && opt_.reduce == 1;
   if (s.projected) {
     s.processor.fit(*s.frame);  // the projector of the frame's size
     s.projection.integrals = s.processor.projector()->equirectIntegrals();
-    // (The display draws the frame where the GPU merged it, where it can.)
-    s.projection.keepWhereMerged = opt_.keepImages && s.gpuMergedImage;
-    s.projection.keepFrame = opt_.keepImages && !s.projection.keepWhereMerged;
+    // The light search reads the merged frame; else the display draws it where the GPU merged
+    // it, where it can.
+    const bool lights = opt_.lights.maxLights > 0;
+    s.projection.keepWhereMerged = opt_.keepImages && s.gpuMergedImage && !lights;
+    s.projection.keepFrame = lights || (opt_.keepImages && !s.projection.keepWhereMerged);
     out.confidence = s.merger->add(*s.frame, s.merged, s.pool.get(), s.projection);
   } else {
     out.confidence = s.merger->add(*s.frame, s.merged, s.pool.get());
@@ -257,6 +258,7 @@ void CapturePipeline::project(Loop& s, ProcessedFrame& out) {
         {.background = opt_.keepImages && !s.backgroundOnGpu,
          .saturation = true,
          .projected = s.projected ? std::optional(s.projection.coefficients) : std::nullopt,
+         .projectedPeaks = s.projected ? &s.projection.rowPeaks : nullptr,
          .projectWith = s.gpu},
         s.pool.get());
   } catch (const Error& e) {

@@ -312,17 +312,28 @@ FrameConfidence BracketMerger::add(const Frame& in, Frame& out, Executor* execut
   frame.luminanceBack = !(frameKernel_ && fetchLuminance_);
   frame.rgbKept = !keep && projection.keepWhereMerged && frameKernel_;
   MergeTally total;
+  float* peaks = nullptr;
+  if (project) {
+    projection.rowPeaks.assign(std::size_t(h), 0.0f);
+    peaks = projection.rowPeaks.data();
+  }
   if (frameKernel_) {
     std::vector<merge::RowSums> rows(static_cast<std::size_t>(h));
     frameKernel_(frame, rows);
-    for (std::size_t y = 0; y < std::size_t(h); ++y) total.add(tally(rows[y], y, project));
+    for (std::size_t y = 0; y < std::size_t(h); ++y) {
+      if (peaks) peaks[y] = rows[y].peak;
+      total.add(tally(rows[y], y, project));
+    }
   } else {
     total = parallelReduce(
         executor, std::size_t(h), Split{.grain = 1, .perThread = 4}, MergeTally{},
         [&](std::size_t y0, std::size_t y1) {
           MergeTally t;
-          for (std::size_t y = y0; y < y1; ++y)
-            t.add(tally(view.kernel(merge::RowInput::of(frame, y)), y, project));
+          for (std::size_t y = y0; y < y1; ++y) {
+            const merge::RowSums row = view.kernel(merge::RowInput::of(frame, y));
+            if (peaks) peaks[y] = row.peak;
+            t.add(tally(row, y, project));
+          }
           return t;
         },
         [](MergeTally& into, const MergeTally& part) { into.add(part); });

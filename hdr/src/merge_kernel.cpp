@@ -264,6 +264,7 @@ RowSums MergeRow(const RowInput& in) {
   VF s[5][3];
   for (auto& sk : s)
     for (VF& v : sk) v = hn::Zero(d);
+  VF peak = hn::Zero(d);  // the largest channel value (merged radiance is never negative)
   HWY_ALIGN float colTail[5][kBlock];
   HWY_ALIGN float radiance[3 * kBlock];  // the block's merged radiance, planar
   for (int x0 = 0; x0 < in.width; x0 += kBlock) {
@@ -327,6 +328,8 @@ RowSums MergeRow(const RowInput& in) {
       for (int x = 0; x < kBlock; x += lanes) {
         const VF r = hn::Load(d, radiance + x), g = hn::Load(d, radiance + kBlock + x),
                  b = hn::Load(d, radiance + 2 * kBlock + x);
+        const MF valid = hn::FirstN(d, std::size_t(std::clamp(count - x, 0, lanes)));
+        peak = hn::Max(peak, hn::IfThenElseZero(valid, hn::Max(r, hn::Max(g, b))));
         for (int k = 0; k < 5; ++k) {
           const VF wk = hn::LoadU(d, col[k] + x);
           s[k][0] = hn::MulAdd(wk, r, s[k][0]), s[k][1] = hn::MulAdd(wk, g, s[k][1]);
@@ -354,12 +357,14 @@ RowSums MergeRow(const RowInput& in) {
       sums.brightest = v[4][j], sums.brightestClipped = v[5][j] > 0,
       sums.brightestFresh = v[6][j] > 0, firstX = v[7][j];
   }
-  if (project)
+  if (project) {
     for (int k = 0; k < 5; ++k)
       for (int c = 0; c < 3; ++c) {
         hn::Store(s[k][c], d, v[0]);
         for (int j = 0; j < lanes; ++j) sums.col[k][c] += double(v[0][j]);
       }
+    sums.peak = hn::GetLane(hn::MaxOfLanes(d, peak));
+  }
   return sums;
 }
 

@@ -29,9 +29,9 @@ enum Binding {
 constexpr int kSlots = 2 * merge::kMaxFrames;
 
 // Floats a row's sums take in the Rows buffer: power, clipped power, clipped estimate, lost
-// power, dark pixels, the brightest luminance, its clipped and fresh flags, its column, and the
-// 15 column-weighted sums.
-constexpr int kRowFloats = 24;
+// power, dark pixels, the brightest luminance, its clipped and fresh flags, its column, the
+// 15 column-weighted sums, and the largest channel value.
+constexpr int kRowFloats = 25;
 
 // A workgroup a row, or a part of one (`parts` a row); each of its GROUP invocations merges every
 // GROUP-th pixel of it as the CPU's row kernel (hdr/src/merge_kernel.cpp, Chunk) merges a lane,
@@ -58,7 +58,7 @@ uniform uint frameOffset[5];
 uniform uint nearHighOffset;
 
 const float kInf = uintBitsToFloat(0x7F800000u);
-const int kFloats = 24;
+const int kFloats = 25;
 shared float red[kFloats][GROUP];
 shared float sLut[768];  // the response, read from shared memory
 
@@ -210,6 +210,7 @@ void main() {
         const float wk = col[k * width + x];
         acc[9 + 3 * k] += wk * c.r, acc[10 + 3 * k] += wk * c.g, acc[11 + 3 * k] += wk * c.b;
       }
+    if (project != 0) acc[24] = max(acc[24], max(c.r, max(c.g, c.b)));
   }
   for (int k = 0; k < kFloats; ++k) red[k][lid] = acc[k];
   barrier();
@@ -217,7 +218,8 @@ void main() {
     if (lid < stride) {
       const uint o = lid + stride;
       for (int k = 0; k < 5; ++k) red[k][lid] += red[k][o];
-      for (int k = 9; k < kFloats; ++k) red[k][lid] += red[k][o];
+      for (int k = 9; k < 24; ++k) red[k][lid] += red[k][o];
+      red[24][lid] = max(red[24][lid], red[24][o]);
       // The brightest: the larger, or of equals the first pixel.
       if (red[5][o] > red[5][lid] || (red[5][o] == red[5][lid] && red[8][o] < red[8][lid]))
         for (int k = 5; k < 9; ++k) red[k][lid] = red[k][o];
@@ -550,9 +552,11 @@ void GpuMerge::operator()(const merge::FrameInput& in, std::vector<merge::RowSum
     r.dark += std::size_t(s[4]);
     if (s[5] > r.brightest)
       r.brightest = s[5], r.brightestClipped = s[6] > 0, r.brightestFresh = s[7] > 0;
-    if (project)
+    if (project) {
       for (int k = 0; k < 5; ++k)
         for (int c = 0; c < 3; ++c) r.col[k][c] += double(s[9 + 3 * k + c]);
+      r.peak = std::max(r.peak, s[24]);
+    }
   }
 }
 

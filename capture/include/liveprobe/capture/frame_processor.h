@@ -52,7 +52,10 @@ struct FrameRequest {
   /// coefficients of the frame's own pixels, projected as it was made (a bracket merged and
   /// projected in one pass, liveprobe/hdr/merge.h); they are scaled and turned as the CPU's are.
   std::optional<Sh9> projected;
-  /// With `projected`, lights cannot be searched (lp::Error where the options ask for them).
+  /// With `projected`, where lights are asked for: the frame's row peaks as Projector::project
+  /// makes them (MergeProjection::rowPeaks), from which the light search reads the frame's pixels
+  /// here as the CPU path's does. Without them lights cannot be searched (lp::Error).
+  const std::vector<float>* projectedPeaks = nullptr;
   /// `projectWith`: the GPU's projection (liveprobe/gl/gpu_projector.h), given the frame as the
   /// projection reads it; timed as the Project stage. Where lights are asked for it gives the row
   /// peaks too, and the light search reads the frame's pixels here as the CPU path's does.

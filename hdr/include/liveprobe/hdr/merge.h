@@ -77,8 +77,10 @@ struct MergeProjection {
   /// the merged frame where it merges (merge::FrameInput::rgbKept), for a display drawing there.
   bool keepWhereMerged = false;
   /// The result: the merged frame's radiance coefficients, the sums Projector::project makes of
-  /// it (in its units, before any photometry or rotation).
+  /// it (in its units, before any photometry or rotation), and its row peaks as that makes them
+  /// (each row's largest channel value: where a light search starts).
   Sh9 coefficients;
+  std::vector<float> rowPeaks;
 };
 
 class BracketMerger {

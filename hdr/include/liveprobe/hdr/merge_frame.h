@@ -89,8 +89,10 @@ struct RowSums {
   std::size_t dark = 0;
   float brightest = -1;  ///< the largest luminance; the flags are of its first pixel
   bool brightestClipped = false, brightestFresh = true;
-  /// With FrameInput::col: the merged radiance's column-weighted sums, [column integral][R, G, B].
+  /// With FrameInput::col: the merged radiance's column-weighted sums, [column integral][R, G, B],
+  /// and its largest channel value (Projector::project's row peak).
   double col[5][3] = {};
+  float peak = 0;
 };
 
 /// A whole frame's pixel loop: writes `in`'s luminance (and rgb where asked) and `rows`
