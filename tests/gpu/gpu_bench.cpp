@@ -518,8 +518,9 @@ std::vector<lp::merge::RowSums> mergeOnCpu(const lp::merge::FrameInput& in, lp::
   return rows;
 }
 
-/// The GPU's row sums against the CPU's: every row's dark count, and the whole frame's power and
-/// column-weighted sums (what the coefficients are made of) within 1e-5 of the largest.
+/// The GPU's row sums against the CPU's: every row's dark count and peak (within 1e-5), and the
+/// whole frame's power and column-weighted sums (what the coefficients are made of) within 1e-5
+/// of the largest.
 std::string mergeDisagreement(const std::vector<lp::merge::RowSums>& gpu,
                               const std::vector<lp::merge::RowSums>& cpu) {
   double g[16] = {}, c[16] = {};
@@ -527,6 +528,9 @@ std::string mergeDisagreement(const std::vector<lp::merge::RowSums>& gpu,
     if (gpu[y].dark != cpu[y].dark)
       return "row " + std::to_string(y) + ": " + std::to_string(gpu[y].dark) + " dark pixels, " +
              "the CPU's " + std::to_string(cpu[y].dark);
+    if (std::abs(gpu[y].peak - cpu[y].peak) > 1e-5f * cpu[y].peak)
+      return "row " + std::to_string(y) + ": peak " + std::to_string(gpu[y].peak) + ", the CPU's " +
+             std::to_string(cpu[y].peak);
     g[15] += gpu[y].power, c[15] += cpu[y].power;
     for (int k = 0; k < 5; ++k)
       for (int ch = 0; ch < 3; ++ch)
