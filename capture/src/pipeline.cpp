@@ -172,11 +172,11 @@ void CapturePipeline::merge(Loop& s, ProcessedFrame& out) {
   if (s.projected) {
     s.processor.fit(*s.frame);  // the projector of the frame's size
     s.projection.integrals = s.processor.projector()->equirectIntegrals();
-    // The light search reads the merged frame; else the display draws it where the GPU merged
-    // it, where it can.
-    const bool lights = opt_.lights.maxLights > 0;
-    s.projection.keepWhereMerged = opt_.keepImages && s.gpuMergedImage && !lights;
-    s.projection.keepFrame = lights || (opt_.keepImages && !s.projection.keepWhereMerged);
+    // The display draws the frame where the GPU merged it, where it can; the light search reads
+    // it here.
+    s.projection.keepWhereMerged = opt_.keepImages && s.gpuMergedImage;
+    s.projection.keepFrame =
+        opt_.lights.maxLights > 0 || (opt_.keepImages && !s.projection.keepWhereMerged);
     out.confidence = s.merger->add(*s.frame, s.merged, s.pool.get(), s.projection);
   } else {
     out.confidence = s.merger->add(*s.frame, s.merged, s.pool.get());

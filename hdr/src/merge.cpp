@@ -310,7 +310,7 @@ FrameConfidence BracketMerger::add(const Frame& in, Frame& out, Executor* execut
                                                         : 0;
   frame.luminanceKey = newKey();
   frame.luminanceBack = !(frameKernel_ && fetchLuminance_);
-  frame.rgbKept = !keep && projection.keepWhereMerged && frameKernel_;
+  frame.rgbKept = project && projection.keepWhereMerged && frameKernel_;
   MergeTally total;
   float* peaks = nullptr;
   if (project) {

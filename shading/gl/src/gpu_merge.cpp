@@ -502,10 +502,14 @@ void GpuMerge::operator()(const merge::FrameInput& in, std::vector<merge::RowSum
   }
   kept_.reset();
   const std::size_t rgbBytes = pixels * 3 * sizeof(float);
-  if (in.rgbKept)
-    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, kRgb, keptPool_.take(rgbBytes));
-  else
+  GLuint rgbBuffer = 0;  // where the merged frame is written
+  if (in.rgbKept) {
+    rgbBuffer = keptPool_.take(rgbBytes);
+    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, kRgb, rgbBuffer);
+  } else {
     fill(kRgb, nullptr, in.rgb ? rgbBytes : 4);
+    rgbBuffer = buffers_[kRgb].get();
+  }
   const bool project = in.col[0] != nullptr;
   fill(kCol, nullptr, project ? 5 * std::size_t(in.width) * sizeof(float) : 4);
   if (project)
@@ -536,13 +540,14 @@ void GpuMerge::operator()(const merge::FrameInput& in, std::vector<merge::RowSum
   if (in.rgbKept) kept_ = keptPool_.give(in.width, in.height);
 
   std::vector<float> sums(groups * kRowFloats);
-  const auto read = [](const Buffer& b, void* into, std::size_t bytes) {
-    glBindBuffer(GL_SHADER_STORAGE_BUFFER, b.get());
+  const auto read = [](GLuint b, void* into, std::size_t bytes) {
+    glBindBuffer(GL_SHADER_STORAGE_BUFFER, b);
     glGetBufferSubData(GL_SHADER_STORAGE_BUFFER, 0, GLsizeiptr(bytes), into);
   };
-  read(buffers_[kRows], sums.data(), sums.size() * sizeof(float));
-  if (in.luminanceBack) read(luminance_[std::size_t(out)], in.luminance, pixels * sizeof(float));
-  if (in.rgb && !in.rgbKept) read(buffers_[kRgb], in.rgb, rgbBytes);
+  read(buffers_[kRows].get(), sums.data(), sums.size() * sizeof(float));
+  if (in.luminanceBack)
+    read(luminance_[std::size_t(out)].get(), in.luminance, pixels * sizeof(float));
+  if (in.rgb) read(rgbBuffer, in.rgb, rgbBytes);
   // Each row's parts in order: their sums added, the brightest the larger (of equals the first).
   rows.assign(std::size_t(in.height), merge::RowSums{});
   for (std::size_t g = 0; g < groups; ++g) {

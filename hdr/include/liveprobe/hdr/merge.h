@@ -73,8 +73,9 @@ struct MergeProjection {
   const EquirectIntegrals* integrals = nullptr;
   /// false: `out` gets the merged frame's size, times and scale, and no pixels.
   bool keepFrame = true;
-  /// With keepFrame false and a frame kernel (BracketMerger::setFrameKernel): the kernel keeps
-  /// the merged frame where it merges (merge::FrameInput::rgbKept), for a display drawing there.
+  /// With a frame kernel (BracketMerger::setFrameKernel): the kernel keeps the merged frame where
+  /// it merges (merge::FrameInput::rgbKept), for a display drawing there; with keepFrame too,
+  /// `out` gets a copy (a light search reads it).
   bool keepWhereMerged = false;
   /// The result: the merged frame's radiance coefficients, the sums Projector::project makes of
   /// it (in its units, before any photometry or rotation), and its row peaks as that makes them

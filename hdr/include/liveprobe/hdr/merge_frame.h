@@ -76,7 +76,7 @@ struct FrameInput {
   const std::uint8_t* nearHigh = nullptr;
   float* rgb = nullptr;  ///< the merged radiance, R, G, B per pixel (null: not written)
   /// The processor keeps the merged radiance where it runs (a GPU's buffer the display draws
-  /// from: gl::GpuMerge::takeKeptImage) instead of writing `rgb`.
+  /// from: gl::GpuMerge::takeKeptImage); `rgb`, where given too, gets a copy of it.
   bool rgbKept = false;
   /// Equirect frames projected as they merge: the five column integrals (width floats each,
   /// EquirectIntegrals::col), or null: no projection.
