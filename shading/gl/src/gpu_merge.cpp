@@ -205,12 +205,13 @@ void main() {
       acc[5] = l, acc[6] = clipped ? 1.0 : 0.0, acc[7] = n.w > 0.0 ? 1.0 : 0.0;
       acc[8] = float(x);
     }
-    if (project != 0)
+    if (project != 0) {
       for (int k = 0; k < 5; ++k) {
         const float wk = col[k * width + x];
         acc[9 + 3 * k] += wk * c.r, acc[10 + 3 * k] += wk * c.g, acc[11 + 3 * k] += wk * c.b;
       }
-    if (project != 0) acc[24] = max(acc[24], max(c.r, max(c.g, c.b)));
+      acc[24] = max(acc[24], max(c.r, max(c.g, c.b)));
+    }
   }
   for (int k = 0; k < kFloats; ++k) red[k][lid] = acc[k];
   barrier();
